@@ -1,0 +1,101 @@
+//! Emission and scattering (twin: `shaders/materials.wgsl`). Random numbers drawn per bounce are
+//! fixed per material (lambertian 2, metal 2, dielectric 1, light 0) so both backends stay in step.
+
+use super::sampling::unit_vector;
+use super::shapes::Hit;
+use crate::rng::Rng;
+use crate::scene::{Background, Material};
+use glam::Vec3;
+
+/// Radiance leaving the surface toward the ray.
+#[inline]
+pub fn emitted(material: &Material, hit: &Hit) -> Vec3 {
+    match *material {
+        Material::Lambertian { emission, .. } => emission,
+        Material::Light {
+            radiance,
+            two_sided,
+        } if hit.front_face || two_sided => radiance,
+        _ => Vec3::ZERO,
+    }
+}
+
+/// The throughput factor and direction of the continued path, or `None` if the path ends here.
+#[inline]
+pub fn scatter(
+    material: &Material,
+    dir_in: Vec3,
+    hit: &Hit,
+    rng: &mut Rng,
+) -> Option<(Vec3, Vec3)> {
+    match *material {
+        Material::Lambertian { albedo, .. } => {
+            // normal + a uniform unit vector is cosine-distributed about the normal.
+            let d = hit.normal + unit_vector(rng.next_f32(), rng.next_f32());
+            let len2 = d.length_squared();
+            let dir = if len2 > 1e-12 {
+                d / len2.sqrt()
+            } else {
+                hit.normal
+            };
+            Some((albedo, dir))
+        }
+        Material::Metal { albedo, fuzz } => {
+            let fuzzed =
+                reflect(dir_in, hit.normal) + fuzz * unit_vector(rng.next_f32(), rng.next_f32());
+            let len2 = fuzzed.length_squared();
+            if !(len2 > 1e-12) {
+                return None;
+            }
+            let dir = fuzzed / len2.sqrt();
+            // Fuzzed below the surface: absorbed.
+            (dir.dot(hit.normal) > 0.0).then_some((albedo, dir))
+        }
+        Material::Dielectric { ior } => {
+            let eta = if hit.front_face { 1.0 / ior } else { ior };
+            let cos_i = (-dir_in).dot(hit.normal).clamp(0.0, 1.0);
+            let u = rng.next_f32();
+            let dir = match refract_cos(cos_i, eta) {
+                Some(cos_t) if u >= fresnel(cos_i, cos_t, eta) => {
+                    eta * dir_in + (eta * cos_i - cos_t) * hit.normal
+                }
+                _ => reflect(dir_in, hit.normal),
+            };
+            Some((Vec3::ONE, dir.normalize()))
+        }
+        Material::Light { .. } => None,
+    }
+}
+
+#[inline]
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// Cosine of the refracted angle for incidence cosine `cos_i` and relative index
+/// `eta = n_incident / n_transmitted`, or `None` under total internal reflection.
+#[inline]
+pub fn refract_cos(cos_i: f32, eta: f32) -> Option<f32> {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    (sin2_t < 1.0).then(|| (1.0 - sin2_t).sqrt())
+}
+
+/// Exact unpolarised Fresnel reflectance: the mean of the s and p reflectances.
+#[inline]
+pub fn fresnel(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// Radiance arriving from the environment along unit direction `dir`.
+#[inline]
+pub fn background(bg: &Background, dir: Vec3) -> Vec3 {
+    match *bg {
+        Background::Constant(c) => c,
+        Background::Sky => {
+            let t = 0.5 * (dir.y + 1.0);
+            (1.0 - t) * Vec3::ONE + t * Vec3::new(0.5, 0.7, 1.0)
+        }
+    }
+}

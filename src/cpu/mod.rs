@@ -1,0 +1,60 @@
+//! The CPU reference renderer: the ground truth the GPU kernel is tested against. Plain f32 math
+//! in the same order as the WGSL kernel, one counter-based random stream per sample, rayon over
+//! image rows.
+
+pub mod camera;
+pub mod integrator;
+pub mod material;
+pub mod sampling;
+pub mod shapes;
+
+use crate::film::{Film, PixelStats};
+use crate::render::RenderOptions;
+use crate::rng::Rng;
+use crate::scene::flat::FlatScene;
+use rayon::prelude::*;
+
+/// Renders samples `opts.first_sample .. opts.first_sample + opts.spp` of every pixel.
+/// `on_row` is called once per finished image row (for progress bars).
+pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync)) -> Film {
+    let width = opts.width as usize;
+    let mut film = Film::new(opts.width, opts.height);
+    let invalid: u64 = film
+        .pixels
+        .par_chunks_mut(width)
+        .enumerate()
+        .map(|(y, row)| {
+            let mut invalid = 0;
+            for (x, stats) in row.iter_mut().enumerate() {
+                invalid += render_pixel(scene, opts, x as u32, y as u32, stats);
+            }
+            on_row();
+            invalid
+        })
+        .sum();
+    film.invalid_samples = invalid;
+    film
+}
+
+/// Accumulates one pixel's samples; returns how many were non-finite (and counted as zero).
+fn render_pixel(
+    scene: &FlatScene,
+    opts: &RenderOptions,
+    x: u32,
+    y: u32,
+    stats: &mut PixelStats,
+) -> u64 {
+    let pixel = y * opts.width + x;
+    let mut invalid = 0;
+    for sample in opts.first_sample..opts.first_sample + opts.spp {
+        let mut rng = Rng::for_sample(pixel, sample, opts.seed);
+        let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut rng);
+        let mut radiance = integrator::radiance(scene, ray, opts.max_depth, &mut rng);
+        if !radiance.is_finite() {
+            invalid += 1;
+            radiance = glam::Vec3::ZERO;
+        }
+        stats.add(radiance);
+    }
+    invalid
+}

@@ -1,0 +1,139 @@
+//! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
+
+use crate::scene::flat::{FlatScene, Quad, Sphere};
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    /// Always unit length.
+    pub dir: Vec3,
+}
+
+impl Ray {
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// What a ray hit: `normal` faces the incoming ray; `front_face` says whether that is the shape's
+/// outward (or `u x v`) side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub point: Vec3,
+    pub normal: Vec3,
+    pub front_face: bool,
+    pub material: u32,
+    /// Index into spheres, then quads (spheres first), for tests and debugging.
+    pub primitive: u32,
+}
+
+/// Distance along the ray to `sphere` within (t_min, t_max), if any.
+#[inline]
+pub fn hit_sphere(sphere: &Sphere, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    let oc = sphere.center - ray.origin;
+    let h = ray.dir.dot(oc);
+    // r^2 - |oc - h d|^2 rather than h^2 - (|oc|^2 - r^2): no cancellation when the sphere is
+    // small or far away (Ray Tracing Gems, chapter 7).
+    let perpendicular = oc - h * ray.dir;
+    let disc = sphere.radius * sphere.radius - perpendicular.length_squared();
+    if disc < 0.0 {
+        return None;
+    }
+    let sq = disc.sqrt();
+    let near = h - sq;
+    if near > t_min && near < t_max {
+        return Some(near);
+    }
+    let far = h + sq;
+    (far > t_min && far < t_max).then_some(far)
+}
+
+/// Distance along the ray to `quad` within (t_min, t_max), if any. Rays parallel to its plane
+/// miss: they have no single crossing point.
+#[inline]
+pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    let denom = quad.normal.dot(ray.dir);
+    if denom.abs() < 1e-8 {
+        return None;
+    }
+    let t = (quad.d - quad.normal.dot(ray.origin)) / denom;
+    if !(t > t_min && t < t_max) {
+        return None;
+    }
+    let planar = ray.at(t) - quad.q;
+    let alpha = quad.w.dot(planar.cross(quad.v));
+    let beta = quad.w.dot(quad.u.cross(planar));
+    ((0.0..=1.0).contains(&alpha) && (0.0..=1.0).contains(&beta)).then_some(t)
+}
+
+/// The closest hit along `ray` beyond its origin.
+pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
+    let mut closest = f32::INFINITY;
+    let mut found: Option<(u32, Vec3)> = None;
+    for (i, sphere) in scene.spheres.iter().enumerate() {
+        if let Some(t) = hit_sphere(sphere, ray, 0.0, closest) {
+            closest = t;
+            let outward = (ray.at(t) - sphere.center) / sphere.radius;
+            found = Some((i as u32, outward));
+        }
+    }
+    let quad_base = scene.spheres.len() as u32;
+    for (i, quad) in scene.quads.iter().enumerate() {
+        if let Some(t) = hit_quad(quad, ray, 0.0, closest) {
+            closest = t;
+            found = Some((quad_base + i as u32, quad.normal));
+        }
+    }
+    let (primitive, outward) = found?;
+    let outward = outward.normalize();
+    let material = if primitive < quad_base {
+        scene.spheres[primitive as usize].material
+    } else {
+        scene.quads[(primitive - quad_base) as usize].material
+    };
+    let front_face = ray.dir.dot(outward) < 0.0;
+    Some(Hit {
+        t: closest,
+        point: ray.at(closest),
+        normal: if front_face { outward } else { -outward },
+        front_face,
+        material,
+        primitive,
+    })
+}
+
+/// A ray origin moved off the surface at `p` along `n` by a few units in the last place of each
+/// coordinate, so the new ray cannot re-hit the surface it leaves, at any scale (Wächter and
+/// Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6).
+#[inline]
+pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
+    const ORIGIN: f32 = 1.0 / 32.0;
+    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+    const INT_SCALE: f32 = 256.0;
+    let offset = |p: f32, n: f32| -> f32 {
+        if p.abs() < ORIGIN {
+            p + FLOAT_SCALE * n
+        } else {
+            let of_i = (INT_SCALE * n) as i32;
+            let of_i = if p < 0.0 { -of_i } else { of_i };
+            f32::from_bits((p.to_bits() as i32).wrapping_add(of_i) as u32)
+        }
+    };
+    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+}
+
+/// A ray leaving a hit in direction `dir` (unit), started on the side `dir` points to.
+#[inline]
+pub fn spawn(hit: &Hit, dir: Vec3) -> Ray {
+    let side = if dir.dot(hit.normal) >= 0.0 {
+        hit.normal
+    } else {
+        -hit.normal
+    };
+    Ray {
+        origin: offset_origin(hit.point, side),
+        dir,
+    }
+}

@@ -1,0 +1,139 @@
+//! The film: every pixel's running mean and variance in f64, so each render knows its own noise.
+
+use glam::{DVec3, Vec3};
+
+/// Welford's running mean and sum of squared deviations of one pixel's samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelStats {
+    pub n: u64,
+    pub mean: DVec3,
+    pub m2: DVec3,
+}
+
+impl PixelStats {
+    #[inline]
+    pub fn add(&mut self, sample: Vec3) {
+        let x = sample.as_dvec3();
+        self.n += 1;
+        let delta = x - self.mean;
+        self.mean += delta / self.n as f64;
+        self.m2 += delta * (x - self.mean);
+    }
+
+    /// Combines two disjoint sets of samples (Chan et al.'s parallel update).
+    pub fn merge(&mut self, other: &PixelStats) {
+        if other.n == 0 {
+            return;
+        }
+        let n = self.n + other.n;
+        let delta = other.mean - self.mean;
+        let weight = other.n as f64 / n as f64;
+        self.mean += delta * weight;
+        self.m2 += other.m2 + delta * delta * (self.n as f64 * weight);
+        self.n = n;
+    }
+
+    /// Unbiased sample variance of one sample.
+    pub fn variance(&self) -> DVec3 {
+        if self.n < 2 {
+            DVec3::ZERO
+        } else {
+            self.m2 / (self.n - 1) as f64
+        }
+    }
+
+    /// Variance of the pixel's mean: the square of its standard error.
+    pub fn variance_of_mean(&self) -> DVec3 {
+        if self.n == 0 {
+            DVec3::ZERO
+        } else {
+            self.variance() / self.n as f64
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, row 0 at the top.
+    pub pixels: Vec<PixelStats>,
+    /// Samples that came out NaN or infinite and were counted as zero.
+    pub invalid_samples: u64,
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Self {
+        Film {
+            width,
+            height,
+            pixels: vec![PixelStats::default(); width as usize * height as usize],
+            invalid_samples: 0,
+        }
+    }
+
+    pub fn pixel(&self, x: u32, y: u32) -> &PixelStats {
+        &self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Linear radiance per pixel, row-major from the top.
+    pub fn mean_rgb(&self) -> Vec<[f32; 3]> {
+        self.pixels
+            .iter()
+            .map(|p| p.mean.as_vec3().to_array())
+            .collect()
+    }
+
+    /// The mean linear radiance of the whole image, per channel.
+    pub fn image_mean(&self) -> DVec3 {
+        let sum: DVec3 = self.pixels.iter().map(|p| p.mean).sum();
+        sum / self.pixels.len().max(1) as f64
+    }
+
+    /// Standard error of [`Film::image_mean`], from the per-pixel variances.
+    pub fn image_mean_std_error(&self) -> DVec3 {
+        let sum: DVec3 = self.pixels.iter().map(|p| p.variance_of_mean()).sum();
+        let n = self.pixels.len().max(1) as f64;
+        (sum / (n * n)).map(f64::sqrt)
+    }
+
+    /// Adds another film's samples of the same pixels.
+    pub fn merge(&mut self, other: &Film) {
+        assert_eq!((self.width, self.height), (other.width, other.height));
+        for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
+            a.merge(b);
+        }
+        self.invalid_samples += other.invalid_samples;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welford_matches_two_pass_and_merge_matches_sequential() {
+        let samples: Vec<Vec3> = (0..101)
+            .map(|i| Vec3::new(i as f32, (i * i % 17) as f32, 1e4 + (i % 3) as f32))
+            .collect();
+        let mut all = PixelStats::default();
+        samples.iter().for_each(|&s| all.add(s));
+        let n = samples.len() as f64;
+        let mean: DVec3 = samples.iter().map(|s| s.as_dvec3()).sum::<DVec3>() / n;
+        let var: DVec3 = samples
+            .iter()
+            .map(|s| (s.as_dvec3() - mean) * (s.as_dvec3() - mean))
+            .sum::<DVec3>()
+            / (n - 1.0);
+        assert!((all.mean - mean).abs().max_element() < 1e-9);
+        assert!((all.variance() - var).abs().max_element() < 1e-7);
+
+        let (mut a, mut b) = (PixelStats::default(), PixelStats::default());
+        samples[..40].iter().for_each(|&s| a.add(s));
+        samples[40..].iter().for_each(|&s| b.add(s));
+        a.merge(&b);
+        assert_eq!(a.n, all.n);
+        assert!((a.mean - all.mean).abs().max_element() < 1e-9);
+        assert!((a.m2 - all.m2).abs().max_element() < 1e-6);
+    }
+}

@@ -1,0 +1,12 @@
+//! rt-gpu: a physically based path tracer with a WGSL compute kernel (via wgpu) and a CPU
+//! reference renderer computing the same estimator. See `docs/architecture.md`.
+
+// `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod cpu;
+pub mod film;
+pub mod output;
+pub mod render;
+pub mod rng;
+pub mod scene;

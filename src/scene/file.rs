@@ -1,0 +1,524 @@
+//! Scene files: TOML, human-writable, documented in `scenes/README.md`.
+//!
+//! Numbers are checked as they are read (finite, in range), so a bad value is reported at its own
+//! line and column; whole-object checks (a zero-area quad, a degenerate camera) report the line of
+//! the table they belong to.
+
+use super::{
+    Background, Camera, Material, Object, RenderDefaults, Scene, SceneError, Shape, Transform,
+};
+use glam::Vec3;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+
+/// Largest image side a scene or the CLI may ask for.
+pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
+/// Longest path a scene or the CLI may ask for.
+pub const MAX_DEPTH_LIMIT: u32 = 10_000;
+
+/// A scene file problem, located in its file.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}:{line}:{column}: {message}")]
+pub struct SceneFileError {
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+}
+
+/// Reads and checks the scene file at `path`.
+pub fn load(path: &Path) -> anyhow::Result<Scene> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| anyhow::anyhow!("cannot read scene file {}: {e}", path.display()))?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    Ok(parse(&text, &path.display().to_string(), &name)?)
+}
+
+/// Parses scene-file text; `file` names it in errors.
+pub fn parse(text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError> {
+    let located = |span: Option<Range<usize>>, message: String| {
+        let offset = span.map(|s| s.start).unwrap_or(0).min(text.len());
+        let before = &text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let column = offset - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+        SceneFileError {
+            file: file.to_string(),
+            line,
+            column,
+            message,
+        }
+    };
+    let doc: SceneDoc = toml::from_str(text).map_err(|e| {
+        let source_line = e
+            .span()
+            .and_then(|s| {
+                text[..s.start.min(text.len())]
+                    .rfind('\n')
+                    .map(|i| i + 1)
+                    .or(Some(0))
+            })
+            .and_then(|start| text[start..].lines().next())
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .map(|l| format!(" (in `{l}`)"))
+            .unwrap_or_default();
+        let message = e.message().trim().replace('\n', " ");
+        located(e.span(), format!("{message}{source_line}"))
+    })?;
+    doc.into_scene(name)
+        .map_err(|(span, message)| located(span, message))
+}
+
+/// Writes `scene` as scene-file text that [`parse`] reads back to the same scene.
+pub fn to_toml(scene: &Scene) -> String {
+    let doc = SceneDoc::from_scene(scene);
+    let body = toml::to_string(&doc).unwrap_or_else(|e| format!("# cannot serialise: {e}\n"));
+    format!(
+        "# rt-gpu scene \"{}\" (format: scenes/README.md)\n\n{body}",
+        scene.name
+    )
+}
+
+// ---- Checked numbers ------------------------------------------------------------------------
+
+/// A finite number (TOML allows `nan` and `inf`; a scene must not).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Num(f32);
+
+impl<'de> Deserialize<'de> for Num {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let x = f64::deserialize(d)?;
+        if !x.is_finite() || x.abs() > f32::MAX as f64 {
+            return Err(serde::de::Error::custom(format!(
+                "expected a finite number, got {x}"
+            )));
+        }
+        Ok(Num(x as f32))
+    }
+}
+
+impl Serialize for Num {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        // The shortest decimal that reads back as the same f32 (0.65, not 0.6499999761581421).
+        let shortest: f64 = self.0.to_string().parse().unwrap_or(self.0 as f64);
+        shortest.serialize(s)
+    }
+}
+
+/// Three finite numbers `[x, y, z]`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+struct V3([Num; 3]);
+
+impl<'de> Deserialize<'de> for V3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let values = Vec::<Num>::deserialize(d)?;
+        let array: [Num; 3] = values.try_into().map_err(|v: Vec<Num>| {
+            serde::de::Error::custom(format!("expected 3 numbers [x, y, z], got {}", v.len()))
+        })?;
+        Ok(V3(array))
+    }
+}
+
+impl V3 {
+    fn vec(self) -> Vec3 {
+        Vec3::new(self.0[0].0, self.0[1].0, self.0[2].0)
+    }
+    fn from(v: Vec3) -> Self {
+        V3([Num(v.x), Num(v.y), Num(v.z)])
+    }
+}
+
+/// A colour: three finite numbers, none negative.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+struct Colour(V3);
+
+impl<'de> Deserialize<'de> for Colour {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = V3::deserialize(d)?;
+        if v.0.iter().any(|c| c.0 < 0.0) {
+            return Err(serde::de::Error::custom(
+                "expected a colour with no negative component",
+            ));
+        }
+        Ok(Colour(v))
+    }
+}
+
+/// A reflectance: a colour with every component in [0, 1] (more would create energy).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+struct Albedo(V3);
+
+impl<'de> Deserialize<'de> for Albedo {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = V3::deserialize(d)?;
+        if v.0.iter().any(|c| !(0.0..=1.0).contains(&c.0)) {
+            return Err(serde::de::Error::custom(
+                "expected an albedo with every component in [0, 1]",
+            ));
+        }
+        Ok(Albedo(v))
+    }
+}
+
+// ---- The document ---------------------------------------------------------------------------
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct SceneDoc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    render: Option<RenderDoc>,
+    camera: Spanned<CameraDoc>,
+    #[serde(default)]
+    materials: BTreeMap<String, MaterialDoc>,
+    #[serde(default, rename = "object")]
+    objects: Vec<Spanned<ObjectDoc>>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDoc {
+    width: Option<u32>,
+    height: Option<u32>,
+    max_depth: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    background: Option<BackgroundDoc>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(untagged)]
+enum BackgroundDoc {
+    Colour(Colour),
+    Named(String),
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDoc {
+    look_from: V3,
+    look_at: V3,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    up: Option<V3>,
+    vfov: Num,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    aperture: Option<Num>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    focus_distance: Option<Num>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum MaterialDoc {
+    Lambertian {
+        albedo: Albedo,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        emission: Option<Colour>,
+    },
+    Metal {
+        albedo: Albedo,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        fuzz: Option<Num>,
+    },
+    Dielectric {
+        ior: Num,
+    },
+    Light {
+        radiance: Colour,
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        two_sided: bool,
+    },
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectDoc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sphere: Option<SphereDoc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    quad: Option<QuadDoc>,
+    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
+    cuboid: Option<BoxDoc>,
+    material: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rotate_y: Option<Num>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    translate: Option<V3>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct SphereDoc {
+    center: V3,
+    radius: Num,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct QuadDoc {
+    q: V3,
+    u: V3,
+    v: V3,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct BoxDoc {
+    min: V3,
+    max: V3,
+}
+
+type Located = (Option<Range<usize>>, String);
+
+impl SceneDoc {
+    fn into_scene(self, name: &str) -> Result<Scene, Located> {
+        let defaults = RenderDefaults {
+            width: self.render.as_ref().and_then(|r| r.width).unwrap_or(512),
+            height: self.render.as_ref().and_then(|r| r.height).unwrap_or(512),
+            max_depth: self.render.as_ref().and_then(|r| r.max_depth).unwrap_or(10),
+        };
+        for (what, value, max) in [
+            ("render.width", defaults.width, MAX_IMAGE_SIDE),
+            ("render.height", defaults.height, MAX_IMAGE_SIDE),
+            ("render.max_depth", defaults.max_depth, MAX_DEPTH_LIMIT),
+        ] {
+            if value == 0 || value > max {
+                return Err((None, format!("{what} must be in 1..={max}, got {value}")));
+            }
+        }
+        let background = match self.render.and_then(|r| r.background) {
+            None => Background::Constant(Vec3::ZERO),
+            Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
+            Some(BackgroundDoc::Named(n)) if n == "sky" => Background::Sky,
+            Some(BackgroundDoc::Named(n)) => {
+                return Err((
+                    None,
+                    format!("background must be a colour [r, g, b] or \"sky\", got \"{n}\""),
+                ));
+            }
+        };
+
+        let camera_span = self.camera.span();
+        let c = self.camera.into_inner();
+        let camera = Camera {
+            look_from: c.look_from.vec(),
+            look_at: c.look_at.vec(),
+            up: c.up.map(V3::vec).unwrap_or(Vec3::Y),
+            vfov_degrees: c.vfov.0,
+            aperture: c.aperture.map(|a| a.0).unwrap_or(0.0),
+            focus_distance: c.focus_distance.map(|f| f.0),
+        };
+        camera
+            .validate()
+            .map_err(|e| (Some(camera_span.clone()), e.to_string()))?;
+
+        let mut material_index = BTreeMap::new();
+        let mut materials = Vec::new();
+        let mut material_names = Vec::new();
+        for (name, doc) in self.materials {
+            let material = match doc {
+                MaterialDoc::Lambertian { albedo, emission } => Material::Lambertian {
+                    albedo: albedo.0.vec(),
+                    emission: emission.map(|e| e.0.vec()).unwrap_or(Vec3::ZERO),
+                },
+                MaterialDoc::Metal { albedo, fuzz } => {
+                    let fuzz = fuzz.map(|f| f.0).unwrap_or(0.0);
+                    if !(0.0..=1.0).contains(&fuzz) {
+                        return Err((
+                            None,
+                            format!("material \"{name}\": fuzz must be in [0, 1], got {fuzz}"),
+                        ));
+                    }
+                    Material::Metal {
+                        albedo: albedo.0.vec(),
+                        fuzz,
+                    }
+                }
+                MaterialDoc::Dielectric { ior } => {
+                    if !(ior.0 > 0.0) {
+                        return Err((
+                            None,
+                            format!("material \"{name}\": ior must be > 0, got {}", ior.0),
+                        ));
+                    }
+                    Material::Dielectric { ior: ior.0 }
+                }
+                MaterialDoc::Light {
+                    radiance,
+                    two_sided,
+                } => Material::Light {
+                    radiance: radiance.0.vec(),
+                    two_sided,
+                },
+            };
+            material_index.insert(name.clone(), materials.len() as u32);
+            materials.push(material);
+            material_names.push(name);
+        }
+
+        let mut objects = Vec::new();
+        for spanned in self.objects {
+            let span = Some(spanned.span());
+            let o = spanned.into_inner();
+            let mut shapes = Vec::new();
+            if let Some(s) = o.sphere {
+                shapes.push(Shape::Sphere {
+                    center: s.center.vec(),
+                    radius: s.radius.0,
+                });
+            }
+            if let Some(q) = o.quad {
+                shapes.push(Shape::Quad {
+                    q: q.q.vec(),
+                    u: q.u.vec(),
+                    v: q.v.vec(),
+                });
+            }
+            if let Some(b) = o.cuboid {
+                shapes.push(Shape::Cuboid {
+                    min: b.min.vec(),
+                    max: b.max.vec(),
+                });
+            }
+            let [shape] = shapes[..] else {
+                return Err((
+                    span,
+                    format!(
+                        "an [[object]] needs exactly one of `sphere`, `quad` or `box`, found {}",
+                        shapes.len()
+                    ),
+                ));
+            };
+            shape.validate().map_err(|e| (span.clone(), e))?;
+            let Some(&material) = material_index.get(&o.material) else {
+                let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
+                return Err((
+                    span,
+                    format!(
+                        "unknown material \"{}\" (defined: {})",
+                        o.material,
+                        known.join(", ")
+                    ),
+                ));
+            };
+            objects.push(Object {
+                shape,
+                material,
+                transform: Transform {
+                    rotate_y_degrees: o.rotate_y.map(|r| r.0).unwrap_or(0.0),
+                    translate: o.translate.map(V3::vec).unwrap_or(Vec3::ZERO),
+                },
+            });
+        }
+        let scene = Scene {
+            name: name.to_string(),
+            camera,
+            background,
+            materials,
+            material_names,
+            objects,
+            defaults,
+        };
+        scene
+            .validate()
+            .map_err(|e: SceneError| (None, e.to_string()))?;
+        Ok(scene)
+    }
+
+    fn from_scene(scene: &Scene) -> SceneDoc {
+        let names = &scene.material_names;
+        let materials = scene
+            .materials
+            .iter()
+            .zip(names)
+            .map(|(m, name)| {
+                let doc = match *m {
+                    Material::Lambertian { albedo, emission } => MaterialDoc::Lambertian {
+                        albedo: Albedo(V3::from(albedo)),
+                        emission: (emission != Vec3::ZERO).then(|| Colour(V3::from(emission))),
+                    },
+                    Material::Metal { albedo, fuzz } => MaterialDoc::Metal {
+                        albedo: Albedo(V3::from(albedo)),
+                        fuzz: Some(Num(fuzz)),
+                    },
+                    Material::Dielectric { ior } => MaterialDoc::Dielectric { ior: Num(ior) },
+                    Material::Light {
+                        radiance,
+                        two_sided,
+                    } => MaterialDoc::Light {
+                        radiance: Colour(V3::from(radiance)),
+                        two_sided,
+                    },
+                };
+                (name.clone(), doc)
+            })
+            .collect();
+        let objects = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let mut doc = ObjectDoc {
+                    sphere: None,
+                    quad: None,
+                    cuboid: None,
+                    material: names[o.material as usize].clone(),
+                    rotate_y: (o.transform.rotate_y_degrees != 0.0)
+                        .then_some(Num(o.transform.rotate_y_degrees)),
+                    translate: (o.transform.translate != Vec3::ZERO)
+                        .then(|| V3::from(o.transform.translate)),
+                };
+                match o.shape {
+                    Shape::Sphere { center, radius } => {
+                        doc.sphere = Some(SphereDoc {
+                            center: V3::from(center),
+                            radius: Num(radius),
+                        })
+                    }
+                    Shape::Quad { q, u, v } => {
+                        doc.quad = Some(QuadDoc {
+                            q: V3::from(q),
+                            u: V3::from(u),
+                            v: V3::from(v),
+                        })
+                    }
+                    Shape::Cuboid { min, max } => {
+                        doc.cuboid = Some(BoxDoc {
+                            min: V3::from(min),
+                            max: V3::from(max),
+                        })
+                    }
+                }
+                Spanned::new(0..0, doc)
+            })
+            .collect();
+        let c = &scene.camera;
+        SceneDoc {
+            render: Some(RenderDoc {
+                width: Some(scene.defaults.width),
+                height: Some(scene.defaults.height),
+                max_depth: Some(scene.defaults.max_depth),
+                background: Some(match scene.background {
+                    Background::Constant(c) => BackgroundDoc::Colour(Colour(V3::from(c))),
+                    Background::Sky => BackgroundDoc::Named("sky".into()),
+                }),
+            }),
+            camera: Spanned::new(
+                0..0,
+                CameraDoc {
+                    look_from: V3::from(c.look_from),
+                    look_at: V3::from(c.look_at),
+                    up: Some(V3::from(c.up)),
+                    vfov: Num(c.vfov_degrees),
+                    aperture: (c.aperture != 0.0).then_some(Num(c.aperture)),
+                    focus_distance: c.focus_distance.map(Num),
+                },
+            ),
+            materials,
+            objects,
+        }
+    }
+}

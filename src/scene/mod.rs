@@ -1,0 +1,209 @@
+//! The scene: plain data shared by every backend.
+//!
+//! A [`Scene`] is what a user describes (boxes, instances, named materials); [`flat::FlatScene`] is
+//! what the backends trace (world-space spheres and quads, resolved material indices).
+
+pub mod builtin;
+pub mod file;
+pub mod flat;
+
+use glam::Vec3;
+
+/// A thin-lens perspective camera. Image x grows to the camera's right, `cross(forward, up)`;
+/// row 0 is the top of the image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub look_from: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub vfov_degrees: f32,
+    /// Lens diameter; 0 is a pinhole.
+    pub aperture: f32,
+    /// Distance to the plane in focus; `None` focuses on `look_at`.
+    pub focus_distance: Option<f32>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// Ideal diffuse reflector. `emission` (both faces) makes it glow, as the furnace tests need.
+    Lambertian { albedo: Vec3, emission: Vec3 },
+    /// Mirror reflection perturbed by `fuzz` in [0, 1]; rays fuzzed below the surface are absorbed.
+    Metal { albedo: Vec3, fuzz: f32 },
+    /// Smooth glass: exact unpolarised Fresnel, refraction by Snell's law, total internal reflection.
+    Dielectric { ior: f32 },
+    /// Diffuse area light. It emits from its front face (along the shape's normal) unless
+    /// `two_sided`, and reflects nothing.
+    Light { radiance: Vec3, two_sided: bool },
+}
+
+impl Material {
+    pub fn lambertian(albedo: Vec3) -> Self {
+        Material::Lambertian {
+            albedo,
+            emission: Vec3::ZERO,
+        }
+    }
+}
+
+/// Rigid placement of an object: rotate about +y (right-handed, degrees), then translate.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Transform {
+    pub rotate_y_degrees: f32,
+    pub translate: Vec3,
+}
+
+impl Transform {
+    /// x' = cos(a) x + sin(a) z, z' = -sin(a) x + cos(a) z.
+    pub fn rotate_vector(&self, v: Vec3) -> Vec3 {
+        let (sin, cos) = (self.rotate_y_degrees.to_radians() as f64).sin_cos();
+        let (x, z) = (v.x as f64, v.z as f64);
+        Vec3::new((cos * x + sin * z) as f32, v.y, (-sin * x + cos * z) as f32)
+    }
+
+    pub fn apply_point(&self, p: Vec3) -> Vec3 {
+        self.rotate_vector(p) + self.translate
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A negative radius flips the normal inward (a hollow bubble inside glass).
+    Sphere { center: Vec3, radius: f32 },
+    /// The parallelogram `q + a u + b v`, a, b in [0, 1]; its front face is along `u x v`.
+    Quad { q: Vec3, u: Vec3, v: Vec3 },
+    /// An axis-aligned box made of six outward-facing quads.
+    Cuboid { min: Vec3, max: Vec3 },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    pub shape: Shape,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    pub transform: Transform,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Background {
+    Constant(Vec3),
+    /// White at the horizon blending to (0.5, 0.7, 1.0) overhead, by the ray's y.
+    Sky,
+}
+
+/// Defaults a scene carries for how it is rendered; the CLI may override them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderDefaults {
+    pub width: u32,
+    pub height: u32,
+    /// The number of path segments: emission at the k-th surface hit counts for k <= max_depth.
+    pub max_depth: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub name: String,
+    pub camera: Camera,
+    pub background: Background,
+    pub materials: Vec<Material>,
+    /// A name per material, as scene files refer to them.
+    pub material_names: Vec<String>,
+    pub objects: Vec<Object>,
+    pub defaults: RenderDefaults,
+}
+
+/// Problems in a scene that any source (built-in, file, test) can have.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SceneError {
+    #[error("camera look_from equals look_at: the view direction is undefined")]
+    CameraNoDirection,
+    #[error(
+        "camera up {0:?} is parallel to the view direction: the image orientation is undefined"
+    )]
+    CameraUpParallel([f32; 3]),
+    #[error("camera vfov (vertical field of view) must be in (0, 180) degrees, got {0}")]
+    BadFov(f32),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Camera {
+    /// Checks what makes the camera frame undefined.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let forward = self.look_at - self.look_from;
+        if forward.length_squared() == 0.0 || !forward.is_finite() {
+            return Err(SceneError::CameraNoDirection);
+        }
+        let right = forward.normalize().cross(self.up);
+        if !(right.length() > 1e-6) || !self.up.is_finite() {
+            return Err(SceneError::CameraUpParallel(self.up.to_array()));
+        }
+        if !(self.vfov_degrees > 0.0 && self.vfov_degrees < 180.0) {
+            return Err(SceneError::BadFov(self.vfov_degrees));
+        }
+        if !(self.aperture >= 0.0 && self.aperture.is_finite()) {
+            return Err(SceneError::Invalid(format!(
+                "camera aperture must be >= 0, got {}",
+                self.aperture
+            )));
+        }
+        if let Some(d) = self.focus_distance
+            && !(d > 0.0 && d.is_finite())
+        {
+            return Err(SceneError::Invalid(format!(
+                "camera focus_distance must be > 0, got {d}"
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// The whole-scene checks the backends rely on; file loading reports the same problems with
+    /// the file's line numbers before it gets here.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        self.camera.validate()?;
+        if self.material_names.len() != self.materials.len() {
+            return Err(SceneError::Invalid("every material needs a name".into()));
+        }
+        for (i, object) in self.objects.iter().enumerate() {
+            if object.material as usize >= self.materials.len() {
+                return Err(SceneError::Invalid(format!(
+                    "object {i} uses material {} but the scene has {}",
+                    object.material,
+                    self.materials.len()
+                )));
+            }
+            object.shape.validate().map_err(SceneError::Invalid)?;
+        }
+        Ok(())
+    }
+}
+
+impl Shape {
+    pub fn validate(&self) -> Result<(), String> {
+        match *self {
+            Shape::Sphere { center, radius } => {
+                if !center.is_finite() || !radius.is_finite() || radius == 0.0 {
+                    return Err(format!(
+                        "sphere radius must be finite and non-zero, got {radius}"
+                    ));
+                }
+            }
+            Shape::Quad { q, u, v } => {
+                let area = u.cross(v).length();
+                if !q.is_finite() || !(area > 0.0) || !area.is_finite() {
+                    return Err("quad has zero area: its edges u and v are parallel or zero".into());
+                }
+            }
+            Shape::Cuboid { min, max } => {
+                if !min.is_finite() || !max.is_finite() || !(max.cmpgt(min).all()) {
+                    return Err(format!(
+                        "box needs max > min on every axis, got min {min:?} max {max:?}"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}

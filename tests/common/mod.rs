@@ -1,0 +1,65 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use glam::Vec3;
+use rt_gpu::film::Film;
+use rt_gpu::render::RenderOptions;
+use rt_gpu::scene::flat::FlatScene;
+use rt_gpu::scene::{
+    Background, Camera, Material, Object, RenderDefaults, Scene, Shape, Transform,
+};
+
+pub fn opts(width: u32, height: u32, spp: u32, max_depth: u32, seed: u32) -> RenderOptions {
+    RenderOptions {
+        width,
+        height,
+        spp,
+        first_sample: 0,
+        seed,
+        max_depth,
+    }
+}
+
+pub fn render_cpu(scene: &Scene, opts: &RenderOptions) -> Film {
+    let flat = FlatScene::new(scene, opts.width, opts.height).expect("valid scene");
+    rt_gpu::cpu::render(&flat, opts, &|| {})
+}
+
+pub fn object(shape: Shape, material: u32) -> Object {
+    Object {
+        shape,
+        material,
+        transform: Transform::default(),
+    }
+}
+
+/// A scene with the camera at `from` looking at `at` (up +y).
+pub fn scene(
+    from: Vec3,
+    at: Vec3,
+    vfov: f32,
+    background: Background,
+    materials: Vec<Material>,
+    objects: Vec<Object>,
+) -> Scene {
+    Scene {
+        name: "test".into(),
+        camera: Camera {
+            look_from: from,
+            look_at: at,
+            up: Vec3::Y,
+            vfov_degrees: vfov,
+            aperture: 0.0,
+            focus_distance: None,
+        },
+        background,
+        material_names: (0..materials.len()).map(|i| format!("m{i}")).collect(),
+        materials,
+        objects,
+        defaults: RenderDefaults {
+            width: 16,
+            height: 16,
+            max_depth: 4,
+        },
+    }
+}

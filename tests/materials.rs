@@ -1,0 +1,141 @@
+//! Scattering: Fresnel, total internal reflection, mirrors, and a chi-square test that lambertian
+//! scattering is cosine-distributed.
+
+use glam::Vec3;
+use rt_gpu::cpu::material::{fresnel, reflect, refract_cos, scatter};
+use rt_gpu::cpu::shapes::Hit;
+use rt_gpu::rng::Rng;
+use rt_gpu::scene::Material;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
+    Hit {
+        t: 1.0,
+        point: Vec3::ZERO,
+        normal,
+        front_face,
+        material: 0,
+        primitive: 0,
+    }
+}
+
+#[test]
+fn fresnel_at_normal_incidence_is_four_percent_for_glass() {
+    let eta = 1.0 / 1.5;
+    let cos_t = refract_cos(1.0, eta).expect("refracts");
+    assert!((fresnel(1.0, cos_t, eta) - 0.04).abs() < 1e-6);
+    // Same from inside the glass.
+    let cos_t = refract_cos(1.0, 1.5).expect("refracts");
+    assert!((fresnel(1.0, cos_t, 1.5) - 0.04).abs() < 1e-6);
+    // Grazing incidence reflects everything.
+    let cos_t = refract_cos(1e-4, eta).expect("refracts");
+    assert!(fresnel(1e-4, cos_t, eta) > 0.999);
+}
+
+#[test]
+fn total_internal_reflection_beyond_the_critical_angle() {
+    // From glass (1.5) to air, the critical angle is asin(1/1.5) = 41.81 degrees.
+    let critical = (1.0f32 / 1.5).asin();
+    assert!(refract_cos((critical - 0.01).cos(), 1.5).is_some());
+    assert!(refract_cos((critical + 0.01).cos(), 1.5).is_none());
+    // A dielectric then always reflects, whatever the random number.
+    let n = Vec3::Y; // the normal faces the incoming ray, inside the glass
+    let angle = critical + 0.2;
+    let dir_in = Vec3::new(angle.sin(), -angle.cos(), 0.0);
+    for seed in 0..64 {
+        let mut rng = Rng::for_sample(0, 0, seed);
+        let (att, out) = scatter(
+            &Material::Dielectric { ior: 1.5 },
+            dir_in,
+            &hit_with_normal(n, false),
+            &mut rng,
+        )
+        .expect("scatters");
+        assert_eq!(att, Vec3::ONE);
+        assert!((out - reflect(dir_in, n)).length() < 1e-6);
+    }
+}
+
+#[test]
+fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
+    let n = Vec3::Y;
+    let dir_in = Vec3::new(1.0, -1.0, 0.0).normalize();
+    let mirror = Material::Metal {
+        albedo: Vec3::new(0.8, 0.6, 0.2),
+        fuzz: 0.0,
+    };
+    let mut rng = Rng::for_sample(1, 2, 3);
+    let (att, out) =
+        scatter(&mirror, dir_in, &hit_with_normal(n, true), &mut rng).expect("reflects");
+    assert_eq!(att, Vec3::new(0.8, 0.6, 0.2));
+    assert!((out - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
+
+    // At grazing incidence with full fuzz, some rays end below the surface: those are absorbed,
+    // the rest leave above it.
+    let grazing = Vec3::new(1.0, -0.01, 0.0).normalize();
+    let fuzzy = Material::Metal {
+        albedo: Vec3::ONE,
+        fuzz: 1.0,
+    };
+    let mut absorbed = 0;
+    for i in 0..1000 {
+        let mut rng = Rng::for_sample(i, 0, 9);
+        match scatter(&fuzzy, grazing, &hit_with_normal(n, true), &mut rng) {
+            Some((_, out)) => assert!(out.dot(n) > 0.0),
+            None => absorbed += 1,
+        }
+    }
+    assert!(absorbed > 100 && absorbed < 900, "{absorbed}");
+}
+
+/// Histogram of directions about `normal` over (cos^2 theta, phi): for a cosine-weighted
+/// distribution cos^2 theta is uniform, so every cell expects the same count.
+fn chi_square_p_value(normal: Vec3, sample: impl Fn(u32) -> Vec3) -> f64 {
+    const N: u32 = 200_000;
+    const BINS_COS: usize = 10;
+    const BINS_PHI: usize = 20;
+    let tangent = normal.any_orthonormal_vector();
+    let bitangent = normal.cross(tangent);
+    let mut counts = [[0u32; BINS_PHI]; BINS_COS];
+    for i in 0..N {
+        let d = sample(i);
+        let cos = d.dot(normal);
+        assert!(cos >= 0.0, "direction below the surface");
+        let phi = d.dot(bitangent).atan2(d.dot(tangent)) + std::f32::consts::PI;
+        let a = ((cos * cos) * BINS_COS as f32).min(BINS_COS as f32 - 1.0) as usize;
+        let b = (phi / std::f32::consts::TAU * BINS_PHI as f32).min(BINS_PHI as f32 - 1.0) as usize;
+        counts[a][b] += 1;
+    }
+    let expected = N as f64 / (BINS_COS * BINS_PHI) as f64;
+    let chi2: f64 = counts
+        .iter()
+        .flatten()
+        .map(|&c| (c as f64 - expected).powi(2) / expected)
+        .sum();
+    let dof = (BINS_COS * BINS_PHI - 1) as f64;
+    1.0 - ChiSquared::new(dof).expect("dof > 0").cdf(chi2)
+}
+
+/// One chi-square test at significance 0.01 (a single comparison, so no correction); expected
+/// count per cell 1000, far above the usual minimum of 5. Negative control: uniform-hemisphere
+/// directions, which must be rejected.
+#[test]
+fn lambertian_scattering_is_cosine_distributed() {
+    let normal = Vec3::new(0.3, 0.8, -0.52).normalize();
+    let lambertian = Material::lambertian(Vec3::ONE);
+    let hit = hit_with_normal(normal, true);
+    let p = chi_square_p_value(normal, |i| {
+        let mut rng = Rng::for_sample(i, 0, 42);
+        scatter(&lambertian, -normal, &hit, &mut rng)
+            .expect("scatters")
+            .1
+    });
+    assert!(p > 0.01, "cosine sampling rejected: p = {p}");
+
+    let p_uniform = chi_square_p_value(normal, |i| {
+        let mut rng = Rng::for_sample(i, 0, 42);
+        let d = rt_gpu::cpu::sampling::unit_vector(rng.next_f32(), rng.next_f32());
+        if d.dot(normal) < 0.0 { -d } else { d }
+    });
+    assert!(p_uniform < 1e-6, "negative control passed: p = {p_uniform}");
+}

@@ -1,0 +1,188 @@
+//! Scene files: the files in scenes/ are the built-ins, and bad files give located errors.
+
+use rt_gpu::scene::builtin::{BUILTINS, builtin};
+use rt_gpu::scene::file::{load, parse, to_toml};
+use rt_gpu::scene::{Material, Scene, Shape, Transform};
+use std::path::Path;
+
+#[test]
+fn every_builtin_has_an_identical_scene_file() {
+    for (name, _) in BUILTINS {
+        let from_file =
+            load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml")))
+                .unwrap_or_else(|e| panic!("scenes/{name}.toml: {e:#}"));
+        let expected = builtin(name).expect("built-in");
+        assert_eq!(
+            resolved(&from_file),
+            resolved(&expected),
+            "scenes/{name}.toml differs from the built-in"
+        );
+    }
+}
+
+/// A scene with material references resolved: files list materials in name order.
+#[allow(clippy::type_complexity)]
+fn resolved(s: &Scene) -> (String, Vec<(Shape, Transform, Material, String)>) {
+    let objects = s
+        .objects
+        .iter()
+        .map(|o| {
+            let m = o.material as usize;
+            (
+                o.shape,
+                o.transform,
+                s.materials[m],
+                s.material_names[m].clone(),
+            )
+        })
+        .collect();
+    (
+        format!("{:?} {:?} {:?}", s.camera, s.background, s.defaults),
+        objects,
+    )
+}
+
+#[test]
+fn export_round_trips() {
+    for (name, _) in BUILTINS {
+        let scene = builtin(name).expect("built-in");
+        let text = to_toml(&scene);
+        assert_eq!(
+            resolved(&parse(&text, "x.toml", name).expect("parses")),
+            resolved(&scene)
+        );
+    }
+}
+
+const GOOD: &str = r#"
+[camera]
+look_from = [0, 0, 1]
+look_at = [0, 0, 0]
+vfov = 40
+
+[materials]
+white = { type = "lambertian", albedo = [0.7, 0.7, 0.7] }
+
+[[object]]
+sphere = { center = [0, 0, 0], radius = 0.5 }
+material = "white"
+"#;
+
+fn error_of(text: &str) -> String {
+    match parse(text, "bad.toml", "bad") {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn a_minimal_file_loads_with_defaults() {
+    let scene = parse(GOOD, "good.toml", "good").expect("parses");
+    assert_eq!(scene.objects.len(), 1);
+    assert_eq!(scene.defaults.max_depth, 10);
+}
+
+#[test]
+fn bad_files_name_the_file_line_and_problem() {
+    let cases: &[(&str, &str, &str, &str)] = &[
+        // (replace this, with this, expected location, expected words)
+        (
+            "radius = 0.5",
+            "radius = 0.5, colour = 1",
+            "bad.toml:11:",
+            "unknown field `colour`",
+        ),
+        (
+            "vfov = 40",
+            "vfov = \"wide\"",
+            "bad.toml:5:",
+            "invalid type",
+        ),
+        ("radius = 0.5", "radius = nan", "bad.toml:11:", "finite"),
+        (
+            "look_at = [0, 0, 0]",
+            "look_at = [0, 0, inf]",
+            "bad.toml:4:",
+            "finite",
+        ),
+        ("radius = 0.5", "radius = 0", "bad.toml:10:", "non-zero"),
+        (
+            "look_at = [0, 0, 0]",
+            "look_at = [0, 0, 1]",
+            "bad.toml:2:",
+            "look_from equals look_at",
+        ),
+        (
+            "look_at = [0, 0, 0]",
+            "look_at = [0, 5, 1]\nup = [0, 1, 0]",
+            "bad.toml:2:",
+            "parallel",
+        ),
+        (
+            "material = \"white\"",
+            "material = \"black\"",
+            "bad.toml:10:",
+            "unknown material \"black\"",
+        ),
+        (
+            "albedo = [0.7, 0.7, 0.7]",
+            "albedo = [0.7, 1.7, 0.7]",
+            "bad.toml:8:",
+            "[0, 1]",
+        ),
+        (
+            "albedo = [0.7, 0.7, 0.7]",
+            "albedo = [0.7, 0.7]",
+            "bad.toml:8:",
+            "3 numbers",
+        ),
+        (
+            "sphere = { center = [0, 0, 0], radius = 0.5 }",
+            "quad = { q = [0, 0, 0], u = [1, 0, 0], v = [2, 0, 0] }",
+            "bad.toml:10:",
+            "zero area",
+        ),
+        (
+            "sphere = { center = [0, 0, 0], radius = 0.5 }",
+            "box = { min = [0, 0, 0], max = [1, 0, 1] }",
+            "bad.toml:10:",
+            "max > min",
+        ),
+        (
+            "sphere = { center = [0, 0, 0], radius = 0.5 }",
+            "",
+            "bad.toml:10:",
+            "exactly one of",
+        ),
+        ("vfov = 40", "vfov = 180", "bad.toml:2:", "field of view"),
+        ("[camera]", "[camera]\n[camera]", "bad.toml:3:", "camera"),
+    ];
+    for (from, to, location, words) in cases {
+        assert!(GOOD.contains(from), "{from}");
+        let text = GOOD.replacen(from, to, 1);
+        let message = error_of(&text);
+        assert!(
+            message.starts_with(location),
+            "{message:?} should start with {location}"
+        );
+        assert!(
+            message.contains(words),
+            "{message:?} should mention {words}"
+        );
+        assert!(!message.contains('\n'), "{message:?} is not one line");
+    }
+}
+
+/// The format reference in scenes/README.md is itself a valid scene.
+#[test]
+fn the_documented_example_parses() {
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/README.md"))
+            .expect("scenes/README.md");
+    let start = doc.find("```toml\n").expect("a toml block") + "```toml\n".len();
+    let end = start + doc[start..].find("```").expect("closed");
+    let scene =
+        parse(&doc[start..end], "scenes/README.md", "example").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.objects.len(), 3);
+    assert_eq!(scene.materials.len(), 6);
+}
