@@ -6,6 +6,7 @@
 
 pub mod cpu;
 pub mod film;
+pub mod gpu;
 pub mod output;
 pub mod render;
 pub mod rng;

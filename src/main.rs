@@ -3,8 +3,9 @@
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rt_gpu::gpu::{Features, list_adapters};
 use rt_gpu::output::{ImageFormat, write_image};
-use rt_gpu::render::{Backend, RenderOptions, render};
+use rt_gpu::render::{Backend, GpuChoice, RenderOptions, Rendered, render};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
 use rt_gpu::scene::file::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
 use rt_gpu::scene::flat::FlatScene;
@@ -21,7 +22,10 @@ Examples:
   rt-gpu cornell --spp 1000              render the Cornell box to cornell.png
   rt-gpu scenes/showcase.toml -o a.exr   render a scene file to linear EXR
   rt-gpu spheres --size 800x450 --backend cpu --seed 7 -o spheres.ppm
-  rt-gpu scenes                          list the built-in scenes";
+  rt-gpu cornell --print-shader          show the GPU kernel built for a scene
+  rt-gpu scenes                          list the built-in scenes
+  rt-gpu devices                         list GPU adapters
+  rt-gpu bench                           compare backends' speed on the Cornell box";
 
 /// A physically based path tracer: a WGSL compute kernel via wgpu, and a CPU reference
 /// renderer that computes the same estimator.
@@ -48,6 +52,27 @@ enum Command {
         #[arg(long, value_name = "DIR")]
         export: Option<PathBuf>,
     },
+    /// List the GPU adapters wgpu can see (pick one with --adapter).
+    Devices,
+    /// Measure million samples per second of each backend, side by side in one run.
+    Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// A built-in scene name or a scene file.
+    #[arg(default_value = "cornell")]
+    scene: String,
+    /// Samples per pixel of each measured render.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: u32,
+    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
+    size: (u32, u32),
+    #[arg(long, value_name = "D", default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    max_depth: u32,
+    /// GPU adapter (part of its name).
+    #[arg(long)]
+    adapter: Option<String>,
 }
 
 #[derive(Args)]
@@ -67,8 +92,17 @@ struct RenderArgs {
     #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     max_depth: Option<u32>,
     /// Where to render.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
     backend: Backend,
+    /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
+    #[arg(long, value_name = "NAME")]
+    adapter: Option<String>,
+    /// Print the WGSL kernel built for this scene and exit.
+    #[arg(long)]
+    print_shader: bool,
+    /// Run the general everything-enabled GPU kernel instead of the scene's specialised one.
+    #[arg(long, hide = true)]
+    unspecialised: bool,
     /// Output image; the extension picks the format: .png and .ppm (8-bit, gamma 2), .exr and
     /// .pfm (linear radiance) [default: <scene>.png].
     #[arg(short, long, value_name = "FILE")]
@@ -94,9 +128,16 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn main() -> ExitCode {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // Mesa's Vulkan drivers print an "error:" line on every start without it.
+        // SAFETY: nothing else runs yet: no other thread can read the environment concurrently.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Scenes { export }) => list_scenes(export.as_deref()),
+        Some(Command::Devices) => list_devices(),
+        Some(Command::Bench(args)) => bench(&args),
         None => run_render(&cli.render),
     };
     match result {
@@ -106,6 +147,101 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Renders with a progress bar on stderr; returns the result and wall seconds.
+fn timed_render(
+    backend: Backend,
+    gpu: &GpuChoice,
+    flat: &FlatScene,
+    opts: &RenderOptions,
+) -> anyhow::Result<(Rendered, f64)> {
+    let progress = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template(
+            "{spinner} {elapsed_precise} [{bar:40}] {percent}%, eta {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let start = Instant::now();
+    let result = render(backend, gpu, flat, opts, &|f| {
+        progress.set_position((f * 1000.0) as u64)
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+    Ok((result?, seconds))
+}
+
+fn list_devices() -> anyhow::Result<()> {
+    let adapters = list_adapters();
+    if adapters.is_empty() {
+        bail!("{}", rt_gpu::gpu::GpuError::NoAdapter);
+    }
+    for a in adapters {
+        println!(
+            "{:<40} {:?} {:?}, driver {} {}",
+            a.name, a.backend, a.device_type, a.driver, a.driver_info
+        );
+    }
+    Ok(())
+}
+
+/// Renders the same scene on each backend (and the GPU with both kernels) in one run.
+fn bench(args: &BenchArgs) -> anyhow::Result<()> {
+    let scene = resolve_scene(&args.scene)?;
+    let (width, height) = args.size;
+    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: args.spp,
+        first_sample: 0,
+        seed: 1,
+        max_depth: args.max_depth,
+    };
+    let samples = width as f64 * height as f64 * args.spp as f64;
+    println!(
+        "{}: {width}x{height}, {} spp, max depth {}",
+        scene.name, args.spp, args.max_depth
+    );
+    let mut rates = Vec::new();
+    let runs = [
+        ("cpu", Backend::Cpu, false),
+        ("gpu specialised kernel", Backend::Gpu, false),
+        ("gpu everything-enabled kernel", Backend::Gpu, true),
+    ];
+    for (label, backend, everything) in runs {
+        let gpu = GpuChoice {
+            adapter: args.adapter.clone(),
+            everything,
+        };
+        match timed_render(backend, &gpu, &flat, &opts) {
+            Ok((rendered, seconds)) => {
+                let rate = samples / seconds / 1e6;
+                let gpu_time = rendered
+                    .gpu_seconds
+                    .map(|s| format!(", {:.2} Msamples/s by GPU time", samples / s / 1e6))
+                    .unwrap_or_default();
+                println!(
+                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{gpu_time}",
+                    rendered.device
+                );
+                rates.push((label, rate));
+            }
+            Err(e) => println!("  {label:<30} unavailable: {e:#}"),
+        }
+    }
+    let rate = |name: &str| rates.iter().find(|(l, _)| *l == name).map(|(_, r)| *r);
+    if let (Some(gpu), Some(cpu)) = (rate(runs[1].0), rate(runs[0].0)) {
+        println!("  gpu / cpu speed: {:.2}x", gpu / cpu);
+    }
+    if let (Some(special), Some(general)) = (rate(runs[1].0), rate(runs[2].0)) {
+        println!(
+            "  specialised / everything-enabled kernel speed: {:.2}x",
+            special / general
+        );
+    }
+    Ok(())
 }
 
 fn list_scenes(export: Option<&Path>) -> anyhow::Result<()> {
@@ -166,27 +302,39 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
     };
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    let gpu = GpuChoice {
+        adapter: args.adapter.clone(),
+        everything: args.unspecialised,
+    };
+    if args.print_shader {
+        let features = if gpu.everything {
+            Features::everything(&flat)
+        } else {
+            Features::of(&flat)
+        };
+        print!(
+            "{}",
+            rt_gpu::gpu::shader::compose(&features).map_err(anyhow::Error::msg)?
+        );
+        return Ok(());
+    }
 
-    let progress = ProgressBar::new(height as u64).with_style(
-        ProgressStyle::with_template(
-            "{spinner} {elapsed_precise} [{bar:40}] {pos}/{len} rows, eta {eta}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    let start = Instant::now();
-    let film = render(args.backend, &flat, &opts, &|| progress.inc(1))?;
-    let seconds = start.elapsed().as_secs_f64();
-    progress.finish_and_clear();
-    write_image(&output, &film)?;
+    let (rendered, seconds) = timed_render(args.backend, &gpu, &flat, &opts)?;
+    let film = &rendered.film;
+    write_image(&output, film)?;
 
     let samples = width as f64 * height as f64 * opts.spp as f64;
     let mean = film.image_mean();
+    let gpu_time = rendered
+        .gpu_seconds
+        .map(|s| format!(" ({s:.2} s on the GPU)"))
+        .unwrap_or_default();
     eprintln!(
-        "{}: {width}x{height}, {} spp, {}, {seconds:.2} s, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
+        "{}: {width}x{height}, {} spp, {} [{}], {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
         scene.name,
         opts.spp,
         args.backend.name(),
+        rendered.device,
         samples / seconds / 1e6,
         mean.x,
         mean.y,

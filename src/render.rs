@@ -1,7 +1,9 @@
 //! What a render is asked to do, and the backends that do it.
 
 use crate::film::Film;
+use crate::gpu::{Features, GpuContext, GpuRenderer, Tuning};
 use crate::scene::flat::FlatScene;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderOptions {
@@ -33,15 +35,59 @@ impl Backend {
     }
 }
 
-/// Renders on `backend`; `on_progress` is called with fractions of the work done.
+/// GPU choices.
+#[derive(Clone, Debug, Default)]
+pub struct GpuChoice {
+    /// Part of an adapter's name (see `rt-gpu devices`); `None` picks the best available.
+    pub adapter: Option<String>,
+    /// Run the everything-enabled kernel instead of the one specialised to the scene.
+    pub everything: bool,
+}
+
+pub struct Rendered {
+    pub film: Film,
+    /// Device time from timestamp queries, where available.
+    pub gpu_seconds: Option<f64>,
+    /// What rendered it: "cpu (N threads)" or the adapter's name.
+    pub device: String,
+}
+
+/// Renders on `backend`; `on_progress` is called with the fraction of work done.
 pub fn render(
     backend: Backend,
+    gpu: &GpuChoice,
     scene: &FlatScene,
     opts: &RenderOptions,
-    on_row: &(dyn Fn() + Sync),
-) -> anyhow::Result<Film> {
+    on_progress: &(dyn Fn(f64) + Sync),
+) -> anyhow::Result<Rendered> {
     match backend {
-        Backend::Cpu => Ok(crate::cpu::render(scene, opts, on_row)),
-        Backend::Gpu => anyhow::bail!("the GPU backend is not built yet: use --backend cpu"),
+        Backend::Cpu => {
+            let rows = AtomicU32::new(0);
+            let film = crate::cpu::render(scene, opts, &|| {
+                let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
+                on_progress(done as f64 / opts.height as f64);
+            });
+            Ok(Rendered {
+                film,
+                gpu_seconds: None,
+                device: format!("cpu ({} threads)", rayon::current_num_threads()),
+            })
+        }
+        Backend::Gpu => {
+            let renderer = GpuRenderer::new(GpuContext::new(gpu.adapter.as_deref())?);
+            let features = if gpu.everything {
+                Features::everything(scene)
+            } else {
+                Features::of(scene)
+            };
+            let kernel = renderer.kernel(features, "render")?;
+            let (film, timings) =
+                renderer.render(&kernel, scene, opts, &Tuning::default(), on_progress)?;
+            Ok(Rendered {
+                film,
+                gpu_seconds: timings.gpu_seconds,
+                device: renderer.ctx.info.name.clone(),
+            })
+        }
     }
 }

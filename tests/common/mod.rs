@@ -1,6 +1,9 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod gpu;
+pub mod stats;
+
 use glam::Vec3;
 use rt_gpu::film::Film;
 use rt_gpu::render::RenderOptions;

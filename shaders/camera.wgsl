@@ -1,0 +1,17 @@
+// Primary rays (twin: src/cpu/camera.rs): pixel x covers [x, x+1)/width, row 0 is the top.
+
+fn generate_ray(x: u32, y: u32, rng: ptr<function, u32>) -> Ray {
+    let jx = rng_next(rng);
+    let jy = rng_next(rng);
+    let s = (f32(x) + jx) / f32(params.width);
+    let t = (f32(y) + jy) / f32(params.height);
+    let target_point = params.upper_left + s * params.horizontal - t * params.vertical;
+    var origin = params.origin;
+//#if LENS
+    let u1 = rng_next(rng);
+    let u2 = rng_next(rng);
+    let d = unit_disk(u1, u2);
+    origin += params.lens_radius * (d.x * params.right + d.y * params.up);
+//#endif
+    return Ray(origin, normalize(target_point - origin));
+}

@@ -1,0 +1,67 @@
+// Data shared by every kernel module: the scene buffers and the per-dispatch parameters.
+// Each struct mirrors a #[repr(C)] struct in src/gpu/layout.rs; a test checks sizes and offsets.
+
+struct Sphere {
+    center: vec3f,
+    radius: f32,      // negative: the normal faces inward
+    material: u32,
+}
+
+struct Quad {
+    q: vec3f,
+    d: f32,           // plane: dot(normal, p) = d
+    u: vec3f,
+    material: u32,
+    v: vec3f,
+    normal: vec3f,
+    w: vec3f,         // cross(u, v) / |cross(u, v)|^2
+}
+
+struct Material {
+    albedo: vec3f,    // lambertian, metal
+    kind: u32,        // MAT_* below
+    emission: vec3f,  // lambertian emission, light radiance
+    param: f32,       // metal: fuzz; dielectric: ior; light: 1 if two-sided
+}
+
+const MAT_LAMBERTIAN: u32 = 0u;
+const MAT_METAL: u32 = 1u;
+const MAT_DIELECTRIC: u32 = 2u;
+const MAT_LIGHT: u32 = 3u;
+
+struct Params {
+    origin: vec3f,
+    lens_radius: f32,
+    upper_left: vec3f,
+    width: u32,
+    horizontal: vec3f,
+    height: u32,
+    vertical: vec3f,
+    max_depth: u32,
+    right: vec3f,
+    seed: u32,
+    up: vec3f,
+    first_sample: u32,     // random-stream index of this dispatch's first sample
+    background: vec3f,
+    sample_count: u32,     // samples per pixel in this dispatch
+    tile_origin: vec2u,
+    tile_size: vec2u,
+    sphere_count: u32,
+    quad_count: u32,
+    samples_before: u32,   // samples already in the accumulator
+    sky: u32,              // 1: sky gradient background
+}
+
+struct Ray {
+    origin: vec3f,
+    dir: vec3f,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+//#if SPHERES
+@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
+//#endif
+//#if QUADS
+@group(0) @binding(2) var<storage, read> quads: array<Quad>;
+//#endif
+@group(0) @binding(3) var<storage, read> materials: array<Material>;

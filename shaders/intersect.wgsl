@@ -1,0 +1,100 @@
+// Ray-shape intersection (twin: src/cpu/shapes.rs).
+
+struct Hit {
+    point: vec3f,
+    t: f32,
+    normal: vec3f,      // faces the incoming ray
+    material: u32,
+    front_face: bool,   // the ray hit the outward (u x v) side
+    primitive: u32,     // spheres first, then quads
+}
+
+// The closest hit beyond the ray's origin, if any.
+fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
+    var closest = 3.4e38;
+    var found = false;
+    var primitive = 0u;
+    var material = 0u;
+    var outward = vec3f(0.0, 1.0, 0.0);
+//#if SPHERES
+    for (var i = 0u; i < params.sphere_count; i++) {
+        let s = spheres[i];
+        let oc = s.center - ray.origin;
+        let h = dot(ray.dir, oc);
+        // r^2 - |oc - h d|^2: no cancellation for small or distant spheres.
+        let perpendicular = oc - h * ray.dir;
+        let disc = s.radius * s.radius - dot(perpendicular, perpendicular);
+        if disc >= 0.0 {
+            let sq = sqrt(disc);
+            var t = h - sq;
+            if !(t > 0.0 && t < closest) {
+                t = h + sq;
+            }
+            if t > 0.0 && t < closest {
+                closest = t;
+                found = true;
+                primitive = i;
+                material = s.material;
+                outward = (ray.origin + t * ray.dir - s.center) / s.radius;
+            }
+        }
+    }
+//#endif
+//#if QUADS
+    for (var i = 0u; i < params.quad_count; i++) {
+        let q = quads[i];
+        let denom = dot(q.normal, ray.dir);
+        // Rays parallel to the plane miss.
+        if abs(denom) >= 1e-8 {
+            let t = (q.d - dot(q.normal, ray.origin)) / denom;
+            if t > 0.0 && t < closest {
+                let planar = ray.origin + t * ray.dir - q.q;
+                let alpha = dot(q.w, cross(planar, q.v));
+                let beta = dot(q.w, cross(q.u, planar));
+                if alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0 {
+                    closest = t;
+                    found = true;
+                    primitive = params.sphere_count + i;
+                    material = q.material;
+                    outward = q.normal;
+                }
+            }
+        }
+    }
+//#endif
+    if !found {
+        return false;
+    }
+    let n = normalize(outward);
+    let front = dot(ray.dir, n) < 0.0;
+    (*hit).t = closest;
+    (*hit).point = ray.origin + closest * ray.dir;
+    (*hit).normal = select(-n, n, front);
+    (*hit).front_face = front;
+    (*hit).material = material;
+    (*hit).primitive = primitive;
+    return true;
+}
+
+// Moves a ray origin off a surface by a few units in the last place along n (Ray Tracing Gems,
+// ch. 6), so it cannot re-hit the surface it leaves at any scale.
+fn offset_component(p: f32, n: f32) -> f32 {
+    if abs(p) < 1.0 / 32.0 {
+        return p + (1.0 / 65536.0) * n;
+    }
+    var of_i = i32(256.0 * n);
+    if p < 0.0 {
+        of_i = -of_i;
+    }
+    return bitcast<f32>(bitcast<i32>(p) + of_i);
+}
+
+fn offset_origin(p: vec3f, n: vec3f) -> vec3f {
+    return vec3f(offset_component(p.x, n.x), offset_component(p.y, n.y), offset_component(p.z, n.z));
+}
+
+// A ray leaving `hit` along unit `dir`, started on the side `dir` points to.
+fn spawn(hit: Hit, dir: vec3f) -> Ray {
+    let side = select(-hit.normal, hit.normal, dot(dir, hit.normal) >= 0.0);
+    return Ray(offset_origin(hit.point, side), dir);
+}

@@ -1,0 +1,92 @@
+// Entry points: one invocation per pixel of the current tile.
+
+// Per pixel of the tile, three vec4s: the running mean (w: count of non-finite samples, as
+// bits), the Kahan compensation of the mean (w: samples accumulated, as bits, so the host can
+// prove no loop was cut short), and Welford's M2. Updated sample by sample in sample order, so
+// the result does not depend on how a render is sliced into dispatches.
+@group(0) @binding(4) var<storage, read_write> accum: array<vec4f>;
+
+// WGSL lets implementations assume floats are finite, so test the exponent bits instead.
+fn all_finite(v: vec3f) -> bool {
+    let exponent = bitcast<vec3u>(v) & vec3u(0x7f800000u);
+    return all(exponent != vec3u(0x7f800000u));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn render(@builtin(global_invocation_id) gid: vec3u) {
+    if gid.x >= params.tile_size.x || gid.y >= params.tile_size.y {
+        return;
+    }
+    let x = params.tile_origin.x + gid.x;
+    let y = params.tile_origin.y + gid.y;
+    let pixel = y * params.width + x;
+    let slot = 3u * (gid.y * params.tile_size.x + gid.x);
+    let first = accum[slot];
+    var mean = first.xyz;
+    var invalid = bitcast<u32>(first.w);
+    let second = accum[slot + 1u];
+    var compensation = second.xyz;
+    var count = bitcast<u32>(second.w);
+    var m2 = accum[slot + 2u].xyz;
+    for (var s = 0u; s < params.sample_count; s++) {
+        var rng = rng_for_sample(pixel, params.first_sample + s, params.seed);
+        let ray = generate_ray(x, y, &rng);
+        var l = radiance(ray, &rng);
+        if !all_finite(l) {
+            l = vec3f(0.0);
+            invalid += 1u;
+        }
+        let n = f32(params.samples_before + s + 1u);
+        let delta = l - mean;
+        // Kahan-compensated mean += delta / n. Drivers may compile with fast-math, under which
+        // (mean + step - mean) - step folds to 0; passing `next` through a select on a value
+        // the compiler cannot know (the image width is never 0) keeps the rounding error real.
+        let step = delta / n - compensation;
+        let next = select(vec3f(0.0), mean + step, params.width != 0u);
+        compensation = (next - mean) - step;
+        mean = next;
+        m2 += delta * (l - mean);
+        count += 1u;
+    }
+    accum[slot] = vec4f(mean, bitcast<f32>(invalid));
+    accum[slot + 1u] = vec4f(compensation, bitcast<f32>(count));
+    accum[slot + 2u] = vec4f(m2, 0.0);
+}
+
+//#if DEBUG
+// The first bounce of one sample per pixel, for comparing paths with the CPU reference.
+struct FirstBounce {
+    point: vec3f,
+    primitive: u32,
+    normal: vec3f,
+    hit: u32,
+    dir: vec3f,       // the scattered direction
+    scattered: u32,
+}
+
+@group(0) @binding(5) var<storage, read_write> bounces: array<FirstBounce>;
+
+@compute @workgroup_size(8, 8, 1)
+fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
+    if gid.x >= params.tile_size.x || gid.y >= params.tile_size.y {
+        return;
+    }
+    let x = params.tile_origin.x + gid.x;
+    let y = params.tile_origin.y + gid.y;
+    let pixel = y * params.width + x;
+    var rng = rng_for_sample(pixel, params.first_sample, params.seed);
+    let ray = generate_ray(x, y, &rng);
+    var out = FirstBounce(vec3f(0.0), 0u, vec3f(0.0), 0u, vec3f(0.0), 0u);
+    var hit: Hit;
+    if intersect(ray, &hit) {
+        out.point = hit.point;
+        out.primitive = hit.primitive;
+        out.normal = hit.normal;
+        out.hit = 1u;
+        let s = scatter(materials[hit.material], ray.dir, hit, &rng);
+        out.dir = s.dir;
+        out.scattered = select(0u, 1u, s.ok);
+    }
+    bounces[gid.y * params.tile_size.x + gid.x] = out;
+}
+//#endif

@@ -1,0 +1,96 @@
+// Emission, scattering and the background (twin: src/cpu/material.rs). Random numbers per
+// bounce: lambertian 2, metal 2, dielectric 1, light 0.
+
+struct Scattered {
+    attenuation: vec3f,
+    ok: bool,            // false: the path ends here
+    dir: vec3f,
+}
+
+fn emitted(m: Material, front_face: bool) -> vec3f {
+//#if LIGHT
+    if m.kind == MAT_LIGHT {
+        if front_face || m.param > 0.5 {
+            return m.emission;
+        }
+        return vec3f(0.0);
+    }
+//#endif
+//#if EMISSIVE
+    if m.kind == MAT_LAMBERTIAN {
+        return m.emission;
+    }
+//#endif
+    return vec3f(0.0);
+}
+
+fn reflect_dir(d: vec3f, n: vec3f) -> vec3f {
+    return d - 2.0 * dot(d, n) * n;
+}
+
+fn scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+    var out = Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));
+//#if LAMBERTIAN
+    if m.kind == MAT_LAMBERTIAN {
+        // normal + a uniform unit vector is cosine-distributed about the normal.
+        let u1 = rng_next(rng);
+        let u2 = rng_next(rng);
+        let d = hit.normal + unit_vector(u1, u2);
+        let len2 = dot(d, d);
+        out.dir = select(hit.normal, d / sqrt(len2), len2 > 1e-12);
+        out.attenuation = m.albedo;
+        out.ok = true;
+    }
+//#endif
+//#if METAL
+    if m.kind == MAT_METAL {
+        let u1 = rng_next(rng);
+        let u2 = rng_next(rng);
+        let fuzzed = reflect_dir(dir_in, hit.normal) + m.param * unit_vector(u1, u2);
+        let len2 = dot(fuzzed, fuzzed);
+        if len2 > 1e-12 {
+            out.dir = fuzzed / sqrt(len2);
+            out.attenuation = m.albedo;
+            // Fuzzed below the surface: absorbed.
+            out.ok = dot(out.dir, hit.normal) > 0.0;
+        }
+    }
+//#endif
+//#if DIELECTRIC
+    if m.kind == MAT_DIELECTRIC {
+        let eta = select(m.param, 1.0 / m.param, hit.front_face);
+        let cos_i = clamp(dot(-dir_in, hit.normal), 0.0, 1.0);
+        let u = rng_next(rng);
+        var dir = reflect_dir(dir_in, hit.normal);
+        let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
+        if sin2_t < 1.0 {
+            let cos_t = sqrt(1.0 - sin2_t);
+            if u >= fresnel(cos_i, cos_t, eta) {
+                dir = eta * dir_in + (eta * cos_i - cos_t) * hit.normal;
+            }
+        }
+        out.dir = normalize(dir);
+        out.attenuation = vec3f(1.0);
+        out.ok = true;
+    }
+//#endif
+    return out;
+}
+
+//#if DIELECTRIC
+// Exact unpolarised Fresnel reflectance; eta = n_incident / n_transmitted.
+fn fresnel(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+//#endif
+
+fn background(dir: vec3f) -> vec3f {
+//#if SKY
+    let t = 0.5 * (dir.y + 1.0);
+    return (1.0 - t) * vec3f(1.0) + t * vec3f(0.5, 0.7, 1.0);
+//#else
+    return params.background;
+//#endif
+}

@@ -1,0 +1,149 @@
+//! Finding an adapter and opening a device, headless.
+
+use std::sync::{Arc, Mutex};
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no GPU adapter found: install a Vulkan driver (on Debian/Ubuntu `apt-get install mesa-vulkan-drivers libvulkan1` gives lavapipe, a software GPU) or use --backend cpu"
+    )]
+    NoAdapter,
+    #[error("no GPU adapter matches '{wanted}' (available: {available}); see `rt-gpu devices`")]
+    NoSuchAdapter { wanted: String, available: String },
+    #[error("cannot open the GPU device {adapter}: {message}")]
+    Device { adapter: String, message: String },
+    #[error("shader error: {0}")]
+    Shader(String),
+    #[error("GPU error: {0}")]
+    Runtime(String),
+    #[error("the GPU device was lost: {0}")]
+    Lost(String),
+    #[error("{0}")]
+    TooLarge(String),
+}
+
+/// A device and queue, with what the renderer needs to know about them.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    pub timestamps: bool,
+    /// Set by wgpu's error and device-lost callbacks; checked after every submission.
+    pub failure: Arc<Mutex<Option<GpuError>>>,
+}
+
+fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if wgpu::Backends::from_env().is_none() {
+        desc.backends = wgpu::Backends::PRIMARY;
+    }
+    wgpu::Instance::new(desc)
+}
+
+/// Every adapter wgpu can see.
+pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
+    let instance = instance();
+    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+        .iter()
+        .map(|a| a.get_info())
+        .collect()
+}
+
+impl GpuContext {
+    /// Opens the adapter whose name contains `wanted` (case-insensitive), or the best available:
+    /// a hardware GPU if there is one, else a software one such as lavapipe.
+    pub fn new(wanted: Option<&str>) -> Result<Self, GpuError> {
+        let instance = instance();
+        let adapter = match wanted {
+            Some(name) => {
+                let adapters =
+                    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+                let needle = name.to_lowercase();
+                let available: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+                adapters
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&needle))
+                    .ok_or_else(|| GpuError::NoSuchAdapter {
+                        wanted: name.to_string(),
+                        available: if available.is_empty() {
+                            "none".into()
+                        } else {
+                            available.join(", ")
+                        },
+                    })?
+            }
+            None => {
+                let request = |fallback| {
+                    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                        power_preference: wgpu::PowerPreference::HighPerformance,
+                        force_fallback_adapter: fallback,
+                        ..Default::default()
+                    }))
+                };
+                request(false)
+                    .or_else(|_| request(true))
+                    .map_err(|_| GpuError::NoAdapter)?
+            }
+        };
+        let info = adapter.get_info();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("rt-gpu"),
+            required_features: if timestamps {
+                wgpu::Features::TIMESTAMP_QUERY
+            } else {
+                wgpu::Features::empty()
+            },
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+
+        let failure: Arc<Mutex<Option<GpuError>>> = Arc::default();
+        let on_error = failure.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            let mut slot = on_error.lock().unwrap_or_else(|p| p.into_inner());
+            slot.get_or_insert(GpuError::Runtime(e.to_string().replace('\n', " ")));
+        }));
+        let on_lost = failure.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            let mut slot = on_lost.lock().unwrap_or_else(|p| p.into_inner());
+            slot.get_or_insert(GpuError::Lost(format!("{reason:?}: {message}")));
+        });
+        Ok(GpuContext {
+            device,
+            queue,
+            info,
+            limits,
+            timestamps,
+            failure,
+        })
+    }
+
+    /// The first error wgpu reported since the last check, if any.
+    pub fn take_failure(&self) -> Option<GpuError> {
+        self.failure
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take()
+    }
+
+    /// Waits for all submitted work, surfacing errors instead of hanging or panicking.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(std::time::Duration::from_secs(60)),
+            })
+            .map_err(|e| GpuError::Runtime(format!("waiting for the GPU: {e}")))?;
+        match self.take_failure() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}

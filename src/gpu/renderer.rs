@@ -1,0 +1,470 @@
+//! Dispatching the kernel: buffers, tiles, sample slices, timing and readback into a [`Film`].
+
+use super::context::{GpuContext, GpuError};
+use super::layout::{ACCUM_BYTES_PER_PIXEL, GpuFirstBounce, GpuParams, SceneBuffers, base_params};
+use super::shader::{Features, compose, validate};
+use crate::film::{Film, PixelStats};
+use crate::render::RenderOptions;
+use crate::scene::flat::FlatScene;
+use glam::DVec3;
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+/// GPU watchdogs kill long dispatches; slices aim well under this.
+const TARGET_DISPATCH_SECONDS: f64 = 0.05;
+
+/// Mesa's llvmpipe (lavapipe) silently ends any invocation after 65535 loop iterations in
+/// total, across all its loops. Dispatches stay under this budget on every device (it costs
+/// nothing elsewhere), and the kernel counts the samples it really took so that a cut loop is
+/// an error, never a quietly wrong image.
+const LOOP_ITERATION_BUDGET: u64 = 60_000;
+
+/// A generous bound on the loop iterations one sample costs: the path loop, and in each segment
+/// one pass over each primitive list, counting every loop's exit test as an iteration too
+/// (measured on lavapipe: a 1-sphere, depth-2 sample costs about 7).
+fn loop_iterations_per_sample(scene: &FlatScene, max_depth: u32) -> u64 {
+    let primitives = scene.spheres.len() as u64 + scene.quads.len() as u64;
+    2 + (max_depth as u64 + 1) * (3 + primitives)
+}
+
+/// Knobs tests use to force tiling and slicing; renders normally leave them `None`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Tuning {
+    /// Most pixels per tile [default: what one storage binding holds].
+    pub max_tile_pixels: Option<u64>,
+    /// Samples per dispatch [default: sized from measured dispatch time].
+    pub samples_per_dispatch: Option<u32>,
+}
+
+/// A compiled kernel and the source it was built from.
+pub struct Kernel {
+    pub features: Features,
+    pub source: String,
+    pipeline: wgpu::ComputePipeline,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Timings {
+    /// Sum of per-dispatch GPU time from timestamp queries, where the adapter has them.
+    pub gpu_seconds: Option<f64>,
+    pub dispatches: u32,
+    /// The longest single dispatch, GPU time if known, else wall time.
+    pub longest_dispatch_seconds: f64,
+}
+
+pub struct GpuRenderer {
+    pub ctx: GpuContext,
+    bind_group_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl GpuRenderer {
+    pub fn new(ctx: GpuContext) -> Self {
+        let device = &ctx.device;
+        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage_entry(1, true),
+                storage_entry(2, true),
+                storage_entry(3, true),
+                storage_entry(4, false),
+                storage_entry(5, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&bind_group_layout)],
+            immediate_size: 0,
+        });
+        GpuRenderer {
+            ctx,
+            bind_group_layout,
+            pipeline_layout,
+        }
+    }
+
+    /// Builds, validates and compiles the kernel for `features`.
+    pub fn kernel(&self, features: Features, entry_point: &str) -> Result<Kernel, GpuError> {
+        let source = compose(&features).map_err(GpuError::Shader)?;
+        self.kernel_from_source(features, source, entry_point)
+    }
+
+    /// Compiles WGSL `source`; errors come back as [`GpuError::Shader`], never a panic.
+    pub fn kernel_from_source(
+        &self,
+        features: Features,
+        source: String,
+        entry_point: &str,
+    ) -> Result<Kernel, GpuError> {
+        validate(&source).map_err(GpuError::Shader)?;
+        let device = &self.ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let descriptor = wgpu::ShaderModuleDescriptor {
+            label: Some("rt-gpu kernel"),
+            source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
+        };
+        // SAFETY: every index the kernel uses is in range by construction. Sphere and quad loops
+        // run to counts equal to the uploaded array lengths (arrays are never shorter: empty ones
+        // hold one dummy element); material indices are checked by `Scene::validate`; the
+        // accumulator slot is bounded by the tile size the accumulator was allocated for. Every
+        // loop is bounded by a uniform (max depth, sample count, primitive counts). So wgpu's
+        // injected bounds checks and loop guards, a large cost in these hot loops, are dropped.
+        let module = unsafe {
+            device.create_shader_module_trusted(descriptor, wgpu::ShaderRuntimeChecks::unchecked())
+        };
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry_point),
+            layout: Some(&self.pipeline_layout),
+            module: &module,
+            entry_point: Some(entry_point),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Shader(e.to_string().replace('\n', " ")));
+        }
+        if let Some(e) = self.ctx.take_failure() {
+            return Err(e);
+        }
+        Ok(Kernel {
+            features,
+            source,
+            pipeline,
+        })
+    }
+
+    /// Most pixels one tile may hold: its accumulator must fit one storage binding.
+    fn max_tile_pixels(&self, tuning: &Tuning) -> u64 {
+        let binding = (self.ctx.limits.max_storage_buffer_binding_size as u64)
+            .min(self.ctx.limits.max_buffer_size);
+        let fits = binding / ACCUM_BYTES_PER_PIXEL;
+        tuning.max_tile_pixels.map_or(fits, |t| t.min(fits))
+    }
+
+    fn scene_buffers(&self, scene: &FlatScene) -> [wgpu::Buffer; 3] {
+        let buffers = SceneBuffers::new(scene);
+        let make = |label, contents: &[u8]| {
+            self.ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+        };
+        [
+            make("spheres", bytemuck::cast_slice(&buffers.spheres)),
+            make("quads", bytemuck::cast_slice(&buffers.quads)),
+            make("materials", bytemuck::cast_slice(&buffers.materials)),
+        ]
+    }
+
+    fn bind_group(
+        &self,
+        params: &wgpu::Buffer,
+        scene: &[wgpu::Buffer; 3],
+        accum: &wgpu::Buffer,
+        debug: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
+        }
+        self.ctx
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("scene"),
+                layout: &self.bind_group_layout,
+                entries: &[
+                    entry(0, params),
+                    entry(1, &scene[0]),
+                    entry(2, &scene[1]),
+                    entry(3, &scene[2]),
+                    entry(4, accum),
+                    entry(5, debug),
+                ],
+            })
+    }
+
+    fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(16),
+            usage,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Copies `size` bytes of `source` back to the host.
+    fn read_back(&self, source: &wgpu::Buffer, size: u64) -> Result<Vec<u8>, GpuError> {
+        let staging = self.buffer(
+            "readback",
+            size,
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+        self.ctx.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..size);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.ctx.wait()?;
+        rx.recv()
+            .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
+            .map_err(|e| GpuError::Runtime(format!("cannot read GPU memory: {e}")))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Runtime(format!("cannot read GPU memory: {e}")))?
+            .to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
+
+    /// Renders `opts.spp` samples per pixel with `kernel`, tile by tile; `on_progress` gets the
+    /// fraction done.
+    pub fn render(
+        &self,
+        kernel: &Kernel,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+        tuning: &Tuning,
+        on_progress: &dyn Fn(f64),
+    ) -> Result<(Film, Timings), GpuError> {
+        let (width, height) = (opts.width, opts.height);
+        let max_tile_pixels = self.max_tile_pixels(tuning);
+        if (width as u64) > max_tile_pixels {
+            return Err(GpuError::TooLarge(format!(
+                "a {width}-pixel row does not fit one GPU storage binding ({max_tile_pixels} pixels)"
+            )));
+        }
+        let tile_rows = ((max_tile_pixels / width as u64).min(height as u64)) as u32;
+        let per_sample = loop_iterations_per_sample(scene, opts.max_depth);
+        let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
+        if is_llvmpipe && per_sample > LOOP_ITERATION_BUDGET {
+            return Err(GpuError::TooLarge(format!(
+                "this scene needs up to {per_sample} loop iterations per sample, more than lavapipe allows (65535): use fewer primitives or a lower --max-depth, or --backend cpu"
+            )));
+        }
+        let max_slice = (LOOP_ITERATION_BUDGET / per_sample).clamp(1, u32::MAX as u64) as u32;
+        let scene_buffers = self.scene_buffers(scene);
+        let params_buffer = self.buffer(
+            "params",
+            std::mem::size_of::<GpuParams>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let debug = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
+        let accum_size = tile_rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
+        let accum = self.buffer(
+            "accumulator",
+            accum_size,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        );
+        let bind_group = self.bind_group(&params_buffer, &scene_buffers, &accum, &debug);
+        let timer = self.ctx.timestamps.then(|| DispatchTimer::new(self));
+
+        let mut film = Film::new(width, height);
+        let mut timings = Timings::default();
+        let mut gpu_seconds = 0.0;
+        let mut slice = tuning.samples_per_dispatch.unwrap_or(1).clamp(1, max_slice);
+        let mut y0 = 0;
+        while y0 < height {
+            let rows = tile_rows.min(height - y0);
+            let tile_bytes = rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
+            {
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                encoder.clear_buffer(&accum, 0, None);
+                self.ctx.queue.submit([encoder.finish()]);
+            }
+            let mut done = 0;
+            while done < opts.spp {
+                let count = slice.min(opts.spp - done);
+                let mut params = base_params(scene, opts);
+                params.tile_origin = [0, y0];
+                params.tile_size = [width, rows];
+                params.first_sample = opts.first_sample + done;
+                params.samples_before = done;
+                params.sample_count = count;
+                self.ctx
+                    .queue
+                    .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&params));
+
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("render"),
+                        timestamp_writes: timer.as_ref().map(|t| t.writes()),
+                    });
+                    pass.set_pipeline(&kernel.pipeline);
+                    pass.set_bind_group(0, &bind_group, &[]);
+                    pass.dispatch_workgroups(width.div_ceil(8), rows.div_ceil(8), 1);
+                }
+                if let Some(t) = &timer {
+                    t.resolve(&mut encoder);
+                }
+                let start = Instant::now();
+                self.ctx.queue.submit([encoder.finish()]);
+                self.ctx.wait()?;
+                let wall = start.elapsed().as_secs_f64();
+                let seconds = match &timer {
+                    Some(t) => {
+                        let s = t.read(self)?;
+                        gpu_seconds += s;
+                        s
+                    }
+                    None => wall,
+                };
+                timings.dispatches += 1;
+                timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
+                done += count;
+                on_progress(
+                    (y0 as f64 + rows as f64 * done as f64 / opts.spp as f64) / height as f64,
+                );
+                if tuning.samples_per_dispatch.is_none() {
+                    // Size the next slice from this one's time; grow at most 4x per step.
+                    let per_sample = seconds.max(1e-6) / count as f64;
+                    let ideal = (TARGET_DISPATCH_SECONDS / per_sample).floor() as u32;
+                    slice = ideal.clamp(1, count.saturating_mul(4)).min(max_slice);
+                }
+            }
+            let bytes = self.read_back(&accum, tile_bytes)?;
+            let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            for (i, px) in values.chunks_exact(3).enumerate() {
+                let [mean, compensation, m2] = [px[0], px[1], px[2]];
+                let taken = compensation[3].to_bits();
+                if taken != opts.spp {
+                    return Err(GpuError::Runtime(format!(
+                        "the device ended the kernel early: a pixel got {taken} of {} samples",
+                        opts.spp
+                    )));
+                }
+                let stats = &mut film.pixels[y0 as usize * width as usize + i];
+                *stats = PixelStats {
+                    n: opts.spp as u64,
+                    mean: DVec3::new(
+                        mean[0] as f64 - compensation[0] as f64,
+                        mean[1] as f64 - compensation[1] as f64,
+                        mean[2] as f64 - compensation[2] as f64,
+                    ),
+                    m2: DVec3::new(m2[0] as f64, m2[1] as f64, m2[2] as f64).max(DVec3::ZERO),
+                };
+                film.invalid_samples += mean[3].to_bits() as u64;
+            }
+            y0 += rows;
+        }
+        timings.gpu_seconds = timer.is_some().then_some(gpu_seconds);
+        Ok((film, timings))
+    }
+
+    /// The first bounce of sample `opts.first_sample` of every pixel, from the debug kernel.
+    pub fn first_bounce(
+        &self,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+    ) -> Result<Vec<GpuFirstBounce>, GpuError> {
+        let features = Features {
+            debug: true,
+            ..Features::of(scene)
+        };
+        let kernel = self.kernel(features, "first_bounce")?;
+        let pixels = opts.width as u64 * opts.height as u64;
+        let size = pixels * std::mem::size_of::<GpuFirstBounce>() as u64;
+        let out = self.buffer(
+            "bounces",
+            size,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let params_buffer = self
+            .ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("params"),
+                contents: bytemuck::bytes_of(&base_params(scene, opts)),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let accum = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
+        let bind_group = self.bind_group(&params_buffer, &self.scene_buffers(scene), &accum, &out);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&kernel.pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(opts.width.div_ceil(8), opts.height.div_ceil(8), 1);
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.wait()?;
+        let bytes = self.read_back(&out, size)?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+}
+
+/// Timestamp queries around one compute pass.
+struct DispatchTimer {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    period_ns: f64,
+}
+
+impl DispatchTimer {
+    fn new(r: &GpuRenderer) -> Self {
+        DispatchTimer {
+            queries: r.ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("dispatch time"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolved: r.buffer(
+                "timestamps",
+                16,
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            period_ns: r.ctx.queue.get_timestamp_period() as f64,
+        }
+    }
+
+    fn writes(&self) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        }
+    }
+
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.resolve_query_set(&self.queries, 0..2, &self.resolved, 0);
+    }
+
+    fn read(&self, r: &GpuRenderer) -> Result<f64, GpuError> {
+        let bytes = r.read_back(&self.resolved, 16)?;
+        let stamps: &[u64] = bytemuck::cast_slice(&bytes);
+        Ok(stamps[1].saturating_sub(stamps[0]) as f64 * self.period_ns * 1e-9)
+    }
+}

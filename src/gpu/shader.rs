@@ -1,0 +1,183 @@
+//! Building the kernel for a scene. The WGSL modules in `shaders/` are joined in order, and
+//! blocks between `//#if FEATURE` (or `//#if A || B`), optional `//#else`, and `//#endif` are kept
+//! only when the scene needs that feature: a scene without spheres gets no sphere code, one
+//! without glass no dielectric branch.
+
+use crate::scene::flat::FlatScene;
+use crate::scene::{Background, Material};
+
+/// The kernel's modules, in dependency order.
+const MODULES: &[(&str, &str)] = &[
+    ("common.wgsl", include_str!("../../shaders/common.wgsl")),
+    ("rng.wgsl", include_str!("../../shaders/rng.wgsl")),
+    ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
+    ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
+    (
+        "intersect.wgsl",
+        include_str!("../../shaders/intersect.wgsl"),
+    ),
+    (
+        "materials.wgsl",
+        include_str!("../../shaders/materials.wgsl"),
+    ),
+    (
+        "integrator.wgsl",
+        include_str!("../../shaders/integrator.wgsl"),
+    ),
+    ("kernel.wgsl", include_str!("../../shaders/kernel.wgsl")),
+];
+
+/// What a scene needs from the kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Features {
+    pub spheres: bool,
+    pub quads: bool,
+    pub lambertian: bool,
+    pub metal: bool,
+    pub dielectric: bool,
+    pub light: bool,
+    /// Lambertian surfaces with emission.
+    pub emissive: bool,
+    /// A camera with an aperture.
+    pub lens: bool,
+    pub sky: bool,
+    /// The `first_bounce` entry point, for tests.
+    pub debug: bool,
+}
+
+impl Features {
+    pub fn of(scene: &FlatScene) -> Self {
+        let has = |f: fn(&Material) -> bool| scene.materials.iter().any(f);
+        Features {
+            spheres: !scene.spheres.is_empty(),
+            quads: !scene.quads.is_empty(),
+            lambertian: has(|m| matches!(m, Material::Lambertian { .. })),
+            metal: has(|m| matches!(m, Material::Metal { .. })),
+            dielectric: has(|m| matches!(m, Material::Dielectric { .. })),
+            light: has(|m| matches!(m, Material::Light { .. })),
+            emissive: has(
+                |m| matches!(m, Material::Lambertian { emission, .. } if *emission != glam::Vec3::ZERO),
+            ),
+            lens: scene.camera.lens_radius > 0.0,
+            sky: scene.background == Background::Sky,
+            debug: false,
+        }
+    }
+
+    /// Everything on: the general kernel any scene can run (except `sky`, which replaces the
+    /// constant background, and `lens`, which changes the random-number sequence).
+    pub fn everything(scene: &FlatScene) -> Self {
+        let own = Features::of(scene);
+        Features {
+            spheres: true,
+            quads: true,
+            lambertian: true,
+            metal: true,
+            dielectric: true,
+            light: true,
+            emissive: true,
+            ..own
+        }
+    }
+
+    pub fn flags(&self) -> [(&'static str, bool); 10] {
+        [
+            ("SPHERES", self.spheres),
+            ("QUADS", self.quads),
+            ("LAMBERTIAN", self.lambertian),
+            ("METAL", self.metal),
+            ("DIELECTRIC", self.dielectric),
+            ("LIGHT", self.light),
+            ("EMISSIVE", self.emissive),
+            ("LENS", self.lens),
+            ("SKY", self.sky),
+            ("DEBUG", self.debug),
+        ]
+    }
+
+    fn enabled(&self, name: &str) -> Result<bool, String> {
+        self.flags()
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, on)| *on)
+            .ok_or_else(|| format!("unknown shader feature {name}"))
+    }
+}
+
+/// The kernel source for `features`.
+pub fn compose(features: &Features) -> Result<String, String> {
+    let on: Vec<&str> = features
+        .flags()
+        .iter()
+        .filter(|(_, on)| *on)
+        .map(|(n, _)| *n)
+        .collect();
+    let mut out = format!(
+        "// rt-gpu kernel, generated from shaders/*.wgsl for features: {}\n",
+        on.join(" ")
+    );
+    for (name, source) in MODULES {
+        out.push_str(&format!("\n// ---- {name} ----\n"));
+        out.push_str(&preprocess(source, features).map_err(|e| format!("shaders/{name}: {e}"))?);
+    }
+    Ok(out)
+}
+
+fn preprocess(source: &str, features: &Features) -> Result<String, String> {
+    // Each open block: (whether its branch is kept, whether the enclosing text is kept).
+    let mut stack: Vec<(bool, bool)> = Vec::new();
+    let mut keep = true;
+    let mut out = String::new();
+    for (number, line) in source.lines().enumerate() {
+        let directive = line.trim();
+        if let Some(condition) = directive.strip_prefix("//#if ") {
+            let mut value = false;
+            for name in condition.split("||") {
+                value |= features
+                    .enabled(name.trim())
+                    .map_err(|e| format!("line {}: {e}", number + 1))?;
+            }
+            stack.push((value, keep));
+            keep = keep && value;
+        } else if directive == "//#else" {
+            let &(value, outer) = stack
+                .last()
+                .ok_or(format!("line {}: #else without #if", number + 1))?;
+            keep = outer && !value;
+        } else if directive == "//#endif" {
+            let (_, outer) = stack
+                .pop()
+                .ok_or(format!("line {}: #endif without #if", number + 1))?;
+            keep = outer;
+        } else if keep {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    if !stack.is_empty() {
+        return Err("#if without #endif".into());
+    }
+    Ok(out)
+}
+
+/// Parses and validates WGSL with naga, as wgpu will; the error is one line.
+pub fn validate(source: &str) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
+    let module = naga::front::wgsl::parse_str(source).map_err(|e| {
+        format!(
+            "WGSL parse error: {}",
+            e.emit_to_string(source).replace('\n', " ")
+        )
+    })?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .map_err(|e| {
+        format!(
+            "WGSL validation error: {}",
+            e.emit_to_string(source).replace('\n', " ")
+        )
+    })?;
+    Ok((module, info))
+}
