@@ -7,14 +7,14 @@ struct Sphere {
     material: u32,
 }
 
+// The parallelogram q + a u + b v, a, b in [0, 1]; see src/scene/flat.rs for the axes.
 struct Quad {
     q: vec3f,
     d: f32,           // plane: dot(normal, p) = d
-    u: vec3f,
-    material: u32,
-    v: vec3f,
     normal: vec3f,
-    w: vec3f,         // cross(u, v) / |cross(u, v)|^2
+    material: u32,
+    alpha_axis: vec3f,
+    beta_axis: vec3f,
 }
 
 struct Material {

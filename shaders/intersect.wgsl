@@ -24,41 +24,36 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
         // r^2 - |oc - h d|^2: no cancellation for small or distant spheres.
         let perpendicular = oc - h * ray.dir;
         let disc = s.radius * s.radius - dot(perpendicular, perpendicular);
-        if disc >= 0.0 {
-            let sq = sqrt(disc);
-            var t = h - sq;
-            if !(t > 0.0 && t < closest) {
-                t = h + sq;
-            }
-            if t > 0.0 && t < closest {
-                closest = t;
-                found = true;
-                primitive = i;
-                material = s.material;
-                outward = (ray.origin + t * ray.dir - s.center) / s.radius;
-            }
+        let sq = sqrt(max(disc, 0.0));
+        let near = h - sq;
+        let t = select(h + sq, near, near > 0.0 && near < closest);
+        if disc >= 0.0 && t > 0.0 && t < closest {
+            closest = t;
+            found = true;
+            primitive = i;
+            material = s.material;
+            outward = (ray.origin + t * ray.dir - s.center) / s.radius;
         }
     }
 //#endif
 //#if QUADS
     for (var i = 0u; i < params.quad_count; i++) {
         let q = quads[i];
+        // Branch-free: SIMD drivers run every branch for some lane anyway. Rays parallel to the
+        // plane (|denom| < 1e-8) miss; their division is replaced by a harmless one.
         let denom = dot(q.normal, ray.dir);
-        // Rays parallel to the plane miss.
-        if abs(denom) >= 1e-8 {
-            let t = (q.d - dot(q.normal, ray.origin)) / denom;
-            if t > 0.0 && t < closest {
-                let planar = ray.origin + t * ray.dir - q.q;
-                let alpha = dot(q.w, cross(planar, q.v));
-                let beta = dot(q.w, cross(q.u, planar));
-                if alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0 {
-                    closest = t;
-                    found = true;
-                    primitive = params.sphere_count + i;
-                    material = q.material;
-                    outward = q.normal;
-                }
-            }
+        let facing = abs(denom) >= 1e-8;
+        let t = (q.d - dot(q.normal, ray.origin)) / select(1.0, denom, facing);
+        let planar = ray.origin + t * ray.dir - q.q;
+        let alpha = dot(planar, q.alpha_axis);
+        let beta = dot(planar, q.beta_axis);
+        let inside = alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0;
+        if facing && t > 0.0 && t < closest && inside {
+            closest = t;
+            found = true;
+            primitive = params.sphere_count + i;
+            material = q.material;
+            outward = q.normal;
         }
     }
 //#endif

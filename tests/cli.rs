@@ -98,7 +98,10 @@ fn bad_inputs_fail_with_one_line_and_leave_the_output_untouched() {
         (&["cornell", "--size", "30000x30000"], "pixels"),
         (&["cornell", "--max-depth", "0"], "--max-depth"),
         (&["cornell", "--backend", "tpu"], "--backend"),
-        (&["cornell", "--backend", "gpu"], "GPU backend"),
+        (
+            &["cornell", "--adapter", "no-such-gpu-xyz"],
+            "no GPU adapter",
+        ),
         (&["cornell", "-o", "image.jpg"], ".png, .ppm, .exr or .pfm"),
         (&["cornell", "-o", "no/such/dir/x.png"], "does not exist"),
         (&[], "no scene given"),
@@ -139,4 +142,20 @@ fn images_are_readable_by_others() {
         .permissions()
         .mode();
     assert_eq!(mode & 0o644, 0o644, "{mode:o}");
+}
+
+#[test]
+fn print_shader_shows_the_specialised_kernel() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = rt_gpu(&["cornell-empty", "--print-shader"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let wgsl = String::from_utf8_lossy(&out.stdout);
+    assert!(wgsl.contains("fn render("), "{wgsl}");
+    assert!(
+        wgsl.contains("features: QUADS LAMBERTIAN LIGHT"),
+        "{}",
+        wgsl.lines().next().unwrap_or("")
+    );
+    assert!(!wgsl.contains("fn fresnel"));
+    rt_gpu::gpu::shader::validate(&wgsl).expect("valid WGSL");
 }

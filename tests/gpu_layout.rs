@@ -20,8 +20,10 @@ fn all_features() -> Features {
     }
 }
 
-/// (WGSL struct name, Rust size, Rust field offsets in declaration order).
-fn rust_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
+/// A Rust struct's WGSL name, size, and field offsets in declaration order.
+type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+fn rust_layouts() -> Vec<Layout> {
     vec![
         (
             "Sphere",
@@ -38,11 +40,10 @@ fn rust_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
             vec![
                 ("q", offset_of!(GpuQuad, q)),
                 ("d", offset_of!(GpuQuad, d)),
-                ("u", offset_of!(GpuQuad, u)),
-                ("material", offset_of!(GpuQuad, material)),
-                ("v", offset_of!(GpuQuad, v)),
                 ("normal", offset_of!(GpuQuad, normal)),
-                ("w", offset_of!(GpuQuad, w)),
+                ("material", offset_of!(GpuQuad, material)),
+                ("alpha_axis", offset_of!(GpuQuad, alpha_axis)),
+                ("beta_axis", offset_of!(GpuQuad, beta_axis)),
             ],
         ),
         (

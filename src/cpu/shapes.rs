@@ -63,8 +63,8 @@ pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         return None;
     }
     let planar = ray.at(t) - quad.q;
-    let alpha = quad.w.dot(planar.cross(quad.v));
-    let beta = quad.w.dot(quad.u.cross(planar));
+    let alpha = planar.dot(quad.alpha_axis);
+    let beta = planar.dot(quad.beta_axis);
     ((0.0..=1.0).contains(&alpha) && (0.0..=1.0).contains(&beta)).then_some(t)
 }
 

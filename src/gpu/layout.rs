@@ -21,14 +21,12 @@ pub struct GpuSphere {
 pub struct GpuQuad {
     pub q: [f32; 3],
     pub d: f32,
-    pub u: [f32; 3],
-    pub material: u32,
-    pub v: [f32; 3],
-    pub _pad0: u32,
     pub normal: [f32; 3],
+    pub material: u32,
+    pub alpha_axis: [f32; 3],
+    pub _pad0: u32,
+    pub beta_axis: [f32; 3],
     pub _pad1: u32,
-    pub w: [f32; 3],
-    pub _pad2: u32,
 }
 
 pub const MAT_LAMBERTIAN: u32 = 0;
@@ -111,11 +109,10 @@ impl SceneBuffers {
             .map(|q| GpuQuad {
                 q: q.q.to_array(),
                 d: q.d,
-                u: q.u.to_array(),
-                material: q.material,
-                v: q.v.to_array(),
                 normal: q.normal.to_array(),
-                w: q.w.to_array(),
+                material: q.material,
+                alpha_axis: q.alpha_axis.to_array(),
+                beta_axis: q.beta_axis.to_array(),
                 ..Default::default()
             })
             .collect();

@@ -158,7 +158,10 @@ impl GpuRenderer {
 
     /// Most pixels one tile may hold: its accumulator must fit one storage binding.
     fn max_tile_pixels(&self, tuning: &Tuning) -> u64 {
-        let binding = (self.ctx.limits.max_storage_buffer_binding_size as u64)
+        let binding = self
+            .ctx
+            .limits
+            .max_storage_buffer_binding_size
             .min(self.ctx.limits.max_buffer_size);
         let fits = binding / ACCUM_BYTES_PER_PIXEL;
         tuning.max_tile_pixels.map_or(fits, |t| t.min(fits))

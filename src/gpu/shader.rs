@@ -47,7 +47,15 @@ pub struct Features {
 
 impl Features {
     pub fn of(scene: &FlatScene) -> Self {
-        let has = |f: fn(&Material) -> bool| scene.materials.iter().any(f);
+        // Only materials some primitive uses: a scene may define more than it places.
+        let used: Vec<&Material> = scene
+            .spheres
+            .iter()
+            .map(|s| s.material)
+            .chain(scene.quads.iter().map(|q| q.material))
+            .map(|m| &scene.materials[m as usize])
+            .collect();
+        let has = |f: fn(&Material) -> bool| used.iter().any(|m| f(m));
         Features {
             spheres: !scene.spheres.is_empty(),
             quads: !scene.quads.is_empty(),

@@ -14,8 +14,10 @@ pub struct Sphere {
     pub material: u32,
 }
 
-/// The parallelogram `q + a u + b v`; its plane `normal . p = d` and `w = n / |n|^2` (n = u x v)
-/// are precomputed so a hit costs one division.
+/// The parallelogram `q + a u + b v`, with its plane `normal . p = d` and two axes precomputed
+/// so that a hit costs one division and two dot products: for a point p in the plane,
+/// a = (p - q) . alpha_axis and b = (p - q) . beta_axis, where with n = u x v and
+/// w = n / |n|^2, alpha_axis = v x w and beta_axis = w x u.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quad {
     pub q: Vec3,
@@ -23,7 +25,8 @@ pub struct Quad {
     pub v: Vec3,
     pub normal: Vec3,
     pub d: f32,
-    pub w: Vec3,
+    pub alpha_axis: Vec3,
+    pub beta_axis: Vec3,
     pub material: u32,
 }
 
@@ -31,13 +34,15 @@ impl Quad {
     pub fn new(q: Vec3, u: Vec3, v: Vec3, material: u32) -> Self {
         let n = u.cross(v);
         let normal = n.normalize();
+        let w = n / n.length_squared();
         Quad {
             q,
             u,
             v,
             normal,
             d: normal.dot(q),
-            w: n / n.length_squared(),
+            alpha_axis: v.cross(w),
+            beta_axis: w.cross(u),
             material,
         }
     }
