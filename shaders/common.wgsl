@@ -58,6 +58,17 @@ struct Ray {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
+// Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
+// than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
+//#if UNIFORM_SCENE
+//#if SPHERES
+@group(0) @binding(1) var<uniform> spheres: array<Sphere, SCENE_CAPACITY>;
+//#endif
+//#if QUADS
+@group(0) @binding(2) var<uniform> quads: array<Quad, SCENE_CAPACITY>;
+//#endif
+@group(0) @binding(3) var<uniform> materials: array<Material, SCENE_CAPACITY>;
+//#else
 //#if SPHERES
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
 //#endif
@@ -65,3 +76,4 @@ struct Ray {
 @group(0) @binding(2) var<storage, read> quads: array<Quad>;
 //#endif
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
+//#endif

@@ -9,6 +9,22 @@ struct Hit {
     primitive: u32,     // spheres first, then quads
 }
 
+//#if QUADS
+// Distance along the ray to quad q, or -1 for a miss. Branch-free: SIMD drivers run every
+// branch for some lane anyway. Rays parallel to the plane (|denom| < 1e-8) miss; their
+// division is replaced by a harmless one.
+fn quad_distance(q: Quad, ray: Ray) -> f32 {
+    let denom = dot(q.normal, ray.dir);
+    let facing = abs(denom) >= 1e-8;
+    let t = (q.d - dot(q.normal, ray.origin)) / select(1.0, denom, facing);
+    let planar = ray.origin + t * ray.dir - q.q;
+    let alpha = dot(planar, q.alpha_axis);
+    let beta = dot(planar, q.beta_axis);
+    let inside = alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0;
+    return select(-1.0, t, facing && inside);
+}
+//#endif
+
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     var closest = 3.4e38;
@@ -39,16 +55,8 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 //#if QUADS
     for (var i = 0u; i < params.quad_count; i++) {
         let q = quads[i];
-        // Branch-free: SIMD drivers run every branch for some lane anyway. Rays parallel to the
-        // plane (|denom| < 1e-8) miss; their division is replaced by a harmless one.
-        let denom = dot(q.normal, ray.dir);
-        let facing = abs(denom) >= 1e-8;
-        let t = (q.d - dot(q.normal, ray.origin)) / select(1.0, denom, facing);
-        let planar = ray.origin + t * ray.dir - q.q;
-        let alpha = dot(planar, q.alpha_axis);
-        let beta = dot(planar, q.beta_axis);
-        let inside = alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0;
-        if facing && t > 0.0 && t < closest && inside {
+        let t = quad_distance(q, ray);
+        if t > 0.0 && t < closest {
             closest = t;
             found = true;
             primitive = params.sphere_count + i;

@@ -17,6 +17,8 @@ fn all_features() -> Features {
         lens: true,
         sky: false,
         debug: true,
+        uniform_scene: false,
+        scene_capacity: 1,
     }
 }
 
@@ -124,10 +126,10 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     }
 }
 
-/// Every combination of features composes into valid WGSL.
+/// Every combination of features (2^11 kernels) composes into valid WGSL.
 #[test]
 fn every_kernel_variant_validates() {
-    for bits in 0u32..1 << 10 {
+    for bits in 0u32..1 << 11 {
         let on = |i: u32| bits & (1 << i) != 0;
         let features = Features {
             spheres: on(0),
@@ -140,6 +142,8 @@ fn every_kernel_variant_validates() {
             lens: on(7),
             sky: on(8),
             debug: on(9),
+            uniform_scene: on(10),
+            scene_capacity: 16,
         };
         let source = compose(&features).expect("composes");
         if let Err(e) = validate(&source) {

@@ -41,6 +41,7 @@ pub struct Kernel {
     pub features: Features,
     pub source: String,
     pipeline: wgpu::ComputePipeline,
+    bind_group_layout: wgpu::BindGroupLayout,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -54,16 +55,14 @@ pub struct Timings {
 
 pub struct GpuRenderer {
     pub ctx: GpuContext,
-    bind_group_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
+            ty,
             has_dynamic_offset: false,
             min_binding_size: None,
         },
@@ -73,37 +72,7 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
 
 impl GpuRenderer {
     pub fn new(ctx: GpuContext) -> Self {
-        let device = &ctx.device;
-        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, true),
-                storage_entry(4, false),
-                storage_entry(5, false),
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scene"),
-            bind_group_layouts: &[Some(&bind_group_layout)],
-            immediate_size: 0,
-        });
-        GpuRenderer {
-            ctx,
-            bind_group_layout,
-            pipeline_layout,
-        }
+        GpuRenderer { ctx }
     }
 
     /// Builds, validates and compiles the kernel for `features`.
@@ -121,6 +90,28 @@ impl GpuRenderer {
     ) -> Result<Kernel, GpuError> {
         validate(&source).map_err(GpuError::Shader)?;
         let device = &self.ctx.device;
+        let scene_ty = if features.uniform_scene {
+            wgpu::BufferBindingType::Uniform
+        } else {
+            wgpu::BufferBindingType::Storage { read_only: true }
+        };
+        let read_write = wgpu::BufferBindingType::Storage { read_only: false };
+        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                buffer_entry(0, wgpu::BufferBindingType::Uniform),
+                buffer_entry(1, scene_ty),
+                buffer_entry(2, scene_ty),
+                buffer_entry(3, scene_ty),
+                buffer_entry(4, read_write),
+                buffer_entry(5, read_write),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&bind_group_layout)],
+            immediate_size: 0,
+        });
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let descriptor = wgpu::ShaderModuleDescriptor {
             label: Some("rt-gpu kernel"),
@@ -137,7 +128,7 @@ impl GpuRenderer {
         };
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry_point),
-            layout: Some(&self.pipeline_layout),
+            layout: Some(&pipeline_layout),
             module: &module,
             entry_point: Some(entry_point),
             compilation_options: Default::default(),
@@ -153,6 +144,7 @@ impl GpuRenderer {
             features,
             source,
             pipeline,
+            bind_group_layout,
         })
     }
 
@@ -167,15 +159,26 @@ impl GpuRenderer {
         tuning.max_tile_pixels.map_or(fits, |t| t.min(fits))
     }
 
-    fn scene_buffers(&self, scene: &FlatScene) -> [wgpu::Buffer; 3] {
-        let buffers = SceneBuffers::new(scene);
+    /// The scene arrays as buffers of the kind `features` asks for: uniform arrays padded to
+    /// their fixed capacity, or storage arrays.
+    fn scene_buffers(&self, scene: &FlatScene, features: &Features) -> [wgpu::Buffer; 3] {
+        let mut buffers = SceneBuffers::new(scene);
+        let usage = if features.uniform_scene {
+            let capacity = features.scene_capacity.max(1) as usize;
+            buffers.spheres.resize(capacity, Default::default());
+            buffers.quads.resize(capacity, Default::default());
+            buffers.materials.resize(capacity, Default::default());
+            wgpu::BufferUsages::UNIFORM
+        } else {
+            wgpu::BufferUsages::STORAGE
+        };
         let make = |label, contents: &[u8]| {
             self.ctx
                 .device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some(label),
                     contents,
-                    usage: wgpu::BufferUsages::STORAGE,
+                    usage,
                 })
         };
         [
@@ -187,6 +190,7 @@ impl GpuRenderer {
 
     fn bind_group(
         &self,
+        kernel: &Kernel,
         params: &wgpu::Buffer,
         scene: &[wgpu::Buffer; 3],
         accum: &wgpu::Buffer,
@@ -202,7 +206,7 @@ impl GpuRenderer {
             .device
             .create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene"),
-                layout: &self.bind_group_layout,
+                layout: &kernel.bind_group_layout,
                 entries: &[
                     entry(0, params),
                     entry(1, &scene[0]),
@@ -276,7 +280,7 @@ impl GpuRenderer {
             )));
         }
         let max_slice = (LOOP_ITERATION_BUDGET / per_sample).clamp(1, u32::MAX as u64) as u32;
-        let scene_buffers = self.scene_buffers(scene);
+        let scene_buffers = self.scene_buffers(scene, &kernel.features);
         let params_buffer = self.buffer(
             "params",
             std::mem::size_of::<GpuParams>() as u64,
@@ -291,7 +295,7 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
         );
-        let bind_group = self.bind_group(&params_buffer, &scene_buffers, &accum, &debug);
+        let bind_group = self.bind_group(kernel, &params_buffer, &scene_buffers, &accum, &debug);
         let timer = self.ctx.timestamps.then(|| DispatchTimer::new(self));
 
         let mut film = Film::new(width, height);
@@ -414,7 +418,8 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::UNIFORM,
             });
         let accum = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
-        let bind_group = self.bind_group(&params_buffer, &self.scene_buffers(scene), &accum, &out);
+        let buffers = self.scene_buffers(scene, &kernel.features);
+        let bind_group = self.bind_group(&kernel, &params_buffer, &buffers, &accum, &out);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());

@@ -43,7 +43,15 @@ pub struct Features {
     pub sky: bool,
     /// The `first_bounce` entry point, for tests.
     pub debug: bool,
+    /// Scene arrays in uniform buffers of `scene_capacity` elements (faster where they fit).
+    pub uniform_scene: bool,
+    pub scene_capacity: u32,
 }
+
+/// The largest uniform binding every WebGPU device offers.
+pub const MAX_UNIFORM_BYTES: u64 = 64 * 1024;
+/// The largest scene-array element: a quad.
+pub const LARGEST_ELEMENT_BYTES: u64 = 64;
 
 impl Features {
     pub fn of(scene: &FlatScene) -> Self {
@@ -56,6 +64,13 @@ impl Features {
             .map(|m| &scene.materials[m as usize])
             .collect();
         let has = |f: fn(&Material) -> bool| used.iter().any(|m| f(m));
+        // Uniform arrays have a fixed size: the next power of two (fewer distinct kernels).
+        let longest = scene
+            .spheres
+            .len()
+            .max(scene.quads.len())
+            .max(scene.materials.len());
+        let capacity = (longest.max(1) as u64).next_power_of_two();
         Features {
             spheres: !scene.spheres.is_empty(),
             quads: !scene.quads.is_empty(),
@@ -69,11 +84,14 @@ impl Features {
             lens: scene.camera.lens_radius > 0.0,
             sky: scene.background == Background::Sky,
             debug: false,
+            uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
+            scene_capacity: capacity as u32,
         }
     }
 
-    /// Everything on: the general kernel any scene can run (except `sky`, which replaces the
-    /// constant background, and `lens`, which changes the random-number sequence).
+    /// Everything on, scene arrays in storage buffers: the general kernel any scene can run
+    /// (except `sky`, which replaces the constant background, and `lens`, which changes the
+    /// random-number sequence).
     pub fn everything(scene: &FlatScene) -> Self {
         let own = Features::of(scene);
         Features {
@@ -84,11 +102,12 @@ impl Features {
             dielectric: true,
             light: true,
             emissive: true,
+            uniform_scene: false,
             ..own
         }
     }
 
-    pub fn flags(&self) -> [(&'static str, bool); 10] {
+    pub fn flags(&self) -> [(&'static str, bool); 11] {
         [
             ("SPHERES", self.spheres),
             ("QUADS", self.quads),
@@ -100,6 +119,7 @@ impl Features {
             ("LENS", self.lens),
             ("SKY", self.sky),
             ("DEBUG", self.debug),
+            ("UNIFORM_SCENE", self.uniform_scene),
         ]
     }
 
@@ -124,6 +144,12 @@ pub fn compose(features: &Features) -> Result<String, String> {
         "// rt-gpu kernel, generated from shaders/*.wgsl for features: {}\n",
         on.join(" ")
     );
+    if features.uniform_scene {
+        out.push_str(&format!(
+            "const SCENE_CAPACITY: u32 = {}u;\n",
+            features.scene_capacity.max(1)
+        ));
+    }
     for (name, source) in MODULES {
         out.push_str(&format!("\n// ---- {name} ----\n"));
         out.push_str(&preprocess(source, features).map_err(|e| format!("shaders/{name}: {e}"))?);

@@ -25,9 +25,20 @@ pub fn renderer() -> Option<GpuRenderer> {
 }
 
 pub fn render_gpu(r: &GpuRenderer, scene: &Scene, opts: &RenderOptions, tuning: &Tuning) -> Film {
+    render_gpu_with(r, scene, opts, tuning, Features::of)
+}
+
+/// Renders with the kernel `features` picks for the flattened scene.
+pub fn render_gpu_with(
+    r: &GpuRenderer,
+    scene: &Scene,
+    opts: &RenderOptions,
+    tuning: &Tuning,
+    features: fn(&FlatScene) -> Features,
+) -> Film {
     let flat = FlatScene::new(scene, opts.width, opts.height).expect("valid scene");
     let kernel = r
-        .kernel(Features::of(&flat), "render")
+        .kernel(features(&flat), "render")
         .expect("kernel compiles");
     r.render(&kernel, &flat, opts, tuning, &|_| {})
         .expect("renders")
