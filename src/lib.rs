@@ -4,10 +4,12 @@
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod converge;
 pub mod cpu;
 pub mod film;
 pub mod gpu;
 pub mod output;
+pub mod plot;
 pub mod render;
 pub mod rng;
 pub mod scene;

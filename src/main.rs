@@ -25,7 +25,8 @@ Examples:
   rt-gpu cornell --print-shader          show the GPU kernel built for a scene
   rt-gpu scenes                          list the built-in scenes
   rt-gpu devices                         list GPU adapters
-  rt-gpu bench                           compare backends' speed on the Cornell box";
+  rt-gpu bench                           compare backends' speed on the Cornell box
+  rt-gpu converge cornell --budget 20    error against time for each backend";
 
 /// A physically based path tracer: a WGSL compute kernel via wgpu, and a CPU reference
 /// renderer that computes the same estimator.
@@ -56,6 +57,46 @@ enum Command {
     Devices,
     /// Measure million samples per second of each backend, side by side in one run.
     Bench(BenchArgs),
+    /// Error against run time: ladders of renders at 1, 2, 4, ... spp per backend, compared with
+    /// a reference; writes a table, DIR/converge.csv and a log-log plot (DIR/converge.svg, .png).
+    Converge(ConvergeArgs),
+}
+
+#[derive(Args)]
+struct ConvergeArgs {
+    /// A built-in scene name or a scene file.
+    scene: String,
+    /// Reference image (.exr or .pfm, same size) [default: render one at high spp on the
+    /// fastest backend and cache it in DIR].
+    #[arg(long, value_name = "FILE")]
+    reference: Option<PathBuf>,
+    /// Samples per pixel of a rendered reference [default: 8x what the fastest series reaches].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    reference_spp: Option<u32>,
+    /// Backends to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "gpu,cpu")]
+    backends: Vec<Backend>,
+    /// Integrators to compare, comma-separated (available: naive).
+    #[arg(long, value_delimiter = ',', default_value = "naive")]
+    integrators: Vec<String>,
+    /// Seconds each series may spend on its ladder.
+    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
+    budget: f64,
+    /// Image size WIDTHxHEIGHT [default: the scene's].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Path segments per sample [default: the scene's].
+    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    max_depth: Option<u32>,
+    /// RMSE the time-to-error comparison aims at [default: the CPU series' error at its largest spp].
+    #[arg(long, value_name = "RMSE")]
+    target_rmse: Option<f64>,
+    /// GPU adapter (part of its name).
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Output directory.
+    #[arg(short, long, value_name = "DIR", default_value = "converge")]
+    output: PathBuf,
 }
 
 #[derive(Args)]
@@ -138,6 +179,7 @@ fn main() -> ExitCode {
         Some(Command::Scenes { export }) => list_scenes(export.as_deref()),
         Some(Command::Devices) => list_devices(),
         Some(Command::Bench(args)) => bench(&args),
+        Some(Command::Converge(args)) => converge(&args),
         None => run_render(&cli.render),
     };
     match result {
@@ -170,6 +212,69 @@ fn timed_render(
     let seconds = start.elapsed().as_secs_f64();
     progress.finish_and_clear();
     Ok((result?, seconds))
+}
+
+/// A stable 64-bit FNV-1a digest, for cache keys that must not change between builds.
+fn digest(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
+    let scene = resolve_scene(&args.scene)?;
+    let (width, height) = args
+        .size
+        .unwrap_or((scene.defaults.width, scene.defaults.height));
+    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    if let Some(t) = args.target_rmse
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--target-rmse must be a positive number, got {t}");
+    }
+    let options = rt_gpu::converge::ConvergeOptions {
+        scene: flat,
+        scene_name: scene.name.clone(),
+        scene_digest: digest(&file::to_toml(&scene)),
+        width,
+        height,
+        max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
+        backends: args.backends.clone(),
+        integrators: args.integrators.clone(),
+        budget: args.budget,
+        reference: args.reference.clone(),
+        reference_spp: args.reference_spp,
+        out_dir: args.output.clone(),
+        gpu: GpuChoice {
+            adapter: args.adapter.clone(),
+            everything: false,
+        },
+    };
+    let report = rt_gpu::converge::run(&options)?;
+    let target = report.target_rmse(args.target_rmse);
+    print!("{}", report.table(target));
+    let csv = args.output.join("converge.csv");
+    rt_gpu::output::write_atomically(&csv, |out| {
+        use std::io::Write;
+        Ok(out.write_all(report.csv().as_bytes())?)
+    })?;
+    let title = format!(
+        "{} {width}x{height}, max depth {}",
+        scene.name, options.max_depth
+    );
+    match rt_gpu::plot::write_plot(&report, &title, &args.output.join("converge")) {
+        Ok(()) => println!(
+            "wrote {}, {} and {}",
+            csv.display(),
+            args.output.join("converge.svg").display(),
+            args.output.join("converge.png").display()
+        ),
+        Err(e) => {
+            println!("wrote {}", csv.display());
+            eprintln!("warning: no plot: {e:#}");
+        }
+    }
+    Ok(())
 }
 
 fn list_devices() -> anyhow::Result<()> {

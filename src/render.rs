@@ -1,7 +1,7 @@
 //! What a render is asked to do, and the backends that do it.
 
 use crate::film::Film;
-use crate::gpu::{Features, GpuContext, GpuRenderer, Tuning};
+use crate::gpu::{Features, GpuContext, GpuRenderer, Kernel, Tuning};
 use crate::scene::flat::FlatScene;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -52,6 +52,76 @@ pub struct Rendered {
     pub device: String,
 }
 
+/// A backend made ready once (device opened, kernel compiled) for many renders of one scene.
+pub enum Session {
+    Cpu,
+    Gpu {
+        renderer: Box<GpuRenderer>,
+        kernel: Box<Kernel>,
+    },
+}
+
+impl Session {
+    pub fn new(backend: Backend, gpu: &GpuChoice, scene: &FlatScene) -> anyhow::Result<Self> {
+        Ok(match backend {
+            Backend::Cpu => Session::Cpu,
+            Backend::Gpu => {
+                let renderer = GpuRenderer::new(GpuContext::new(gpu.adapter.as_deref())?);
+                let features = if gpu.everything {
+                    Features::everything(scene)
+                } else {
+                    Features::of(scene)
+                };
+                let kernel = renderer.kernel(features, "render")?;
+                Session::Gpu {
+                    renderer: Box::new(renderer),
+                    kernel: Box::new(kernel),
+                }
+            }
+        })
+    }
+
+    /// What renders: "cpu (N threads)" or the adapter's name.
+    pub fn device(&self) -> String {
+        match self {
+            Session::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
+            Session::Gpu { renderer, .. } => renderer.ctx.info.name.clone(),
+        }
+    }
+
+    /// Renders `scene` (the one the session was made for); `on_progress` gets the fraction done.
+    pub fn render(
+        &self,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+        on_progress: &(dyn Fn(f64) + Sync),
+    ) -> anyhow::Result<Rendered> {
+        match self {
+            Session::Cpu => {
+                let rows = AtomicU32::new(0);
+                let film = crate::cpu::render(scene, opts, &|| {
+                    let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
+                    on_progress(done as f64 / opts.height as f64);
+                });
+                Ok(Rendered {
+                    film,
+                    gpu_seconds: None,
+                    device: self.device(),
+                })
+            }
+            Session::Gpu { renderer, kernel } => {
+                let (film, timings) =
+                    renderer.render(kernel, scene, opts, &Tuning::default(), on_progress)?;
+                Ok(Rendered {
+                    film,
+                    gpu_seconds: timings.gpu_seconds,
+                    device: self.device(),
+                })
+            }
+        }
+    }
+}
+
 /// Renders on `backend`; `on_progress` is called with the fraction of work done.
 pub fn render(
     backend: Backend,
@@ -60,34 +130,5 @@ pub fn render(
     opts: &RenderOptions,
     on_progress: &(dyn Fn(f64) + Sync),
 ) -> anyhow::Result<Rendered> {
-    match backend {
-        Backend::Cpu => {
-            let rows = AtomicU32::new(0);
-            let film = crate::cpu::render(scene, opts, &|| {
-                let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
-                on_progress(done as f64 / opts.height as f64);
-            });
-            Ok(Rendered {
-                film,
-                gpu_seconds: None,
-                device: format!("cpu ({} threads)", rayon::current_num_threads()),
-            })
-        }
-        Backend::Gpu => {
-            let renderer = GpuRenderer::new(GpuContext::new(gpu.adapter.as_deref())?);
-            let features = if gpu.everything {
-                Features::everything(scene)
-            } else {
-                Features::of(scene)
-            };
-            let kernel = renderer.kernel(features, "render")?;
-            let (film, timings) =
-                renderer.render(&kernel, scene, opts, &Tuning::default(), on_progress)?;
-            Ok(Rendered {
-                film,
-                gpu_seconds: timings.gpu_seconds,
-                device: renderer.ctx.info.name.clone(),
-            })
-        }
-    }
+    Session::new(backend, gpu, scene)?.render(scene, opts, on_progress)
 }

@@ -159,3 +159,49 @@ fn print_shader_shows_the_specialised_kernel() {
     assert!(!wgsl.contains("fn fresnel"));
     rt_gpu::gpu::shader::validate(&wgsl).expect("valid WGSL");
 }
+
+#[test]
+fn converge_rejects_bad_options_in_one_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (args, words) in [
+        (
+            &[
+                "converge",
+                "cornell",
+                "--integrators",
+                "magic",
+                "--backends",
+                "cpu",
+            ][..],
+            "unknown integrator 'magic'",
+        ),
+        (
+            &["converge", "cornell", "--budget", "0", "--backends", "cpu"][..],
+            "--budget",
+        ),
+        (
+            &[
+                "converge",
+                "cornell",
+                "--reference",
+                "missing.pfm",
+                "--backends",
+                "cpu",
+            ][..],
+            "missing.pfm",
+        ),
+        (
+            &["converge", "cornell", "--backends", "tpu"][..],
+            "--backends",
+        ),
+    ] {
+        let out = rt_gpu(args, dir.path());
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains(words),
+            "{args:?}: {err:?} should mention {words:?}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}

@@ -1,0 +1,450 @@
+//! Error against run time: ladders of renders at 1, 2, 4, ... spp per series (backend x
+//! integrator), each compared with a reference image, with log-log fits of RMSE against seconds.
+
+use crate::film::Film;
+use crate::output::{read_pfm, write_atomically, write_image};
+use crate::render::{Backend, GpuChoice, RenderOptions, Session};
+use crate::scene::flat::FlatScene;
+use anyhow::{Context, bail};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Error figures of one image against a reference, over linear radiance, all pixels and channels.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Errors {
+    pub rmse: f64,
+    /// mean of (x - ref)^2 / (ref^2 + 0.01)
+    pub relmse: f64,
+    pub mae: f64,
+}
+
+pub fn errors(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Errors {
+    assert_eq!(image.len(), reference.len());
+    let (mut se, mut rel, mut abs) = (0.0, 0.0, 0.0);
+    for (x, r) in image.iter().flatten().zip(reference.iter().flatten()) {
+        let d = *x as f64 - *r as f64;
+        se += d * d;
+        rel += d * d / ((*r as f64) * (*r as f64) + 0.01);
+        abs += d.abs();
+    }
+    let n = (image.len() * 3).max(1) as f64;
+    Errors {
+        rmse: (se / n).sqrt(),
+        relmse: rel / n,
+        mae: abs / n,
+    }
+}
+
+/// A render's own estimate of its RMSE: the root of the mean variance of its pixel means.
+pub fn estimated_rmse(film: &Film) -> f64 {
+    let sum: f64 = film
+        .pixels
+        .iter()
+        .map(|p| p.variance_of_mean().element_sum())
+        .sum();
+    (sum / (film.pixels.len() * 3).max(1) as f64).sqrt()
+}
+
+/// The image errors are measured against, with its own noise where known.
+pub struct Reference {
+    pub rgb: Vec<[f32; 3]>,
+    /// RMSE of the reference itself (from its variance buffer); the floor of every error figure.
+    pub noise_rmse: Option<f64>,
+    pub description: String,
+}
+
+/// One render of a ladder.
+#[derive(Clone, Debug)]
+pub struct Rung {
+    pub series: String,
+    pub spp: u32,
+    pub seconds: f64,
+    pub gpu_seconds: Option<f64>,
+    pub samples_per_second: f64,
+    pub errors: Errors,
+    pub estimated_rmse: f64,
+}
+
+/// log(rmse) = intercept + exponent * log(seconds), least squares.
+#[derive(Clone, Copy, Debug)]
+pub struct Fit {
+    pub exponent: f64,
+    pub intercept: f64,
+    pub points: usize,
+}
+
+impl Fit {
+    /// Monte Carlo error falls as time^-0.5; outside [-0.6, -0.4] points to bias or correlation.
+    pub fn suspicious(&self) -> bool {
+        !(-0.6..=-0.4).contains(&self.exponent)
+    }
+
+    /// Seconds at which the fitted line reaches `rmse`.
+    pub fn seconds_to(&self, rmse: f64) -> f64 {
+        ((rmse.ln() - self.intercept) / self.exponent).exp()
+    }
+}
+
+pub fn fit_loglog(points: &[(f64, f64)]) -> Option<Fit> {
+    let pts: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    if !(sxx > 0.0) {
+        return None;
+    }
+    let exponent = sxy / sxx;
+    Some(Fit {
+        exponent,
+        intercept: my - exponent * mx,
+        points: pts.len(),
+    })
+}
+
+/// Rungs used for a series' fit: those whose error is more than twice the reference's noise
+/// (below that the floor flattens the line) and whose time is at least 1% of the series'
+/// longest (shorter renders are dominated by fixed per-render costs).
+pub fn fit_series(rungs: &[&Rung], floor: Option<f64>) -> Option<Fit> {
+    let longest = rungs.iter().map(|r| r.seconds).fold(0.0, f64::max);
+    let points: Vec<(f64, f64)> = rungs
+        .iter()
+        .filter(|r| floor.is_none_or(|f| r.errors.rmse > 2.0 * f))
+        .filter(|r| r.seconds >= 0.01 * longest)
+        .map(|r| (r.seconds, r.errors.rmse))
+        .collect();
+    fit_loglog(&points)
+}
+
+pub struct ConvergeOptions {
+    pub scene: FlatScene,
+    pub scene_name: String,
+    /// A stable digest of the scene, keying the cached reference.
+    pub scene_digest: u64,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    pub backends: Vec<Backend>,
+    pub integrators: Vec<String>,
+    /// Seconds each series may spend.
+    pub budget: f64,
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of a rendered reference; `None` picks 8x what the fastest series is
+    /// predicted to reach within the budget.
+    pub reference_spp: Option<u32>,
+    pub out_dir: PathBuf,
+    pub gpu: GpuChoice,
+}
+
+pub struct Report {
+    pub reference: Reference,
+    pub rungs: Vec<Rung>,
+    pub fits: Vec<(String, Option<Fit>)>,
+}
+
+fn options(o: &ConvergeOptions, spp: u32, seed: u32) -> RenderOptions {
+    RenderOptions {
+        width: o.width,
+        height: o.height,
+        spp,
+        first_sample: 0,
+        seed,
+        max_depth: o.max_depth,
+    }
+}
+
+/// Reference images are keyed by everything that changes them.
+fn reference_key(o: &ConvergeOptions) -> String {
+    format!(
+        "{}-{:016x}-{}x{}-d{}",
+        o.scene_name, o.scene_digest, o.width, o.height, o.max_depth
+    )
+}
+
+fn load_reference(o: &ConvergeOptions, path: &Path) -> anyhow::Result<Reference> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let (w, h, rgb) = match ext.as_str() {
+        "pfm" => read_pfm(path)?,
+        "exr" => {
+            let img = image::open(path)
+                .with_context(|| format!("cannot read reference {}", path.display()))?
+                .into_rgb32f();
+            let (w, h) = img.dimensions();
+            (w, h, img.pixels().map(|p| p.0).collect())
+        }
+        _ => bail!(
+            "the reference must be an .exr or .pfm file, got {}",
+            path.display()
+        ),
+    };
+    if (w, h) != (o.width, o.height) {
+        bail!(
+            "reference {} is {w}x{h} but the renders are {}x{}: pass --size {w}x{h}",
+            path.display(),
+            o.width,
+            o.height
+        );
+    }
+    if rgb.iter().flatten().any(|c| !c.is_finite()) {
+        bail!("reference {} holds NaN or infinite values", path.display());
+    }
+    Ok(Reference {
+        rgb,
+        noise_rmse: None,
+        description: format!("{} (given; its noise is unknown)", path.display()),
+    })
+}
+
+/// The reference: the user's, the cached one, or a new high-spp render on the fastest backend.
+fn reference(
+    o: &ConvergeOptions,
+    sessions: &[(Backend, Session)],
+    rate: &[f64],
+) -> anyhow::Result<Reference> {
+    if let Some(path) = &o.reference {
+        return load_reference(o, path);
+    }
+    let key = reference_key(o);
+    let mean_path = o.out_dir.join(format!("reference-{key}.pfm"));
+    let noise_path = o.out_dir.join(format!("reference-{key}.noise"));
+    if let (Ok((w, h, rgb)), Ok(noise)) =
+        (read_pfm(&mean_path), std::fs::read_to_string(&noise_path))
+        && (w, h) == (o.width, o.height)
+        && let Some((noise, spp)) = noise.trim().split_once(' ')
+        && let (Ok(noise), Ok(spp)) = (noise.parse::<f64>(), spp.parse::<u32>())
+    {
+        return Ok(Reference {
+            rgb,
+            noise_rmse: Some(noise),
+            description: format!("{} (cached, {spp} spp)", mean_path.display()),
+        });
+    }
+    let fastest = (0..sessions.len())
+        .max_by(|&a, &b| rate[a].total_cmp(&rate[b]))
+        .context("no backend to render a reference with")?;
+    let pixels = o.width as f64 * o.height as f64;
+    let spp = o.reference_spp.unwrap_or_else(|| {
+        let reachable = rate[fastest] * o.budget / pixels;
+        (8.0 * reachable).clamp(64.0, 1_048_576.0) as u32
+    });
+    let (backend, session) = &sessions[fastest];
+    let bar = progress_bar(&format!("reference: {spp} spp on {}", backend.name()));
+    let film = session
+        .render(&o.scene, &options(o, spp, 0x5EED_0000), &|f| {
+            bar.set_position((f * 1000.0) as u64)
+        })?
+        .film;
+    bar.finish_and_clear();
+    let noise = estimated_rmse(&film);
+    write_image(&mean_path, &film)?;
+    write_atomically(&noise_path, |out| Ok(writeln!(out, "{noise} {spp}")?))?;
+    Ok(Reference {
+        rgb: film.mean_rgb(),
+        noise_rmse: Some(noise),
+        description: format!("{} ({spp} spp on {})", mean_path.display(), backend.name()),
+    })
+}
+
+fn progress_bar(message: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(1000).with_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {percent}% {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_message(message.to_string());
+    bar
+}
+
+/// Runs every series' ladder and fits.
+pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
+    for integrator in &o.integrators {
+        if integrator != "naive" {
+            bail!("unknown integrator '{integrator}': available: naive");
+        }
+    }
+    if !(o.budget > 0.0 && o.budget.is_finite()) {
+        bail!("--budget must be a positive number of seconds");
+    }
+    std::fs::create_dir_all(&o.out_dir)
+        .with_context(|| format!("cannot create {}", o.out_dir.display()))?;
+    let mut sessions = Vec::new();
+    for &backend in &o.backends {
+        sessions.push((backend, Session::new(backend, &o.gpu, &o.scene)?));
+    }
+    // A 1-spp probe per backend: warms it up and measures its rate for the reference.
+    let mut rate = Vec::new();
+    for (_, session) in &sessions {
+        let start = Instant::now();
+        session.render(&o.scene, &options(o, 1, 0x0B0E), &|_| {})?;
+        rate.push(o.width as f64 * o.height as f64 / start.elapsed().as_secs_f64());
+    }
+    let reference = reference(o, &sessions, &rate)?;
+
+    let mut rungs = Vec::new();
+    let mut fits = Vec::new();
+    for (backend, session) in &sessions {
+        for integrator in &o.integrators {
+            let series = format!("{}-{integrator}", backend.name());
+            let bar = progress_bar(&series);
+            let (mut spent, mut spp, mut last) = (0.0, 1u32, 0.0);
+            // Stop before a rung that would overrun the budget (each rung doubles the last).
+            while spent + 2.0 * last <= o.budget && spp <= 1 << 24 {
+                let seed = 1000 + spp.trailing_zeros();
+                let start = Instant::now();
+                let rendered = session.render(&o.scene, &options(o, spp, seed), &|_| {})?;
+                let seconds = start.elapsed().as_secs_f64();
+                let film = &rendered.film;
+                rungs.push(Rung {
+                    series: series.clone(),
+                    spp,
+                    seconds,
+                    gpu_seconds: rendered.gpu_seconds,
+                    samples_per_second: o.width as f64 * o.height as f64 * spp as f64 / seconds,
+                    errors: errors(&film.mean_rgb(), &reference.rgb),
+                    estimated_rmse: estimated_rmse(film),
+                });
+                spent += seconds;
+                last = seconds;
+                spp *= 2;
+                bar.set_position(((spent / o.budget).min(1.0) * 1000.0) as u64);
+            }
+            bar.finish_and_clear();
+            let own: Vec<&Rung> = rungs.iter().filter(|r| r.series == series).collect();
+            fits.push((series, fit_series(&own, reference.noise_rmse)));
+        }
+    }
+    Ok(Report {
+        reference,
+        rungs,
+        fits,
+    })
+}
+
+impl Report {
+    pub fn csv(&self) -> String {
+        let mut out =
+            String::from("series,spp,seconds,gpu_seconds,rmse,relmse,mae,estimated_rmse\n");
+        for r in &self.rungs {
+            out.push_str(&format!(
+                "{},{},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+                r.series,
+                r.spp,
+                r.seconds,
+                r.gpu_seconds.map(|s| format!("{s:.6}")).unwrap_or_default(),
+                r.errors.rmse,
+                r.errors.relmse,
+                r.errors.mae,
+                r.estimated_rmse
+            ));
+        }
+        out
+    }
+
+    /// The error the time-to-error comparison aims at: the CPU series' error at its largest spp
+    /// (else the first series'), unless given.
+    pub fn target_rmse(&self, given: Option<f64>) -> Option<f64> {
+        given.or_else(|| {
+            let series = self
+                .fits
+                .iter()
+                .map(|(s, _)| s)
+                .find(|s| s.starts_with("cpu"))
+                .or(self.fits.first().map(|(s, _)| s))?;
+            self.rungs
+                .iter()
+                .rev()
+                .find(|r| &r.series == series)
+                .map(|r| r.errors.rmse)
+        })
+    }
+
+    pub fn table(&self, target: Option<f64>) -> String {
+        let floor = self.reference.noise_rmse;
+        let mut out = format!("reference: {}\n", self.reference.description);
+        match floor {
+            Some(f) => out.push_str(&format!(
+                "reference noise (RMSE): {f:.3e}; '*' marks errors within 2x of it\n"
+            )),
+            None => out.push_str("reference noise: unknown\n"),
+        }
+        out.push_str(&format!(
+            "{:<12} {:>8} {:>9} {:>9} {:>10} {:>11} {:>11} {:>11} {:>12}\n",
+            "series", "spp", "seconds", "gpu s", "Msamples/s", "rmse", "relmse", "mae", "est. rmse"
+        ));
+        for r in &self.rungs {
+            let near_floor = floor.is_some_and(|f| r.errors.rmse <= 2.0 * f);
+            out.push_str(&format!(
+                "{:<12} {:>8} {:>9.3} {:>9} {:>10.3} {:>10.4e}{} {:>11.4e} {:>11.4e} {:>12.4e}\n",
+                r.series,
+                r.spp,
+                r.seconds,
+                r.gpu_seconds
+                    .map(|s| format!("{s:.3}"))
+                    .unwrap_or_else(|| "-".into()),
+                r.samples_per_second / 1e6,
+                r.errors.rmse,
+                if near_floor { "*" } else { " " },
+                r.errors.relmse,
+                r.errors.mae,
+                r.estimated_rmse
+            ));
+        }
+        out.push_str("fitted RMSE ~ seconds^exponent (Monte Carlo: -0.5):\n");
+        for (series, fit) in &self.fits {
+            match fit {
+                Some(f) => out.push_str(&format!(
+                    "  {series:<12} exponent {:+.3} over {} renders{}\n",
+                    f.exponent,
+                    f.points,
+                    if f.suspicious() {
+                        "  <- outside [-0.6, -0.4]: bias or correlated samples?"
+                    } else {
+                        ""
+                    }
+                )),
+                None => out.push_str(&format!(
+                    "  {series:<12} too few renders above the reference's noise to fit\n"
+                )),
+            }
+        }
+        if let Some(target) = target {
+            out.push_str(&format!(
+                "time to reach RMSE {target:.4e} (on the fitted lines):\n"
+            ));
+            let times: Vec<(&String, Option<f64>)> = self
+                .fits
+                .iter()
+                .map(|(s, f)| (s, f.map(|f| f.seconds_to(target))))
+                .collect();
+            // Ratios against the CPU series (the reference renderer), else the first.
+            let (base_name, base) = times
+                .iter()
+                .find(|(s, t)| s.starts_with("cpu") && t.is_some())
+                .or_else(|| times.iter().find(|(_, t)| t.is_some()))
+                .map(|(s, t)| (s.as_str(), *t))
+                .unwrap_or(("", None));
+            for (series, t) in &times {
+                match (t, base) {
+                    (Some(t), Some(b)) => out.push_str(&format!(
+                        "  {series:<12} {t:9.3} s   {:.2}x the speed of {base_name}\n",
+                        b / t
+                    )),
+                    _ => out.push_str(&format!("  {series:<12} no fit\n")),
+                }
+            }
+        }
+        out
+    }
+}
