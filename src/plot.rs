@@ -76,6 +76,8 @@ where
         .configure_mesh()
         .x_desc("seconds")
         .y_desc("RMSE against the reference")
+        .x_label_formatter(&|v| compact(*v))
+        .y_label_formatter(&|v| compact(*v))
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
@@ -114,6 +116,7 @@ where
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", 14))
@@ -121,6 +124,16 @@ where
         .map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
+}
+
+/// A short axis label: 0.25, 3, 1e-4.
+fn compact(v: f64) -> String {
+    if (0.01..10_000.0).contains(&v.abs()) {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.0e}")
+    }
 }
 
 /// Writes `stem.svg` and `stem.png` (atomically).

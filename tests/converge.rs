@@ -6,7 +6,7 @@ use glam::Vec3;
 use rt_gpu::converge::{ConvergeOptions, errors, estimated_rmse, fit_loglog, run};
 use rt_gpu::render::{Backend, GpuChoice};
 use rt_gpu::scene::flat::FlatScene;
-use rt_gpu::scene::{Background, Material, Scene, Shape};
+use rt_gpu::scene::{Background, Material, Shape};
 use std::sync::Mutex;
 
 /// Timing-sensitive tests take turns: the fitted exponent is measured against wall time.
@@ -49,45 +49,13 @@ fn loglog_fit_recovers_a_power_law() {
     );
 }
 
-fn furnace() -> Scene {
-    common::scene(
-        Vec3::new(0.0, 0.0, 3.0),
-        Vec3::ZERO,
-        50.0,
-        Background::Constant(Vec3::new(0.9, 0.8, 0.7)),
-        vec![
-            Material::lambertian(Vec3::new(0.6, 0.5, 0.4)),
-            Material::Metal {
-                albedo: Vec3::splat(0.9),
-                fuzz: 0.3,
-            },
-        ],
-        vec![
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::new(-0.6, 0.0, 0.0),
-                    radius: 0.5,
-                },
-                0,
-            ),
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::new(0.6, 0.0, 0.0),
-                    radius: 0.5,
-                },
-                1,
-            ),
-        ],
-    )
-}
-
 /// On the furnace scene, the render's own error estimate (from its variance buffer) matches its
 /// true error against a 256x-spp reference within a factor of 1.5. The reference's own noise
 /// (its estimate, 1/16 of the render's) is subtracted from the measured mean squared error.
 #[test]
 fn self_estimated_error_tracks_the_true_error() {
     let _turn = CPU.lock().unwrap_or_else(|p| p.into_inner());
-    let scene = furnace();
+    let scene = common::furnace_scene();
     let reference = common::render_cpu(&scene, &common::opts(24, 24, 8192, 10, 1));
     for spp in [8, 32] {
         let film = common::render_cpu(&scene, &common::opts(24, 24, spp, 10, 2));

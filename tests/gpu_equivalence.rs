@@ -13,7 +13,7 @@ use rt_gpu::gpu::{GpuError, Tuning};
 use rt_gpu::rng::Rng;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
-use rt_gpu::scene::{Background, Material, Scene, Shape};
+use rt_gpu::scene::{Background, Material, Shape};
 
 /// Tolerances for one bounce computed in f32 on both sides (the GPU's sin/cos and fused
 /// multiply-adds round differently): positions to 1e-4 of the scene's size, unit vectors to 1e-3.
@@ -74,38 +74,6 @@ fn first_bounces_match_the_cpu() {
     }
 }
 
-fn furnace_scene() -> Scene {
-    common::scene(
-        Vec3::new(0.0, 0.0, 3.0),
-        Vec3::ZERO,
-        50.0,
-        Background::Constant(Vec3::new(0.9, 0.8, 0.7)),
-        vec![
-            Material::lambertian(Vec3::new(0.6, 0.5, 0.4)),
-            Material::Metal {
-                albedo: Vec3::splat(0.9),
-                fuzz: 0.3,
-            },
-        ],
-        vec![
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::new(-0.6, 0.0, 0.0),
-                    radius: 0.5,
-                },
-                0,
-            ),
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::new(0.6, 0.0, 0.0),
-                    radius: 0.5,
-                },
-                1,
-            ),
-        ],
-    )
-}
-
 /// Cornell box settings for the equivalence test and its negative controls: 16x16 pixels at
 /// 20 000 spp (5.1 million samples per render) gives the whole-image comparison enough power to
 /// see a 2% albedo change (measured: z = 2.7 at 1 million samples, so ~6 here, against a Sidak
@@ -134,7 +102,7 @@ fn gpu_images_match_cpu_images_statistically() {
         ),
         (
             "furnace",
-            furnace_scene(),
+            common::furnace_scene(),
             common::opts(32, 32, 256, 10, 1),
             common::opts(32, 32, 256, 10, 2),
         ),

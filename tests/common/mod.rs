@@ -66,3 +66,37 @@ pub fn scene(
         },
     }
 }
+
+/// Two spheres, lambertian and fuzzy metal, under a constant background: a cheap scene with
+/// real variance (metal absorption, silhouettes) and no light to find.
+pub fn furnace_scene() -> Scene {
+    scene(
+        Vec3::new(0.0, 0.0, 3.0),
+        Vec3::ZERO,
+        50.0,
+        Background::Constant(Vec3::new(0.9, 0.8, 0.7)),
+        vec![
+            Material::lambertian(Vec3::new(0.6, 0.5, 0.4)),
+            Material::Metal {
+                albedo: Vec3::splat(0.9),
+                fuzz: 0.3,
+            },
+        ],
+        vec![
+            object(
+                Shape::Sphere {
+                    center: Vec3::new(-0.6, 0.0, 0.0),
+                    radius: 0.5,
+                },
+                0,
+            ),
+            object(
+                Shape::Sphere {
+                    center: Vec3::new(0.6, 0.0, 0.0),
+                    radius: 0.5,
+                },
+                1,
+            ),
+        ],
+    )
+}
