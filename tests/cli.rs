@@ -205,3 +205,26 @@ fn converge_rejects_bad_options_in_one_line() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// With no usable adapter (here: only Metal allowed, which Linux lacks) the GPU backend says what
+/// to install and how to render without it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_missing_gpu_is_one_line_that_says_what_to_do() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args(["cornell", "--spp", "1", "--size", "8x8"])
+        .env("WGPU_BACKEND", "metal")
+        .current_dir(dir.path())
+        .output()
+        .expect("runs");
+    let err = stderr(&out);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("no GPU adapter found")
+            && err.contains("mesa-vulkan-drivers")
+            && err.contains("--backend cpu"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
