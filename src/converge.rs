@@ -112,14 +112,14 @@ pub fn fit_loglog(points: &[(f64, f64)]) -> Option<Fit> {
 }
 
 /// Rungs used for a series' fit: those whose error is more than twice the reference's noise
-/// (below that the floor flattens the line) and whose time is at least 1% of the series'
-/// longest (shorter renders are dominated by fixed per-render costs).
+/// (below that the floor flattens the line) and whose time is at least 5% of the series'
+/// longest (shorter renders are dominated by fixed per-render costs and timer noise).
 pub fn fit_series(rungs: &[&Rung], floor: Option<f64>) -> Option<Fit> {
     let longest = rungs.iter().map(|r| r.seconds).fold(0.0, f64::max);
     let points: Vec<(f64, f64)> = rungs
         .iter()
         .filter(|r| floor.is_none_or(|f| r.errors.rmse > 2.0 * f))
-        .filter(|r| r.seconds >= 0.01 * longest)
+        .filter(|r| r.seconds >= 0.05 * longest)
         .map(|r| (r.seconds, r.errors.rmse))
         .collect();
     fit_loglog(&points)

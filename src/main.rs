@@ -327,8 +327,12 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
                     .gpu_seconds
                     .map(|s| format!(", {:.2} Msamples/s by GPU time", samples / s / 1e6))
                     .unwrap_or_default();
+                let longest = rendered
+                    .longest_dispatch_seconds
+                    .map(|d| format!(", longest dispatch {:.0} ms", d * 1e3))
+                    .unwrap_or_default();
                 println!(
-                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{gpu_time}",
+                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{gpu_time}{longest}",
                     rendered.device
                 );
                 rates.push((label, rate));
@@ -430,10 +434,11 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 
     let samples = width as f64 * height as f64 * opts.spp as f64;
     let mean = film.image_mean();
-    let gpu_time = rendered
-        .gpu_seconds
-        .map(|s| format!(" ({s:.2} s on the GPU)"))
-        .unwrap_or_default();
+    let gpu_time = match (rendered.gpu_seconds, rendered.longest_dispatch_seconds) {
+        (Some(s), Some(d)) => format!(" ({s:.2} s on the GPU, longest dispatch {:.0} ms)", d * 1e3),
+        (None, Some(d)) => format!(" (longest dispatch {:.0} ms)", d * 1e3),
+        _ => String::new(),
+    };
     eprintln!(
         "{}: {width}x{height}, {} spp, {} [{}], {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
         scene.name,

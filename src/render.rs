@@ -48,6 +48,8 @@ pub struct Rendered {
     pub film: Film,
     /// Device time from timestamp queries, where available.
     pub gpu_seconds: Option<f64>,
+    /// The longest single GPU dispatch (device time if known, else wall time).
+    pub longest_dispatch_seconds: Option<f64>,
     /// What rendered it: "cpu (N threads)" or the adapter's name.
     pub device: String,
 }
@@ -106,6 +108,7 @@ impl Session {
                 Ok(Rendered {
                     film,
                     gpu_seconds: None,
+                    longest_dispatch_seconds: None,
                     device: self.device(),
                 })
             }
@@ -115,6 +118,7 @@ impl Session {
                 Ok(Rendered {
                     film,
                     gpu_seconds: timings.gpu_seconds,
+                    longest_dispatch_seconds: Some(timings.longest_dispatch_seconds),
                     device: self.device(),
                 })
             }

@@ -107,7 +107,7 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_time() {
         max_depth: 6,
         backends: vec![Backend::Cpu],
         integrators: vec!["naive".into()],
-        budget: 1.5,
+        budget: 3.0,
         reference: None,
         reference_spp: Some(32_768),
         out_dir: dir.path().to_path_buf(),

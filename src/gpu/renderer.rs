@@ -10,8 +10,12 @@ use glam::DVec3;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
-/// GPU watchdogs kill long dispatches; slices aim well under this.
-const TARGET_DISPATCH_SECONDS: f64 = 0.05;
+/// GPU watchdogs kill long dispatches (~100 ms and up); dispatches aim at a quarter of that, so
+/// that a band of the image 4x costlier than the one measured before it still stays under.
+const TARGET_DISPATCH_SECONDS: f64 = 0.025;
+
+/// Rows of the first tile, before any dispatch has been timed.
+const PROBE_TILE_ROWS: u32 = 4;
 
 /// Mesa's llvmpipe (lavapipe) silently ends any invocation after 65535 loop iterations in
 /// total, across all its loops. Dispatches stay under this budget on every device (it costs
@@ -301,10 +305,36 @@ impl GpuRenderer {
         let mut film = Film::new(width, height);
         let mut timings = Timings::default();
         let mut gpu_seconds = 0.0;
-        let mut slice = tuning.samples_per_dispatch.unwrap_or(1).clamp(1, max_slice);
+        // Dispatch sizes come from the measured cost of one pixel-sample: tiles are as tall as
+        // one 1-spp dispatch may be (so even the first dispatch of a tile stays short), slices
+        // as long as the tile allows. Until the first measurement, a short probe tile.
+        // Costs differ across the image (a band of sky is cheap, a band of glass is not), so a
+        // tile grows at most 2x over the last one.
+        let mut per_pixel_sample: Option<f64> = None;
+        let mut last_rows = PROBE_TILE_ROWS / 2;
         let mut y0 = 0;
         while y0 < height {
-            let rows = tile_rows.min(height - y0);
+            let rows = match per_pixel_sample {
+                _ if tuning.max_tile_pixels.is_some() => tile_rows,
+                None => PROBE_TILE_ROWS.min(tile_rows),
+                Some(cost) => {
+                    let fit = TARGET_DISPATCH_SECONDS / (cost * width as f64);
+                    (fit.floor() as u32)
+                        .clamp(1, tile_rows)
+                        .min(last_rows.saturating_mul(2))
+                }
+            }
+            .min(height - y0);
+            last_rows = rows;
+            let tile_pixels = rows as f64 * width as f64;
+            let mut slice = match (tuning.samples_per_dispatch, per_pixel_sample) {
+                (Some(fixed), _) => fixed,
+                (None, None) => 1,
+                (None, Some(cost)) => {
+                    (TARGET_DISPATCH_SECONDS / (cost * tile_pixels)).floor() as u32
+                }
+            }
+            .clamp(1, max_slice);
             let tile_bytes = rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
             {
                 let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
@@ -355,10 +385,11 @@ impl GpuRenderer {
                 on_progress(
                     (y0 as f64 + rows as f64 * done as f64 / opts.spp as f64) / height as f64,
                 );
+                let cost = seconds.max(1e-7) / (count as f64 * tile_pixels);
+                per_pixel_sample = Some(cost);
                 if tuning.samples_per_dispatch.is_none() {
                     // Size the next slice from this one's time; grow at most 4x per step.
-                    let per_sample = seconds.max(1e-6) / count as f64;
-                    let ideal = (TARGET_DISPATCH_SECONDS / per_sample).floor() as u32;
+                    let ideal = (TARGET_DISPATCH_SECONDS / (cost * tile_pixels)).floor() as u32;
                     slice = ideal.clamp(1, count.saturating_mul(4)).min(max_slice);
                 }
             }
