@@ -302,6 +302,27 @@ impl GpuRenderer {
         let bind_group = self.bind_group(kernel, &params_buffer, &scene_buffers, &accum, &debug);
         let timer = self.ctx.timestamps.then(|| DispatchTimer::new(self));
 
+        // Drivers such as lavapipe compile a pipeline at its first dispatch: run one empty
+        // dispatch (zero samples) first so compilation is not timed as, or inside, a slice.
+        {
+            let mut params = base_params(scene, opts);
+            params.tile_size = [width, 1];
+            params.sample_count = 0;
+            self.ctx
+                .queue
+                .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&params));
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&kernel.pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(width.div_ceil(8), 1, 1);
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+            self.ctx.wait()?;
+        }
+
+        let trace = std::env::var_os("RT_GPU_TRACE").is_some();
         let mut film = Film::new(width, height);
         let mut timings = Timings::default();
         let mut gpu_seconds = 0.0;
@@ -327,14 +348,9 @@ impl GpuRenderer {
             .min(height - y0);
             last_rows = rows;
             let tile_pixels = rows as f64 * width as f64;
-            let mut slice = match (tuning.samples_per_dispatch, per_pixel_sample) {
-                (Some(fixed), _) => fixed,
-                (None, None) => 1,
-                (None, Some(cost)) => {
-                    (TARGET_DISPATCH_SECONDS / (cost * tile_pixels)).floor() as u32
-                }
-            }
-            .clamp(1, max_slice);
+            // A new tile's cost is unknown: its first dispatch takes one sample per pixel (which
+            // the tile height keeps near the target), later ones grow from its own timings.
+            let mut slice = tuning.samples_per_dispatch.unwrap_or(1).clamp(1, max_slice);
             let tile_bytes = rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
             {
                 let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
@@ -385,12 +401,18 @@ impl GpuRenderer {
                 on_progress(
                     (y0 as f64 + rows as f64 * done as f64 / opts.spp as f64) / height as f64,
                 );
+                if trace {
+                    // RT_GPU_TRACE=1: one line per dispatch, for tuning the sizing.
+                    eprintln!(
+                        "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4} wall {wall:.4}"
+                    );
+                }
                 let cost = seconds.max(1e-7) / (count as f64 * tile_pixels);
                 per_pixel_sample = Some(cost);
                 if tuning.samples_per_dispatch.is_none() {
-                    // Size the next slice from this one's time; grow at most 4x per step.
+                    // Size the next slice from this one's time; grow at most 2x per step.
                     let ideal = (TARGET_DISPATCH_SECONDS / (cost * tile_pixels)).floor() as u32;
-                    slice = ideal.clamp(1, count.saturating_mul(4)).min(max_slice);
+                    slice = ideal.clamp(1, count.saturating_mul(2)).min(max_slice);
                 }
             }
             let bytes = self.read_back(&accum, tile_bytes)?;
