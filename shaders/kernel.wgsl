@@ -12,9 +12,14 @@ fn all_finite(v: vec3f) -> bool {
     return all(exponent != vec3u(0x7f800000u));
 }
 
+// Workgroups overhang the tile's edges; those invocations do nothing.
+fn in_tile(gid: vec3u) -> bool {
+    return gid.x < params.tile_size.x && gid.y < params.tile_size.y;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= params.tile_size.x || gid.y >= params.tile_size.y {
+    if !in_tile(gid) {
         return;
     }
     let x = params.tile_origin.x + gid.x;
@@ -68,7 +73,7 @@ struct FirstBounce {
 
 @compute @workgroup_size(8, 8, 1)
 fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= params.tile_size.x || gid.y >= params.tile_size.y {
+    if !in_tile(gid) {
         return;
     }
     let x = params.tile_origin.x + gid.x;
