@@ -25,57 +25,77 @@ fn quad_distance(q: Quad, ray: Ray) -> f32 {
 }
 //#endif
 
+// The closest hit found so far along a ray.
+struct Closest {
+    outward: vec3f,
+    t: f32,
+    primitive: u32,
+    material: u32,
+    found: bool,
+}
+
+//#if SPHERES
+fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
+    let oc = s.center - ray.origin;
+    let h = dot(ray.dir, oc);
+    // r^2 - |oc - h d|^2: no cancellation for small or distant spheres.
+    let perpendicular = oc - h * ray.dir;
+    let disc = s.radius * s.radius - dot(perpendicular, perpendicular);
+    let sq = sqrt(max(disc, 0.0));
+    let near = h - sq;
+    let t = select(h + sq, near, near > 0.0 && near < (*c).t);
+    if disc >= 0.0 && t > 0.0 && t < (*c).t {
+        (*c).t = t;
+        (*c).found = true;
+        (*c).primitive = index;
+        (*c).material = s.material;
+        (*c).outward = (ray.origin + t * ray.dir - s.center) / s.radius;
+    }
+}
+//#endif
+
+//#if QUADS
+fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
+    let t = quad_distance(q, ray);
+    if t > 0.0 && t < (*c).t {
+        (*c).t = t;
+        (*c).found = true;
+        (*c).primitive = index;
+        (*c).material = q.material;
+        (*c).outward = q.normal;
+    }
+}
+//#endif
+
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var closest = 3.4e38;
-    var found = false;
-    var primitive = 0u;
-    var material = 0u;
-    var outward = vec3f(0.0, 1.0, 0.0);
+    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, 0u, 0u, false);
+//#if INLINE_SCENE
+    // The scene's primitives are constants in this kernel (see inline_scene below).
+    inline_scene(ray, &c);
+//#else
 //#if SPHERES
     for (var i = 0u; i < params.sphere_count; i++) {
-        let s = spheres[i];
-        let oc = s.center - ray.origin;
-        let h = dot(ray.dir, oc);
-        // r^2 - |oc - h d|^2: no cancellation for small or distant spheres.
-        let perpendicular = oc - h * ray.dir;
-        let disc = s.radius * s.radius - dot(perpendicular, perpendicular);
-        let sq = sqrt(max(disc, 0.0));
-        let near = h - sq;
-        let t = select(h + sq, near, near > 0.0 && near < closest);
-        if disc >= 0.0 && t > 0.0 && t < closest {
-            closest = t;
-            found = true;
-            primitive = i;
-            material = s.material;
-            outward = (ray.origin + t * ray.dir - s.center) / s.radius;
-        }
+        consider_sphere(spheres[i], i, ray, &c);
     }
 //#endif
 //#if QUADS
     for (var i = 0u; i < params.quad_count; i++) {
-        let q = quads[i];
-        let t = quad_distance(q, ray);
-        if t > 0.0 && t < closest {
-            closest = t;
-            found = true;
-            primitive = params.sphere_count + i;
-            material = q.material;
-            outward = q.normal;
-        }
+        consider_quad(quads[i], params.sphere_count + i, ray, &c);
     }
 //#endif
-    if !found {
+//#endif
+    if !c.found {
         return false;
     }
-    let n = normalize(outward);
+    let n = normalize(c.outward);
     let front = dot(ray.dir, n) < 0.0;
-    (*hit).t = closest;
-    (*hit).point = ray.origin + closest * ray.dir;
+    (*hit).t = c.t;
+    (*hit).point = ray.origin + c.t * ray.dir;
     (*hit).normal = select(-n, n, front);
     (*hit).front_face = front;
-    (*hit).material = material;
-    (*hit).primitive = primitive;
+    (*hit).material = c.material;
+    (*hit).primitive = c.primitive;
     return true;
 }
 

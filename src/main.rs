@@ -423,7 +423,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         };
         print!(
             "{}",
-            rt_gpu::gpu::shader::compose(&features).map_err(anyhow::Error::msg)?
+            rt_gpu::gpu::shader::compose(&features, &flat).map_err(anyhow::Error::msg)?
         );
         return Ok(());
     }

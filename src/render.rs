@@ -74,7 +74,7 @@ impl Session {
                 } else {
                     Features::of(scene)
                 };
-                let kernel = renderer.kernel(features, "render")?;
+                let kernel = renderer.kernel(scene, features, "render")?;
                 Session::Gpu {
                     renderer: Box::new(renderer),
                     kernel: Box::new(kernel),

@@ -19,7 +19,14 @@ fn all_features() -> Features {
         debug: true,
         uniform_scene: false,
         scene_capacity: 1,
+        inline_scene: false,
     }
+}
+
+/// A scene with a sphere and a box, for kernels that hold the scene as constants.
+fn small_scene() -> rt_gpu::scene::flat::FlatScene {
+    let scene = rt_gpu::scene::builtin::builtin("cornell").expect("built-in");
+    rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid")
 }
 
 /// A Rust struct's WGSL name, size, and field offsets in declaration order.
@@ -101,7 +108,7 @@ fn rust_layouts() -> Vec<Layout> {
 
 #[test]
 fn rust_structs_match_wgsl_sizes_and_offsets() {
-    let source = compose(&all_features()).expect("composes");
+    let source = compose(&all_features(), &small_scene()).expect("composes");
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
     for (name, rust_size, rust_fields) in rust_layouts() {
         let ty = module
@@ -126,10 +133,11 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     }
 }
 
-/// Every combination of features (2^11 kernels) composes into valid WGSL.
+/// Every combination of features (2^12 kernels) composes into valid WGSL.
 #[test]
 fn every_kernel_variant_validates() {
-    for bits in 0u32..1 << 11 {
+    let scene = small_scene();
+    for bits in 0u32..1 << 12 {
         let on = |i: u32| bits & (1 << i) != 0;
         let features = Features {
             spheres: on(0),
@@ -143,9 +151,10 @@ fn every_kernel_variant_validates() {
             sky: on(8),
             debug: on(9),
             uniform_scene: on(10),
-            scene_capacity: 16,
+            scene_capacity: 32,
+            inline_scene: on(11),
         };
-        let source = compose(&features).expect("composes");
+        let source = compose(&features, &scene).expect("composes");
         if let Err(e) = validate(&source) {
             panic!("{features:?}: {e}");
         }
@@ -159,9 +168,10 @@ fn kernels_leave_out_unused_code() {
         let scene = rt_gpu::scene::builtin::builtin(name).expect("built-in");
         rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid")
     };
-    let empty = compose(&Features::of(&flat("cornell-empty"))).expect("composes");
+    let kernel = |name: &str| compose(&Features::of(&flat(name)), &flat(name)).expect("composes");
+    let empty = kernel("cornell-empty");
     assert!(
-        !empty.contains("spheres[i]"),
+        !empty.contains("fn consider_sphere"),
         "sphere code in a scene without spheres"
     );
     assert!(
@@ -172,13 +182,20 @@ fn kernels_leave_out_unused_code() {
         !empty.contains("MAT_METAL {"),
         "metal code in a scene without metal"
     );
-    assert!(empty.contains("quads[i]"));
-    let spheres = compose(&Features::of(&flat("spheres"))).expect("composes");
+    // Small scenes are constants in the kernel: one test per primitive, no buffer loop.
+    assert_eq!(empty.matches("    consider_quad(Quad(").count(), 6);
+    assert!(!empty.contains("quads[i]"));
+    let spheres = kernel("spheres");
     assert!(
-        !spheres.contains("quads[i]"),
+        !spheres.contains("fn consider_quad"),
         "quad code in a scene without quads"
     );
+    assert_eq!(spheres.matches("    consider_sphere(Sphere(").count(), 4);
     assert!(spheres.contains("fresnel") && spheres.contains("MAT_METAL {"));
+    // A scene too large to inline loops over its buffers.
+    let showcase = kernel("showcase");
+    assert!(showcase.contains("spheres[i]") && showcase.contains("quads[i]"));
+    assert!(!showcase.contains("fn inline_scene"));
 }
 
 #[test]

@@ -79,9 +79,14 @@ impl GpuRenderer {
         GpuRenderer { ctx }
     }
 
-    /// Builds, validates and compiles the kernel for `features`.
-    pub fn kernel(&self, features: Features, entry_point: &str) -> Result<Kernel, GpuError> {
-        let source = compose(&features).map_err(GpuError::Shader)?;
+    /// Builds, validates and compiles the kernel for `features` and `scene`.
+    pub fn kernel(
+        &self,
+        scene: &FlatScene,
+        features: Features,
+        entry_point: &str,
+    ) -> Result<Kernel, GpuError> {
+        let source = compose(&features, scene).map_err(GpuError::Shader)?;
         self.kernel_from_source(features, source, entry_point)
     }
 
@@ -454,7 +459,7 @@ impl GpuRenderer {
             debug: true,
             ..Features::of(scene)
         };
-        let kernel = self.kernel(features, "first_bounce")?;
+        let kernel = self.kernel(scene, features, "first_bounce")?;
         let pixels = opts.width as u64 * opts.height as u64;
         let size = pixels * std::mem::size_of::<GpuFirstBounce>() as u64;
         let out = self.buffer(

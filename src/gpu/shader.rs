@@ -46,7 +46,13 @@ pub struct Features {
     /// Scene arrays in uniform buffers of `scene_capacity` elements (faster where they fit).
     pub uniform_scene: bool,
     pub scene_capacity: u32,
+    /// Spheres and quads written into the kernel as constants, tested in straight-line code:
+    /// no loads, no loops, and the compiler folds the zeros of axis-aligned quads.
+    pub inline_scene: bool,
 }
+
+/// Most spheres plus quads a kernel takes as constants.
+pub const MAX_INLINE_PRIMITIVES: usize = 64;
 
 /// The largest uniform binding every WebGPU device offers.
 pub const MAX_UNIFORM_BYTES: u64 = 64 * 1024;
@@ -86,6 +92,7 @@ impl Features {
             debug: false,
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
+            inline_scene: scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES,
         }
     }
 
@@ -103,11 +110,12 @@ impl Features {
             light: true,
             emissive: true,
             uniform_scene: false,
+            inline_scene: false,
             ..own
         }
     }
 
-    pub fn flags(&self) -> [(&'static str, bool); 11] {
+    pub fn flags(&self) -> [(&'static str, bool); 12] {
         [
             ("SPHERES", self.spheres),
             ("QUADS", self.quads),
@@ -120,6 +128,7 @@ impl Features {
             ("SKY", self.sky),
             ("DEBUG", self.debug),
             ("UNIFORM_SCENE", self.uniform_scene),
+            ("INLINE_SCENE", self.inline_scene),
         ]
     }
 
@@ -132,8 +141,8 @@ impl Features {
     }
 }
 
-/// The kernel source for `features`.
-pub fn compose(features: &Features) -> Result<String, String> {
+/// The kernel source for `features`, built for `scene` (whose primitives it may hold as constants).
+pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String> {
     let on: Vec<&str> = features
         .flags()
         .iter()
@@ -154,7 +163,53 @@ pub fn compose(features: &Features) -> Result<String, String> {
         out.push_str(&format!("\n// ---- {name} ----\n"));
         out.push_str(&preprocess(source, features).map_err(|e| format!("shaders/{name}: {e}"))?);
     }
+    if features.inline_scene {
+        out.push_str(&inline_scene(scene, features));
+    }
     Ok(out)
+}
+
+/// A WGSL float literal that reads back as exactly `x`.
+fn lit(x: f32) -> String {
+    format!("{x:?}")
+}
+
+fn vec3(v: glam::Vec3) -> String {
+    format!("vec3f({}, {}, {})", lit(v.x), lit(v.y), lit(v.z))
+}
+
+/// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does).
+fn inline_scene(scene: &FlatScene, features: &Features) -> String {
+    let mut out = String::from(
+        "\n// ---- the scene's primitives, generated ----\nfn inline_scene(ray: Ray, c: ptr<function, Closest>) {\n",
+    );
+    if features.spheres {
+        for (i, s) in scene.spheres.iter().enumerate() {
+            out.push_str(&format!(
+                "    consider_sphere(Sphere({}, {}, {}u), {i}u, ray, c);\n",
+                vec3(s.center),
+                lit(s.radius),
+                s.material
+            ));
+        }
+    }
+    if features.quads {
+        let base = scene.spheres.len();
+        for (i, q) in scene.quads.iter().enumerate() {
+            out.push_str(&format!(
+                "    consider_quad(Quad({}, {}, {}, {}u, {}, {}), {}u, ray, c);\n",
+                vec3(q.q),
+                lit(q.d),
+                vec3(q.normal),
+                q.material,
+                vec3(q.alpha_axis),
+                vec3(q.beta_axis),
+                base + i
+            ));
+        }
+    }
+    out.push_str("}\n");
+    out
 }
 
 fn preprocess(source: &str, features: &Features) -> Result<String, String> {

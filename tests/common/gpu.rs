@@ -38,7 +38,7 @@ pub fn render_gpu_with(
 ) -> Film {
     let flat = FlatScene::new(scene, opts.width, opts.height).expect("valid scene");
     let kernel = r
-        .kernel(features(&flat), "render")
+        .kernel(&flat, features(&flat), "render")
         .expect("kernel compiles");
     r.render(&kernel, &flat, opts, tuning, &|_| {})
         .expect("renders")
