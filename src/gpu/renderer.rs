@@ -24,10 +24,15 @@ const PROBE_TILE_ROWS: u32 = 4;
 const LOOP_ITERATION_BUDGET: u64 = 60_000;
 
 /// A generous bound on the loop iterations one sample costs: the path loop, and in each segment
-/// one pass over each primitive list, counting every loop's exit test as an iteration too
-/// (measured on lavapipe: a 1-sphere, depth-2 sample costs about 7).
-fn loop_iterations_per_sample(scene: &FlatScene, max_depth: u32) -> u64 {
-    let primitives = scene.spheres.len() as u64 + scene.quads.len() as u64;
+/// one pass over each primitive list (none when the scene is inlined as straight-line code),
+/// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
+/// depth-2 sample costs about 7).
+fn loop_iterations_per_sample(scene: &FlatScene, features: &Features, max_depth: u32) -> u64 {
+    let primitives = if features.inline_scene {
+        0
+    } else {
+        scene.spheres.len() as u64 + scene.quads.len() as u64
+    };
     2 + (max_depth as u64 + 1) * (3 + primitives)
 }
 
@@ -281,7 +286,7 @@ impl GpuRenderer {
             )));
         }
         let tile_rows = ((max_tile_pixels / width as u64).min(height as u64)) as u32;
-        let per_sample = loop_iterations_per_sample(scene, opts.max_depth);
+        let per_sample = loop_iterations_per_sample(scene, &kernel.features, opts.max_depth);
         let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
         if is_llvmpipe && per_sample > LOOP_ITERATION_BUDGET {
             return Err(GpuError::TooLarge(format!(
