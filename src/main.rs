@@ -3,7 +3,7 @@
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use rt_gpu::gpu::{Features, list_adapters};
+use rt_gpu::gpu::list_adapters;
 use rt_gpu::output::{ImageFormat, write_image};
 use rt_gpu::render::{Backend, GpuChoice, RenderOptions, Rendered, render};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
@@ -416,11 +416,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         everything: args.unspecialised,
     };
     if args.print_shader {
-        let features = if gpu.everything {
-            Features::everything(&flat)
-        } else {
-            Features::of(&flat)
-        };
+        let features = gpu.features(&flat);
         print!(
             "{}",
             rt_gpu::gpu::shader::compose(&features, &flat).map_err(anyhow::Error::msg)?

@@ -44,6 +44,17 @@ pub struct GpuChoice {
     pub everything: bool,
 }
 
+impl GpuChoice {
+    /// The kernel features this choice runs `scene` with.
+    pub fn features(&self, scene: &FlatScene) -> Features {
+        if self.everything {
+            Features::everything(scene)
+        } else {
+            Features::of(scene)
+        }
+    }
+}
+
 pub struct Rendered {
     pub film: Film,
     /// Device time from timestamp queries, where available.
@@ -69,11 +80,7 @@ impl Session {
             Backend::Cpu => Session::Cpu,
             Backend::Gpu => {
                 let renderer = GpuRenderer::new(GpuContext::new(gpu.adapter.as_deref())?);
-                let features = if gpu.everything {
-                    Features::everything(scene)
-                } else {
-                    Features::of(scene)
-                };
+                let features = gpu.features(scene);
                 let kernel = renderer.kernel(scene, features, "render")?;
                 Session::Gpu {
                     renderer: Box::new(renderer),
