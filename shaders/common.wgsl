@@ -5,6 +5,7 @@ struct Sphere {
     center: vec3f,
     radius: f32,      // negative: the normal faces inward
     material: u32,
+    light: u32,       // 1 + index in lights, 0 if it does not emit
 }
 
 // The parallelogram q + a u + b v, a, b in [0, 1]; see src/scene/flat.rs for the axes.
@@ -14,7 +15,21 @@ struct Quad {
     normal: vec3f,
     material: u32,
     alpha_axis: vec3f,
+    light: u32,       // 1 + index in lights, 0 if it does not emit
     beta_axis: vec3f,
+}
+
+// An emitter for next-event estimation: a quad (uniform on its area) or a sphere (radius > 0;
+// uniform in the cone it subtends), picked in proportion to power (see src/scene/flat.rs).
+struct Light {
+    position: vec3f,  // quad corner, or sphere centre
+    cdf: f32,         // chance of picking this light or one before it
+    u: vec3f,         // quad edges
+    pick: f32,        // chance of picking this light
+    v: vec3f,
+    radius: f32,      // sphere: |radius|; quad: 0
+    normal: vec3f,    // quad unit normal
+    inv_area: f32,    // quad: 1 / area
 }
 
 struct Material {
@@ -50,6 +65,8 @@ struct Params {
     quad_count: u32,
     samples_before: u32,   // samples already in the accumulator
     sky: u32,              // 1: sky gradient background
+    light_count: u32,
+    roulette_depth: u32,   // Russian roulette from this many segments on; 0: off
 }
 
 struct Ray {
@@ -68,6 +85,9 @@ struct Ray {
 @group(0) @binding(2) var<uniform> quads: array<Quad, SCENE_CAPACITY>;
 //#endif
 @group(0) @binding(3) var<uniform> materials: array<Material, SCENE_CAPACITY>;
+//#if NEE
+@group(0) @binding(6) var<uniform> lights: array<Light, SCENE_CAPACITY>;
+//#endif
 //#else
 //#if SPHERES
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
@@ -76,4 +96,7 @@ struct Ray {
 @group(0) @binding(2) var<storage, read> quads: array<Quad>;
 //#endif
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
+//#if NEE
+@group(0) @binding(6) var<storage, read> lights: array<Light>;
+//#endif
 //#endif

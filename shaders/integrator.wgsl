@@ -1,24 +1,93 @@
 // The path loop (twin: src/cpu/integrator.rs): segment k adds the emission it hits, or the
-// background it escapes to, for k <= max_depth.
+// background it escapes to, for k <= max_depth. With NEE, each lambertian hit also samples a
+// light (a path of one more segment, so only while that stays within max_depth), and light
+// found both ways is weighted by the power heuristic.
+
+// Roulette keeps a path with the probability of its largest throughput component, capped here.
+const MAX_SURVIVAL: f32 = 0.95;
+
+//#if NEE
+// Light reaching a lambertian hit from one light sample, times cos / pi and the MIS weight.
+fn direct_light(hit: Hit, u0: f32, u1: f32, u2: f32) -> vec3f {
+    let index = pick_light(u0);
+    let s = sample_light(light_at(index), hit.point, u1, u2);
+    if !(s.pdf > 0.0) {
+        return vec3f(0.0);
+    }
+    let cos = dot(hit.normal, s.dir);
+    if !(cos > 0.0) {
+        return vec3f(0.0);
+    }
+    // The shadow ray: whatever it hits first must be the light sampled.
+    var shadow: Hit;
+    if !intersect(spawn(hit, s.dir), &shadow) || light_of(shadow.primitive) != index + 1u {
+        return vec3f(0.0);
+    }
+    let le = emitted(material_at(shadow.material), shadow.front_face);
+    return le * light_sample_factor(s.pdf, cos / PI);
+}
+//#endif
 
 fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
     var ray = primary;
     var total = vec3f(0.0);
     var throughput = vec3f(1.0);
+//#if NEE
+    // The pdf with which a lambertian bounce chose `ray` from `origin`; 0 when light sampling
+    // could not have chosen it (camera rays, metal, glass), so light it finds counts in full.
+    var bsdf_pdf = 0.0;
+    var origin = ray.origin;
+//#endif
     for (var segment = 0u; segment < params.max_depth; segment++) {
         var hit: Hit;
         if !intersect(ray, &hit) {
             total += throughput * background(ray.dir);
             break;
         }
-        let m = materials[hit.material];
-        total += throughput * emitted(m, hit.front_face);
+        let m = material_at(hit.material);
+        var weight = 1.0;
+//#if NEE
+        if bsdf_pdf > 0.0 {
+            let light = light_of(hit.primitive);
+            if light > 0u {
+                let l = light_at(light - 1u);
+                weight = power_heuristic(bsdf_pdf, light_pdf(l, origin, hit.point, ray.dir));
+            }
+        }
+//#endif
+        total += throughput * weight * emitted(m, hit.front_face);
+        if segment + 1u == params.max_depth {
+            break; // no longer path counts
+        }
+//#if NEE
+        bsdf_pdf = 0.0;
+        let diffuse = m.kind == MAT_LAMBERTIAN;
+        if diffuse {
+            let u0 = rng_next(rng);
+            let u1 = rng_next(rng);
+            let u2 = rng_next(rng);
+            total += throughput * m.albedo * direct_light(hit, u0, u1, u2);
+        }
+//#endif
         let s = scatter(m, ray.dir, hit, rng);
         if !s.ok {
             break;
         }
         throughput *= s.attenuation;
+//#if NEE
+        if diffuse {
+            bsdf_pdf = max(dot(hit.normal, s.dir), 0.0) / PI;
+        }
+        origin = hit.point;
+//#endif
         ray = spawn(hit, s.dir);
+        if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
+            let survival = min(max(throughput.x, max(throughput.y, throughput.z)), MAX_SURVIVAL);
+            if !(rng_next(rng) < survival) {
+                break;
+            }
+            throughput /= survival;
+        }
     }
     return total;
 }

@@ -71,6 +71,18 @@ struct FirstBounce {
 
 @group(0) @binding(5) var<storage, read_write> bounces: array<FirstBounce>;
 
+// The closest hit of `ray` as a FirstBounce (not yet scattered), and the hit itself.
+fn trace_debug(ray: Ray, hit: ptr<function, Hit>) -> FirstBounce {
+    var out = FirstBounce(vec3f(0.0), 0u, vec3f(0.0), 0u, ray.dir, 0u);
+    if intersect(ray, hit) {
+        out.point = (*hit).point;
+        out.primitive = (*hit).primitive;
+        out.normal = (*hit).normal;
+        out.hit = 1u;
+    }
+    return out;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
@@ -81,17 +93,26 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     let pixel = y * params.width + x;
     var rng = rng_for_sample(pixel, params.first_sample, params.seed);
     let ray = generate_ray(x, y, &rng);
-    var out = FirstBounce(vec3f(0.0), 0u, vec3f(0.0), 0u, vec3f(0.0), 0u);
     var hit: Hit;
-    if intersect(ray, &hit) {
-        out.point = hit.point;
-        out.primitive = hit.primitive;
-        out.normal = hit.normal;
-        out.hit = 1u;
-        let s = scatter(materials[hit.material], ray.dir, hit, &rng);
+    var out = trace_debug(ray, &hit);
+    out.dir = vec3f(0.0);
+    if out.hit == 1u {
+        let s = scatter(material_at(hit.material), ray.dir, hit, &rng);
         out.dir = s.dir;
         out.scattered = select(0u, 1u, s.ok);
     }
     bounces[gid.y * params.tile_size.x + gid.x] = out;
+}
+
+// Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:
+// origin, dir: direction) and its hit on output (dir is kept).
+@compute @workgroup_size(8, 8, 1)
+fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
+    if !in_tile(gid) {
+        return;
+    }
+    let slot = gid.y * params.tile_size.x + gid.x;
+    var hit: Hit;
+    bounces[slot] = trace_debug(Ray(bounces[slot].point, bounces[slot].dir), &hit);
 }
 //#endif

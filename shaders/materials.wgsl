@@ -7,6 +7,15 @@ struct Scattered {
     dir: vec3f,
 }
 
+//#if INLINE_SCENE
+// material_at is generated with the scene's constants (see inline_materials in
+// src/gpu/shader.rs): lavapipe gathers buffer loads at dynamic indices lane by lane.
+//#else
+fn material_at(i: u32) -> Material {
+    return materials[i];
+}
+//#endif
+
 fn emitted(m: Material, front_face: bool) -> vec3f {
 //#if LIGHT
     if m.kind == MAT_LIGHT {

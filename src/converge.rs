@@ -3,7 +3,7 @@
 
 use crate::film::Film;
 use crate::output::{read_pfm, write_atomically, write_image};
-use crate::render::{Backend, GpuChoice, RenderOptions, Session};
+use crate::render::{Backend, GpuChoice, Integrator, RenderOptions, Session};
 use crate::scene::flat::FlatScene;
 use anyhow::{Context, bail};
 use std::io::Write;
@@ -134,7 +134,9 @@ pub struct ConvergeOptions {
     pub height: u32,
     pub max_depth: u32,
     pub backends: Vec<Backend>,
-    pub integrators: Vec<String>,
+    pub integrators: Vec<Integrator>,
+    /// Russian roulette from this many segments on (0: off).
+    pub roulette_depth: u32,
     /// Seconds each series may spend.
     pub budget: f64,
     pub reference: Option<PathBuf>,
@@ -151,7 +153,7 @@ pub struct Report {
     pub fits: Vec<(String, Option<Fit>)>,
 }
 
-fn options(o: &ConvergeOptions, spp: u32, seed: u32) -> RenderOptions {
+fn options(o: &ConvergeOptions, spp: u32, seed: u32, integrator: Integrator) -> RenderOptions {
     RenderOptions {
         width: o.width,
         height: o.height,
@@ -159,6 +161,8 @@ fn options(o: &ConvergeOptions, spp: u32, seed: u32) -> RenderOptions {
         first_sample: 0,
         seed,
         max_depth: o.max_depth,
+        integrator,
+        roulette_depth: o.roulette_depth,
     }
 }
 
@@ -207,7 +211,8 @@ fn load_reference(o: &ConvergeOptions, path: &Path) -> anyhow::Result<Reference>
     })
 }
 
-/// The reference: the user's, the cached one, or a new high-spp render on the fastest backend.
+/// The reference: the user's, the cached one, or a new high-spp render on the fastest backend
+/// (with nee where a series uses it: it converges faster).
 fn reference(
     o: &ConvergeOptions,
     sessions: &[(Backend, Session)],
@@ -231,8 +236,13 @@ fn reference(
             description: format!("{} (cached, {spp} spp)", mean_path.display()),
         });
     }
+    let prefers_nee = |i: usize| sessions[i].1.integrator() == Integrator::Nee;
     let fastest = (0..sessions.len())
-        .max_by(|&a, &b| rate[a].total_cmp(&rate[b]))
+        .max_by(|&a, &b| {
+            (prefers_nee(a), rate[a])
+                .partial_cmp(&(prefers_nee(b), rate[b]))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
         .context("no backend to render a reference with")?;
     let pixels = o.width as f64 * o.height as f64;
     let spp = o.reference_spp.unwrap_or_else(|| {
@@ -240,9 +250,14 @@ fn reference(
         (8.0 * reachable).clamp(64.0, 1_048_576.0) as u32
     });
     let (backend, session) = &sessions[fastest];
-    let bar = progress_bar(&format!("reference: {spp} spp on {}", backend.name()));
+    let integrator = session.integrator();
+    let bar = progress_bar(&format!(
+        "reference: {spp} spp on {}-{}",
+        backend.name(),
+        integrator.name()
+    ));
     let film = session
-        .render(&o.scene, &options(o, spp, 0x5EED_0000), &|f| {
+        .render(&o.scene, &options(o, spp, 0x5EED_0000, integrator), &|f| {
             bar.set_position((f * 1000.0) as u64)
         })?
         .film;
@@ -253,7 +268,12 @@ fn reference(
     Ok(Reference {
         rgb: film.mean_rgb(),
         noise_rmse: Some(noise),
-        description: format!("{} ({spp} spp on {})", mean_path.display(), backend.name()),
+        description: format!(
+            "{} ({spp} spp on {}-{})",
+            mean_path.display(),
+            backend.name(),
+            integrator.name()
+        ),
     })
 }
 
@@ -269,11 +289,6 @@ fn progress_bar(message: &str) -> indicatif::ProgressBar {
 
 /// Runs every series' ladder and fits.
 pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
-    for integrator in &o.integrators {
-        if integrator != "naive" {
-            bail!("unknown integrator '{integrator}': available: naive");
-        }
-    }
     if !(o.budget > 0.0 && o.budget.is_finite()) {
         bail!("--budget must be a positive number of seconds");
     }
@@ -281,13 +296,19 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
         .with_context(|| format!("cannot create {}", o.out_dir.display()))?;
     let mut sessions = Vec::new();
     for &backend in &o.backends {
-        sessions.push((backend, Session::new(backend, &o.gpu, &o.scene)?));
+        for &integrator in &o.integrators {
+            sessions.push((
+                backend,
+                Session::new(backend, &o.gpu, &o.scene, integrator)?,
+            ));
+        }
     }
-    // A 1-spp probe per backend: warms it up and measures its rate for the reference.
+    // A 1-spp probe per series: warms it up and measures its rate for the reference.
     let mut rate = Vec::new();
     for (_, session) in &sessions {
         let start = Instant::now();
-        session.render(&o.scene, &options(o, 1, 0x0B0E), &|_| {})?;
+        let opts = options(o, 1, 0x0B0E, session.integrator());
+        session.render(&o.scene, &opts, &|_| {})?;
         rate.push(o.width as f64 * o.height as f64 / start.elapsed().as_secs_f64());
     }
     let reference = reference(o, &sessions, &rate)?;
@@ -295,35 +316,35 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
     let mut rungs = Vec::new();
     let mut fits = Vec::new();
     for (backend, session) in &sessions {
-        for integrator in &o.integrators {
-            let series = format!("{}-{integrator}", backend.name());
-            let bar = progress_bar(&series);
-            let (mut spent, mut spp, mut last) = (0.0, 1u32, 0.0);
-            // Stop before a rung that would overrun the budget (each rung doubles the last).
-            while spent + 2.0 * last <= o.budget && spp <= 1 << 24 {
-                let seed = 1000 + spp.trailing_zeros();
-                let start = Instant::now();
-                let rendered = session.render(&o.scene, &options(o, spp, seed), &|_| {})?;
-                let seconds = start.elapsed().as_secs_f64();
-                let film = &rendered.film;
-                rungs.push(Rung {
-                    series: series.clone(),
-                    spp,
-                    seconds,
-                    gpu_seconds: rendered.gpu_seconds,
-                    samples_per_second: o.width as f64 * o.height as f64 * spp as f64 / seconds,
-                    errors: errors(&film.mean_rgb(), &reference.rgb),
-                    estimated_rmse: estimated_rmse(film),
-                });
-                spent += seconds;
-                last = seconds;
-                spp *= 2;
-                bar.set_position(((spent / o.budget).min(1.0) * 1000.0) as u64);
-            }
-            bar.finish_and_clear();
-            let own: Vec<&Rung> = rungs.iter().filter(|r| r.series == series).collect();
-            fits.push((series, fit_series(&own, reference.noise_rmse)));
+        let integrator = session.integrator();
+        let series = format!("{}-{}", backend.name(), integrator.name());
+        let bar = progress_bar(&series);
+        let (mut spent, mut spp, mut last) = (0.0, 1u32, 0.0);
+        // Stop before a rung that would overrun the budget (each rung doubles the last).
+        while spent + 2.0 * last <= o.budget && spp <= 1 << 24 {
+            let seed = 1000 + spp.trailing_zeros();
+            let start = Instant::now();
+            let opts = options(o, spp, seed, integrator);
+            let rendered = session.render(&o.scene, &opts, &|_| {})?;
+            let seconds = start.elapsed().as_secs_f64();
+            let film = &rendered.film;
+            rungs.push(Rung {
+                series: series.clone(),
+                spp,
+                seconds,
+                gpu_seconds: rendered.gpu_seconds,
+                samples_per_second: o.width as f64 * o.height as f64 * spp as f64 / seconds,
+                errors: errors(&film.mean_rgb(), &reference.rgb),
+                estimated_rmse: estimated_rmse(film),
+            });
+            spent += seconds;
+            last = seconds;
+            spp *= 2;
+            bar.set_position(((spent / o.budget).min(1.0) * 1000.0) as u64);
         }
+        bar.finish_and_clear();
+        let own: Vec<&Rung> = rungs.iter().filter(|r| r.series == series).collect();
+        fits.push((series, fit_series(&own, reference.noise_rmse)));
     }
     Ok(Report {
         reference,
@@ -332,7 +353,82 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
     })
 }
 
+/// On one backend: how long nee takes to reach the error naive reaches at its largest spp.
+#[derive(Clone, Debug)]
+pub struct NeeSpeedup {
+    pub backend: String,
+    /// Naive's RMSE at its largest spp, and the seconds that render took.
+    pub target_rmse: f64,
+    pub naive_seconds: f64,
+    /// Seconds on nee's fitted line to that RMSE.
+    pub nee_fitted_seconds: Option<f64>,
+    /// The first nee render at or below that RMSE: (spp, seconds).
+    pub nee_first_below: Option<(u32, f64)>,
+    /// Seconds to that RMSE between the two nee renders around it, interpolated as a power law.
+    pub nee_interpolated_seconds: Option<f64>,
+}
+
+impl NeeSpeedup {
+    /// naive seconds / nee seconds: nee's time interpolated between its renders around the
+    /// target error, else on its fitted line.
+    pub fn ratio(&self) -> Option<f64> {
+        self.nee_interpolated_seconds
+            .or(self.nee_fitted_seconds)
+            .map(|s| self.naive_seconds / s)
+    }
+}
+
+/// Seconds at which the (seconds, rmse) series reaches `target`, by a power law through the
+/// last render above it and the first at or below it.
+fn interpolate_seconds(series: &[(f64, f64)], target: f64) -> Option<f64> {
+    let below = series.iter().position(|&(_, e)| e <= target)?;
+    let (t1, e1) = series[below];
+    let (t0, e0) = *series[..below].last()?;
+    if !(e1 < e0 && t1 > t0 && t0 > 0.0 && e1 > 0.0) {
+        return None;
+    }
+    let exponent = (e1 / e0).ln() / (t1 / t0).ln();
+    Some(t0 * (target / e0).powf(1.0 / exponent))
+}
+
 impl Report {
+    /// nee against naive on each backend that ran both.
+    pub fn nee_speedups(&self) -> Vec<NeeSpeedup> {
+        let mut out = Vec::new();
+        for (series, _) in &self.fits {
+            let Some(backend) = series.strip_suffix("-naive") else {
+                continue;
+            };
+            let nee = format!("{backend}-nee");
+            let Some(naive_last) = self.rungs.iter().rev().find(|r| &r.series == series) else {
+                continue;
+            };
+            let Some((_, nee_fit)) = self.fits.iter().find(|(s, _)| *s == nee) else {
+                continue;
+            };
+            let target = naive_last.errors.rmse;
+            let nee_series: Vec<(f64, f64)> = self
+                .rungs
+                .iter()
+                .filter(|r| r.series == nee)
+                .map(|r| (r.seconds, r.errors.rmse))
+                .collect();
+            out.push(NeeSpeedup {
+                nee_interpolated_seconds: interpolate_seconds(&nee_series, target),
+                backend: backend.to_string(),
+                target_rmse: target,
+                naive_seconds: naive_last.seconds,
+                nee_fitted_seconds: nee_fit.map(|f| f.seconds_to(target)),
+                nee_first_below: self
+                    .rungs
+                    .iter()
+                    .find(|r| r.series == nee && r.errors.rmse <= target)
+                    .map(|r| (r.spp, r.seconds)),
+            });
+        }
+        out
+    }
+
     pub fn csv(&self) -> String {
         let mut out =
             String::from("series,spp,seconds,gpu_seconds,rmse,relmse,mae,estimated_rmse\n");
@@ -352,16 +448,15 @@ impl Report {
         out
     }
 
-    /// The error the time-to-error comparison aims at: the CPU series' error at its largest spp
-    /// (else the first series'), unless given.
+    /// The error the time-to-error comparison aims at: the cpu-naive series' error at its
+    /// largest spp (else the first CPU series', else the first series'), unless given.
     pub fn target_rmse(&self, given: Option<f64>) -> Option<f64> {
         given.or_else(|| {
-            let series = self
-                .fits
-                .iter()
-                .map(|(s, _)| s)
-                .find(|s| s.starts_with("cpu"))
-                .or(self.fits.first().map(|(s, _)| s))?;
+            let names = || self.fits.iter().map(|(s, _)| s);
+            let series = names()
+                .find(|s| *s == "cpu-naive")
+                .or_else(|| names().find(|s| s.starts_with("cpu")))
+                .or_else(|| names().next())?;
             self.rungs
                 .iter()
                 .rev()
@@ -419,6 +514,26 @@ impl Report {
                 )),
             }
         }
+        for n in self.nee_speedups() {
+            out.push_str(&format!(
+                "{}: naive reached RMSE {:.4e} at its largest spp in {:.3} s; nee ",
+                n.backend, n.target_rmse, n.naive_seconds
+            ));
+            match n.nee_first_below {
+                Some((spp, s)) => out.push_str(&format!("got below it at {spp} spp in {s:.3} s")),
+                None => out.push_str("did not get below it"),
+            }
+            if let Some(i) = n.nee_interpolated_seconds {
+                out.push_str(&format!(", interpolated {i:.3} s"));
+            }
+            if let Some(f) = n.nee_fitted_seconds {
+                out.push_str(&format!(", fitted line {f:.3} s"));
+            }
+            match n.ratio() {
+                Some(r) => out.push_str(&format!(": nee is {r:.2}x faster\n")),
+                None => out.push('\n'),
+            }
+        }
         if let Some(target) = target {
             out.push_str(&format!(
                 "time to reach RMSE {target:.4e} (on the fitted lines):\n"
@@ -428,10 +543,16 @@ impl Report {
                 .iter()
                 .map(|(s, f)| (s, f.map(|f| f.seconds_to(target))))
                 .collect();
-            // Ratios against the CPU series (the reference renderer), else the first.
+            // Ratios against the CPU naive series (the original estimator on the reference
+            // renderer), else a CPU series, else the first.
             let (base_name, base) = times
                 .iter()
-                .find(|(s, t)| s.starts_with("cpu") && t.is_some())
+                .find(|(s, t)| *s == "cpu-naive" && t.is_some())
+                .or_else(|| {
+                    times
+                        .iter()
+                        .find(|(s, t)| s.starts_with("cpu") && t.is_some())
+                })
                 .or_else(|| times.iter().find(|(_, t)| t.is_some()))
                 .map(|(s, t)| (s.as_str(), *t))
                 .unwrap_or(("", None));
@@ -446,5 +567,24 @@ impl Report {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::interpolate_seconds;
+
+    #[test]
+    fn interpolates_time_to_error_as_a_power_law() {
+        // rmse = 0.2 t^-0.5: 0.1414 is reached at t = 2.
+        let series = [(0.5, 0.2828), (1.0, 0.2), (4.0, 0.1), (16.0, 0.05)];
+        let t = interpolate_seconds(&series, 0.2 / 2f64.sqrt()).expect("brackets");
+        assert!((t - 2.0).abs() < 1e-3, "{t}");
+        assert_eq!(interpolate_seconds(&series, 0.01), None, "never reached");
+        assert_eq!(
+            interpolate_seconds(&series, 0.5),
+            None,
+            "no render above it"
+        );
     }
 }

@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_gpu::gpu::list_adapters;
 use rt_gpu::output::{ImageFormat, write_image};
-use rt_gpu::render::{Backend, GpuChoice, RenderOptions, Rendered, render};
+use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
 use rt_gpu::scene::file::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
 use rt_gpu::scene::flat::FlatScene;
@@ -76,9 +76,12 @@ struct ConvergeArgs {
     /// Backends to compare, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "gpu,cpu")]
     backends: Vec<Backend>,
-    /// Integrators to compare, comma-separated (available: naive).
-    #[arg(long, value_delimiter = ',', default_value = "naive")]
-    integrators: Vec<String>,
+    /// Integrators to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "naive,nee")]
+    integrators: Vec<Integrator>,
+    /// Russian roulette from this many path segments on (0: off).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    roulette_depth: u32,
     /// Seconds each series may spend on its ladder.
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     budget: f64,
@@ -111,6 +114,8 @@ struct BenchArgs {
     size: (u32, u32),
     #[arg(long, value_name = "D", default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     max_depth: u32,
+    #[arg(long, value_enum, default_value_t = Integrator::Nee)]
+    integrator: Integrator,
     /// GPU adapter (part of its name).
     #[arg(long)]
     adapter: Option<String>,
@@ -135,6 +140,14 @@ struct RenderArgs {
     /// Where to render.
     #[arg(long, value_enum, default_value_t = Backend::Gpu)]
     backend: Backend,
+    /// How paths find light: nee samples lights directly at diffuse hits (with multiple
+    /// importance sampling); naive waits for paths to hit them (the original project's way).
+    #[arg(long, value_enum, default_value_t = Integrator::Nee)]
+    integrator: Integrator,
+    /// Russian roulette from this many path segments on: paths end at random, in proportion to
+    /// how little they can still carry, and survivors are reweighted (unbiased) [0: off].
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    roulette_depth: u32,
     /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
     #[arg(long, value_name = "NAME")]
     adapter: Option<String>,
@@ -241,6 +254,7 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
         backends: args.backends.clone(),
         integrators: args.integrators.clone(),
+        roulette_depth: args.roulette_depth,
         budget: args.budget,
         reference: args.reference.clone(),
         reference_spp: args.reference_spp,
@@ -303,11 +317,16 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         first_sample: 0,
         seed: 1,
         max_depth: args.max_depth,
+        integrator: args.integrator,
+        roulette_depth: 0,
     };
     let samples = width as f64 * height as f64 * args.spp as f64;
     println!(
-        "{}: {width}x{height}, {} spp, max depth {}",
-        scene.name, args.spp, args.max_depth
+        "{}: {width}x{height}, {} spp, max depth {}, {} integrator",
+        scene.name,
+        args.spp,
+        args.max_depth,
+        args.integrator.name()
     );
     let mut rates = Vec::new();
     let runs = [
@@ -409,6 +428,8 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         first_sample: 0,
         seed: args.seed,
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
+        integrator: args.integrator,
+        roulette_depth: args.roulette_depth,
     };
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
     let gpu = GpuChoice {
@@ -416,7 +437,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         everything: args.unspecialised,
     };
     if args.print_shader {
-        let features = gpu.features(&flat);
+        let features = gpu.features(&flat, opts.integrator);
         print!(
             "{}",
             rt_gpu::gpu::shader::compose(&features, &flat).map_err(anyhow::Error::msg)?
@@ -436,11 +457,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         _ => String::new(),
     };
     eprintln!(
-        "{}: {width}x{height}, {} spp, {} [{}], {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
+        "{}: {width}x{height}, {} spp, {} [{}], {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
         scene.name,
         opts.spp,
         args.backend.name(),
         rendered.device,
+        opts.integrator.name(),
         samples / seconds / 1e6,
         mean.x,
         mean.y,

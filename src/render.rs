@@ -16,6 +16,46 @@ pub struct RenderOptions {
     pub seed: u32,
     /// The number of path segments.
     pub max_depth: u32,
+    pub integrator: Integrator,
+    /// Russian roulette from this many segments on (0: off). Unbiased: a path survives with the
+    /// probability of its largest throughput component (at most 0.95) and is reweighted.
+    pub roulette_depth: u32,
+}
+
+impl RenderOptions {
+    /// `width` x `height` at `spp` samples, seed 0, the default integrator, no roulette.
+    pub fn new(width: u32, height: u32, spp: u32, max_depth: u32) -> Self {
+        RenderOptions {
+            width,
+            height,
+            spp,
+            first_sample: 0,
+            seed: 0,
+            max_depth,
+            integrator: Integrator::default(),
+            roulette_depth: 0,
+        }
+    }
+}
+
+/// How a path finds light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Integrator {
+    /// Paths find light only by hitting it (the original project's estimator).
+    Naive,
+    /// Next-event estimation: each diffuse hit also samples a light with a shadow ray, combined
+    /// with BSDF sampling by multiple importance sampling (power heuristic).
+    #[default]
+    Nee,
+}
+
+impl Integrator {
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Naive => "naive",
+            Integrator::Nee => "nee",
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -45,13 +85,14 @@ pub struct GpuChoice {
 }
 
 impl GpuChoice {
-    /// The kernel features this choice runs `scene` with.
-    pub fn features(&self, scene: &FlatScene) -> Features {
-        if self.everything {
+    /// The kernel features this choice runs `scene` with under `integrator`.
+    pub fn features(&self, scene: &FlatScene, integrator: Integrator) -> Features {
+        let features = if self.everything {
             Features::everything(scene)
         } else {
             Features::of(scene)
-        }
+        };
+        features.with_integrator(scene, integrator)
     }
 }
 
@@ -66,34 +107,50 @@ pub struct Rendered {
 }
 
 /// A backend made ready once (device opened, kernel compiled) for many renders of one scene.
+/// The GPU's kernel is built for one integrator, so a session is too.
 pub enum Session {
-    Cpu,
+    Cpu {
+        integrator: Integrator,
+    },
     Gpu {
         renderer: Box<GpuRenderer>,
         kernel: Box<Kernel>,
+        integrator: Integrator,
     },
 }
 
 impl Session {
-    pub fn new(backend: Backend, gpu: &GpuChoice, scene: &FlatScene) -> anyhow::Result<Self> {
+    pub fn new(
+        backend: Backend,
+        gpu: &GpuChoice,
+        scene: &FlatScene,
+        integrator: Integrator,
+    ) -> anyhow::Result<Self> {
         Ok(match backend {
-            Backend::Cpu => Session::Cpu,
+            Backend::Cpu => Session::Cpu { integrator },
             Backend::Gpu => {
                 let renderer = GpuRenderer::new(GpuContext::new(gpu.adapter.as_deref())?);
-                let features = gpu.features(scene);
+                let features = gpu.features(scene, integrator);
                 let kernel = renderer.kernel(scene, features, "render")?;
                 Session::Gpu {
                     renderer: Box::new(renderer),
                     kernel: Box::new(kernel),
+                    integrator,
                 }
             }
         })
     }
 
+    pub fn integrator(&self) -> Integrator {
+        match self {
+            Session::Cpu { integrator } | Session::Gpu { integrator, .. } => *integrator,
+        }
+    }
+
     /// What renders: "cpu (N threads)" or the adapter's name.
     pub fn device(&self) -> String {
         match self {
-            Session::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
+            Session::Cpu { .. } => format!("cpu ({} threads)", rayon::current_num_threads()),
             Session::Gpu { renderer, .. } => renderer.ctx.info.name.clone(),
         }
     }
@@ -105,8 +162,15 @@ impl Session {
         opts: &RenderOptions,
         on_progress: &(dyn Fn(f64) + Sync),
     ) -> anyhow::Result<Rendered> {
+        if opts.integrator != self.integrator() {
+            anyhow::bail!(
+                "this session was built for the {} integrator, not {}",
+                self.integrator().name(),
+                opts.integrator.name()
+            );
+        }
         match self {
-            Session::Cpu => {
+            Session::Cpu { .. } => {
                 let rows = AtomicU32::new(0);
                 let film = crate::cpu::render(scene, opts, &|| {
                     let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
@@ -119,7 +183,9 @@ impl Session {
                     device: self.device(),
                 })
             }
-            Session::Gpu { renderer, kernel } => {
+            Session::Gpu {
+                renderer, kernel, ..
+            } => {
                 let (film, timings) =
                     renderer.render(kernel, scene, opts, &Tuning::default(), on_progress)?;
                 Ok(Rendered {
@@ -141,5 +207,5 @@ pub fn render(
     opts: &RenderOptions,
     on_progress: &(dyn Fn(f64) + Sync),
 ) -> anyhow::Result<Rendered> {
-    Session::new(backend, gpu, scene)?.render(scene, opts, on_progress)
+    Session::new(backend, gpu, scene, opts.integrator)?.render(scene, opts, on_progress)
 }

@@ -19,7 +19,12 @@ fn stderr(out: &Output) -> String {
 #[test]
 fn renders_each_format_with_a_summary_line() {
     let dir = tempfile::tempdir().expect("tempdir");
-    for ext in ["png", "ppm", "exr", "pfm"] {
+    for (ext, integrator) in [
+        ("png", "nee"),
+        ("ppm", "naive"),
+        ("exr", "nee"),
+        ("pfm", "naive"),
+    ] {
         let name = format!("out.{ext}");
         let out = rt_gpu(
             &[
@@ -30,6 +35,8 @@ fn renders_each_format_with_a_summary_line() {
                 "16x12",
                 "--backend",
                 "cpu",
+                "--integrator",
+                integrator,
                 "-o",
                 &name,
             ],
@@ -38,6 +45,7 @@ fn renders_each_format_with_a_summary_line() {
         assert!(out.status.success(), "{ext}: {}", stderr(&out));
         let summary = stderr(&out);
         assert!(summary.contains("16x12, 2 spp, cpu"), "{summary}");
+        assert!(summary.contains(&format!("], {integrator}, ")), "{summary}");
         assert!(summary.contains("Msamples/s"), "{summary}");
         let bytes = std::fs::read(dir.path().join(&name)).expect("written");
         let magic: &[u8] = match ext {
@@ -173,7 +181,7 @@ fn converge_rejects_bad_options_in_one_line() {
                 "--backends",
                 "cpu",
             ][..],
-            "unknown integrator 'magic'",
+            "invalid value 'magic' for '--integrators",
         ),
         (
             &["converge", "cornell", "--budget", "0", "--backends", "cpu"][..],

@@ -4,7 +4,7 @@ mod common;
 
 use glam::Vec3;
 use rt_gpu::converge::{ConvergeOptions, errors, estimated_rmse, fit_loglog, run};
-use rt_gpu::render::{Backend, GpuChoice};
+use rt_gpu::render::{Backend, GpuChoice, Integrator};
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Background, Material, Shape};
 use std::sync::Mutex;
@@ -70,9 +70,10 @@ fn self_estimated_error_tracks_the_true_error() {
     }
 }
 
-/// A ladder on a plain lambertian scene falls as time^-0.5, and the report files are written.
+/// A ladder on a plain lambertian scene falls as spp^-0.5 (so time^-0.5 at a steady rate), and
+/// the report files are written.
 #[test]
-fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_time() {
+fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
     let _turn = CPU.lock().unwrap_or_else(|p| p.into_inner());
     let scene = common::scene(
         Vec3::new(0.0, 0.3, 3.0),
@@ -106,7 +107,8 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_time() {
         height: 24,
         max_depth: 6,
         backends: vec![Backend::Cpu],
-        integrators: vec!["naive".into()],
+        integrators: vec![Integrator::Naive],
+        roulette_depth: 0,
         budget: 3.0,
         reference: None,
         reference_spp: Some(32_768),
@@ -114,7 +116,16 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_time() {
         gpu: GpuChoice::default(),
     };
     let report = run(&options).expect("runs");
-    let fit = report.fits[0].1.expect("fits");
+    assert!(report.fits[0].1.is_some(), "no fit\n{}", report.table(None));
+    // Against seconds the exponent depends on how steady this shared machine's clock is; against
+    // samples it does not (the renders are seeded), so the rate is asserted on spp.
+    let by_spp: Vec<(f64, f64)> = report
+        .rungs
+        .iter()
+        .filter(|r| r.errors.rmse > 2.0 * report.reference.noise_rmse.unwrap_or(0.0))
+        .map(|r| (r.spp as f64, r.errors.rmse))
+        .collect();
+    let fit = fit_loglog(&by_spp).expect("fits");
     assert!(
         !fit.suspicious(),
         "exponent {} outside [-0.6, -0.4]\n{}",

@@ -48,6 +48,7 @@ fn lambertian_sphere_under_constant_sky_shows_albedo_times_background() {
         center: Vec3::ZERO,
         radius: 1.0,
         material: 0,
+        light: 0,
     };
     // A pixel is covered when the rays through its four corners all hit (the silhouette is convex).
     let corner_hits = |x: u32, y: u32| {

@@ -98,6 +98,7 @@ fn sphere_hits_from_outside_and_inside() {
         center: Vec3::new(0.0, 0.0, -5.0),
         radius: 2.0,
         material: 0,
+        light: 0,
     };
     assert_eq!(
         hit_sphere(

@@ -1,8 +1,9 @@
 //! The Rust structs uploaded to the GPU agree with their WGSL twins, and every kernel variant is
 //! valid WGSL. Runs without a GPU: naga does the checking.
 
-use rt_gpu::gpu::layout::{GpuFirstBounce, GpuMaterial, GpuParams, GpuQuad, GpuSphere};
+use rt_gpu::gpu::layout::{GpuFirstBounce, GpuLight, GpuMaterial, GpuParams, GpuQuad, GpuSphere};
 use rt_gpu::gpu::shader::{Features, compose, validate};
+use rt_gpu::render::Integrator;
 use std::mem::{offset_of, size_of};
 
 fn all_features() -> Features {
@@ -17,6 +18,7 @@ fn all_features() -> Features {
         lens: true,
         sky: false,
         debug: true,
+        nee: true,
         uniform_scene: false,
         scene_capacity: 1,
         inline_scene: false,
@@ -41,6 +43,7 @@ fn rust_layouts() -> Vec<Layout> {
                 ("center", offset_of!(GpuSphere, center)),
                 ("radius", offset_of!(GpuSphere, radius)),
                 ("material", offset_of!(GpuSphere, material)),
+                ("light", offset_of!(GpuSphere, light)),
             ],
         ),
         (
@@ -52,7 +55,22 @@ fn rust_layouts() -> Vec<Layout> {
                 ("normal", offset_of!(GpuQuad, normal)),
                 ("material", offset_of!(GpuQuad, material)),
                 ("alpha_axis", offset_of!(GpuQuad, alpha_axis)),
+                ("light", offset_of!(GpuQuad, light)),
                 ("beta_axis", offset_of!(GpuQuad, beta_axis)),
+            ],
+        ),
+        (
+            "Light",
+            size_of::<GpuLight>(),
+            vec![
+                ("position", offset_of!(GpuLight, position)),
+                ("cdf", offset_of!(GpuLight, cdf)),
+                ("u", offset_of!(GpuLight, u)),
+                ("pick", offset_of!(GpuLight, pick)),
+                ("v", offset_of!(GpuLight, v)),
+                ("radius", offset_of!(GpuLight, radius)),
+                ("normal", offset_of!(GpuLight, normal)),
+                ("inv_area", offset_of!(GpuLight, inv_area)),
             ],
         ),
         (
@@ -89,6 +107,8 @@ fn rust_layouts() -> Vec<Layout> {
                 ("quad_count", offset_of!(GpuParams, quad_count)),
                 ("samples_before", offset_of!(GpuParams, samples_before)),
                 ("sky", offset_of!(GpuParams, sky)),
+                ("light_count", offset_of!(GpuParams, light_count)),
+                ("roulette_depth", offset_of!(GpuParams, roulette_depth)),
             ],
         ),
         (
@@ -133,11 +153,11 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     }
 }
 
-/// Every combination of features (2^12 kernels) composes into valid WGSL.
+/// Every combination of features (2^13 kernels) composes into valid WGSL.
 #[test]
 fn every_kernel_variant_validates() {
     let scene = small_scene();
-    for bits in 0u32..1 << 12 {
+    for bits in 0u32..1 << 13 {
         let on = |i: u32| bits & (1 << i) != 0;
         let features = Features {
             spheres: on(0),
@@ -153,6 +173,7 @@ fn every_kernel_variant_validates() {
             uniform_scene: on(10),
             scene_capacity: 32,
             inline_scene: on(11),
+            nee: on(12),
         };
         let source = compose(&features, &scene).expect("composes");
         if let Err(e) = validate(&source) {
@@ -196,6 +217,14 @@ fn kernels_leave_out_unused_code() {
     let showcase = kernel("showcase");
     assert!(showcase.contains("spheres[i]") && showcase.contains("quads[i]"));
     assert!(!showcase.contains("fn inline_scene"));
+    // Light sampling only for nee, and only where there is a light.
+    let with = |name: &str, integrator| {
+        let f = flat(name);
+        compose(&Features::of(&f).with_integrator(&f, integrator), &f).expect("composes")
+    };
+    assert!(with("cornell", Integrator::Nee).contains("fn sample_light"));
+    assert!(!with("cornell", Integrator::Naive).contains("fn sample_light"));
+    assert!(!with("spheres", Integrator::Nee).contains("fn sample_light"));
 }
 
 #[test]

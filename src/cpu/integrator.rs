@@ -1,28 +1,111 @@
 //! The path tracer (twin: `shaders/integrator.wgsl`): the original project's recursive
 //! `ray_color`, made iterative. Segment k (1-based) adds the emission it hits, or the background
 //! it escapes to, for k <= max_depth.
+//!
+//! With next-event estimation (`Integrator::Nee`), each lambertian hit also samples a light
+//! directly with a shadow ray, and light found both ways is weighted by the power heuristic.
+//! A light sample taken at the k-th hit forms a path of k + 1 segments, so it is taken only when
+//! k + 1 <= max_depth: both integrators sum over exactly the same paths.
 
+use super::lights;
 use super::material::{background, emitted, scatter};
 use super::shapes::{Ray, intersect, spawn};
+use crate::render::{Integrator, RenderOptions};
 use crate::rng::Rng;
+use crate::scene::Material;
 use crate::scene::flat::FlatScene;
 use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
 
-pub fn radiance(scene: &FlatScene, mut ray: Ray, max_depth: u32, rng: &mut Rng) -> Vec3 {
+/// Roulette keeps a path with the probability of its largest throughput component, capped here
+/// so bright paths still end eventually.
+pub const MAX_SURVIVAL: f32 = 0.95;
+
+/// Whether light sampling runs: asked for, and the scene has a light to sample.
+pub fn uses_nee(scene: &FlatScene, opts: &RenderOptions) -> bool {
+    opts.integrator == Integrator::Nee && !scene.lights.is_empty()
+}
+
+pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut Rng) -> Vec3 {
+    let nee = uses_nee(scene, opts);
     let mut total = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
-    for _segment in 0..max_depth {
+    // The pdf with which a lambertian bounce chose `ray`, from `origin`; 0 when light sampling
+    // could not have chosen it (camera rays, metal and glass), so light it finds counts in full.
+    let mut bsdf_pdf = 0.0;
+    let mut origin = ray.origin;
+    for segment in 0..opts.max_depth {
         let Some(hit) = intersect(scene, &ray) else {
             total += throughput * background(&scene.background, ray.dir);
             break;
         };
         let material = &scene.materials[hit.material as usize];
-        total += throughput * emitted(material, &hit);
+        let light = hit_light(scene, hit.primitive);
+        let mut weight = 1.0;
+        if nee && bsdf_pdf > 0.0 && light > 0 {
+            let l = &scene.lights[light as usize - 1];
+            let light_pdf = lights::pdf(l, origin, hit.point, ray.dir);
+            weight = lights::power_heuristic(bsdf_pdf, light_pdf);
+        }
+        total += throughput * weight * emitted(material, &hit);
+        if segment + 1 == opts.max_depth {
+            break; // no longer path counts
+        }
+        bsdf_pdf = 0.0;
+        if nee && let Material::Lambertian { albedo, .. } = *material {
+            let (u0, u1, u2) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+            total += throughput * albedo * direct_light(scene, &hit, u0, u1, u2);
+        }
         let Some((attenuation, dir)) = scatter(material, ray.dir, &hit, rng) else {
             break;
         };
         throughput *= attenuation;
+        if nee && matches!(material, Material::Lambertian { .. }) {
+            bsdf_pdf = hit.normal.dot(dir).max(0.0) * FRAC_1_PI;
+        }
+        origin = hit.point;
         ray = spawn(&hit, dir);
+        if opts.roulette_depth > 0 && segment + 1 >= opts.roulette_depth {
+            let survival = throughput.max_element().min(MAX_SURVIVAL);
+            if !(rng.next_f32() < survival) {
+                break;
+            }
+            throughput /= survival;
+        }
     }
     total
+}
+
+/// 1 + the light index of primitive `primitive` (spheres first), or 0.
+#[inline]
+fn hit_light(scene: &FlatScene, primitive: u32) -> u32 {
+    let spheres = scene.spheres.len() as u32;
+    if primitive < spheres {
+        scene.spheres[primitive as usize].light
+    } else {
+        scene.quads[(primitive - spheres) as usize].light
+    }
+}
+
+/// Light arriving at a lambertian `hit` from one light sample, times cos / pi and the MIS
+/// weight (the caller multiplies by albedo): zero if the light is below the surface or occluded.
+#[inline]
+fn direct_light(scene: &FlatScene, hit: &super::shapes::Hit, u0: f32, u1: f32, u2: f32) -> Vec3 {
+    let index = lights::pick_light(scene, u0);
+    let Some((dir, light_pdf)) = lights::sample(&scene.lights[index], hit.point, u1, u2) else {
+        return Vec3::ZERO;
+    };
+    let cos = hit.normal.dot(dir);
+    if !(cos > 0.0) {
+        return Vec3::ZERO;
+    }
+    // The shadow ray: whatever it hits first must be the light sampled.
+    let Some(shadow) = intersect(scene, &spawn(hit, dir)) else {
+        return Vec3::ZERO;
+    };
+    if hit_light(scene, shadow.primitive) != index as u32 + 1 {
+        return Vec3::ZERO;
+    }
+    let le = emitted(&scene.materials[shadow.material as usize], &shadow);
+    le * lights::light_sample_factor(light_pdf, cos * FRAC_1_PI)
 }

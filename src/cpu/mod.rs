@@ -4,6 +4,7 @@
 
 pub mod camera;
 pub mod integrator;
+pub mod lights;
 pub mod material;
 pub mod sampling;
 pub mod shapes;
@@ -49,7 +50,7 @@ fn render_pixel(
     for sample in opts.first_sample..opts.first_sample + opts.spp {
         let mut rng = Rng::for_sample(pixel, sample, opts.seed);
         let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut rng);
-        let mut radiance = integrator::radiance(scene, ray, opts.max_depth, &mut rng);
+        let mut radiance = integrator::radiance(scene, ray, opts, &mut rng);
         if !radiance.is_finite() {
             invalid += 1;
             radiance = glam::Vec3::ZERO;

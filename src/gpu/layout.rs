@@ -13,7 +13,9 @@ pub struct GpuSphere {
     pub center: [f32; 3],
     pub radius: f32,
     pub material: u32,
-    pub _pad: [u32; 3],
+    /// 1 + its index in the light list; 0 when it does not emit.
+    pub light: u32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -24,9 +26,24 @@ pub struct GpuQuad {
     pub normal: [f32; 3],
     pub material: u32,
     pub alpha_axis: [f32; 3],
-    pub _pad0: u32,
+    /// 1 + its index in the light list; 0 when it does not emit.
+    pub light: u32,
     pub beta_axis: [f32; 3],
-    pub _pad1: u32,
+    pub _pad: u32,
+}
+
+/// A light for next-event estimation (see `scene::flat::Light`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub cdf: f32,
+    pub u: [f32; 3],
+    pub pick: f32,
+    pub v: [f32; 3],
+    pub radius: f32,
+    pub normal: [f32; 3],
+    pub inv_area: f32,
 }
 
 pub const MAT_LAMBERTIAN: u32 = 0;
@@ -67,6 +84,10 @@ pub struct GpuParams {
     pub quad_count: u32,
     pub samples_before: u32,
     pub sky: u32,
+    pub light_count: u32,
+    /// Russian roulette from this many segments on; 0: off.
+    pub roulette_depth: u32,
+    pub _pad: [u32; 2],
 }
 
 /// The per-pixel accumulator: mean (w: non-finite sample count as bits), Kahan compensation, M2.
@@ -89,6 +110,7 @@ pub struct SceneBuffers {
     pub spheres: Vec<GpuSphere>,
     pub quads: Vec<GpuQuad>,
     pub materials: Vec<GpuMaterial>,
+    pub lights: Vec<GpuLight>,
 }
 
 impl SceneBuffers {
@@ -100,7 +122,8 @@ impl SceneBuffers {
                 center: s.center.to_array(),
                 radius: s.radius,
                 material: s.material,
-                _pad: [0; 3],
+                light: s.light,
+                _pad: [0; 2],
             })
             .collect();
         let mut quads: Vec<GpuQuad> = scene
@@ -113,6 +136,7 @@ impl SceneBuffers {
                 material: q.material,
                 alpha_axis: q.alpha_axis.to_array(),
                 beta_axis: q.beta_axis.to_array(),
+                light: q.light,
                 ..Default::default()
             })
             .collect();
@@ -126,10 +150,28 @@ impl SceneBuffers {
         if materials.is_empty() {
             materials.push(GpuMaterial::default());
         }
+        let mut lights: Vec<GpuLight> = scene
+            .lights
+            .iter()
+            .map(|l| GpuLight {
+                position: l.position.to_array(),
+                cdf: l.cdf,
+                u: l.u.to_array(),
+                pick: l.pick,
+                v: l.v.to_array(),
+                radius: l.radius,
+                normal: l.normal.to_array(),
+                inv_area: l.inv_area,
+            })
+            .collect();
+        if lights.is_empty() {
+            lights.push(GpuLight::default());
+        }
         SceneBuffers {
             spheres,
             quads,
             materials,
+            lights,
         }
     }
 }
@@ -194,5 +236,8 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         quad_count: scene.quads.len() as u32,
         samples_before: 0,
         sky,
+        light_count: scene.lights.len() as u32,
+        roulette_depth: opts.roulette_depth,
+        _pad: [0; 2],
     }
 }

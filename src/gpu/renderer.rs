@@ -27,13 +27,19 @@ const LOOP_ITERATION_BUDGET: u64 = 60_000;
 /// one pass over each primitive list (none when the scene is inlined as straight-line code),
 /// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
+/// With NEE, a segment also scans the light list and traces a shadow ray.
 fn loop_iterations_per_sample(scene: &FlatScene, features: &Features, max_depth: u32) -> u64 {
     let primitives = if features.inline_scene {
         0
     } else {
         scene.spheres.len() as u64 + scene.quads.len() as u64
     };
-    2 + (max_depth as u64 + 1) * (3 + primitives)
+    let per_segment = if features.nee {
+        6 + 2 * primitives + scene.lights.len() as u64
+    } else {
+        3 + primitives
+    };
+    2 + (max_depth as u64 + 1) * per_segment
 }
 
 /// Knobs tests use to force tiling and slicing; renders normally leave them `None`.
@@ -119,6 +125,7 @@ impl GpuRenderer {
                 buffer_entry(3, scene_ty),
                 buffer_entry(4, read_write),
                 buffer_entry(5, read_write),
+                buffer_entry(6, scene_ty),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -175,13 +182,14 @@ impl GpuRenderer {
 
     /// The scene arrays as buffers of the kind `features` asks for: uniform arrays padded to
     /// their fixed capacity, or storage arrays.
-    fn scene_buffers(&self, scene: &FlatScene, features: &Features) -> [wgpu::Buffer; 3] {
+    fn scene_buffers(&self, scene: &FlatScene, features: &Features) -> [wgpu::Buffer; 4] {
         let mut buffers = SceneBuffers::new(scene);
         let usage = if features.uniform_scene {
             let capacity = features.scene_capacity.max(1) as usize;
             buffers.spheres.resize(capacity, Default::default());
             buffers.quads.resize(capacity, Default::default());
             buffers.materials.resize(capacity, Default::default());
+            buffers.lights.resize(capacity, Default::default());
             wgpu::BufferUsages::UNIFORM
         } else {
             wgpu::BufferUsages::STORAGE
@@ -199,6 +207,7 @@ impl GpuRenderer {
             make("spheres", bytemuck::cast_slice(&buffers.spheres)),
             make("quads", bytemuck::cast_slice(&buffers.quads)),
             make("materials", bytemuck::cast_slice(&buffers.materials)),
+            make("lights", bytemuck::cast_slice(&buffers.lights)),
         ]
     }
 
@@ -206,7 +215,7 @@ impl GpuRenderer {
         &self,
         kernel: &Kernel,
         params: &wgpu::Buffer,
-        scene: &[wgpu::Buffer; 3],
+        scene: &[wgpu::Buffer; 4],
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
@@ -228,6 +237,7 @@ impl GpuRenderer {
                     entry(3, &scene[2]),
                     entry(4, accum),
                     entry(5, debug),
+                    entry(6, &scene[3]),
                 ],
             })
     }
@@ -278,6 +288,12 @@ impl GpuRenderer {
         tuning: &Tuning,
         on_progress: &dyn Fn(f64),
     ) -> Result<(Film, Timings), GpuError> {
+        if kernel.features.with_integrator(scene, opts.integrator) != kernel.features {
+            return Err(GpuError::Runtime(format!(
+                "this kernel was not built for the {} integrator",
+                opts.integrator.name()
+            )));
+        }
         let (width, height) = (opts.width, opts.height);
         let max_tile_pixels = self.max_tile_pixels(tuning);
         if (width as u64) > max_tile_pixels {
@@ -460,18 +476,55 @@ impl GpuRenderer {
         scene: &FlatScene,
         opts: &RenderOptions,
     ) -> Result<Vec<GpuFirstBounce>, GpuError> {
+        let pixels = opts.width as usize * opts.height as usize;
+        let slots = vec![GpuFirstBounce::default(); pixels];
+        self.run_debug(scene, opts, "first_bounce", slots)
+    }
+
+    /// The closest hit of each ray (origin, unit direction), from the debug kernel: `point`,
+    /// `normal` and `primitive` are set when `hit` is 1.
+    pub fn trace_rays(
+        &self,
+        scene: &FlatScene,
+        rays: &[(glam::Vec3, glam::Vec3)],
+    ) -> Result<Vec<GpuFirstBounce>, GpuError> {
+        let slots: Vec<GpuFirstBounce> = rays
+            .iter()
+            .map(|(origin, dir)| GpuFirstBounce {
+                point: origin.to_array(),
+                dir: dir.to_array(),
+                ..Default::default()
+            })
+            .collect();
+        let opts = RenderOptions::new(rays.len().max(1) as u32, 1, 1, 1);
+        self.run_debug(scene, &opts, "trace_rays", slots)
+    }
+
+    /// Runs debug entry point `entry` once over an `opts.width` x `opts.height` grid whose
+    /// slots start as `slots` and are read back.
+    fn run_debug(
+        &self,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+        entry: &str,
+        slots: Vec<GpuFirstBounce>,
+    ) -> Result<Vec<GpuFirstBounce>, GpuError> {
         let features = Features {
             debug: true,
             ..Features::of(scene)
         };
-        let kernel = self.kernel(scene, features, "first_bounce")?;
-        let pixels = opts.width as u64 * opts.height as u64;
-        let size = pixels * std::mem::size_of::<GpuFirstBounce>() as u64;
-        let out = self.buffer(
-            "bounces",
-            size,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        );
+        let kernel = self.kernel(scene, features, entry)?;
+        let size = (slots.len().max(1) * std::mem::size_of::<GpuFirstBounce>()) as u64;
+        let mut contents = bytemuck::cast_slice(&slots).to_vec();
+        contents.resize(size as usize, 0);
+        let out = self
+            .ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("debug slots"),
+                contents: &contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            });
         let params_buffer = self
             .ctx
             .device
@@ -493,7 +546,9 @@ impl GpuRenderer {
         self.ctx.queue.submit([encoder.finish()]);
         self.ctx.wait()?;
         let bytes = self.read_back(&out, size)?;
-        Ok(bytemuck::cast_slice(&bytes).to_vec())
+        let mut result: Vec<GpuFirstBounce> = bytemuck::cast_slice(&bytes).to_vec();
+        result.truncate(slots.len());
+        Ok(result)
     }
 }
 

@@ -3,6 +3,7 @@
 //! only when the scene needs that feature: a scene without spheres gets no sphere code, one
 //! without glass no dielectric branch.
 
+use crate::render::Integrator;
 use crate::scene::flat::FlatScene;
 use crate::scene::{Background, Material};
 
@@ -20,6 +21,7 @@ const MODULES: &[(&str, &str)] = &[
         "materials.wgsl",
         include_str!("../../shaders/materials.wgsl"),
     ),
+    ("lights.wgsl", include_str!("../../shaders/lights.wgsl")),
     (
         "integrator.wgsl",
         include_str!("../../shaders/integrator.wgsl"),
@@ -43,6 +45,9 @@ pub struct Features {
     pub sky: bool,
     /// The `first_bounce` entry point, for tests.
     pub debug: bool,
+    /// Next-event estimation: light sampling with MIS (the nee integrator, in a scene with
+    /// lights and diffuse surfaces to light).
+    pub nee: bool,
     /// Scene arrays in uniform buffers of `scene_capacity` elements (faster where they fit).
     pub uniform_scene: bool,
     pub scene_capacity: u32,
@@ -75,7 +80,8 @@ impl Features {
             .spheres
             .len()
             .max(scene.quads.len())
-            .max(scene.materials.len());
+            .max(scene.materials.len())
+            .max(scene.lights.len());
         let capacity = (longest.max(1) as u64).next_power_of_two();
         Features {
             spheres: !scene.spheres.is_empty(),
@@ -90,6 +96,7 @@ impl Features {
             lens: scene.camera.lens_radius > 0.0,
             sky: scene.background == Background::Sky,
             debug: false,
+            nee: false,
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
             inline_scene: scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES,
@@ -115,7 +122,17 @@ impl Features {
         }
     }
 
-    pub fn flags(&self) -> [(&'static str, bool); 12] {
+    /// These features for rendering `scene` with `integrator`. Without lights, or without
+    /// diffuse surfaces to take light samples at, nee computes exactly what naive does, so the
+    /// kernel leaves it out.
+    pub fn with_integrator(self, scene: &FlatScene, integrator: Integrator) -> Self {
+        Features {
+            nee: integrator == Integrator::Nee && !scene.lights.is_empty() && self.lambertian,
+            ..self
+        }
+    }
+
+    pub fn flags(&self) -> [(&'static str, bool); 13] {
         [
             ("SPHERES", self.spheres),
             ("QUADS", self.quads),
@@ -127,6 +144,7 @@ impl Features {
             ("LENS", self.lens),
             ("SKY", self.sky),
             ("DEBUG", self.debug),
+            ("NEE", self.nee),
             ("UNIFORM_SCENE", self.uniform_scene),
             ("INLINE_SCENE", self.inline_scene),
         ]
@@ -165,6 +183,10 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     }
     if features.inline_scene {
         out.push_str(&inline_scene(scene, features));
+        out.push_str(&inline_materials(scene));
+        if features.nee {
+            out.push_str(&inline_lights(scene));
+        }
     }
     Ok(out)
 }
@@ -186,10 +208,11 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
     if features.spheres {
         for (i, s) in scene.spheres.iter().enumerate() {
             out.push_str(&format!(
-                "    consider_sphere(Sphere({}, {}, {}u), {i}u, ray, c);\n",
+                "    consider_sphere(Sphere({}, {}, {}u, {}u), {i}u, ray, c);\n",
                 vec3(s.center),
                 lit(s.radius),
-                s.material
+                s.material,
+                s.light
             ));
         }
     }
@@ -197,18 +220,100 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
         let base = scene.spheres.len();
         for (i, q) in scene.quads.iter().enumerate() {
             out.push_str(&format!(
-                "    consider_quad(Quad({}, {}, {}, {}u, {}, {}), {}u, ray, c);\n",
+                "    consider_quad(Quad({}, {}, {}, {}u, {}, {}u, {}), {}u, ray, c);\n",
                 vec3(q.q),
                 lit(q.d),
                 vec3(q.normal),
                 q.material,
                 vec3(q.alpha_axis),
+                q.light,
                 vec3(q.beta_axis),
                 base + i
             ));
         }
     }
     out.push_str("}\n");
+    out
+}
+
+/// `material_at` as a switch over the scene's materials.
+fn inline_materials(scene: &FlatScene) -> String {
+    let mut out = String::from(
+        "\n// ---- the scene's materials, generated ----\nfn material_at(i: u32) -> Material {\n    switch i {\n",
+    );
+    let materials = crate::gpu::layout::SceneBuffers::new(scene).materials;
+    let last = materials.len() - 1;
+    for (i, m) in materials.iter().enumerate() {
+        let constant = format!(
+            "Material({}, {}u, {}, {})",
+            vec3(glam::Vec3::from(m.albedo)),
+            m.kind,
+            vec3(glam::Vec3::from(m.emission)),
+            lit(m.param)
+        );
+        let label = if i == last {
+            "default".to_string()
+        } else {
+            format!("case {i}u")
+        };
+        out.push_str(&format!(
+            "        {label}: {{\n            return {constant};\n        }}\n"
+        ));
+    }
+    out.push_str("    }\n}\n");
+    out
+}
+
+/// The light list as constants: `pick_light` as a chain of comparisons, `light_of` and
+/// `light_at` as switches.
+fn inline_lights(scene: &FlatScene) -> String {
+    let mut out = String::from(
+        "\n// ---- the scene's lights, generated ----\nfn pick_light(u: f32) -> u32 {\n",
+    );
+    let last = scene.lights.len().saturating_sub(1);
+    for (i, l) in scene.lights.iter().enumerate().take(last) {
+        out.push_str(&format!(
+            "    if u < {} {{\n        return {i}u;\n    }}\n",
+            lit(l.cdf)
+        ));
+    }
+    out.push_str(&format!("    return {last}u;\n}}\n\nfn light_of(primitive: u32) -> u32 {{\n    switch primitive {{\n"));
+    let emitters = scene
+        .spheres
+        .iter()
+        .map(|s| s.light)
+        .chain(scene.quads.iter().map(|q| q.light))
+        .enumerate()
+        .filter(|(_, light)| *light > 0);
+    for (primitive, light) in emitters {
+        out.push_str(&format!(
+            "        case {primitive}u: {{\n            return {light}u;\n        }}\n"
+        ));
+    }
+    out.push_str("        default: {\n            return 0u;\n        }\n    }\n}\n\nfn light_at(i: u32) -> Light {\n    switch i {\n");
+    for (i, l) in scene.lights.iter().enumerate() {
+        let constant = format!(
+            "Light({}, {}, {}, {}, {}, {}, {}, {})",
+            vec3(l.position),
+            lit(l.cdf),
+            vec3(l.u),
+            lit(l.pick),
+            vec3(l.v),
+            lit(l.radius),
+            vec3(l.normal),
+            lit(l.inv_area)
+        );
+        if i == last {
+            out.push_str(&format!(
+                "        default: {{\n            return {constant};\n        }}\n"
+            ));
+        } else {
+            out.push_str(&format!(
+                "        case {i}u: {{\n            return {constant};\n        }}\n"
+            ));
+        }
+    }
+    out.push_str("    }\n}\n");
     out
 }
 

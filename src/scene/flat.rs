@@ -12,6 +12,8 @@ pub struct Sphere {
     /// Negative for an inward-facing (hollow) sphere.
     pub radius: f32,
     pub material: u32,
+    /// 1 + this sphere's index in [`FlatScene::lights`]; 0 when it does not emit.
+    pub light: u32,
 }
 
 /// The parallelogram `q + a u + b v`, with its plane `normal . p = d` and two axes precomputed
@@ -28,6 +30,8 @@ pub struct Quad {
     pub alpha_axis: Vec3,
     pub beta_axis: Vec3,
     pub material: u32,
+    /// 1 + this quad's index in [`FlatScene::lights`]; 0 when it does not emit.
+    pub light: u32,
 }
 
 impl Quad {
@@ -44,6 +48,7 @@ impl Quad {
             alpha_axis: v.cross(w),
             beta_axis: w.cross(u),
             material,
+            light: 0,
         }
     }
 }
@@ -69,6 +74,47 @@ pub struct FlatScene {
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
+    /// Every emitting sphere and quad, for next-event estimation (see [`Light`]).
+    pub lights: Vec<Light>,
+}
+
+/// An emitting primitive as light sampling sees it: a quad (sampled uniformly on its area) or
+/// a sphere (sampled uniformly in the cone it subtends), picked in proportion to its power.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// Quad corner `q`, or sphere centre.
+    pub position: Vec3,
+    /// Chance of picking this light or one before it; the last light's is exactly 1.
+    pub cdf: f32,
+    /// Quad edges; zero for a sphere.
+    pub u: Vec3,
+    /// Chance of picking this light.
+    pub pick: f32,
+    pub v: Vec3,
+    /// Sphere: |radius|; quad: 0.
+    pub radius: f32,
+    /// Quad: unit normal `u x v / |u x v|`.
+    pub normal: Vec3,
+    /// Quad: 1 / area.
+    pub inv_area: f32,
+}
+
+impl Light {
+    pub fn is_sphere(&self) -> bool {
+        self.radius > 0.0
+    }
+}
+
+/// Radiance and whether both faces emit, for materials that emit.
+pub fn emission_of(material: &Material) -> Option<(Vec3, bool)> {
+    match *material {
+        Material::Light {
+            radiance,
+            two_sided,
+        } if radiance != Vec3::ZERO => Some((radiance, two_sided)),
+        Material::Lambertian { emission, .. } if emission != Vec3::ZERO => Some((emission, true)),
+        _ => None,
+    }
 }
 
 impl FlatScene {
@@ -85,6 +131,7 @@ impl FlatScene {
                     center: t.apply_point(center),
                     radius,
                     material,
+                    light: 0,
                 }),
                 Shape::Quad { q, u, v } => quads.push(Quad::new(
                     t.apply_point(q),
@@ -104,13 +151,82 @@ impl FlatScene {
                 }
             }
         }
-        Ok(FlatScene {
+        let mut flat = FlatScene {
             camera: camera_frame(scene, width, height),
             background: scene.background,
             materials: scene.materials.clone(),
             spheres,
             quads,
-        })
+            lights: Vec::new(),
+        };
+        flat.collect_lights();
+        Ok(flat)
+    }
+
+    /// Fills `lights` with every emitting primitive (spheres first, as primitives are numbered)
+    /// and links each primitive to its light. Lights are picked in proportion to their power,
+    /// pi * luminance * area (twice that for two-sided ones).
+    pub fn collect_lights(&mut self) {
+        let mut lights = Vec::new();
+        let mut powers = Vec::new();
+        let luminance = |c: Vec3| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64;
+        for sphere in &mut self.spheres {
+            sphere.light = 0;
+            if let Some((radiance, two_sided)) =
+                emission_of(&self.materials[sphere.material as usize])
+            {
+                let r = sphere.radius.abs();
+                let area = 4.0 * std::f64::consts::PI * (r as f64).powi(2);
+                let sides = if two_sided { 2.0 } else { 1.0 };
+                powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
+                lights.push(Light {
+                    position: sphere.center,
+                    cdf: 0.0,
+                    u: Vec3::ZERO,
+                    pick: 0.0,
+                    v: Vec3::ZERO,
+                    radius: r,
+                    normal: Vec3::ZERO,
+                    inv_area: 0.0,
+                });
+                sphere.light = lights.len() as u32;
+            }
+        }
+        for quad in &mut self.quads {
+            quad.light = 0;
+            if let Some((radiance, two_sided)) =
+                emission_of(&self.materials[quad.material as usize])
+            {
+                let area = quad.u.cross(quad.v).length();
+                let sides = if two_sided { 2.0 } else { 1.0 };
+                powers.push(std::f64::consts::PI * luminance(radiance) * area as f64 * sides);
+                lights.push(Light {
+                    position: quad.q,
+                    cdf: 0.0,
+                    u: quad.u,
+                    pick: 0.0,
+                    v: quad.v,
+                    radius: 0.0,
+                    normal: quad.normal,
+                    inv_area: 1.0 / area,
+                });
+                quad.light = lights.len() as u32;
+            }
+        }
+        // (A light with no power share is never picked; hits on it then count in full.)
+        let total: f64 = powers.iter().sum();
+        let n = lights.len() as f64;
+        let share = |p: f64| if total > 0.0 { p / total } else { 1.0 / n };
+        let mut running = 0.0;
+        for (light, power) in lights.iter_mut().zip(&powers) {
+            light.pick = share(*power) as f32;
+            running += share(*power);
+            light.cdf = running as f32;
+        }
+        if let Some(last) = lights.last_mut() {
+            last.cdf = 1.0;
+        }
+        self.lights = lights;
     }
 }
 

@@ -138,6 +138,11 @@ impl Camera {
         if !(right.length() > 1e-6) || !self.up.is_finite() {
             return Err(SceneError::CameraUpParallel(self.up.to_array()));
         }
+        if !within_extent(self.look_from) || !within_extent(self.look_at) {
+            return Err(SceneError::Invalid(format!(
+                "camera positions must lie within {MAX_EXTENT:e} of the origin"
+            )));
+        }
         if !(self.vfov_degrees > 0.0 && self.vfov_degrees < 180.0) {
             return Err(SceneError::BadFov(self.vfov_degrees));
         }
@@ -175,9 +180,23 @@ impl Scene {
                 )));
             }
             object.shape.validate().map_err(SceneError::Invalid)?;
+            if !within_extent(object.transform.translate) {
+                return Err(SceneError::Invalid(format!(
+                    "object {i} is translated beyond {MAX_EXTENT:e} from the origin"
+                )));
+            }
         }
         Ok(())
     }
+}
+
+/// Largest coordinate or size a scene may use: squares of distances stay far from f32 overflow.
+pub const MAX_EXTENT: f32 = 1e8;
+/// Smallest sphere radius or quad/box edge: squares stay far from f32 underflow.
+pub const MIN_SIZE: f32 = 1e-6;
+
+fn within_extent(p: Vec3) -> bool {
+    p.is_finite() && p.abs().max_element() <= MAX_EXTENT
 }
 
 impl Shape {
@@ -189,11 +208,23 @@ impl Shape {
                         "sphere radius must be finite and non-zero, got {radius}"
                     ));
                 }
+                if !(radius.abs() >= MIN_SIZE && radius.abs() <= MAX_EXTENT) {
+                    return Err(format!(
+                        "sphere radius {radius} is outside what f32 geometry handles: use sizes between {MIN_SIZE:e} and {MAX_EXTENT:e}"
+                    ));
+                }
             }
             Shape::Quad { q, u, v } => {
                 let area = u.cross(v).length();
                 if !q.is_finite() || !(area > 0.0) || !area.is_finite() {
                     return Err("quad has zero area: its edges u and v are parallel or zero".into());
+                }
+                let (lu, lv) = (u.length(), v.length());
+                let sized = lu.min(lv) >= MIN_SIZE && lu.max(lv) <= MAX_EXTENT;
+                if !(sized && area >= MIN_SIZE * MIN_SIZE) {
+                    return Err(format!(
+                        "quad edges of length {lu} and {lv} (area {area}) are outside what f32 geometry handles: use sizes between {MIN_SIZE:e} and {MAX_EXTENT:e}"
+                    ));
                 }
             }
             Shape::Cuboid { min, max } => {
@@ -202,7 +233,28 @@ impl Shape {
                         "box needs max > min on every axis, got min {min:?} max {max:?}"
                     ));
                 }
+                let size = max - min;
+                if !(size.min_element() >= MIN_SIZE && size.max_element() <= MAX_EXTENT) {
+                    return Err(format!(
+                        "box size {size:?} is outside what f32 geometry handles: use sizes between {MIN_SIZE:e} and {MAX_EXTENT:e}"
+                    ));
+                }
             }
+        }
+        let position = match *self {
+            Shape::Sphere { center, .. } => center,
+            Shape::Quad { q, .. } => q,
+            Shape::Cuboid { min, .. } => min,
+        };
+        let far = match *self {
+            Shape::Sphere { center, radius } => center.abs() + Vec3::splat(radius.abs()),
+            Shape::Quad { q, u, v } => q.abs() + u.abs() + v.abs(),
+            Shape::Cuboid { max, .. } => max,
+        };
+        if !within_extent(position) || !within_extent(far) {
+            return Err(format!(
+                "shape at {position:?} reaches beyond {MAX_EXTENT:e} from the origin: f32 geometry there is too coarse"
+            ));
         }
         Ok(())
     }

@@ -28,7 +28,7 @@ pub fn render_gpu(r: &GpuRenderer, scene: &Scene, opts: &RenderOptions, tuning: 
     render_gpu_with(r, scene, opts, tuning, Features::of)
 }
 
-/// Renders with the kernel `features` picks for the flattened scene.
+/// Renders with the kernel `features` picks for the flattened scene (and `opts.integrator`).
 pub fn render_gpu_with(
     r: &GpuRenderer,
     scene: &Scene,
@@ -37,8 +37,9 @@ pub fn render_gpu_with(
     features: fn(&FlatScene) -> Features,
 ) -> Film {
     let flat = FlatScene::new(scene, opts.width, opts.height).expect("valid scene");
+    let features = features(&flat).with_integrator(&flat, opts.integrator);
     let kernel = r
-        .kernel(&flat, features(&flat), "render")
+        .kernel(&flat, features, "render")
         .expect("kernel compiles");
     r.render(&kernel, &flat, opts, tuning, &|_| {})
         .expect("renders")

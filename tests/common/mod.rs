@@ -6,20 +6,26 @@ pub mod stats;
 
 use glam::Vec3;
 use rt_gpu::film::Film;
-use rt_gpu::render::RenderOptions;
+use rt_gpu::render::{Integrator, RenderOptions};
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{
     Background, Camera, Material, Object, RenderDefaults, Scene, Shape, Transform,
 };
 
+/// Options for the naive integrator (the estimator most tests pin down); nee tests override it.
 pub fn opts(width: u32, height: u32, spp: u32, max_depth: u32, seed: u32) -> RenderOptions {
     RenderOptions {
-        width,
-        height,
-        spp,
-        first_sample: 0,
         seed,
-        max_depth,
+        integrator: Integrator::Naive,
+        ..RenderOptions::new(width, height, spp, max_depth)
+    }
+}
+
+/// `opts` with next-event estimation.
+pub fn nee_opts(width: u32, height: u32, spp: u32, max_depth: u32, seed: u32) -> RenderOptions {
+    RenderOptions {
+        integrator: Integrator::Nee,
+        ..opts(width, height, spp, max_depth, seed)
     }
 }
 

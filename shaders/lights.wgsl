@@ -1,0 +1,149 @@
+// Light sampling for next-event estimation (twin: src/cpu/lights.rs). Only in kernels for
+// the nee integrator and scenes with lights.
+
+//#if NEE
+// Quad points seen this close to edge-on are not light-sampled; BSDF sampling covers them.
+const MIN_LIGHT_COSINE: f32 = 1e-7;
+
+//#if INLINE_SCENE
+// pick_light, light_of and light_at are generated with the scene's constants (see
+// inline_lights in src/gpu/shader.rs): no buffer loads at dynamic indices, which lavapipe
+// gathers lane by lane.
+//#else
+// The light whose cumulative share first exceeds u in [0, 1).
+fn pick_light(u: f32) -> u32 {
+    let last = params.light_count - 1u;
+    for (var i = 0u; i < last; i++) {
+        if u < lights[i].cdf {
+            return i;
+        }
+    }
+    return last;
+}
+
+// 1 + the light index of a primitive (spheres first), or 0.
+fn light_of(primitive: u32) -> u32 {
+//#if SPHERES
+    if primitive < params.sphere_count {
+        return spheres[primitive].light;
+    }
+//#endif
+//#if QUADS
+    return quads[primitive - params.sphere_count].light;
+//#else
+    return 0u;
+//#endif
+}
+
+fn light_at(i: u32) -> Light {
+    return lights[i];
+}
+//#endif
+
+// Two unit vectors completing unit n to an orthonormal basis (Duff et al. 2017).
+fn basis_t(n: vec3f, sign: f32, a: f32) -> vec3f {
+    return vec3f(1.0 + sign * n.x * n.x * a, sign * n.x * n.y * a, -sign * n.x);
+}
+
+fn basis_b(n: vec3f, sign: f32, a: f32) -> vec3f {
+    return vec3f(n.x * n.y * a, sign + n.y * n.y * a, -n.y);
+}
+
+// The cone a sphere subtends from x: unit axis and 1 - cos(half angle); w = 0 when x is
+// inside the sphere or the cone is too thin to represent.
+fn sphere_cone(center: vec3f, radius: f32, x: vec3f) -> vec4f {
+    let to_center = center - x;
+    let d2 = dot(to_center, to_center);
+    let r2 = radius * radius;
+    if !(d2 > r2) {
+        return vec4f(0.0);
+    }
+    let sin2_max = r2 / d2;
+    // 1 - sqrt(1 - s) without cancellation for small cones.
+    let one_minus_cos = sin2_max / (1.0 + sqrt(1.0 - sin2_max));
+    if !(one_minus_cos > 0.0) {
+        return vec4f(0.0);
+    }
+    return vec4f(to_center / sqrt(d2), one_minus_cos);
+}
+
+// Solid-angle pdf of picking quad light l and its point p from x, seen along unit dir.
+fn quad_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
+    let cos_light = abs(dot(l.normal, dir));
+    if !(cos_light > MIN_LIGHT_COSINE) {
+        return 0.0;
+    }
+    let to_p = p - x;
+    return l.pick * l.inv_area * dot(to_p, to_p) / cos_light;
+}
+
+// Solid-angle pdf of light sampling choosing the direction from x that reaches l at p.
+fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
+    if l.radius > 0.0 {
+        let cone = sphere_cone(l.position, l.radius, x);
+        if cone.w > 0.0 {
+            return l.pick / (2.0 * PI * cone.w);
+        }
+        return 0.0;
+    }
+    return quad_pdf(l, x, p, dir);
+}
+
+struct LightSample {
+    dir: vec3f,
+    pdf: f32,       // 0: no sample
+}
+
+// A unit direction from x toward l and its solid-angle pdf (with the pick probability).
+fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
+    var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0);
+    if l.radius > 0.0 {
+        let cone = sphere_cone(l.position, l.radius, x);
+        if cone.w > 0.0 {
+            let axis = cone.xyz;
+            let a = u1 * cone.w;
+            let cos_theta = 1.0 - a;
+            let sin_theta = sqrt(max(a * (2.0 - a), 0.0));
+            let phi = PI * (2.0 * u2 - 1.0);
+            let sign = select(-1.0, 1.0, axis.z >= 0.0);
+            let ba = -1.0 / (sign + axis.z);
+            let t = basis_t(axis, sign, ba);
+            let b = basis_b(axis, sign, ba);
+            out.dir = normalize(cos_theta * axis + sin_theta * (cos(phi) * t + sin(phi) * b));
+            out.pdf = l.pick / (2.0 * PI * cone.w);
+        }
+    } else {
+        let p = l.position + u1 * l.u + u2 * l.v;
+        let to_light = p - x;
+        let dist2 = dot(to_light, to_light);
+        if dist2 > 0.0 {
+            out.dir = to_light / sqrt(dist2);
+            out.pdf = quad_pdf(l, x, p, out.dir);
+        }
+    }
+    return out;
+}
+
+// Power heuristic (beta = 2) weight of a strategy with pdf own against other, on values
+// scaled to at most 1 so no square overflows.
+fn power_heuristic(own: f32, other: f32) -> f32 {
+    let m = max(own, other);
+    if !(m > 0.0) {
+        return 1.0;
+    }
+    let a = own / m;
+    let b = other / m;
+    return a * a / (a * a + b * b);
+}
+
+// (cos / pi) / light_pdf times the light sample's MIS weight: ab / (a^2 + b^2), at most 1/2.
+fn light_sample_factor(light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    let m = max(light_pdf, bsdf_pdf);
+    if !(m > 0.0) {
+        return 0.0;
+    }
+    let a = light_pdf / m;
+    let b = bsdf_pdf / m;
+    return a * b / (a * a + b * b);
+}
+//#endif

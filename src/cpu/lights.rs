@@ -1,0 +1,129 @@
+//! Light sampling for next-event estimation (twin: `shaders/lights.wgsl`): pick a light in
+//! proportion to its power, then a direction toward it, and the solid-angle pdf of both, which
+//! multiple importance sampling also needs for directions BSDF sampling found.
+
+use crate::scene::flat::{FlatScene, Light};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// Quad points seen this close to edge-on are not light-sampled (their solid-angle pdf would
+/// overflow); BSDF sampling alone covers them, with full weight.
+pub const MIN_LIGHT_COSINE: f32 = 1e-7;
+
+/// The light whose cumulative share first exceeds `u` in [0, 1).
+#[inline]
+pub fn pick_light(scene: &FlatScene, u: f32) -> usize {
+    let last = scene.lights.len() - 1;
+    scene.lights[..last]
+        .iter()
+        .position(|l| u < l.cdf)
+        .unwrap_or(last)
+}
+
+/// Two unit vectors completing unit `n` to an orthonormal basis (Duff et al., "Building an
+/// Orthonormal Basis, Revisited", 2017): no branch on a threshold, stable at every direction.
+#[inline]
+pub fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// The cone a sphere subtends from `x`: its unit axis and 1 - cos(half angle), or `None`
+/// when `x` is inside the sphere (or the cone is too thin to represent).
+#[inline]
+pub fn sphere_cone(center: Vec3, radius: f32, x: Vec3) -> Option<(Vec3, f32)> {
+    let to_center = center - x;
+    let d2 = to_center.length_squared();
+    let r2 = radius * radius;
+    if !(d2 > r2) {
+        return None;
+    }
+    let sin2_max = r2 / d2;
+    // 1 - sqrt(1 - s) without cancellation for small cones.
+    let one_minus_cos = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
+    (one_minus_cos > 0.0).then(|| (to_center / d2.sqrt(), one_minus_cos))
+}
+
+/// Solid-angle pdf of light sampling choosing a quad light's point `p` from `x`, seen along
+/// unit `dir` (includes the pick probability); 0 where light sampling never goes.
+#[inline]
+pub fn quad_pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
+    let cos_light = light.normal.dot(dir).abs();
+    if !(cos_light > MIN_LIGHT_COSINE) {
+        return 0.0;
+    }
+    let dist2 = (p - x).length_squared();
+    light.pick * light.inv_area * dist2 / cos_light
+}
+
+/// Solid-angle pdf of light sampling choosing direction toward `light` from `x`, for a
+/// direction that reaches the light at `p` (includes the pick probability).
+#[inline]
+pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
+    if light.is_sphere() {
+        match sphere_cone(light.position, light.radius, x) {
+            Some((_, one_minus_cos)) => light.pick / (2.0 * PI * one_minus_cos),
+            None => 0.0,
+        }
+    } else {
+        quad_pdf(light, x, p, dir)
+    }
+}
+
+/// A unit direction from `x` toward `light` and its solid-angle pdf (with the pick
+/// probability), from two uniform numbers; `None` where the light cannot be sampled from `x`.
+#[inline]
+pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
+    if light.is_sphere() {
+        let (axis, one_minus_cos) = sphere_cone(light.position, light.radius, x)?;
+        // Uniform in the cone: 1 - cos(theta) uniform in [0, 1 - cos_max]; sin^2 from it
+        // directly, so thin cones keep their width.
+        let a = u1 * one_minus_cos;
+        let cos_theta = 1.0 - a;
+        let sin_theta = (a * (2.0 - a)).max(0.0).sqrt();
+        let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
+        let (t, b) = basis(axis);
+        let dir = (cos_theta * axis + sin_theta * (cos_phi * t + sin_phi * b)).normalize();
+        Some((dir, light.pick / (2.0 * PI * one_minus_cos)))
+    } else {
+        let p = light.position + u1 * light.u + u2 * light.v;
+        let to_light = p - x;
+        let dist2 = to_light.length_squared();
+        if !(dist2 > 0.0) {
+            return None;
+        }
+        let dir = to_light / dist2.sqrt();
+        let pdf = quad_pdf(light, x, p, dir);
+        (pdf > 0.0).then_some((dir, pdf))
+    }
+}
+
+/// The power heuristic (beta = 2) weight of a strategy with pdf `own` against one with pdf
+/// `other`, computed on values scaled to at most 1 so neither square can overflow.
+#[inline]
+pub fn power_heuristic(own: f32, other: f32) -> f32 {
+    let m = own.max(other);
+    if !(m > 0.0) {
+        return 1.0;
+    }
+    let (a, b) = (own / m, other / m);
+    a * a / (a * a + b * b)
+}
+
+/// What a light sample contributes per unit of (albedo x radiance): (cos / pi) / light_pdf times
+/// its power-heuristic weight, i.e. bsdf_pdf / light_pdf * w = ab / (a^2 + b^2) for a, b the two
+/// pdfs scaled by their maximum. At most 1/2, whatever the pdfs' magnitudes.
+#[inline]
+pub fn light_sample_factor(light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    let m = light_pdf.max(bsdf_pdf);
+    if !(m > 0.0) {
+        return 0.0;
+    }
+    let (a, b) = (light_pdf / m, bsdf_pdf / m);
+    a * b / (a * a + b * b)
+}
