@@ -17,6 +17,7 @@ struct Quad {
     alpha_axis: vec3f,
     light: u32,       // 1 + index in lights, 0 if it does not emit
     beta_axis: vec3f,
+    edge_tolerance: f32, // counts as hit this far (a fraction of each edge) past its edges
 }
 
 // An emitter for next-event estimation: a quad (uniform on its area) or a sphere (radius > 0;

@@ -18,9 +18,15 @@ fn direct_light(hit: Hit, u0: f32, u1: f32, u2: f32) -> vec3f {
     if !(cos > 0.0) {
         return vec3f(0.0);
     }
-    // The shadow ray: whatever it hits first must be the light sampled.
+    // The shadow ray leaves the offset origin aimed at the sampled point itself (a tiny light
+    // is not missed by the width of the offset); whatever it hits first must be that light.
+    let origin = leave(hit, hit.normal);
+    let to_light = s.point - origin;
+    if !(dot(to_light, to_light) > 0.0) {
+        return vec3f(0.0);
+    }
     var shadow: Hit;
-    if !intersect(spawn(hit, s.dir), &shadow) || light_of(shadow.primitive) != index + 1u {
+    if !intersect(Ray(origin, normalize(to_light)), &shadow) || light_of(shadow.primitive) != index + 1u {
         return vec3f(0.0);
     }
     let le = emitted(material_at(shadow.material), shadow.front_face);

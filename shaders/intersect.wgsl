@@ -3,6 +3,7 @@
 struct Hit {
     point: vec3f,
     t: f32,
+    error: f32,         // bound on the distance from point to the true surface point
     normal: vec3f,      // faces the incoming ray
     material: u32,
     front_face: bool,   // the ray hit the outward (u x v) side
@@ -12,15 +13,21 @@ struct Hit {
 //#if QUADS
 // Distance along the ray to quad q, or -1 for a miss. Branch-free: SIMD drivers run every
 // branch for some lane anyway. Rays parallel to the plane (|denom| < 1e-8) miss; their
-// division is replaced by a harmless one.
+// division is replaced by a harmless one. From the ray's origin to the corner first: exact
+// far from the world's origin, where n . q - n . o would cancel. A quad counts as hit up to
+// edge_tolerance (a fraction of each edge) past its edges, so that rays cannot slip between
+// the quads meeting at a box edge (see src/scene/flat.rs).
 fn quad_distance(q: Quad, ray: Ray) -> f32 {
     let denom = dot(q.normal, ray.dir);
     let facing = abs(denom) >= 1e-8;
-    let t = (q.d - dot(q.normal, ray.origin)) / select(1.0, denom, facing);
-    let planar = ray.origin + t * ray.dir - q.q;
+    let to_corner = q.q - ray.origin;
+    let t = dot(q.normal, to_corner) / select(1.0, denom, facing);
+    let planar = t * ray.dir - to_corner;
     let alpha = dot(planar, q.alpha_axis);
     let beta = dot(planar, q.beta_axis);
-    let inside = alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0;
+    let lo = -q.edge_tolerance;
+    let hi = 1.0 + q.edge_tolerance;
+    let inside = alpha >= lo && alpha <= hi && beta >= lo && beta <= hi;
     return select(-1.0, t, facing && inside);
 }
 //#endif
@@ -29,6 +36,8 @@ fn quad_distance(q: Quad, ray: Ray) -> f32 {
 struct Closest {
     outward: vec3f,
     t: f32,
+    center: vec3f,      // sphere centre
+    d: f32,             // quad: plane offset; sphere: radius
     primitive: u32,
     material: u32,
     found: bool,
@@ -50,6 +59,8 @@ fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
         (*c).primitive = index;
         (*c).material = s.material;
         (*c).outward = (ray.origin + t * ray.dir - s.center) / s.radius;
+        (*c).center = s.center;
+        (*c).d = s.radius;
     }
 }
 //#endif
@@ -63,13 +74,14 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
         (*c).primitive = index;
         (*c).material = q.material;
         (*c).outward = q.normal;
+        (*c).d = q.d;
     }
 }
 //#endif
 
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, 0u, 0u, false);
+    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0u, 0u, false);
 //#if INLINE_SCENE
     // The scene's primitives are constants in this kernel (see inline_scene below).
     inline_scene(ray, &c);
@@ -90,8 +102,23 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     }
     let n = normalize(c.outward);
     let front = dot(ray.dir, n) < 0.0;
+    // The hit point put back onto the surface, and a bound on its error (see
+    // src/cpu/shapes.rs).
+    let along_ray = ray.origin + c.t * ray.dir;
+    var point = along_ray - (dot(n, along_ray) - c.d) * n;
+    let p = abs(point);
+    var error = POINT_ERROR * (max(p.x, max(p.y, p.z)) + abs(c.d));
+//#if SPHERES
+    if c.primitive < params.sphere_count {
+        let from_center = along_ray - c.center;
+        point = c.center + from_center * (abs(c.d) / length(from_center));
+        let ce = abs(c.center);
+        error = POINT_ERROR * (max(ce.x, max(ce.y, ce.z)) + abs(c.d));
+    }
+//#endif
     (*hit).t = c.t;
-    (*hit).point = ray.origin + c.t * ray.dir;
+    (*hit).point = point;
+    (*hit).error = error;
     (*hit).normal = select(-n, n, front);
     (*hit).front_face = front;
     (*hit).material = c.material;
@@ -99,13 +126,16 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     return true;
 }
 
+// Relative bound on a hit point's error: eight roundings of the coordinates it came from.
+const POINT_ERROR: f32 = 8.0 * 1.1920929e-7;
+
 // Moves a ray origin off a surface by a few units in the last place along n (Ray Tracing Gems,
-// ch. 6), so it cannot re-hit the surface it leaves at any scale.
+// ch. 6); callers first move it by the point's error bound (see leave).
 fn offset_component(p: f32, n: f32) -> f32 {
     if abs(p) < 1.0 / 32.0 {
-        return p + (1.0 / 65536.0) * n;
+        return p + (1.0 / 4294967296.0) * n;
     }
-    var of_i = i32(256.0 * n);
+    var of_i = i32(32.0 * n);
     if p < 0.0 {
         of_i = -of_i;
     }
@@ -116,8 +146,14 @@ fn offset_origin(p: vec3f, n: vec3f) -> vec3f {
     return vec3f(offset_component(p.x, n.x), offset_component(p.y, n.y), offset_component(p.z, n.z));
 }
 
+// The origin of a ray leaving `hit` on the side of unit `side`: past the point's error bound,
+// then a few units in the last place further.
+fn leave(hit: Hit, side: vec3f) -> vec3f {
+    return offset_origin(hit.point + hit.error * side, side);
+}
+
 // A ray leaving `hit` along unit `dir`, started on the side `dir` points to.
 fn spawn(hit: Hit, dir: vec3f) -> Ray {
     let side = select(-hit.normal, hit.normal, dot(dir, hit.normal) >= 0.0);
-    return Ray(offset_origin(hit.point, side), dir);
+    return Ray(leave(hit, side), dir);
 }

@@ -92,11 +92,12 @@ fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
 struct LightSample {
     dir: vec3f,
     pdf: f32,       // 0: no sample
+    point: vec3f,   // where it meets the light: the shadow ray aims here
 }
 
 // A unit direction from x toward l and its solid-angle pdf (with the pick probability).
 fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
-    var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0);
+    var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
     if l.radius > 0.0 {
         let cone = sphere_cone(l.position, l.radius, x);
         if cone.w > 0.0 {
@@ -111,6 +112,12 @@ fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
             let b = basis_b(axis, sign, ba);
             out.dir = normalize(cos_theta * axis + sin_theta * (cos(phi) * t + sin(phi) * b));
             out.pdf = l.pick / (2.0 * PI * cone.w);
+            // Where it meets the sphere: the near root, as in consider_sphere.
+            let oc = l.position - x;
+            let h = dot(out.dir, oc);
+            let perpendicular = oc - h * out.dir;
+            let disc = max(l.radius * l.radius - dot(perpendicular, perpendicular), 0.0);
+            out.point = x + (h - sqrt(disc)) * out.dir;
         }
     } else {
         let p = l.position + u1 * l.u + u2 * l.v;
@@ -119,6 +126,7 @@ fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
         if dist2 > 0.0 {
             out.dir = to_light / sqrt(dist2);
             out.pdf = quad_pdf(l, x, p, out.dir);
+            out.point = p;
         }
     }
     return out;

@@ -57,6 +57,7 @@ fn rust_layouts() -> Vec<Layout> {
                 ("alpha_axis", offset_of!(GpuQuad, alpha_axis)),
                 ("light", offset_of!(GpuQuad, light)),
                 ("beta_axis", offset_of!(GpuQuad, beta_axis)),
+                ("edge_tolerance", offset_of!(GpuQuad, edge_tolerance)),
             ],
         ),
         (

@@ -12,6 +12,7 @@ fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
     Hit {
         t: 1.0,
         point: Vec3::ZERO,
+        error: 0.0,
         normal,
         front_face,
         material: 0,

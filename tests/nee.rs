@@ -397,28 +397,32 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
 
 /// Light-sampled directions follow the pdf that MIS weighs them with: a chi-square test per
 /// light kind (quad, sphere), each at significance 0.001 (Bonferroni: 0.002 for the pair).
-/// The pdf each sample reports must equal `lights::pdf` of its direction.
+/// The pdf each sample reports must equal `lights::pdf` of its direction, and its point must be
+/// on the light along that direction.
 #[test]
 fn light_sampling_directions_follow_their_pdf() {
     let quad = tilted_quad();
     for (name, light) in [("quad", quad_light(&quad)), ("sphere", sphere_light())] {
         let p = chi_square_p(name, &light, |u1, u2| {
-            let (dir, pdf) = lights::sample(&light, X, u1, u2).expect("samples");
-            // The point the direction reaches (any point along it, for a sphere's cone pdf);
-            // quad points within rounding of an edge may miss the quad when re-traced.
-            let reached = if light.is_sphere() {
-                Some(X + dir)
+            let s = lights::sample(&light, X, u1, u2).expect("samples");
+            // The point it reports is on the light, along the direction.
+            let on_light = if light.is_sphere() {
+                ((s.point - light.position).length() - light.radius).abs() < 1e-5
             } else {
-                hit_quad(&quad, &Ray { origin: X, dir }, 0.0, f32::INFINITY).map(|t| X + t * dir)
+                (s.point - quad.q).dot(quad.normal).abs() < 1e-5
             };
-            if let Some(p) = reached {
-                let expected = lights::pdf(&light, X, p, dir);
-                assert!(
-                    (pdf - expected).abs() <= 1e-3 * pdf,
-                    "{name}: sample says pdf {pdf}, lights::pdf says {expected}"
-                );
-            }
-            dir
+            assert!(on_light, "{name}: {} is not on the light", s.point);
+            assert!(
+                (s.point - X).normalize().dot(s.dir) > 1.0 - 1e-6,
+                "{name}: point off the ray"
+            );
+            let expected = lights::pdf(&light, X, s.point, s.dir);
+            assert!(
+                (s.pdf - expected).abs() <= 1e-3 * s.pdf,
+                "{name}: sample says pdf {}, lights::pdf says {expected}",
+                s.pdf
+            );
+            s.dir
         });
         assert!(
             p > 0.001,
@@ -436,7 +440,7 @@ fn light_sampling_test_detects_a_slightly_wrong_warp() {
         let p = chi_square_p(name, &light, |u1, u2| {
             lights::sample(&light, X, u1.powf(1.02), u2)
                 .expect("samples")
-                .0
+                .dir
         });
         assert!(p < 0.001, "{name}: a wrong warp went undetected (p = {p})");
     }

@@ -106,6 +106,31 @@ fn bad_files_name_the_file_line_and_problem() {
             "finite",
         ),
         ("radius = 0.5", "radius = 0", "bad.toml:10:", "non-zero"),
+        // Absurd sizes: squares would overflow or underflow f32.
+        (
+            "radius = 0.5",
+            "radius = 1e30",
+            "bad.toml:10:",
+            "between 1e-6 and 1e8",
+        ),
+        (
+            "radius = 0.5",
+            "radius = 1e-9",
+            "bad.toml:10:",
+            "between 1e-6 and 1e8",
+        ),
+        (
+            "sphere = { center = [0, 0, 0], radius = 0.5 }",
+            "sphere = { center = [3e9, 0, 0], radius = 0.5 }",
+            "bad.toml:10:",
+            "beyond 1e8",
+        ),
+        (
+            "sphere = { center = [0, 0, 0], radius = 0.5 }",
+            "quad = { q = [0, 0, 0], u = [1e-7, 0, 0], v = [0, 1, 0] }",
+            "bad.toml:10:",
+            "between 1e-6 and 1e8",
+        ),
         (
             "look_at = [0, 0, 0]",
             "look_at = [0, 0, 1]",

@@ -9,7 +9,7 @@
 
 use super::lights;
 use super::material::{background, emitted, scatter};
-use super::shapes::{Ray, intersect, spawn};
+use super::shapes::{Ray, intersect, leave, spawn};
 use crate::render::{Integrator, RenderOptions};
 use crate::rng::Rng;
 use crate::scene::Material;
@@ -92,20 +92,30 @@ fn hit_light(scene: &FlatScene, primitive: u32) -> u32 {
 #[inline]
 fn direct_light(scene: &FlatScene, hit: &super::shapes::Hit, u0: f32, u1: f32, u2: f32) -> Vec3 {
     let index = lights::pick_light(scene, u0);
-    let Some((dir, light_pdf)) = lights::sample(&scene.lights[index], hit.point, u1, u2) else {
+    let Some(sample) = lights::sample(&scene.lights[index], hit.point, u1, u2) else {
         return Vec3::ZERO;
     };
-    let cos = hit.normal.dot(dir);
+    let cos = hit.normal.dot(sample.dir);
     if !(cos > 0.0) {
         return Vec3::ZERO;
     }
-    // The shadow ray: whatever it hits first must be the light sampled.
-    let Some(shadow) = intersect(scene, &spawn(hit, dir)) else {
+    // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
+    // light is not missed by the width of the offset. Whatever it hits first must be that light.
+    let origin = leave(hit, hit.normal);
+    let to_light = sample.point - origin;
+    if !(to_light.length_squared() > 0.0) {
+        return Vec3::ZERO;
+    }
+    let shadow_ray = Ray {
+        origin,
+        dir: to_light.normalize(),
+    };
+    let Some(shadow) = intersect(scene, &shadow_ray) else {
         return Vec3::ZERO;
     };
     if hit_light(scene, shadow.primitive) != index as u32 + 1 {
         return Vec3::ZERO;
     }
     let le = emitted(&scene.materials[shadow.material as usize], &shadow);
-    le * lights::light_sample_factor(light_pdf, cos * FRAC_1_PI)
+    le * lights::light_sample_factor(sample.pdf, cos * FRAC_1_PI)
 }

@@ -75,10 +75,18 @@ pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
     }
 }
 
-/// A unit direction from `x` toward `light` and its solid-angle pdf (with the pick
-/// probability), from two uniform numbers; `None` where the light cannot be sampled from `x`.
+/// A sample of a light seen from `x`: a unit direction, its solid-angle pdf (with the pick
+/// probability), and the point on the light it reaches (where the shadow ray aims).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    pub dir: Vec3,
+    pub pdf: f32,
+    pub point: Vec3,
+}
+
+/// A light sample from two uniform numbers; `None` where the light cannot be sampled from `x`.
 #[inline]
-pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
+pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
     if light.is_sphere() {
         let (axis, one_minus_cos) = sphere_cone(light.position, light.radius, x)?;
         // Uniform in the cone: 1 - cos(theta) uniform in [0, 1 - cos_max]; sin^2 from it
@@ -89,17 +97,26 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
         let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
         let (t, b) = basis(axis);
         let dir = (cos_theta * axis + sin_theta * (cos_phi * t + sin_phi * b)).normalize();
-        Some((dir, light.pick / (2.0 * PI * one_minus_cos)))
+        // Where it meets the sphere: the near root, as in hit_sphere.
+        let oc = light.position - x;
+        let h = dir.dot(oc);
+        let perpendicular = oc - h * dir;
+        let disc = (light.radius * light.radius - perpendicular.length_squared()).max(0.0);
+        Some(LightSample {
+            dir,
+            pdf: light.pick / (2.0 * PI * one_minus_cos),
+            point: x + (h - disc.sqrt()) * dir,
+        })
     } else {
-        let p = light.position + u1 * light.u + u2 * light.v;
-        let to_light = p - x;
+        let point = light.position + u1 * light.u + u2 * light.v;
+        let to_light = point - x;
         let dist2 = to_light.length_squared();
         if !(dist2 > 0.0) {
             return None;
         }
         let dir = to_light / dist2.sqrt();
-        let pdf = quad_pdf(light, x, p, dir);
-        (pdf > 0.0).then_some((dir, pdf))
+        let pdf = quad_pdf(light, x, point, dir);
+        (pdf > 0.0).then_some(LightSample { dir, pdf, point })
     }
 }
 

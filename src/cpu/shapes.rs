@@ -22,6 +22,8 @@ impl Ray {
 pub struct Hit {
     pub t: f32,
     pub point: Vec3,
+    /// A bound on the distance from `point` to the true surface point.
+    pub error: f32,
     pub normal: Vec3,
     pub front_face: bool,
     pub material: u32,
@@ -58,14 +60,19 @@ pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
     if denom.abs() < 1e-8 {
         return None;
     }
-    let t = (quad.d - quad.normal.dot(ray.origin)) / denom;
+    // From the ray's origin to the quad's corner first: far from the world's origin the two
+    // are close and their difference exact, where n . q - n . o would cancel catastrophically.
+    let to_corner = quad.q - ray.origin;
+    let t = quad.normal.dot(to_corner) / denom;
     if !(t > t_min && t < t_max) {
         return None;
     }
-    let planar = ray.at(t) - quad.q;
+    let planar = t * ray.dir - to_corner;
     let alpha = planar.dot(quad.alpha_axis);
     let beta = planar.dot(quad.beta_axis);
-    ((0.0..=1.0).contains(&alpha) && (0.0..=1.0).contains(&beta)).then_some(t)
+    let (lo, hi) = (-quad.edge_tolerance, 1.0 + quad.edge_tolerance);
+    let inside = |a: f32| (lo..=hi).contains(&a);
+    (inside(alpha) && inside(beta)).then_some(t)
 }
 
 /// The closest hit along `ray` beyond its origin.
@@ -88,15 +95,29 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     }
     let (primitive, outward) = found?;
     let outward = outward.normalize();
-    let material = if primitive < quad_base {
-        scene.spheres[primitive as usize].material
+    let along_ray = ray.at(closest);
+    // The hit point, and a bound on its distance from the true surface point, which the origin
+    // of a ray leaving it must clear. o + t d carries the rounding of the ray's origin and of
+    // t (which cancels in the sphere's near root), and that can dwarf the point's own
+    // coordinates (a floor at y = 0 seen from 1e6 away), so the point is put back onto the
+    // surface, whose own rounding follows the shape's coordinates.
+    let (material, point, error) = if primitive < quad_base {
+        let s = &scene.spheres[primitive as usize];
+        let from_center = along_ray - s.center;
+        let point = s.center + from_center * (s.radius.abs() / from_center.length());
+        let scale = s.center.abs().max_element() + s.radius.abs();
+        (s.material, point, POINT_ERROR * scale)
     } else {
-        scene.quads[(primitive - quad_base) as usize].material
+        let q = &scene.quads[(primitive - quad_base) as usize];
+        let point = along_ray - (q.normal.dot(along_ray) - q.d) * q.normal;
+        let scale = point.abs().max_element() + q.d.abs();
+        (q.material, point, POINT_ERROR * scale)
     };
     let front_face = ray.dir.dot(outward) < 0.0;
     Some(Hit {
         t: closest,
-        point: ray.at(closest),
+        point,
+        error,
         normal: if front_face { outward } else { -outward },
         front_face,
         material,
@@ -104,14 +125,17 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     })
 }
 
+/// Relative bound on a hit point's error: eight roundings of the coordinates it came from.
+pub const POINT_ERROR: f32 = 8.0 * f32::EPSILON;
+
 /// A ray origin moved off the surface at `p` along `n` by a few units in the last place of each
-/// coordinate, so the new ray cannot re-hit the surface it leaves, at any scale (Wächter and
-/// Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6).
+/// coordinate (Wächter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection",
+/// Ray Tracing Gems ch. 6); callers first move it by the point's error bound (see `leave`).
 #[inline]
 pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
+    const FLOAT_SCALE: f32 = 1.0 / 4294967296.0;
+    const INT_SCALE: f32 = 32.0;
     let offset = |p: f32, n: f32| -> f32 {
         if p.abs() < ORIGIN {
             p + FLOAT_SCALE * n
@@ -124,6 +148,14 @@ pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
     Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
 }
 
+/// The origin of a ray leaving `hit` on the side of unit `side` (its normal or the opposite):
+/// past the point's error bound, then a few units in the last place further, so it cannot
+/// re-hit the surface it leaves, at any scale.
+#[inline]
+pub fn leave(hit: &Hit, side: Vec3) -> Vec3 {
+    offset_origin(hit.point + hit.error * side, side)
+}
+
 /// A ray leaving a hit in direction `dir` (unit), started on the side `dir` points to.
 #[inline]
 pub fn spawn(hit: &Hit, dir: Vec3) -> Ray {
@@ -133,7 +165,7 @@ pub fn spawn(hit: &Hit, dir: Vec3) -> Ray {
         -hit.normal
     };
     Ray {
-        origin: offset_origin(hit.point, side),
+        origin: leave(hit, side),
         dir,
     }
 }

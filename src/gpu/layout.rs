@@ -29,7 +29,7 @@ pub struct GpuQuad {
     /// 1 + its index in the light list; 0 when it does not emit.
     pub light: u32,
     pub beta_axis: [f32; 3],
-    pub _pad: u32,
+    pub edge_tolerance: f32,
 }
 
 /// A light for next-event estimation (see `scene::flat::Light`).
@@ -137,7 +137,7 @@ impl SceneBuffers {
                 alpha_axis: q.alpha_axis.to_array(),
                 beta_axis: q.beta_axis.to_array(),
                 light: q.light,
-                ..Default::default()
+                edge_tolerance: q.edge_tolerance,
             })
             .collect();
         let mut materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();

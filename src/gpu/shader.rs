@@ -220,7 +220,7 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
         let base = scene.spheres.len();
         for (i, q) in scene.quads.iter().enumerate() {
             out.push_str(&format!(
-                "    consider_quad(Quad({}, {}, {}, {}u, {}, {}u, {}), {}u, ray, c);\n",
+                "    consider_quad(Quad({}, {}, {}, {}u, {}, {}u, {}, {}), {}u, ray, c);\n",
                 vec3(q.q),
                 lit(q.d),
                 vec3(q.normal),
@@ -228,6 +228,7 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
                 vec3(q.alpha_axis),
                 q.light,
                 vec3(q.beta_axis),
+                lit(q.edge_tolerance),
                 base + i
             ));
         }

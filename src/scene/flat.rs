@@ -32,6 +32,10 @@ pub struct Quad {
     pub material: u32,
     /// 1 + this quad's index in [`FlatScene::lights`]; 0 when it does not emit.
     pub light: u32,
+    /// How far past its edges, as a fraction of each edge, the quad still counts as hit: the
+    /// quads meeting at a box edge have their corners rounded independently, by a few units in
+    /// the last place of their coordinates, and rays must not slip between them.
+    pub edge_tolerance: f32,
 }
 
 impl Quad {
@@ -49,8 +53,16 @@ impl Quad {
             beta_axis: w.cross(u),
             material,
             light: 0,
+            edge_tolerance: edge_tolerance(q, u, v),
         }
     }
+}
+
+/// Eight units in the last place of the quad's largest coordinate, as a fraction of its shorter
+/// edge, and at least 1e-5.
+fn edge_tolerance(q: Vec3, u: Vec3, v: Vec3) -> f32 {
+    let magnitude = q.abs().max_element() + u.abs().max_element() + v.abs().max_element();
+    (8.0 * f32::EPSILON * magnitude / u.length().min(v.length())).max(1e-5)
 }
 
 /// The camera reduced to what ray generation needs: a ray for film position (s, t) in [0, 1]^2
