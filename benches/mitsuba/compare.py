@@ -183,6 +183,25 @@ def rt_gpu_pair(binary, scene, spp, args, out):
     return seconds, (images[0] + images[1]) / 2, split_rmse(*images)
 
 
+def render_mitsuba(args):
+    """Two renders of spp/2 with seeds 1 and 2, timed, saved to args.mitsuba_only."""
+    import mitsuba as mi
+
+    mi.set_variant("llvm_ad_rgb")
+    desc, width, height, max_depth = mitsuba_scene(args.scene, args.width, args.height, args.max_depth)
+    scene = mi.load_dict(desc)
+    # Warm-up: Mitsuba compiles its kernels on the first render.
+    np.array(mi.render(scene, spp=1, seed=99))
+    halves, seconds = [], 0.0
+    for seed in (1, 2):
+        start = time.perf_counter()
+        img = mi.render(scene, spp=args.spp // 2, seed=seed)
+        halves.append(np.array(img, dtype=np.float64))  # forces evaluation
+        seconds += time.perf_counter() - start
+    np.savez(args.mitsuba_only, a=halves[0], b=halves[1], seconds=seconds, width=width, height=height,
+             max_depth=max_depth, version=mi.__version__)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scene")
@@ -192,29 +211,28 @@ def main():
     parser.add_argument("--max-depth", type=int)
     parser.add_argument("--backend", default="gpu", help="rt-gpu backend")
     parser.add_argument("--binary", default="target/release/rt-gpu")
+    parser.add_argument("--mitsuba-only", metavar="NPZ", help=argparse.SUPPRESS)
     args = parser.parse_args()
-
-    import mitsuba as mi
-
-    mi.set_variant("llvm_ad_rgb")
-    desc, args.width, args.height, args.max_depth = mitsuba_scene(args.scene, args.width, args.height, args.max_depth)
-    scene = mi.load_dict(desc)
-    pixels = args.width * args.height
-
-    # Warm-up: Mitsuba compiles its kernels on the first render.
-    mi.render(scene, spp=1, seed=99)
-    halves, mi_seconds = [], 0.0
-    for seed in (1, 2):
-        start = time.perf_counter()
-        img = mi.render(scene, spp=args.spp // 2, seed=seed)
-        halves.append(np.array(img, dtype=np.float64))  # forces evaluation
-        mi_seconds += time.perf_counter() - start
-    mi_image = (halves[0] + halves[1]) / 2
-    mi_rmse = split_rmse(*halves)
-    print(f"mitsuba {mi.__version__} llvm_ad_rgb: {args.spp} spp in {mi_seconds:.2f} s "
-          f"({pixels * args.spp / mi_seconds / 1e6:.2f} Msamples/s), RMSE {mi_rmse:.4e}")
+    if args.mitsuba_only:
+        render_mitsuba(args)
+        return
 
     with tempfile.TemporaryDirectory() as out:
+        # Mitsuba renders in a process of its own, which has exited before rt-gpu starts: Dr.Jit's
+        # worker threads would otherwise compete with rt-gpu's for the same cores.
+        halves_path = os.path.join(out, "mitsuba.npz")
+        subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only", halves_path]
+                       + (["--width", str(args.width)] if args.width else [])
+                       + (["--height", str(args.height)] if args.height else [])
+                       + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
+        data = np.load(halves_path)
+        halves, mi_seconds = [data["a"], data["b"]], float(data["seconds"])
+        args.width, args.height, args.max_depth = int(data["width"]), int(data["height"]), int(data["max_depth"])
+        pixels = args.width * args.height
+        mi_image = (halves[0] + halves[1]) / 2
+        mi_rmse = split_rmse(*halves)
+        print(f"mitsuba {str(data['version'])} llvm_ad_rgb: {args.spp} spp in {mi_seconds:.2f} s "
+              f"({pixels * args.spp / mi_seconds / 1e6:.2f} Msamples/s), RMSE {mi_rmse:.4e}", flush=True)
         # Warm-up of rt-gpu's device and page cache.
         rt_gpu_pair(args.binary, args.scene, 2, args, out)
         rungs = []
