@@ -11,9 +11,9 @@ use rt_gpu::cpu::material::scatter;
 use rt_gpu::cpu::shapes::intersect;
 use rt_gpu::gpu::{GpuError, Tuning};
 use rt_gpu::rng::Rng;
+use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
-use rt_gpu::scene::Material;
 
 /// Tolerances for one bounce computed in f32 on both sides (the GPU's sin/cos and fused
 /// multiply-adds round differently): positions to 1e-4 of the scene's size, unit vectors to 1e-3.
