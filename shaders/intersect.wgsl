@@ -44,7 +44,8 @@ struct Closest {
 }
 
 //#if SPHERES
-fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
+// Distance along the ray to the nearest crossing of sphere s ahead of its origin, or -1.
+fn sphere_distance(s: Sphere, ray: Ray) -> f32 {
     let oc = s.center - ray.origin;
     let h = dot(ray.dir, oc);
     // r^2 - |oc - h d|^2: no cancellation for small or distant spheres.
@@ -52,8 +53,12 @@ fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
     let disc = s.radius * s.radius - dot(perpendicular, perpendicular);
     let sq = sqrt(max(disc, 0.0));
     let near = h - sq;
-    let t = select(h + sq, near, near > 0.0 && near < (*c).t);
-    if disc >= 0.0 && t > 0.0 && t < (*c).t {
+    return select(-1.0, select(h + sq, near, near > 0.0), disc >= 0.0);
+}
+
+fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
+    let t = sphere_distance(s, ray);
+    if t > 0.0 && t < (*c).t {
         (*c).t = t;
         (*c).found = true;
         (*c).primitive = index;

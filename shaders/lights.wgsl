@@ -41,12 +41,19 @@ fn light_at(i: u32) -> Light {
 //#endif
 
 // Two unit vectors completing unit n to an orthonormal basis (Duff et al. 2017).
-fn basis_t(n: vec3f, sign: f32, a: f32) -> vec3f {
-    return vec3f(1.0 + sign * n.x * n.x * a, sign * n.x * n.y * a, -sign * n.x);
+struct Basis {
+    t: vec3f,
+    b: vec3f,
 }
 
-fn basis_b(n: vec3f, sign: f32, a: f32) -> vec3f {
-    return vec3f(n.x * n.y * a, sign + n.y * n.y * a, -n.y);
+fn basis(n: vec3f) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(
+        vec3f(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3f(b, sign + n.y * n.y * a, -n.y),
+    );
 }
 
 // The cone a sphere subtends from x: unit axis and 1 - cos(half angle); w = 0 when x is
@@ -98,6 +105,7 @@ struct LightSample {
 // A unit direction from x toward l and its solid-angle pdf (with the pick probability).
 fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
     var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
+//#if SPHERES
     if l.radius > 0.0 {
         let cone = sphere_cone(l.position, l.radius, x);
         if cone.w > 0.0 {
@@ -106,28 +114,25 @@ fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
             let cos_theta = 1.0 - a;
             let sin_theta = sqrt(max(a * (2.0 - a), 0.0));
             let phi = PI * (2.0 * u2 - 1.0);
-            let sign = select(-1.0, 1.0, axis.z >= 0.0);
-            let ba = -1.0 / (sign + axis.z);
-            let t = basis_t(axis, sign, ba);
-            let b = basis_b(axis, sign, ba);
-            out.dir = normalize(cos_theta * axis + sin_theta * (cos(phi) * t + sin(phi) * b));
+            let frame = basis(axis);
+            out.dir = normalize(cos_theta * axis + sin_theta * (cos(phi) * frame.t + sin(phi) * frame.b));
             out.pdf = l.pick / (2.0 * PI * cone.w);
-            // Where it meets the sphere: the near root, as in consider_sphere.
-            let oc = l.position - x;
-            let h = dot(out.dir, oc);
-            let perpendicular = oc - h * out.dir;
-            let disc = max(l.radius * l.radius - dot(perpendicular, perpendicular), 0.0);
-            out.point = x + (h - sqrt(disc)) * out.dir;
+            // Where it meets the sphere (a direction in the cone, from outside: the near root; at
+            // the cone's rim, where rounding can miss, the closest approach).
+            let dist = sphere_distance(Sphere(l.position, l.radius, 0u, 0u), Ray(x, out.dir));
+            out.point = x + select(dot(out.dir, l.position - x), dist, dist > 0.0) * out.dir;
         }
-    } else {
-        let p = l.position + u1 * l.u + u2 * l.v;
-        let to_light = p - x;
-        let dist2 = dot(to_light, to_light);
-        if dist2 > 0.0 {
-            out.dir = to_light / sqrt(dist2);
-            out.pdf = quad_pdf(l, x, p, out.dir);
-            out.point = p;
-        }
+        return out;
+    }
+//#endif
+    // A quad: uniform on its area.
+    let p = l.position + u1 * l.u + u2 * l.v;
+    let to_light = p - x;
+    let dist2 = dot(to_light, to_light);
+    if dist2 > 0.0 {
+        out.dir = to_light / sqrt(dist2);
+        out.pdf = quad_pdf(l, x, p, out.dir);
+        out.point = p;
     }
     return out;
 }

@@ -164,9 +164,9 @@ fn parallel_tangent_and_edge_rays() {
         ),
     ];
     let rays: Vec<(Vec3, Vec3)> = cases.iter().map(|c| (c.1, c.2)).collect();
-    let (cpu, gpu) = trace_both(gpu.as_ref(), &flat, &rays);
+    let (cpu, gpu_hits) = trace_both(gpu.as_ref(), &flat, &rays);
     for (i, (what, _, _, expected)) in cases.iter().enumerate() {
-        let backends = [Some(("cpu", &cpu)), gpu.as_ref().map(|g| ("gpu", g))];
+        let backends = [Some(("cpu", &cpu)), gpu_hits.as_ref().map(|g| ("gpu", g))];
         for (backend, hits) in backends.into_iter().flatten() {
             match (expected, hits[i]) {
                 (None, None) => {}
@@ -180,8 +180,8 @@ fn parallel_tangent_and_edge_rays() {
     }
     // Exactly tangent: a hit or a miss is fine, but a hit is on the sphere.
     let tangent = [(Vec3::new(5.0, 1.0, -5.0), Vec3::Z)];
-    let (cpu, gpu) = trace_both(renderer().as_ref(), &flat, &tangent);
-    for p in cpu.iter().chain(gpu.iter().flatten()).flatten() {
+    let (cpu, gpu_hits) = trace_both(gpu.as_ref(), &flat, &tangent);
+    for p in cpu.iter().chain(gpu_hits.iter().flatten()).flatten() {
         assert!(
             ((*p - Vec3::new(5.0, 0.0, 0.0)).length() - 1.0).abs() < 1e-4,
             "{p}"

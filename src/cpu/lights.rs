@@ -2,7 +2,8 @@
 //! proportion to its power, then a direction toward it, and the solid-angle pdf of both, which
 //! multiple importance sampling also needs for directions BSDF sampling found.
 
-use crate::scene::flat::{FlatScene, Light};
+use super::shapes::{Ray, hit_sphere};
+use crate::scene::flat::{FlatScene, Light, Sphere};
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -97,15 +98,20 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
         let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
         let (t, b) = basis(axis);
         let dir = (cos_theta * axis + sin_theta * (cos_phi * t + sin_phi * b)).normalize();
-        // Where it meets the sphere: the near root, as in hit_sphere.
-        let oc = light.position - x;
-        let h = dir.dot(oc);
-        let perpendicular = oc - h * dir;
-        let disc = (light.radius * light.radius - perpendicular.length_squared()).max(0.0);
+        // Where it meets the sphere (a direction in the cone, from outside: the near root; at
+        // the cone's rim, where rounding can miss, the closest approach).
+        let sphere = Sphere {
+            center: light.position,
+            radius: light.radius,
+            material: 0,
+            light: 0,
+        };
+        let t = hit_sphere(&sphere, &Ray { origin: x, dir }, 0.0, f32::INFINITY)
+            .unwrap_or_else(|| dir.dot(light.position - x));
         Some(LightSample {
             dir,
             pdf: light.pick / (2.0 * PI * one_minus_cos),
-            point: x + (h - disc.sqrt()) * dir,
+            point: x + t * dir,
         })
     } else {
         let point = light.position + u1 * light.u + u2 * light.v;

@@ -237,32 +237,48 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
     out
 }
 
-/// `material_at` as a switch over the scene's materials.
-fn inline_materials(scene: &FlatScene) -> String {
-    let mut out = String::from(
-        "\n// ---- the scene's materials, generated ----\nfn material_at(i: u32) -> Material {\n    switch i {\n",
-    );
-    let materials = crate::gpu::layout::SceneBuffers::new(scene).materials;
-    let last = materials.len() - 1;
-    for (i, m) in materials.iter().enumerate() {
-        let constant = format!(
-            "Material({}, {}u, {}, {})",
-            vec3(glam::Vec3::from(m.albedo)),
-            m.kind,
-            vec3(glam::Vec3::from(m.emission)),
-            lit(m.param)
-        );
-        let label = if i == last {
-            "default".to_string()
-        } else {
-            format!("case {i}u")
-        };
+/// `fn {signature} { switch {selector} { case k: { return v; } ... default: { return d; } } }`.
+fn switch_function(
+    signature: &str,
+    selector: &str,
+    cases: impl IntoIterator<Item = (usize, String)>,
+    default: &str,
+) -> String {
+    let mut out = format!("fn {signature} {{\n    switch {selector} {{\n");
+    for (k, value) in cases {
         out.push_str(&format!(
-            "        {label}: {{\n            return {constant};\n        }}\n"
+            "        case {k}u: {{\n            return {value};\n        }}\n"
         ));
     }
-    out.push_str("    }\n}\n");
+    out.push_str(&format!(
+        "        default: {{\n            return {default};\n        }}\n    }}\n}}\n"
+    ));
     out
+}
+
+/// `material_at` as a switch over the scene's materials (the last is the default).
+fn inline_materials(scene: &FlatScene) -> String {
+    let mut constants: Vec<(usize, String)> = crate::gpu::layout::SceneBuffers::new(scene)
+        .materials
+        .iter()
+        .map(|m| {
+            format!(
+                "Material({}, {}u, {}, {})",
+                vec3(glam::Vec3::from(m.albedo)),
+                m.kind,
+                vec3(glam::Vec3::from(m.emission)),
+                lit(m.param)
+            )
+        })
+        .enumerate()
+        .collect();
+    let (_, default) = constants
+        .pop()
+        .expect("a scene has at least one material slot");
+    format!(
+        "\n// ---- the scene's materials, generated ----\n{}",
+        switch_function("material_at(i: u32) -> Material", "i", constants, &default)
+    )
 }
 
 /// The light list as constants: `pick_light` as a chain of comparisons, `light_of` and
@@ -278,43 +294,47 @@ fn inline_lights(scene: &FlatScene) -> String {
             lit(l.cdf)
         ));
     }
-    out.push_str(&format!("    return {last}u;\n}}\n\nfn light_of(primitive: u32) -> u32 {{\n    switch primitive {{\n"));
+    out.push_str(&format!("    return {last}u;\n}}\n\n"));
     let emitters = scene
         .spheres
         .iter()
         .map(|s| s.light)
         .chain(scene.quads.iter().map(|q| q.light))
         .enumerate()
-        .filter(|(_, light)| *light > 0);
-    for (primitive, light) in emitters {
-        out.push_str(&format!(
-            "        case {primitive}u: {{\n            return {light}u;\n        }}\n"
-        ));
-    }
-    out.push_str("        default: {\n            return 0u;\n        }\n    }\n}\n\nfn light_at(i: u32) -> Light {\n    switch i {\n");
-    for (i, l) in scene.lights.iter().enumerate() {
-        let constant = format!(
-            "Light({}, {}, {}, {}, {}, {}, {}, {})",
-            vec3(l.position),
-            lit(l.cdf),
-            vec3(l.u),
-            lit(l.pick),
-            vec3(l.v),
-            lit(l.radius),
-            vec3(l.normal),
-            lit(l.inv_area)
-        );
-        if i == last {
-            out.push_str(&format!(
-                "        default: {{\n            return {constant};\n        }}\n"
-            ));
-        } else {
-            out.push_str(&format!(
-                "        case {i}u: {{\n            return {constant};\n        }}\n"
-            ));
-        }
-    }
-    out.push_str("    }\n}\n");
+        .filter(|(_, light)| *light > 0)
+        .map(|(primitive, light)| (primitive, format!("{light}u")));
+    out.push_str(&switch_function(
+        "light_of(primitive: u32) -> u32",
+        "primitive",
+        emitters,
+        "0u",
+    ));
+    let mut constants: Vec<(usize, String)> = scene
+        .lights
+        .iter()
+        .map(|l| {
+            format!(
+                "Light({}, {}, {}, {}, {}, {}, {}, {})",
+                vec3(l.position),
+                lit(l.cdf),
+                vec3(l.u),
+                lit(l.pick),
+                vec3(l.v),
+                lit(l.radius),
+                vec3(l.normal),
+                lit(l.inv_area)
+            )
+        })
+        .enumerate()
+        .collect();
+    let (_, default) = constants.pop().expect("nee kernels have a light");
+    out.push('\n');
+    out.push_str(&switch_function(
+        "light_at(i: u32) -> Light",
+        "i",
+        constants,
+        &default,
+    ));
     out
 }
 
