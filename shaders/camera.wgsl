@@ -5,13 +5,16 @@ fn generate_ray(x: u32, y: u32, rng: ptr<function, u32>) -> Ray {
     let jy = rng_next(rng);
     let s = (f32(x) + jx) / f32(params.width);
     let t = (f32(y) + jy) / f32(params.height);
-    let target_point = params.upper_left + s * params.horizontal - t * params.vertical;
+    // Relative to the camera, so the direction's precision does not depend on where it is.
+    var to_target = params.to_upper_left + s * params.horizontal - t * params.vertical;
     var origin = params.origin;
 //#if LENS
     let u1 = rng_next(rng);
     let u2 = rng_next(rng);
     let d = unit_disk(u1, u2);
-    origin += params.lens_radius * (d.x * params.right + d.y * params.up);
+    let on_lens = params.lens_radius * (d.x * params.right + d.y * params.up);
+    origin += on_lens;
+    to_target -= on_lens;
 //#endif
-    return Ray(origin, normalize(target_point - origin));
+    return Ray(origin, normalize(to_target));
 }

@@ -48,7 +48,7 @@ const MAT_LIGHT: u32 = 3u;
 struct Params {
     origin: vec3f,
     lens_radius: f32,
-    upper_left: vec3f,
+    to_upper_left: vec3f,
     width: u32,
     horizontal: vec3f,
     height: u32,
@@ -75,7 +75,9 @@ struct Ray {
     dir: vec3f,
 }
 
-@group(0) @binding(0) var<uniform> params: Params;
+// Storage, not uniform: lavapipe compiles a shader variant for every distinct uniform value it
+// can fold, and these change every dispatch (see GpuRenderer::render).
+@group(0) @binding(0) var<storage, read> params: Params;
 // Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
 //#if UNIFORM_SCENE

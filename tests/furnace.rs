@@ -53,11 +53,11 @@ fn lambertian_sphere_under_constant_sky_shows_albedo_times_background() {
     // A pixel is covered when the rays through its four corners all hit (the silhouette is convex).
     let corner_hits = |x: u32, y: u32| {
         let cam = &flat.camera;
-        let target = cam.upper_left + (x as f32 / w as f32) * cam.horizontal
+        let to_target = cam.to_upper_left + (x as f32 / w as f32) * cam.horizontal
             - (y as f32 / h as f32) * cam.vertical;
         let ray = Ray {
             origin: cam.origin,
-            dir: (target - cam.origin).normalize(),
+            dir: to_target.normalize(),
         };
         hit_sphere(&sphere, &ray, 0.0, f32::INFINITY).is_some()
     };

@@ -90,7 +90,7 @@ fn rust_layouts() -> Vec<Layout> {
             vec![
                 ("origin", offset_of!(GpuParams, origin)),
                 ("lens_radius", offset_of!(GpuParams, lens_radius)),
-                ("upper_left", offset_of!(GpuParams, upper_left)),
+                ("to_upper_left", offset_of!(GpuParams, to_upper_left)),
                 ("width", offset_of!(GpuParams, width)),
                 ("horizontal", offset_of!(GpuParams, horizontal)),
                 ("height", offset_of!(GpuParams, height)),

@@ -12,14 +12,17 @@ use crate::scene::flat::CameraFrame;
 pub fn generate_ray(cam: &CameraFrame, opts: &RenderOptions, x: u32, y: u32, rng: &mut Rng) -> Ray {
     let s = (x as f32 + rng.next_f32()) / opts.width as f32;
     let t = (y as f32 + rng.next_f32()) / opts.height as f32;
-    let target = cam.upper_left + s * cam.horizontal - t * cam.vertical;
+    // Relative to the camera, so the direction's precision does not depend on where it is.
+    let mut to_target = cam.to_upper_left + s * cam.horizontal - t * cam.vertical;
     let mut origin = cam.origin;
     if cam.lens_radius > 0.0 {
         let (dx, dy) = unit_disk(rng.next_f32(), rng.next_f32());
-        origin += cam.lens_radius * (dx * cam.right + dy * cam.up);
+        let on_lens = cam.lens_radius * (dx * cam.right + dy * cam.up);
+        origin += on_lens;
+        to_target -= on_lens;
     }
     Ray {
         origin,
-        dir: (target - origin).normalize(),
+        dir: to_target.normalize(),
     }
 }

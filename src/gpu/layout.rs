@@ -66,7 +66,7 @@ pub struct GpuMaterial {
 pub struct GpuParams {
     pub origin: [f32; 3],
     pub lens_radius: f32,
-    pub upper_left: [f32; 3],
+    pub to_upper_left: [f32; 3],
     pub width: u32,
     pub horizontal: [f32; 3],
     pub height: u32,
@@ -218,7 +218,7 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
     GpuParams {
         origin: c.origin.to_array(),
         lens_radius: c.lens_radius,
-        upper_left: c.upper_left.to_array(),
+        to_upper_left: c.to_upper_left.to_array(),
         width: opts.width,
         horizontal: c.horizontal.to_array(),
         height: opts.height,

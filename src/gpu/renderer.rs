@@ -119,7 +119,7 @@ impl GpuRenderer {
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &[
-                buffer_entry(0, wgpu::BufferBindingType::Uniform),
+                buffer_entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(1, scene_ty),
                 buffer_entry(2, scene_ty),
                 buffer_entry(3, scene_ty),
@@ -311,10 +311,13 @@ impl GpuRenderer {
         }
         let max_slice = (LOOP_ITERATION_BUDGET / per_sample).clamp(1, u32::MAX as u64) as u32;
         let scene_buffers = self.scene_buffers(scene, &kernel.features);
+        // Params change every dispatch, so they live in a storage buffer: lavapipe folds the
+        // values of uniform buffers into the shader and JIT-compiles (and keeps) one variant
+        // per distinct value, which leaked about 1 MB per dispatch and cost time.
         let params_buffer = self.buffer(
             "params",
             std::mem::size_of::<GpuParams>() as u64,
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let debug = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
         let accum_size = tile_rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
@@ -531,7 +534,7 @@ impl GpuRenderer {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("params"),
                 contents: bytemuck::bytes_of(&base_params(scene, opts)),
-                usage: wgpu::BufferUsages::UNIFORM,
+                usage: wgpu::BufferUsages::STORAGE,
             });
         let accum = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
         let buffers = self.scene_buffers(scene, &kernel.features);

@@ -99,7 +99,11 @@ impl Features {
             nee: false,
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
-            inline_scene: scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES,
+            // Bounded in size: a flat scene holds only the materials and lights its primitives
+            // use, so neither outnumbers them.
+            inline_scene: scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES
+                && scene.materials.len() <= MAX_INLINE_PRIMITIVES
+                && scene.lights.len() <= MAX_INLINE_PRIMITIVES,
         }
     }
 

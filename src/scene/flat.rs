@@ -4,7 +4,7 @@
 //! transforms rays per hit.
 
 use super::{Background, Material, Scene, SceneError, Shape};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
@@ -66,11 +66,12 @@ fn edge_tolerance(q: Vec3, u: Vec3, v: Vec3) -> f32 {
 }
 
 /// The camera reduced to what ray generation needs: a ray for film position (s, t) in [0, 1]^2
-/// (t down from the top) aims at `upper_left + s * horizontal - t * vertical`.
+/// (t down from the top) from `origin` points along `to_upper_left + s * horizontal - t * vertical`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraFrame {
     pub origin: Vec3,
-    pub upper_left: Vec3,
+    /// From `origin` to the upper-left corner of the image in the plane of focus.
+    pub to_upper_left: Vec3,
     pub horizontal: Vec3,
     pub vertical: Vec3,
     /// Unit vectors to the camera's right and up, for sampling the lens.
@@ -79,10 +80,22 @@ pub struct CameraFrame {
     pub lens_radius: f32,
 }
 
+/// Flat scenes are re-centred near the camera in steps of this size (a power of two, so the
+/// shift is exact): a scene whose camera is within this distance of the origin is not moved.
+pub const RECENTRE_STEP: f64 = 1024.0;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlatScene {
+    /// The world position of this scene's coordinate origin. Every position below is relative
+    /// to it, so that geometry near a camera far from the world origin (1e7 away, say) keeps
+    /// the precision it has near the origin: f32 spacing grows with distance from the origin,
+    /// and rendering happens near the camera. It is the camera's position rounded toward zero
+    /// to a multiple of [`RECENTRE_STEP`]; zero when the camera is within that of the origin.
+    pub origin: DVec3,
     pub camera: CameraFrame,
     pub background: Background,
+    /// The materials the primitives use (not every one the scene defines), which `material`
+    /// fields of spheres and quads index.
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
@@ -135,18 +148,29 @@ impl FlatScene {
         scene.validate()?;
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
+        // Only the materials some object uses, numbered in order of first use: a scene may
+        // define thousands it never places, and the kernel holds every material it is given.
+        let mut materials = Vec::new();
+        let mut renumbered = vec![u32::MAX; scene.materials.len()];
+        let origin = (scene.camera.look_from.as_dvec3() / RECENTRE_STEP).trunc() * RECENTRE_STEP;
         for object in &scene.objects {
             let t = object.transform;
-            let material = object.material;
+            let place = |p: Vec3| t.apply_point_relative(p, origin);
+            let slot = &mut renumbered[object.material as usize];
+            if *slot == u32::MAX {
+                *slot = materials.len() as u32;
+                materials.push(scene.materials[object.material as usize]);
+            }
+            let material = *slot;
             match object.shape {
                 Shape::Sphere { center, radius } => spheres.push(Sphere {
-                    center: t.apply_point(center),
+                    center: place(center),
                     radius,
                     material,
                     light: 0,
                 }),
                 Shape::Quad { q, u, v } => quads.push(Quad::new(
-                    t.apply_point(q),
+                    place(q),
                     t.rotate_vector(u),
                     t.rotate_vector(v),
                     material,
@@ -154,7 +178,7 @@ impl FlatScene {
                 Shape::Cuboid { min, max } => {
                     for [q, u, v] in box_faces(min, max) {
                         quads.push(Quad::new(
-                            t.apply_point(q),
+                            place(q),
                             t.rotate_vector(u),
                             t.rotate_vector(v),
                             material,
@@ -164,9 +188,10 @@ impl FlatScene {
             }
         }
         let mut flat = FlatScene {
-            camera: camera_frame(scene, width, height),
+            origin,
+            camera: camera_frame(scene, origin, width, height),
             background: scene.background,
-            materials: scene.materials.clone(),
+            materials,
             spheres,
             quads,
             lights: Vec::new(),
@@ -260,11 +285,16 @@ pub fn box_faces(min: Vec3, max: Vec3) -> [[Vec3; 3]; 6] {
     ]
 }
 
-fn camera_frame(scene: &Scene, width: u32, height: u32) -> CameraFrame {
+fn camera_frame(scene: &Scene, origin: DVec3, width: u32, height: u32) -> CameraFrame {
     let c = &scene.camera;
-    let to_target = c.look_at - c.look_from;
+    let look_from = (c.look_from.as_dvec3() - origin).as_vec3();
+    let to_target = (c.look_at.as_dvec3() - c.look_from.as_dvec3()).as_vec3();
     let forward = to_target.normalize();
-    let right = forward.cross(c.up).normalize();
+    // `up` is a direction of any length (validated finite and non-zero): normalised in f64
+    // first, since the f32 length of 1e20 overflows.
+    let right = forward
+        .cross(c.up.as_dvec3().normalize().as_vec3())
+        .normalize();
     let up = right.cross(forward);
     let focus = c.focus_distance.unwrap_or(to_target.length());
     let half_height = (c.vfov_degrees.to_radians() * 0.5).tan();
@@ -272,8 +302,8 @@ fn camera_frame(scene: &Scene, width: u32, height: u32) -> CameraFrame {
     let horizontal = right * (2.0 * half_width * focus);
     let vertical = up * (2.0 * half_height * focus);
     CameraFrame {
-        origin: c.look_from,
-        upper_left: c.look_from + forward * focus - horizontal * 0.5 + vertical * 0.5,
+        origin: look_from,
+        to_upper_left: forward * focus - horizontal * 0.5 + vertical * 0.5,
         horizontal,
         vertical,
         right,

@@ -64,6 +64,15 @@ impl Transform {
     pub fn apply_point(&self, p: Vec3) -> Vec3 {
         self.rotate_vector(p) + self.translate
     }
+
+    /// `apply_point` in f64 and then moved by `-origin`, rounded to f32 once: a point far from
+    /// the world origin but near `origin` keeps its full precision.
+    pub fn apply_point_relative(&self, p: Vec3, origin: glam::DVec3) -> Vec3 {
+        let (sin, cos) = (self.rotate_y_degrees.to_radians() as f64).sin_cos();
+        let (x, z) = (p.x as f64, p.z as f64);
+        let rotated = glam::DVec3::new(cos * x + sin * z, p.y as f64, -sin * x + cos * z);
+        (rotated + self.translate.as_dvec3() - origin).as_vec3()
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,7 +124,9 @@ pub struct Scene {
 /// Problems in a scene that any source (built-in, file, test) can have.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SceneError {
-    #[error("camera look_from equals look_at: the view direction is undefined")]
+    #[error(
+        "camera look_from equals look_at (or lies within {MIN_SIZE:e} of it): the view direction is undefined"
+    )]
     CameraNoDirection,
     #[error(
         "camera up {0:?} is parallel to the view direction: the image orientation is undefined"
@@ -130,33 +141,38 @@ pub enum SceneError {
 impl Camera {
     /// Checks what makes the camera frame undefined.
     pub fn validate(&self) -> Result<(), SceneError> {
-        let forward = self.look_at - self.look_from;
-        if forward.length_squared() == 0.0 || !forward.is_finite() {
-            return Err(SceneError::CameraNoDirection);
-        }
-        let right = forward.normalize().cross(self.up);
-        if !(right.length() > 1e-6) || !self.up.is_finite() {
-            return Err(SceneError::CameraUpParallel(self.up.to_array()));
-        }
         if !within_extent(self.look_from) || !within_extent(self.look_at) {
             return Err(SceneError::Invalid(format!(
                 "camera positions must lie within {MAX_EXTENT:e} of the origin"
             )));
         }
+        // In f64: up is a direction of any length, and lengths of extreme vectors overflow f32.
+        let forward = self.look_at.as_dvec3() - self.look_from.as_dvec3();
+        if !(forward.length() >= MIN_SIZE as f64) {
+            return Err(SceneError::CameraNoDirection);
+        }
+        let up = self.up.as_dvec3();
+        if !up.is_finite() || up == glam::DVec3::ZERO {
+            return Err(SceneError::CameraUpParallel(self.up.to_array()));
+        }
+        let right = forward.normalize().cross(up.normalize());
+        if !(right.length() > 1e-6) {
+            return Err(SceneError::CameraUpParallel(self.up.to_array()));
+        }
         if !(self.vfov_degrees > 0.0 && self.vfov_degrees < 180.0) {
             return Err(SceneError::BadFov(self.vfov_degrees));
         }
-        if !(self.aperture >= 0.0 && self.aperture.is_finite()) {
+        if !(0.0..=MAX_EXTENT).contains(&self.aperture) {
             return Err(SceneError::Invalid(format!(
-                "camera aperture must be >= 0, got {}",
+                "camera aperture must be in [0, {MAX_EXTENT:e}], got {}",
                 self.aperture
             )));
         }
         if let Some(d) = self.focus_distance
-            && !(d > 0.0 && d.is_finite())
+            && !(MIN_SIZE..=MAX_EXTENT).contains(&d)
         {
             return Err(SceneError::Invalid(format!(
-                "camera focus_distance must be > 0, got {d}"
+                "camera focus_distance must be in [{MIN_SIZE:e}, {MAX_EXTENT:e}], got {d}"
             )));
         }
         Ok(())
