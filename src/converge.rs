@@ -125,6 +125,7 @@ pub fn fit_series(rungs: &[&Rung], floor: Option<f64>) -> Option<Fit> {
     fit_loglog(&points)
 }
 
+#[derive(Clone)]
 pub struct ConvergeOptions {
     pub scene: FlatScene,
     pub scene_name: String,
@@ -201,14 +202,24 @@ fn load_reference(o: &ConvergeOptions, path: &Path) -> anyhow::Result<Reference>
             o.height
         );
     }
-    if rgb.iter().flatten().any(|c| !c.is_finite()) {
-        bail!("reference {} holds NaN or infinite values", path.display());
-    }
+    check_radiance(&rgb).with_context(|| format!("reference {}", path.display()))?;
     Ok(Reference {
         rgb,
         noise_rmse: None,
         description: format!("{} (given; its noise is unknown)", path.display()),
     })
+}
+
+/// Radiance is finite and non-negative.
+fn check_radiance(rgb: &[[f32; 3]]) -> anyhow::Result<()> {
+    if let Some(c) = rgb
+        .iter()
+        .flatten()
+        .find(|c| !(c.is_finite() && **c >= 0.0))
+    {
+        bail!("holds a value that is not a finite non-negative radiance ({c})");
+    }
+    Ok(())
 }
 
 /// The reference: the user's, the cached one, or a new high-spp render on the fastest backend
@@ -229,6 +240,10 @@ fn reference(
         && (w, h) == (o.width, o.height)
         && let Some((noise, spp)) = noise.trim().split_once(' ')
         && let (Ok(noise), Ok(spp)) = (noise.parse::<f64>(), spp.parse::<u32>())
+        && o.reference_spp.is_none_or(|wanted| wanted == spp)
+        && noise.is_finite()
+        && noise >= 0.0
+        && check_radiance(&rgb).is_ok()
     {
         return Ok(Reference {
             rgb,
@@ -291,6 +306,16 @@ fn progress_bar(message: &str) -> indicatif::ProgressBar {
 pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
     if !(o.budget > 0.0 && o.budget.is_finite()) {
         bail!("--budget must be a positive number of seconds");
+    }
+    for (i, backend) in o.backends.iter().enumerate() {
+        if o.backends[..i].contains(backend) {
+            bail!("--backends lists {} twice", backend.name());
+        }
+    }
+    for (i, integrator) in o.integrators.iter().enumerate() {
+        if o.integrators[..i].contains(integrator) {
+            bail!("--integrators lists {} twice", integrator.name());
+        }
     }
     std::fs::create_dir_all(&o.out_dir)
         .with_context(|| format!("cannot create {}", o.out_dir.display()))?;

@@ -62,6 +62,53 @@ pub struct Film {
     pub invalid_samples: u64,
 }
 
+/// Longest image side.
+pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
+/// Most pixels one image may have (the film keeps 56 bytes of statistics per pixel).
+pub const MAX_PIXELS: u64 = 1 << 26;
+/// Host memory a render needs per pixel: the film (56 bytes), its mean image (12), the encoded
+/// output (up to 12) and slack for GPU readback and the CPU's rows.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 96;
+
+/// The one check of an image size, wherever it comes from (`--size`, a scene file, a test).
+pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(format!(
+            "image sides must be in 1..={MAX_IMAGE_SIDE}, got {width}x{height}"
+        ));
+    }
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(format!(
+            "a {width}x{height} image has more than {MAX_PIXELS} pixels"
+        ));
+    }
+    Ok(())
+}
+
+/// Whether this machine has the memory a `width` x `height` render needs, checked before
+/// anything is allocated (an allocation that fails aborts the process).
+pub fn check_memory(width: u32, height: u32) -> Result<(), String> {
+    let needed = width as u64 * height as u64 * RENDER_BYTES_PER_PIXEL;
+    if let Some(available) = available_memory()
+        && needed > available
+    {
+        return Err(format!(
+            "a {width}x{height} render needs about {:.1} GB of memory, and {:.1} GB is available",
+            needed as f64 / 1e9,
+            available as f64 / 1e9
+        ));
+    }
+    Ok(())
+}
+
+/// MemAvailable from /proc/meminfo, where there is one.
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
 impl Film {
     pub fn new(width: u32, height: u32) -> Self {
         Film {

@@ -3,19 +3,32 @@
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rt_gpu::film::{check_image_size, check_memory};
 use rt_gpu::gpu::list_adapters;
-use rt_gpu::output::{ImageFormat, write_image};
+use rt_gpu::output::{ImageFormat, PendingOutput};
 use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
-use rt_gpu::scene::file::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
+use rt_gpu::scene::file::MAX_DEPTH_LIMIT;
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Scene, file};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-/// Most pixels one image may have (the film keeps 56 bytes of statistics per pixel).
-const MAX_PIXELS: u64 = 1 << 26;
+/// Prints a line to stdout. A closed pipe or a full device is an error to return with `?`,
+/// never a panic (`println!` panics).
+macro_rules! say {
+    ($($arg:tt)*) => { writeln!(std::io::stdout().lock(), $($arg)*) };
+}
+
+/// Prints a line to stderr, ignoring failure: there is nowhere left to report it.
+macro_rules! note {
+    ($($arg:tt)*) => {{ let _ = writeln!(std::io::stderr().lock(), $($arg)*); }};
+}
+
+/// The subcommands, for a hint when one is given where a scene was expected.
+const SUBCOMMANDS: &[&str] = &["scenes", "devices", "bench", "converge"];
 
 const EXAMPLES: &str = "\
 Examples:
@@ -52,6 +65,9 @@ enum Command {
         /// Write every built-in scene as DIR/<name>.toml, a starting point for your own.
         #[arg(long, value_name = "DIR")]
         export: Option<PathBuf>,
+        /// With --export: overwrite scene files that already exist in DIR.
+        #[arg(long, requires = "export")]
+        force: bool,
     },
     /// List the GPU adapters wgpu can see (pick one with --adapter).
     Devices,
@@ -170,14 +186,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         w.trim().parse().map_err(|_| bad())?,
         h.trim().parse().map_err(|_| bad())?,
     );
-    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
-        return Err(format!(
-            "each side must be in 1..={MAX_IMAGE_SIDE}, got {w}x{h}"
-        ));
-    }
-    if w as u64 * h as u64 > MAX_PIXELS {
-        return Err(format!("{w}x{h} has more than {MAX_PIXELS} pixels"));
-    }
+    check_image_size(w, h)?;
     Ok((w, h))
 }
 
@@ -187,9 +196,17 @@ fn main() -> ExitCode {
         // SAFETY: nothing else runs yet: no other thread can read the environment concurrently.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
+    // A bug is one line too, never a backtrace.
+    std::panic::set_hook(Box::new(|info| {
+        note!(
+            "error: internal error, a bug in rt-gpu (please report it): {}",
+            one_line(&info.to_string())
+        )
+    }));
+    install_signal_handler();
     let cli = Cli::parse();
     let result = match cli.command {
-        Some(Command::Scenes { export }) => list_scenes(export.as_deref()),
+        Some(Command::Scenes { export, force }) => list_scenes(export.as_deref(), force),
         Some(Command::Devices) => list_devices(),
         Some(Command::Bench(args)) => bench(&args),
         Some(Command::Converge(args)) => converge(&args),
@@ -197,12 +214,58 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader went away (`rt-gpu scenes | head -1`): stop quietly, as `cat` would.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            note!("error: {}", one_line(&format!("{e:#}")));
             ExitCode::FAILURE
         }
     }
 }
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Most characters of an error message: a scene can hold names megabytes long.
+const MAX_MESSAGE_CHARS: usize = 600;
+
+/// `message` on one line, its middle cut out if it is too long.
+fn one_line(message: &str) -> String {
+    let flat = message.replace(['\n', '\r'], " ");
+    let count = flat.chars().count();
+    if count <= MAX_MESSAGE_CHARS {
+        return flat;
+    }
+    let keep = MAX_MESSAGE_CHARS / 2;
+    let head: String = flat.chars().take(keep).collect();
+    let tail: String = flat.chars().skip(count - keep).collect();
+    format!("{head} [... {} characters ...] {tail}", count - 2 * keep)
+}
+
+/// On SIGINT, SIGTERM or SIGHUP: remove temporary output files (a killed process runs no
+/// destructors, and they can be as large as the image), then exit with 128 + the signal.
+#[cfg(unix)]
+fn install_signal_handler() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            rt_gpu::output::remove_pending_files();
+            note!("\ninterrupted: nothing was written");
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
+#[cfg(not(unix))]
+fn install_signal_handler() {}
 
 /// Renders with a progress bar on stderr; returns the result and wall seconds.
 fn timed_render(
@@ -235,11 +298,17 @@ fn digest(text: &str) -> u64 {
 }
 
 fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
-    let scene = resolve_scene(&args.scene)?;
+    if args.reference.is_some() && args.reference_spp.is_some() {
+        bail!(
+            "--reference-spp sets the spp of a rendered reference; it has no effect with --reference"
+        );
+    }
+    let (scene, _) = resolve_scene(&args.scene)?;
     let (width, height) = args
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    check_memory(width, height).map_err(anyhow::Error::msg)?;
     if let Some(t) = args.target_rmse
         && !(t > 0.0 && t.is_finite())
     {
@@ -266,7 +335,7 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
     };
     let report = rt_gpu::converge::run(&options)?;
     let target = report.target_rmse(args.target_rmse);
-    print!("{}", report.table(target));
+    write!(std::io::stdout().lock(), "{}", report.table(target))?;
     let csv = args.output.join("converge.csv");
     rt_gpu::output::write_atomically(&csv, |out| {
         use std::io::Write;
@@ -277,15 +346,15 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         scene.name, options.max_depth
     );
     match rt_gpu::plot::write_plot(&report, &title, &args.output.join("converge")) {
-        Ok(()) => println!(
+        Ok(()) => say!(
             "wrote {}, {} and {}",
             csv.display(),
             args.output.join("converge.svg").display(),
             args.output.join("converge.png").display()
-        ),
+        )?,
         Err(e) => {
-            println!("wrote {}", csv.display());
-            eprintln!("warning: no plot: {e:#}");
+            say!("wrote {}", csv.display())?;
+            note!("warning: no plot: {}", one_line(&format!("{e:#}")));
         }
     }
     Ok(())
@@ -294,22 +363,27 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
 fn list_devices() -> anyhow::Result<()> {
     let adapters = list_adapters();
     if adapters.is_empty() {
-        bail!("{}", rt_gpu::gpu::GpuError::NoAdapter);
+        bail!("{}", rt_gpu::gpu::context::no_adapter_error());
     }
     for a in adapters {
-        println!(
+        say!(
             "{:<40} {:?} {:?}, driver {} {}",
-            a.name, a.backend, a.device_type, a.driver, a.driver_info
-        );
+            a.name,
+            a.backend,
+            a.device_type,
+            a.driver,
+            a.driver_info
+        )?;
     }
     Ok(())
 }
 
 /// Renders the same scene on each backend (and the GPU with both kernels) in one run.
 fn bench(args: &BenchArgs) -> anyhow::Result<()> {
-    let scene = resolve_scene(&args.scene)?;
+    let (scene, _) = resolve_scene(&args.scene)?;
     let (width, height) = args.size;
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    check_memory(width, height).map_err(anyhow::Error::msg)?;
     let opts = RenderOptions {
         width,
         height,
@@ -321,14 +395,15 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         roulette_depth: 0,
     };
     let samples = width as f64 * height as f64 * args.spp as f64;
-    println!(
+    say!(
         "{}: {width}x{height}, {} spp, max depth {}, {} integrator",
         scene.name,
         args.spp,
         args.max_depth,
         args.integrator.name()
-    );
+    )?;
     let mut rates = Vec::new();
+    let mut failed = Vec::new();
     let runs = [
         ("cpu", Backend::Cpu, false),
         ("gpu specialised kernel", Backend::Gpu, false),
@@ -350,74 +425,107 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
                     .longest_dispatch_seconds
                     .map(|d| format!(", longest dispatch {:.0} ms", d * 1e3))
                     .unwrap_or_default();
-                println!(
+                say!(
                     "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{gpu_time}{longest}",
                     rendered.device
-                );
+                )?;
                 rates.push((label, rate));
             }
-            Err(e) => println!("  {label:<30} unavailable: {e:#}"),
+            Err(e) => {
+                say!("  {label:<30} failed: {}", one_line(&format!("{e:#}")))?;
+                failed.push(label);
+            }
         }
     }
     let rate = |name: &str| rates.iter().find(|(l, _)| *l == name).map(|(_, r)| *r);
     if let (Some(gpu), Some(cpu)) = (rate(runs[1].0), rate(runs[0].0)) {
-        println!("  gpu / cpu speed: {:.2}x", gpu / cpu);
+        say!("  gpu / cpu speed: {:.2}x", gpu / cpu)?;
     }
     if let (Some(special), Some(general)) = (rate(runs[1].0), rate(runs[2].0)) {
-        println!(
+        say!(
             "  specialised / everything-enabled kernel speed: {:.2}x",
             special / general
+        )?;
+    }
+    if !failed.is_empty() {
+        bail!(
+            "{} of {} runs failed ({})",
+            failed.len(),
+            runs.len(),
+            failed.join(", ")
         );
     }
     Ok(())
 }
 
-fn list_scenes(export: Option<&Path>) -> anyhow::Result<()> {
+fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
+    if let Some(dir) = export
+        && !force
+    {
+        // A user's edited copy must not be replaced without asking.
+        let existing: Vec<String> = BUILTINS
+            .iter()
+            .map(|(name, _)| format!("{name}.toml"))
+            .filter(|file| dir.join(file).exists())
+            .collect();
+        if !existing.is_empty() {
+            bail!(
+                "{} already holds {}: add --force to overwrite",
+                dir.display(),
+                existing.join(", ")
+            );
+        }
+    }
     for (name, about) in BUILTINS {
-        println!("{name:<14} {about}");
+        say!("{name:<14} {about}")?;
         if let (Some(dir), Some(scene)) = (export, builtin(name)) {
             let path = dir.join(format!("{name}.toml"));
             let text = file::to_toml(&scene);
-            rt_gpu::output::write_atomically(&path, |out| {
-                use std::io::Write;
-                Ok(out.write_all(text.as_bytes())?)
-            })?;
+            rt_gpu::output::write_atomically(&path, |out| Ok(out.write_all(text.as_bytes())?))?;
         }
     }
     Ok(())
 }
 
-/// A built-in name, or else a scene file.
-fn resolve_scene(arg: &str) -> anyhow::Result<Scene> {
+/// A scene file, or else a built-in scene; with the file's path when it is one.
+fn resolve_scene(arg: &str) -> anyhow::Result<(Scene, Option<PathBuf>)> {
     let path = Path::new(arg);
     if path.is_file() || arg.ends_with(".toml") {
-        return file::load(path);
+        if builtin(arg).is_some() {
+            note!(
+                "note: rendering the scene file {arg}, not the built-in scene '{arg}' (rename the file to use the built-in)"
+            );
+        }
+        return Ok((file::load(path)?, Some(path.to_path_buf())));
     }
-    builtin(arg).with_context(|| {
+    let scene = builtin(arg).with_context(|| {
         let names: Vec<&str> = BUILTINS.iter().map(|(n, _)| *n).collect();
+        let hint = if SUBCOMMANDS.contains(&arg) {
+            format!(": `{arg}` is a subcommand, so it must come before any option (`rt-gpu {arg} --help`)")
+        } else {
+            String::new()
+        };
         format!(
-            "'{arg}' is neither a built-in scene ({}) nor a scene file",
+            "'{arg}' is neither a built-in scene ({}) nor a scene file{hint}",
             names.join(", ")
         )
-    })
+    })?;
+    Ok((scene, None))
 }
 
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let Some(scene_arg) = &args.scene else {
         bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
     };
-    let scene = resolve_scene(scene_arg)?;
+    if args.adapter.is_some() && args.backend == Backend::Cpu {
+        bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
+    }
+    let (scene, scene_file) = resolve_scene(scene_arg)?;
     let output = args
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
-    // Fail on an unwritable destination now, not after a long render.
     ImageFormat::from_path(&output)?;
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty())
-        && !dir.is_dir()
-    {
-        bail!("output directory {} does not exist", dir.display());
-    }
     let (width, height) = args
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));
@@ -438,16 +546,18 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     };
     if args.print_shader {
         let features = gpu.features(&flat, opts.integrator);
-        print!(
-            "{}",
-            rt_gpu::gpu::shader::compose(&features, &flat).map_err(anyhow::Error::msg)?
-        );
+        let source = rt_gpu::gpu::shader::compose(&features, &flat).map_err(anyhow::Error::msg)?;
+        std::io::stdout().lock().write_all(source.as_bytes())?;
         return Ok(());
     }
+    check_memory(width, height).map_err(anyhow::Error::msg)?;
+    // Claimed now, so an unwritable destination fails before a long render, not after it.
+    let inputs: Vec<&Path> = scene_file.iter().map(|p| p.as_path()).collect();
+    let pending = PendingOutput::claim(&output, &inputs)?;
 
     let (rendered, seconds) = timed_render(args.backend, &gpu, &flat, &opts)?;
     let film = &rendered.film;
-    write_image(&output, film)?;
+    pending.commit_image(film)?;
 
     let samples = width as f64 * height as f64 * opts.spp as f64;
     let mean = film.image_mean();
@@ -456,7 +566,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         (None, Some(d)) => format!(" (longest dispatch {:.0} ms)", d * 1e3),
         _ => String::new(),
     };
-    eprintln!(
+    note!(
         "{}: {width}x{height}, {} spp, {} [{}], {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
         scene.name,
         opts.spp,
@@ -470,7 +580,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         output.display()
     );
     if film.invalid_samples > 0 {
-        eprintln!(
+        note!(
             "warning: {} samples were NaN or infinite and were counted as black",
             film.invalid_samples
         );

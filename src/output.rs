@@ -5,7 +5,8 @@
 use crate::film::Film;
 use anyhow::Context;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
@@ -50,18 +51,22 @@ pub fn to_srgb8(linear: f32) -> u8 {
 
 /// Writes `film`'s mean image to `path` atomically, in the format its extension names.
 pub fn write_image(path: &Path, film: &Film) -> anyhow::Result<()> {
-    let format = ImageFormat::from_path(path)?;
+    PendingOutput::claim(path, &[])?.commit_image(film)
+}
+
+/// `film`'s mean image encoded in `format`.
+pub fn encode_image(format: ImageFormat, film: &Film) -> anyhow::Result<Vec<u8>> {
     let rgb = film.mean_rgb();
     let (w, h) = (film.width, film.height);
-    write_atomically(path, |out| match format {
+    let mut out = std::io::Cursor::new(Vec::new());
+    match format {
         ImageFormat::Png => {
             let bytes: Vec<u8> = rgb.iter().flatten().map(|&c| to_srgb8(c)).collect();
             let img = image::RgbImage::from_raw(w, h, bytes).context("image buffer size")?;
-            img.write_to(out, image::ImageFormat::Png)?;
-            Ok(())
+            img.write_to(&mut out, image::ImageFormat::Png)?;
         }
         ImageFormat::Ppm => {
-            let mut text = BufWriter::new(out);
+            let mut text = BufWriter::new(&mut out);
             writeln!(text, "P3\n{w} {h}\n255")?;
             for row in rgb.chunks(w as usize) {
                 for px in row {
@@ -75,13 +80,11 @@ pub fn write_image(path: &Path, film: &Film) -> anyhow::Result<()> {
                 }
             }
             text.flush()?;
-            Ok(())
         }
         ImageFormat::Exr => {
             let floats: Vec<f32> = rgb.iter().flatten().copied().collect();
             let img = image::Rgb32FImage::from_raw(w, h, floats).context("image buffer size")?;
-            img.write_to(out, image::ImageFormat::OpenExr)?;
-            Ok(())
+            img.write_to(&mut out, image::ImageFormat::OpenExr)?;
         }
         ImageFormat::Pfm => {
             let mut bytes = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
@@ -92,9 +95,9 @@ pub fn write_image(path: &Path, film: &Film) -> anyhow::Result<()> {
                 }
             }
             out.write_all(&bytes)?;
-            Ok(())
         }
-    })
+    }
+    Ok(out.into_inner())
 }
 
 /// Reads a PFM written by [`write_image`] (or any little- or big-endian RGB PFM) as
@@ -120,7 +123,11 @@ pub fn read_pfm(path: &Path) -> anyhow::Result<(u32, u32, Vec<[f32; 3]>)> {
     }
     let w: u32 = fields[1].parse().map_err(|_| bad())?;
     let h: u32 = fields[2].parse().map_err(|_| bad())?;
-    let little = fields[3].parse::<f32>().map_err(|_| bad())? < 0.0;
+    let scale = fields[3].parse::<f32>().map_err(|_| bad())?;
+    if !(scale.is_finite() && scale != 0.0) {
+        return Err(bad());
+    }
+    let little = scale < 0.0;
     let data = bytes.get(pos..).ok_or_else(bad)?;
     if data.len() < w as usize * h as usize * 12 {
         return Err(bad());
@@ -144,30 +151,188 @@ pub fn read_pfm(path: &Path) -> anyhow::Result<(u32, u32, Vec<[f32; 3]>)> {
     Ok((w, h, rgb))
 }
 
-/// Runs `write` into a temporary file beside `path`, then renames it over `path`.
+/// Runs `write` into a buffer, then puts it at `path` atomically (see [`PendingOutput`]).
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut std::io::Cursor<Vec<u8>>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
+    let pending = PendingOutput::claim(path, &[])?;
     let mut buffer = std::io::Cursor::new(Vec::new());
     write(&mut buffer).with_context(|| format!("cannot encode {}", path.display()))?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".rt-gpu-").suffix(".tmp");
-    // Temporary files are private (0600); an image is an ordinary file.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
-    let mut tmp = builder
-        .tempfile_in(dir)
-        .with_context(|| format!("cannot create a file in {}", dir.display()))?;
-    tmp.write_all(buffer.get_ref())
-        .and_then(|_| tmp.as_file().sync_all())
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    tmp.persist(path)
-        .map_err(|e| e.error)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+    pending.commit(&buffer.into_inner())
+}
+
+/// Longest file name most file systems take (NAME_MAX on Linux).
+const MAX_NAME_BYTES: usize = 255;
+
+/// Temporary files not yet renamed into place, which a signal handler removes before exiting
+/// (a killed process runs no destructors).
+static PENDING_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary output file still pending; for signal handlers.
+pub fn remove_pending_files() {
+    let files = PENDING_FILES.lock().unwrap_or_else(|p| p.into_inner());
+    for file in files.iter() {
+        let _ = std::fs::remove_file(file);
+    }
+}
+
+/// An output file claimed before the work that produces it, so that a destination that cannot
+/// be written fails at once, not after a long render: the destination is checked and a
+/// temporary file is created beside it now; [`commit`](Self::commit) writes the temporary file
+/// and renames it over the destination, so a failed or interrupted run never leaves a partial
+/// file. It refuses a destination that is a directory or not a regular file, is read-only (as
+/// `cp` does), or is one of the run's inputs; a symbolic link is written through, to its target.
+pub struct PendingOutput {
+    /// The destination as the user named it, for messages.
+    shown: PathBuf,
+    /// Where the file goes: `shown` with symbolic links resolved.
+    target: PathBuf,
+    /// `None` once committed.
+    tmp: Option<tempfile::NamedTempFile>,
+}
+
+impl PendingOutput {
+    /// Claims `path`; `inputs` are files this run reads, which it must not overwrite.
+    pub fn claim(path: &Path, inputs: &[&Path]) -> anyhow::Result<Self> {
+        let shown = path.to_path_buf();
+        let name = path
+            .file_name()
+            .with_context(|| format!("output {} does not name a file", path.display()))?;
+        if name.len() > MAX_NAME_BYTES {
+            anyhow::bail!(
+                "output file name is {} bytes long; file systems take at most {MAX_NAME_BYTES}",
+                name.len()
+            );
+        }
+        let mut target = path.to_path_buf();
+        if let Ok(meta) = std::fs::symlink_metadata(path) {
+            if meta.file_type().is_symlink() {
+                target = std::fs::canonicalize(path).with_context(|| {
+                    format!(
+                        "output {} is a symbolic link to a missing file",
+                        path.display()
+                    )
+                })?;
+            }
+            let meta = std::fs::metadata(&target)
+                .with_context(|| format!("cannot inspect output {}", path.display()))?;
+            if meta.is_dir() {
+                anyhow::bail!("output {} is a directory", path.display());
+            }
+            if !meta.is_file() {
+                anyhow::bail!(
+                    "output {} exists and is not a regular file: refusing to replace it",
+                    path.display()
+                );
+            }
+            if meta.permissions().readonly() {
+                anyhow::bail!(
+                    "output {} exists and is read-only: choose another file or make it writable",
+                    path.display()
+                );
+            }
+            let canonical = std::fs::canonicalize(&target).unwrap_or_else(|_| target.clone());
+            for input in inputs {
+                if std::fs::canonicalize(input).is_ok_and(|i| i == canonical) {
+                    anyhow::bail!(
+                        "output {} is {}, an input of this run: choose another output",
+                        path.display(),
+                        input.display()
+                    );
+                }
+            }
+        }
+        let dir = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        check_directory(&dir)?;
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".rt-gpu-").suffix(".tmp");
+        // Temporary files are private (0600); an output is an ordinary file, or keeps the
+        // permissions of the file it replaces.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&target).map_or(0o644, |m| m.permissions().mode());
+            builder.permissions(std::fs::Permissions::from_mode(mode & 0o7777));
+        }
+        let tmp = builder
+            .tempfile_in(&dir)
+            .with_context(|| format!("cannot create a file in {}", dir.display()))?;
+        PENDING_FILES
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push(tmp.path().to_path_buf());
+        Ok(PendingOutput {
+            shown,
+            target,
+            tmp: Some(tmp),
+        })
+    }
+
+    /// The destination as the user named it.
+    pub fn path(&self) -> &Path {
+        &self.shown
+    }
+
+    /// Writes `film`'s mean image in the format the destination's extension names.
+    pub fn commit_image(self, film: &Film) -> anyhow::Result<()> {
+        let format = ImageFormat::from_path(&self.shown)?;
+        let bytes = encode_image(format, film)
+            .with_context(|| format!("cannot encode {}", self.shown.display()))?;
+        self.commit(&bytes)
+    }
+
+    /// Writes `bytes` to the temporary file and renames it over the destination.
+    pub fn commit(mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        let mut tmp = self.tmp.take().context("output already written")?;
+        let tmp_path = tmp.path().to_path_buf();
+        let written = tmp
+            .write_all(bytes)
+            .and_then(|_| tmp.as_file().sync_all())
+            .map_err(anyhow::Error::from)
+            .and_then(|_| tmp.persist(&self.target).map_err(|e| e.error.into()));
+        forget_pending(&tmp_path);
+        written.with_context(|| format!("cannot write {}", self.shown.display()))?;
+        Ok(())
+    }
+}
+
+impl Drop for PendingOutput {
+    fn drop(&mut self) {
+        if let Some(tmp) = &self.tmp {
+            forget_pending(tmp.path());
+        }
+    }
+}
+
+fn forget_pending(tmp: &Path) {
+    PENDING_FILES
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .retain(|p| p != tmp);
+}
+
+/// Says what is wrong with `dir` as a place for an output file, if anything.
+fn check_directory(dir: &Path) -> anyhow::Result<()> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    // Name the first ancestor that is in the way.
+    for ancestor in dir.ancestors().collect::<Vec<_>>().into_iter().rev() {
+        if ancestor.as_os_str().is_empty() {
+            continue;
+        }
+        match std::fs::metadata(ancestor) {
+            Ok(m) if m.is_dir() => continue,
+            Ok(_) => anyhow::bail!(
+                "{} is a file, not a directory: no output can go inside it",
+                ancestor.display()
+            ),
+            Err(_) => break,
+        }
+    }
+    anyhow::bail!("output directory {} does not exist", dir.display())
 }

@@ -94,6 +94,11 @@ fn bad_inputs_fail_with_one_line_and_leave_the_output_untouched() {
         "[camera]\nlook_from = [0, 0, 1]\nlook_at = [0, 0, nan]\nvfov = 40\n",
     )
     .expect("write");
+    std::fs::write(
+        dir.path().join("huge.toml"),
+        format!("{SMALL_SCENE}\n[render]\nwidth = 32768\nheight = 32768\n"),
+    )
+    .expect("write");
     let cases: &[(&[&str], &str)] = &[
         (&["no-such-scene"], "neither a built-in scene"),
         (&["missing.toml"], "cannot read scene file missing.toml"),
@@ -112,6 +117,15 @@ fn bad_inputs_fail_with_one_line_and_leave_the_output_untouched() {
         ),
         (&["cornell", "-o", "image.jpg"], ".png, .ppm, .exr or .pfm"),
         (&["cornell", "-o", "no/such/dir/x.png"], "does not exist"),
+        (
+            &["cornell", "-o", "keep.png/x.png"],
+            "keep.png is a file, not a directory",
+        ),
+        (
+            &["cornell", "--backend", "cpu", "--adapter", "x"],
+            "--adapter",
+        ),
+        (&["scenes"], "is a subcommand"),
         (&[], "no scene given"),
     ];
     for (args, words) in cases {
@@ -133,6 +147,11 @@ fn bad_inputs_fail_with_one_line_and_leave_the_output_untouched() {
         let kept = std::fs::read(dir.path().join("keep.png")).expect("still there");
         assert_eq!(kept, b"precious", "{args:?} clobbered the output");
     }
+    // A scene's own size meets the same pixel cap as --size (it once aborted allocating 60 GB).
+    let out = rt_gpu(&["huge.toml", "--spp", "1", "-o", "keep.png"], dir.path());
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("pixels"), "{}", stderr(&out));
+    assert_eq!(stderr(&out).lines().count(), 1, "{}", stderr(&out));
 }
 
 #[cfg(unix)]
@@ -171,7 +190,52 @@ fn print_shader_shows_the_specialised_kernel() {
 #[test]
 fn converge_rejects_bad_options_in_one_line() {
     let dir = tempfile::tempdir().expect("tempdir");
-    for (args, words) in [
+    let pfm = |name: &str, scale: &str, value: f32| {
+        let mut bytes = format!("PF\n4 4\n{scale}\n").into_bytes();
+        for _ in 0..48 {
+            bytes.extend_from_slice(&value.to_le_bytes());
+        }
+        std::fs::write(dir.path().join(name), bytes).expect("write");
+    };
+    pfm("nan.pfm", "-1.0", f32::NAN);
+    pfm("negative.pfm", "-1.0", -0.5);
+    pfm("nan-scale.pfm", "nan", 0.5);
+    let reference = |file: &'static str| -> Vec<&'static str> {
+        vec![
+            "converge",
+            "cornell",
+            "--size",
+            "4x4",
+            "--reference",
+            file,
+            "--backends",
+            "cpu",
+        ]
+    };
+    let owned: Vec<(Vec<&str>, &str)> = vec![
+        (reference("nan.pfm"), "not a finite non-negative radiance"),
+        (
+            reference("negative.pfm"),
+            "not a finite non-negative radiance",
+        ),
+        (reference("nan-scale.pfm"), "not an RGB PFM file"),
+        (
+            vec!["converge", "cornell", "--backends", "cpu,cpu"],
+            "--backends lists cpu twice",
+        ),
+        (
+            vec![
+                "converge",
+                "cornell",
+                "--reference",
+                "x.pfm",
+                "--reference-spp",
+                "8",
+            ],
+            "no effect with --reference",
+        ),
+    ];
+    let listed: [(&[&str], &str); 4] = [
         (
             &[
                 "converge",
@@ -202,7 +266,12 @@ fn converge_rejects_bad_options_in_one_line() {
             &["converge", "cornell", "--backends", "tpu"][..],
             "--backends",
         ),
-    ] {
+    ];
+    let cases = owned
+        .iter()
+        .map(|(args, words)| (args.as_slice(), *words))
+        .chain(listed);
+    for (args, words) in cases {
         let out = rt_gpu(args, dir.path());
         let err = stderr(&out);
         assert!(!out.status.success(), "{args:?} succeeded");
@@ -214,25 +283,271 @@ fn converge_rejects_bad_options_in_one_line() {
     }
 }
 
-/// With no usable adapter (here: only Metal allowed, which Linux lacks) the GPU backend says what
-/// to install and how to render without it.
+/// With no Vulkan driver the GPU backend says what to install and how to render without it;
+/// with WGPU_BACKEND naming a backend that has no adapter (Metal, on Linux), it says so instead.
 #[cfg(target_os = "linux")]
 #[test]
 fn a_missing_gpu_is_one_line_that_says_what_to_do() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
-        .args(["cornell", "--spp", "1", "--size", "8x8"])
-        .env("WGPU_BACKEND", "metal")
-        .current_dir(dir.path())
-        .output()
-        .expect("runs");
-    let err = stderr(&out);
-    assert!(!out.status.success());
+    let run = |env: &[(&str, &str)]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+            .args(["cornell", "--spp", "1", "--size", "8x8"])
+            .envs(env.iter().copied())
+            .current_dir(dir.path())
+            .output()
+            .expect("runs");
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        err
+    };
+    let no_driver = "/nonexistent/icd.json";
+    let err = run(&[
+        ("VK_ICD_FILENAMES", no_driver),
+        ("VK_DRIVER_FILES", no_driver),
+    ]);
     assert!(
         err.contains("no GPU adapter found")
             && err.contains("mesa-vulkan-drivers")
             && err.contains("--backend cpu"),
         "{err}"
     );
+    let err = run(&[("WGPU_BACKEND", "metal")]);
+    let gpu_here = std::env::var_os("RT_GPU_REQUIRE_GPU").is_some();
+    assert!(
+        err.contains("WGPU_BACKEND=metal") || (!gpu_here && err.contains("no GPU adapter found")),
+        "{err}"
+    );
+}
+
+/// Destinations that cannot take the image fail before the render starts (the GPU adapter named
+/// here does not exist, so an error about it means the render was tried first), with one line,
+/// and change nothing on disk.
+#[test]
+fn unwritable_outputs_fail_before_rendering() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = |name: &str| dir.path().join(name);
+    std::fs::create_dir(path("folder.png")).expect("mkdir");
+    std::fs::write(path("locked.png"), b"keep").expect("write");
+    let mut perms = std::fs::metadata(path("locked.png"))
+        .expect("meta")
+        .permissions();
+    perms.set_readonly(true);
+    std::fs::set_permissions(path("locked.png"), perms).expect("chmod");
+    std::fs::write(path("scene.toml"), SMALL_SCENE).expect("write");
+    let long_name = format!("{}.png", "a".repeat(300));
+    let mut cases = vec![
+        ("folder.png", "is a directory"),
+        ("locked.png", "read-only"),
+        (long_name.as_str(), "255"),
+        ("no/such/dir/x.png", "does not exist"),
+    ];
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("scene.toml", path("scene.png")).expect("symlink");
+        cases.push(("scene.png", "an input of this run"));
+        if Path::new("/proc/self").exists() {
+            cases.push(("/proc/x.png", "cannot create a file in /proc"));
+        }
+    }
+    for (output, words) in cases {
+        let out = rt_gpu(
+            &["scene.toml", "--adapter", "no-such-gpu-xyz", "-o", output],
+            dir.path(),
+        );
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{output} succeeded");
+        assert!(
+            err.contains(words),
+            "{output}: {err:?} should mention {words:?}"
+        );
+        assert_eq!(err.lines().count(), 1, "{output}: {err:?}");
+    }
+    assert_eq!(std::fs::read(path("locked.png")).expect("kept"), b"keep");
+    assert_eq!(
+        std::fs::read_to_string(path("scene.toml")).expect("kept"),
+        SMALL_SCENE
+    );
+    assert_no_temporary_files(dir.path());
+}
+
+const SMALL_SCENE: &str = "[camera]\nlook_from = [0, 0, 3]\nlook_at = [0, 0, 0]\nvfov = 40\n\n[materials]\nwhite = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n\n[[object]]\nsphere = { center = [0, 0, 0], radius = 1 }\nmaterial = \"white\"\n";
+
+fn assert_no_temporary_files(dir: &Path) {
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
+        .expect("lists")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "left behind: {leftovers:?}");
+}
+
+/// A symbolic link is written through, as `cp` would: the link stays a link.
+#[cfg(unix)]
+#[test]
+fn a_symlinked_output_stays_a_link() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("real.png"), b"old").expect("write");
+    std::os::unix::fs::symlink("real.png", dir.path().join("link.png")).expect("symlink");
+    let out = rt_gpu(
+        &[
+            "cornell",
+            "--backend",
+            "cpu",
+            "--spp",
+            "1",
+            "--size",
+            "4x4",
+            "-o",
+            "link.png",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let link = std::fs::symlink_metadata(dir.path().join("link.png")).expect("exists");
+    assert!(
+        link.file_type().is_symlink(),
+        "the link was replaced by a file"
+    );
+    let image = std::fs::read(dir.path().join("real.png")).expect("target");
+    assert!(image.starts_with(b"\x89PNG"), "the target was not written");
+}
+
+/// `scenes --export` never replaces a user's files unless told to.
+#[test]
+fn export_refuses_to_overwrite_without_force() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let export = |force: bool| {
+        let mut args = vec!["scenes", "--export", "."];
+        if force {
+            args.push("--force");
+        }
+        rt_gpu(&args, dir.path())
+    };
+    assert!(export(false).status.success());
+    std::fs::write(dir.path().join("cornell.toml"), b"# my edits").expect("write");
+    let out = export(false);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("cornell.toml") && stderr(&out).contains("--force"));
+    assert_eq!(
+        std::fs::read(dir.path().join("cornell.toml")).expect("kept"),
+        b"# my edits"
+    );
+    assert!(export(true).status.success());
+    assert_ne!(
+        std::fs::read(dir.path().join("cornell.toml")).expect("exported"),
+        b"# my edits"
+    );
+}
+
+/// A reader that goes away (`rt-gpu scenes | head -1`) ends the program quietly; a full device
+/// is one line of error; neither panics.
+#[cfg(target_os = "linux")]
+#[test]
+fn closed_pipes_and_full_devices_do_not_panic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for args in [
+        &["scenes"][..],
+        &["cornell", "--print-shader"],
+        &["devices"],
+    ] {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+            .args(args)
+            .current_dir(dir.path())
+            .stdout(writer)
+            .output()
+            .expect("runs");
+        let err = stderr(&out);
+        assert!(
+            !err.contains("panicked") && !err.contains("internal error"),
+            "{args:?}: {err}"
+        );
+        if args[0] != "devices" {
+            assert!(out.status.success(), "{args:?}: {err}");
+        }
+    }
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .expect("/dev/full");
+    let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .arg("scenes")
+        .stdout(full)
+        .output()
+        .expect("runs");
+    let err = stderr(&out);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("No space left") && !err.contains("panicked"),
+        "{err}"
+    );
     assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+/// `bench` fails when a run fails (here every GPU run: no such adapter).
+#[test]
+fn bench_fails_when_a_run_fails() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = rt_gpu(
+        &[
+            "bench",
+            "--adapter",
+            "no-such-gpu-xyz",
+            "--spp",
+            "1",
+            "--size",
+            "4x4",
+        ],
+        dir.path(),
+    );
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("runs failed"), "{}", stderr(&out));
+}
+
+/// SIGTERM (or Ctrl-C) during a render exits non-zero (128 + the signal) and leaves no
+/// temporary file and no partial image.
+#[cfg(unix)]
+#[test]
+fn a_signal_leaves_no_temporary_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("keep.png"), b"precious").expect("write");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args([
+            "cornell",
+            "--backend",
+            "cpu",
+            "--spp",
+            "1000000",
+            "--size",
+            "64x64",
+        ])
+        .args(["-o", "keep.png"])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("starts");
+    // Wait until the output is claimed (its temporary file exists), then signal.
+    let claimed = (0..200).any(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(25));
+        std::fs::read_dir(dir.path())
+            .expect("lists")
+            .filter_map(|e| e.ok())
+            .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+    });
+    assert!(claimed, "no temporary file appeared");
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success());
+    let status = child.wait().expect("exits");
+    assert_eq!(status.code(), Some(128 + 15), "{status:?}");
+    assert_eq!(
+        std::fs::read(dir.path().join("keep.png")).expect("kept"),
+        b"precious"
+    );
+    assert_no_temporary_files(dir.path());
 }

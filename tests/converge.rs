@@ -140,6 +140,28 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
         .filter_map(|e| e.ok())
         .any(|e| e.file_name().to_string_lossy().starts_with("reference-"));
     assert!(cached);
+    let quick = ConvergeOptions {
+        budget: 0.2,
+        ..options.clone()
+    };
+    let again = run(&quick).expect("runs");
+    assert!(
+        again.reference.description.contains("cached, 32768 spp"),
+        "{}",
+        again.reference.description
+    );
+    // Asking for another reference spp renders a new reference rather than reusing the cache.
+    let other = run(&ConvergeOptions {
+        reference_spp: Some(64),
+        ..quick
+    })
+    .expect("runs");
+    assert!(
+        !other.reference.description.contains("cached")
+            && other.reference.description.contains("64 spp"),
+        "{}",
+        other.reference.description
+    );
 
     let csv = report.csv();
     assert!(csv.starts_with("series,spp,seconds,gpu_seconds,rmse,relmse,mae,estimated_rmse\n"));

@@ -8,6 +8,10 @@ pub enum GpuError {
         "no GPU adapter found: install a Vulkan driver (on Debian/Ubuntu `apt-get install mesa-vulkan-drivers libvulkan1` gives lavapipe, a software GPU) or use --backend cpu"
     )]
     NoAdapter,
+    #[error(
+        "no GPU adapter for WGPU_BACKEND={wanted}, though wgpu sees {available} on other backends: unset WGPU_BACKEND or name one of those backends (or use --backend cpu)"
+    )]
+    NoAdapterForBackend { wanted: String, available: String },
     #[error("no GPU adapter matches '{wanted}' (available: {available}); see `rt-gpu devices`")]
     NoSuchAdapter { wanted: String, available: String },
     #[error("cannot open the GPU device {adapter}: {message}")]
@@ -39,6 +43,31 @@ fn instance() -> wgpu::Instance {
         desc.backends = wgpu::Backends::PRIMARY;
     }
     wgpu::Instance::new(desc)
+}
+
+/// Why no adapter was found: none at all, or none on the backends `WGPU_BACKEND` allows.
+pub fn no_adapter_error() -> GpuError {
+    let Some(wanted) = std::env::var_os("WGPU_BACKEND") else {
+        return GpuError::NoAdapter;
+    };
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::all();
+    let everywhere =
+        pollster::block_on(wgpu::Instance::new(desc).enumerate_adapters(wgpu::Backends::all()));
+    if everywhere.is_empty() {
+        return GpuError::NoAdapter;
+    }
+    let available: Vec<String> = everywhere
+        .iter()
+        .map(|a| {
+            let info = a.get_info();
+            format!("{} ({:?})", info.name, info.backend).to_lowercase()
+        })
+        .collect();
+    GpuError::NoAdapterForBackend {
+        wanted: wanted.to_string_lossy().into_owned(),
+        available: available.join(", "),
+    }
 }
 
 /// Every adapter wgpu can see.
@@ -83,7 +112,7 @@ impl GpuContext {
                 };
                 request(false)
                     .or_else(|_| request(true))
-                    .map_err(|_| GpuError::NoAdapter)?
+                    .map_err(|_| no_adapter_error())?
             }
         };
         let info = adapter.get_info();

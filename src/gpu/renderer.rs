@@ -7,6 +7,7 @@ use crate::film::{Film, PixelStats};
 use crate::render::RenderOptions;
 use crate::scene::flat::FlatScene;
 use glam::DVec3;
+use std::io::Write;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
@@ -306,7 +307,7 @@ impl GpuRenderer {
         let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
         if is_llvmpipe && per_sample > LOOP_ITERATION_BUDGET {
             return Err(GpuError::TooLarge(format!(
-                "this scene needs up to {per_sample} loop iterations per sample, more than lavapipe allows (65535): use fewer primitives or a lower --max-depth, or --backend cpu"
+                "this scene needs up to {per_sample} loop iterations per sample, more than the {LOOP_ITERATION_BUDGET} rt-gpu allows one invocation on lavapipe (which silently ends it at 65535): use fewer primitives or a lower --max-depth, or --backend cpu"
             )));
         }
         let max_slice = (LOOP_ITERATION_BUDGET / per_sample).clamp(1, u32::MAX as u64) as u32;
@@ -420,7 +421,7 @@ impl GpuRenderer {
                     Some(t) => {
                         let s = t.read(self)?;
                         gpu_seconds += s;
-                        s
+                        if s > 0.0 { s } else { wall }
                     }
                     None => wall,
                 };
@@ -432,7 +433,8 @@ impl GpuRenderer {
                 );
                 if trace {
                     // RT_GPU_TRACE=1: one line per dispatch, for tuning the sizing.
-                    eprintln!(
+                    let _ = writeln!(
+                        std::io::stderr().lock(),
                         "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4} wall {wall:.4}"
                     );
                 }
@@ -469,7 +471,8 @@ impl GpuRenderer {
             }
             y0 += rows;
         }
-        timings.gpu_seconds = timer.is_some().then_some(gpu_seconds);
+        // Some backends (OpenGL) accept timestamp queries and return zeros.
+        timings.gpu_seconds = (timer.is_some() && gpu_seconds > 0.0).then_some(gpu_seconds);
         Ok((film, timings))
     }
 

@@ -14,8 +14,7 @@ use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
 
-/// Largest image side a scene or the CLI may ask for.
-pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
+pub use crate::film::MAX_IMAGE_SIDE;
 /// Longest path a scene or the CLI may ask for.
 pub const MAX_DEPTH_LIMIT: u32 = 10_000;
 

@@ -146,6 +146,7 @@ impl FlatScene {
     /// Flattens `scene` for an image of `width` x `height` pixels.
     pub fn new(scene: &Scene, width: u32, height: u32) -> Result<Self, SceneError> {
         scene.validate()?;
+        crate::film::check_image_size(width, height).map_err(SceneError::Invalid)?;
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
         // Only the materials some object uses, numbered in order of first use: a scene may
