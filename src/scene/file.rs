@@ -30,22 +30,56 @@ pub struct SceneFileError {
 
 /// Reads and checks the scene file at `path`.
 pub fn load(path: &Path) -> anyhow::Result<Scene> {
-    let text = std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)
         .map_err(|e| anyhow::anyhow!("cannot read scene file {}: {e}", path.display()))?;
+    let file = path.display().to_string();
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let (line, column) = line_and_column(&bytes[..e.valid_up_to()]);
+        SceneFileError {
+            file: file.clone(),
+            line,
+            column,
+            message: "the file is not valid UTF-8 text here".into(),
+        }
+    })?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    Ok(parse(&text, &path.display().to_string(), &name)?)
+    Ok(parse(text, &file, &name)?)
+}
+
+/// 1-based line and column (in characters) of the end of `before`.
+fn line_and_column(before: &[u8]) -> (usize, usize) {
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    let column = String::from_utf8_lossy(&before[start..]).chars().count() + 1;
+    (line, column)
+}
+
+/// Most characters of a user's text (a name, a line) quoted in a message.
+const MAX_QUOTED_CHARS: usize = 60;
+
+/// `text` as quoted in a message: cut short if it is long.
+fn quoted(text: &str) -> String {
+    if text.chars().count() <= MAX_QUOTED_CHARS {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(MAX_QUOTED_CHARS).collect();
+    format!("{head}... ({} characters)", text.chars().count())
 }
 
 /// Parses scene-file text; `file` names it in errors.
 pub fn parse(text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError> {
     let located = |span: Option<Range<usize>>, message: String| {
-        let offset = span.map(|s| s.start).unwrap_or(0).min(text.len());
-        let before = &text[..offset];
-        let line = before.matches('\n').count() + 1;
-        let column = offset - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+        let mut offset = span.map(|s| s.start).unwrap_or(0).min(text.len());
+        while !text.is_char_boundary(offset) {
+            offset -= 1;
+        }
+        let (line, column) = line_and_column(&text.as_bytes()[..offset]);
         SceneFileError {
             file: file.to_string(),
             line,
@@ -53,9 +87,11 @@ pub fn parse(text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError
             message,
         }
     };
-    let doc: SceneDoc = toml::from_str(text).map_err(|e| {
-        let source_line = e
-            .span()
+    // Where a parser error is, with the line it is in when that helps.
+    let toml_error = |e: toml::de::Error, base: usize| {
+        let span = e.span().map(|s| s.start + base..s.end + base);
+        let source_line = span
+            .as_ref()
             .and_then(|s| {
                 text[..s.start.min(text.len())]
                     .rfind('\n')
@@ -65,11 +101,37 @@ pub fn parse(text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError
             .and_then(|start| text[start..].lines().next())
             .map(str::trim)
             .filter(|l| !l.is_empty())
-            .map(|l| format!(" (in `{l}`)"))
+            .map(|l| format!(" (in `{}`)", quoted(l)))
             .unwrap_or_default();
-        let message = e.message().trim().replace('\n', " ");
-        located(e.span(), format!("{message}{source_line}"))
-    })?;
+        let message = quoted_message(e.message());
+        located(span, format!("{message}{source_line}"))
+    };
+    let doc = match object_chunks(text) {
+        Some((header_end, starts)) => {
+            // Large scenes are mostly [[object]] tables: parsed one by one, a 50 MB file
+            // takes a fraction of the time and memory the whole document's parse tree needs.
+            let mut doc: SceneDoc =
+                toml::from_str(&text[..header_end]).map_err(|e| toml_error(e, 0))?;
+            if doc.objects.is_empty() {
+                for (i, &start) in starts.iter().enumerate() {
+                    let end = starts.get(i + 1).copied().unwrap_or(text.len());
+                    let part: ObjectsOnly =
+                        toml::from_str(&text[start..end]).map_err(|e| toml_error(e, start))?;
+                    doc.objects.extend(part.objects.into_iter().map(|o| {
+                        let object = shifted(o, start);
+                        let span = object.span();
+                        let mut object = object.into_inner();
+                        object.translate = object.translate.map(|t| shifted(t, start));
+                        Spanned::new(span, object)
+                    }));
+                }
+                doc
+            } else {
+                toml::from_str(text).map_err(|e| toml_error(e, 0))?
+            }
+        }
+        None => toml::from_str(text).map_err(|e| toml_error(e, 0))?,
+    };
     doc.into_scene(name)
         .map_err(|(span, message)| located(span, message))
 }
@@ -81,6 +143,61 @@ pub fn to_toml(scene: &Scene) -> String {
     format!(
         "# rt-gpu scene \"{}\" (format: scenes/README.md)\n\n{body}",
         scene.name
+    )
+}
+
+/// Where each top-level `[[object]]` table starts, and where the text before the first one
+/// ends, when the text can be cut there into documents that parse to the same tables: no
+/// multi-line strings (which could hold such a line), and after the first object only object
+/// tables and their sub-tables. `None` means: parse the text whole.
+fn object_chunks(text: &str) -> Option<(usize, Vec<usize>)> {
+    if text.contains("'''") || text.contains("\"\"\"") {
+        return None;
+    }
+    let mut starts = Vec::new();
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        if trimmed.starts_with('[') {
+            let is_object = trimmed.strip_prefix("[[object]]").is_some_and(|rest| {
+                rest.trim_start().is_empty() || rest.trim_start().starts_with('#')
+            });
+            if is_object {
+                starts.push(offset);
+            } else if !starts.is_empty() && !trimmed.starts_with("[object.") {
+                return None;
+            }
+        }
+        offset += line.len();
+    }
+    let header_end = *starts.first()?;
+    Some((header_end, starts))
+}
+
+/// `value` with its span moved `by` bytes: from a chunk of the text to the whole text.
+fn shifted<T>(value: Spanned<T>, by: usize) -> Spanned<T> {
+    let span = value.span();
+    Spanned::new(span.start + by..span.end + by, value.into_inner())
+}
+
+/// A run of `[[object]]` tables on their own.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectsOnly {
+    #[serde(default, rename = "object")]
+    objects: Vec<Spanned<ObjectDoc>>,
+}
+
+/// A parser message on one line, with any long quoted text in it cut short.
+fn quoted_message(message: &str) -> String {
+    let flat = message.trim().replace('\n', " ");
+    if flat.chars().count() <= 4 * MAX_QUOTED_CHARS {
+        return flat;
+    }
+    quoted(&flat).replacen(
+        &format!("... ({} characters)", flat.chars().count()),
+        "...",
+        1,
     )
 }
 
@@ -174,7 +291,7 @@ struct SceneDoc {
     render: Option<RenderDoc>,
     camera: Spanned<CameraDoc>,
     #[serde(default)]
-    materials: BTreeMap<String, MaterialDoc>,
+    materials: BTreeMap<String, Spanned<MaterialDoc>>,
     #[serde(default, rename = "object")]
     objects: Vec<Spanned<ObjectDoc>>,
 }
@@ -182,18 +299,38 @@ struct SceneDoc {
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RenderDoc {
-    width: Option<u32>,
-    height: Option<u32>,
-    max_depth: Option<u32>,
+    width: Option<Spanned<u32>>,
+    height: Option<Spanned<u32>>,
+    max_depth: Option<Spanned<u32>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     background: Option<BackgroundDoc>,
 }
 
-#[derive(Deserialize, Serialize)]
+#[derive(Serialize)]
 #[serde(untagged)]
 enum BackgroundDoc {
     Colour(Colour),
     Named(String),
+}
+
+/// A colour `[r, g, b]` or `"sky"`, with one message for anything else (serde's untagged
+/// enums say only that nothing matched).
+impl<'de> Deserialize<'de> for BackgroundDoc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let expected = "background must be a colour [r, g, b] or \"sky\"";
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(name) if name == "sky" => Ok(BackgroundDoc::Named(name)),
+            toml::Value::String(name) => Err(D::Error::custom(format!(
+                "{expected}, got \"{}\"",
+                quoted(&name)
+            ))),
+            value @ toml::Value::Array(_) => Colour::deserialize(value)
+                .map(BackgroundDoc::Colour)
+                .map_err(|e| D::Error::custom(format!("{expected}: {}", e.message()))),
+            other => Err(D::Error::custom(format!("{expected}, got {other}"))),
+        }
+    }
 }
 
 #[derive(Deserialize, Serialize)]
@@ -233,6 +370,7 @@ enum MaterialDoc {
     },
 }
 
+/// (Its `Spanned` fields are moved to whole-text positions in `parse`: add new ones there.)
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct ObjectDoc {
@@ -246,7 +384,7 @@ struct ObjectDoc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     rotate_y: Option<Num>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    translate: Option<V3>,
+    translate: Option<Spanned<V3>>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -275,20 +413,40 @@ type Located = (Option<Range<usize>>, String);
 
 impl SceneDoc {
     fn into_scene(self, name: &str) -> Result<Scene, Located> {
-        let defaults = RenderDefaults {
-            width: self.render.as_ref().and_then(|r| r.width).unwrap_or(512),
-            height: self.render.as_ref().and_then(|r| r.height).unwrap_or(512),
-            max_depth: self.render.as_ref().and_then(|r| r.max_depth).unwrap_or(10),
-        };
-        for (what, value, max) in [
-            ("render.width", defaults.width, MAX_IMAGE_SIDE),
-            ("render.height", defaults.height, MAX_IMAGE_SIDE),
-            ("render.max_depth", defaults.max_depth, MAX_DEPTH_LIMIT),
-        ] {
+        let render = self.render.as_ref();
+        let setting = |field: Option<&Spanned<u32>>, what: &str, default: u32, max: u32| {
+            let Some(field) = field else {
+                return Ok(default);
+            };
+            let value = *field.get_ref();
             if value == 0 || value > max {
-                return Err((None, format!("{what} must be in 1..={max}, got {value}")));
+                return Err((
+                    Some(field.span()),
+                    format!("{what} must be in 1..={max}, got {value}"),
+                ));
             }
-        }
+            Ok(value)
+        };
+        let defaults = RenderDefaults {
+            width: setting(
+                render.and_then(|r| r.width.as_ref()),
+                "render.width",
+                512,
+                MAX_IMAGE_SIDE,
+            )?,
+            height: setting(
+                render.and_then(|r| r.height.as_ref()),
+                "render.height",
+                512,
+                MAX_IMAGE_SIDE,
+            )?,
+            max_depth: setting(
+                render.and_then(|r| r.max_depth.as_ref()),
+                "render.max_depth",
+                10,
+                MAX_DEPTH_LIMIT,
+            )?,
+        };
         let background = match self.render.and_then(|r| r.background) {
             None => Background::Constant(Vec3::ZERO),
             Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
@@ -296,7 +454,10 @@ impl SceneDoc {
             Some(BackgroundDoc::Named(n)) => {
                 return Err((
                     None,
-                    format!("background must be a colour [r, g, b] or \"sky\", got \"{n}\""),
+                    format!(
+                        "background must be a colour [r, g, b] or \"sky\", got \"{}\"",
+                        quoted(&n)
+                    ),
                 ));
             }
         };
@@ -319,7 +480,10 @@ impl SceneDoc {
         let mut materials = Vec::new();
         let mut material_names = Vec::new();
         for (name, doc) in self.materials {
-            let material = match doc {
+            // Material tables are internally tagged, where serde cannot track spans of their
+            // fields: errors point at the material.
+            let span = Some(doc.span());
+            let material = match doc.into_inner() {
                 MaterialDoc::Lambertian { albedo, emission } => Material::Lambertian {
                     albedo: albedo.0.vec(),
                     emission: emission.map(|e| e.0.vec()).unwrap_or(Vec3::ZERO),
@@ -328,8 +492,11 @@ impl SceneDoc {
                     let fuzz = fuzz.map(|f| f.0).unwrap_or(0.0);
                     if !(0.0..=1.0).contains(&fuzz) {
                         return Err((
-                            None,
-                            format!("material \"{name}\": fuzz must be in [0, 1], got {fuzz}"),
+                            span,
+                            format!(
+                                "material \"{}\": fuzz must be in [0, 1], got {fuzz}",
+                                quoted(&name)
+                            ),
                         ));
                     }
                     Material::Metal {
@@ -338,13 +505,14 @@ impl SceneDoc {
                     }
                 }
                 MaterialDoc::Dielectric { ior } => {
-                    if !(ior.0 > 0.0) {
+                    let ior = ior.0;
+                    if !(ior > 0.0) {
                         return Err((
-                            None,
-                            format!("material \"{name}\": ior must be > 0, got {}", ior.0),
+                            span,
+                            format!("material \"{}\": ior must be > 0, got {ior}", quoted(&name)),
                         ));
                     }
-                    Material::Dielectric { ior: ior.0 }
+                    Material::Dielectric { ior }
                 }
                 MaterialDoc::Light {
                     radiance,
@@ -394,22 +562,46 @@ impl SceneDoc {
             };
             shape.validate().map_err(|e| (span.clone(), e))?;
             let Some(&material) = material_index.get(&o.material) else {
-                let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
+                let known: Vec<String> =
+                    material_index.keys().take(20).map(|k| quoted(k)).collect();
+                let more = material_index.len().saturating_sub(known.len());
+                let more = if more > 0 {
+                    format!(" and {more} more")
+                } else {
+                    String::new()
+                };
                 return Err((
                     span,
                     format!(
-                        "unknown material \"{}\" (defined: {})",
-                        o.material,
+                        "unknown material \"{}\" (defined: {}{more})",
+                        quoted(&o.material),
                         known.join(", ")
                     ),
                 ));
+            };
+            let translate = match o.translate {
+                None => Vec3::ZERO,
+                Some(t) => {
+                    let span = t.span();
+                    let v = t.into_inner().vec();
+                    if v.abs().max_element() > super::MAX_EXTENT {
+                        return Err((
+                            Some(span),
+                            format!(
+                                "translate {v} reaches beyond {:e} from the origin: f32 geometry there is too coarse",
+                                super::MAX_EXTENT
+                            ),
+                        ));
+                    }
+                    v
+                }
             };
             objects.push(Object {
                 shape,
                 material,
                 transform: Transform {
                     rotate_y_degrees: o.rotate_y.map(|r| r.0).unwrap_or(0.0),
-                    translate: o.translate.map(V3::vec).unwrap_or(Vec3::ZERO),
+                    translate,
                 },
             });
         }
@@ -453,7 +645,7 @@ impl SceneDoc {
                         two_sided,
                     },
                 };
-                (name.clone(), doc)
+                (name.clone(), Spanned::new(0..0, doc))
             })
             .collect();
         let objects = scene
@@ -468,7 +660,7 @@ impl SceneDoc {
                     rotate_y: (o.transform.rotate_y_degrees != 0.0)
                         .then_some(Num(o.transform.rotate_y_degrees)),
                     translate: (o.transform.translate != Vec3::ZERO)
-                        .then(|| V3::from(o.transform.translate)),
+                        .then(|| Spanned::new(0..0, V3::from(o.transform.translate))),
                 };
                 match o.shape {
                     Shape::Sphere { center, radius } => {
@@ -497,9 +689,9 @@ impl SceneDoc {
         let c = &scene.camera;
         SceneDoc {
             render: Some(RenderDoc {
-                width: Some(scene.defaults.width),
-                height: Some(scene.defaults.height),
-                max_depth: Some(scene.defaults.max_depth),
+                width: Some(Spanned::new(0..0, scene.defaults.width)),
+                height: Some(Spanned::new(0..0, scene.defaults.height)),
+                max_depth: Some(Spanned::new(0..0, scene.defaults.max_depth)),
                 background: Some(match scene.background {
                     Background::Constant(c) => BackgroundDoc::Colour(Colour(V3::from(c))),
                     Background::Sky => BackgroundDoc::Named("sky".into()),
