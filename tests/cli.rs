@@ -469,13 +469,15 @@ fn closed_pipes_and_full_devices_do_not_panic() {
             assert!(out.status.success(), "{args:?}: {err}");
         }
     }
-    let full = std::fs::OpenOptions::new()
-        .write(true)
-        .open("/dev/full")
-        .expect("/dev/full");
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full")
+    };
     let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
         .arg("scenes")
-        .stdout(full)
+        .stdout(full())
         .output()
         .expect("runs");
     let err = stderr(&out);
@@ -485,6 +487,25 @@ fn closed_pipes_and_full_devices_do_not_panic() {
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
+    // A render whose stderr (progress, summary) cannot be written still writes its image.
+    let status = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args([
+            "cornell",
+            "--backend",
+            "cpu",
+            "--spp",
+            "1",
+            "--size",
+            "4x4",
+            "-o",
+            "x.png",
+        ])
+        .current_dir(dir.path())
+        .stderr(full())
+        .status()
+        .expect("runs");
+    assert!(status.success(), "{status:?}");
+    assert!(dir.path().join("x.png").exists());
 }
 
 /// `bench` fails when a run fails (here every GPU run: no such adapter).

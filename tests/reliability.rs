@@ -79,6 +79,32 @@ fn thousands_of_materials_render_right_on_the_gpu() {
     assert!(film.image_mean().min_element() > 0.05, "the image is dark");
 }
 
+/// A scene too long for lavapipe's loop budget is refused before rendering, with the limit
+/// rt-gpu applies (60 000) and lavapipe's own (65 535) both named (it once said 65 535 only).
+#[test]
+fn the_loop_budget_message_names_both_limits() {
+    let Some(gpu) = renderer() else { return };
+    if !gpu.ctx.info.name.contains("llvmpipe") {
+        return;
+    }
+    let mut scene = builtin("spheres").expect("built-in");
+    let template = scene.objects[0].clone();
+    scene.objects.extend((0..2000).map(|i| {
+        let mut o = template.clone();
+        o.transform.translate = Vec3::new(i as f32 * 3.0, -500.0, 0.0);
+        o
+    }));
+    let opts = rt_gpu::render::RenderOptions::new(4, 4, 1, 100);
+    let flat = FlatScene::new(&scene, 4, 4).expect("valid");
+    let features = Features::of(&flat).with_integrator(&flat, opts.integrator);
+    let kernel = gpu.kernel(&flat, features, "render").expect("compiles");
+    let err = match gpu.render(&kernel, &flat, &opts, &Tuning::default(), &|_| {}) {
+        Ok(_) => panic!("rendered past the loop budget"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("60000") && err.contains("65535"), "{err}");
+}
+
 /// `up` is a direction: its length does not matter (1e20 once overflowed to a zero frame, so
 /// every pixel traced one ray), and extreme focus distances and apertures are refused.
 #[test]
