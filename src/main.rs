@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_gpu::film::{check_image_size, check_memory};
 use rt_gpu::gpu::list_adapters;
-use rt_gpu::output::{ImageFormat, PendingOutput};
+use rt_gpu::output::{ImageFormat, PendingOutput, Transfer};
 use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
 use rt_gpu::scene::file::MAX_DEPTH_LIMIT;
@@ -173,10 +173,14 @@ struct RenderArgs {
     /// Run the general everything-enabled GPU kernel instead of the scene's specialised one.
     #[arg(long, hide = true)]
     unspecialised: bool,
-    /// Output image; the extension picks the format: .png and .ppm (8-bit, gamma 2), .exr and
-    /// .pfm (linear radiance) [default: <scene>.png].
+    /// Output image; the extension picks the format: .png (8-bit sRGB) and .ppm (8-bit, gamma 2,
+    /// as the original project), .exr and .pfm (linear radiance) [default: <scene>.png].
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
+    /// How .png and .ppm encode light: `srgb`, or a gamma such as 2 (the original project's
+    /// look) [default: srgb for .png, 2 for .ppm].
+    #[arg(long, value_name = "srgb|G", value_parser = Transfer::parse)]
+    gamma: Option<Transfer>,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -478,9 +482,8 @@ fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
     }
     for (name, about) in BUILTINS {
         say!("{name:<14} {about}")?;
-        if let (Some(dir), Some(scene)) = (export, builtin(name)) {
+        if let (Some(dir), Some(text)) = (export, rt_gpu::scene::builtin::source(name)) {
             let path = dir.join(format!("{name}.toml"));
-            let text = file::to_toml(&scene);
             rt_gpu::output::write_atomically(&path, |out| Ok(out.write_all(text.as_bytes())?))?;
         }
     }
@@ -557,7 +560,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
 
     let (rendered, seconds) = timed_render(args.backend, &gpu, &flat, &opts)?;
     let film = &rendered.film;
-    pending.commit_image(film)?;
+    pending.commit_image(film, args.gamma)?;
 
     let samples = width as f64 * height as f64 * opts.spp as f64;
     let mean = film.image_mean();

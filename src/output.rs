@@ -10,7 +10,7 @@ use std::sync::Mutex;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
-    /// 8-bit, gamma 2.
+    /// 8-bit, sRGB by default.
     Png,
     /// ASCII P3, gamma 2, as the original project wrote.
     Ppm,
@@ -39,29 +39,79 @@ impl ImageFormat {
     }
 }
 
-/// Gamma 2 and 8 bits, as the original: 256 * clamp(sqrt(c), 0, 0.999).
-pub fn to_srgb8(linear: f32) -> u8 {
-    let c = if linear.is_finite() {
-        linear.max(0.0)
-    } else {
-        0.0
-    };
-    (256.0 * c.sqrt().clamp(0.0, 0.999)) as u8
+/// How linear radiance becomes 8-bit values in PNG and PPM files.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transfer {
+    /// The sRGB curve, which image viewers assume for PNG.
+    Srgb,
+    /// `c^(1/g)`, as 256 * clamp(c^(1/g), 0, 0.999): the original project wrote gamma 2.
+    Gamma(f32),
 }
 
-/// Writes `film`'s mean image to `path` atomically, in the format its extension names.
+impl Transfer {
+    /// What a format's readers expect: sRGB for PNG, gamma 2 for PPM (as the original wrote).
+    pub fn default_for(format: ImageFormat) -> Self {
+        match format {
+            ImageFormat::Ppm => Transfer::Gamma(2.0),
+            _ => Transfer::Srgb,
+        }
+    }
+
+    /// Parses `srgb` or a gamma such as `2` or `2.2`.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        if text.eq_ignore_ascii_case("srgb") {
+            return Ok(Transfer::Srgb);
+        }
+        match text.parse::<f32>() {
+            Ok(g) if (0.1..=10.0).contains(&g) => Ok(Transfer::Gamma(g)),
+            _ => Err(format!(
+                "expected `srgb` or a gamma in [0.1, 10] such as 2, got '{text}'"
+            )),
+        }
+    }
+
+    /// One linear value as 8 bits; negative and non-finite values are black.
+    pub fn encode(self, linear: f32) -> u8 {
+        let c = if linear.is_finite() {
+            linear.max(0.0)
+        } else {
+            0.0
+        };
+        match self {
+            Transfer::Srgb => {
+                let v = if c <= 0.003_130_8 {
+                    12.92 * c
+                } else {
+                    1.055 * c.powf(1.0 / 2.4) - 0.055
+                };
+                (255.0 * v.clamp(0.0, 1.0)).round() as u8
+            }
+            // sqrt, not powf(0.5): bit-for-bit the original's values.
+            Transfer::Gamma(2.0) => (256.0 * c.sqrt().clamp(0.0, 0.999)) as u8,
+            Transfer::Gamma(g) => (256.0 * c.powf(1.0 / g).clamp(0.0, 0.999)) as u8,
+        }
+    }
+}
+
+/// Writes `film`'s mean image to `path` atomically, in the format its extension names, with
+/// that format's default transfer curve.
 pub fn write_image(path: &Path, film: &Film) -> anyhow::Result<()> {
-    PendingOutput::claim(path, &[])?.commit_image(film)
+    PendingOutput::claim(path, &[])?.commit_image(film, None)
 }
 
-/// `film`'s mean image encoded in `format`.
-pub fn encode_image(format: ImageFormat, film: &Film) -> anyhow::Result<Vec<u8>> {
+/// `film`'s mean image encoded in `format`; 8-bit formats use `transfer`.
+pub fn encode_image(
+    format: ImageFormat,
+    film: &Film,
+    transfer: Transfer,
+) -> anyhow::Result<Vec<u8>> {
+    let to_8bit = |c: f32| transfer.encode(c);
     let rgb = film.mean_rgb();
     let (w, h) = (film.width, film.height);
     let mut out = std::io::Cursor::new(Vec::new());
     match format {
         ImageFormat::Png => {
-            let bytes: Vec<u8> = rgb.iter().flatten().map(|&c| to_srgb8(c)).collect();
+            let bytes: Vec<u8> = rgb.iter().flatten().map(|&c| to_8bit(c)).collect();
             let img = image::RgbImage::from_raw(w, h, bytes).context("image buffer size")?;
             img.write_to(&mut out, image::ImageFormat::Png)?;
         }
@@ -73,9 +123,9 @@ pub fn encode_image(format: ImageFormat, film: &Film) -> anyhow::Result<Vec<u8>>
                     writeln!(
                         text,
                         "{} {} {}",
-                        to_srgb8(px[0]),
-                        to_srgb8(px[1]),
-                        to_srgb8(px[2])
+                        to_8bit(px[0]),
+                        to_8bit(px[1]),
+                        to_8bit(px[2])
                     )?;
                 }
             }
@@ -277,10 +327,12 @@ impl PendingOutput {
         &self.shown
     }
 
-    /// Writes `film`'s mean image in the format the destination's extension names.
-    pub fn commit_image(self, film: &Film) -> anyhow::Result<()> {
+    /// Writes `film`'s mean image in the format the destination's extension names, 8-bit
+    /// formats with `transfer` [default: the format's own].
+    pub fn commit_image(self, film: &Film, transfer: Option<Transfer>) -> anyhow::Result<()> {
         let format = ImageFormat::from_path(&self.shown)?;
-        let bytes = encode_image(format, film)
+        let transfer = transfer.unwrap_or(Transfer::default_for(format));
+        let bytes = encode_image(format, film, transfer)
             .with_context(|| format!("cannot encode {}", self.shown.display()))?;
         self.commit(&bytes)
     }

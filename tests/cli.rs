@@ -69,6 +69,53 @@ fn renders_each_format_with_a_summary_line() {
     assert!(leftovers.is_empty());
 }
 
+/// 8-bit outputs: PNG uses the sRGB curve viewers assume, PPM gamma 2 as the original project
+/// did, and `--gamma` chooses (a grey background of radiance 0.2: sRGB 124, gamma 2 114).
+#[test]
+fn png_is_srgb_and_gamma_2_on_request() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let grey = "[render]\nbackground = [0.2, 0.2, 0.2]\n[camera]\nlook_from = [0, 0, 1]\nlook_at = [0, 0, 0]\nvfov = 40\n";
+    std::fs::write(dir.path().join("grey.toml"), grey).expect("write");
+    let value = |args: &[&str], file: &str| {
+        let all: Vec<&str> = [
+            "grey.toml",
+            "--backend",
+            "cpu",
+            "--spp",
+            "1",
+            "--size",
+            "2x2",
+            "-o",
+            file,
+        ]
+        .into_iter()
+        .chain(args.iter().copied())
+        .collect();
+        let out = rt_gpu(&all, dir.path());
+        assert!(out.status.success(), "{}", stderr(&out));
+        if file.ends_with(".png") {
+            image::open(dir.path().join(file))
+                .expect("png")
+                .into_rgb8()
+                .get_pixel(0, 0)
+                .0[0]
+        } else {
+            let text = std::fs::read_to_string(dir.path().join(file)).expect("ppm");
+            text.split_whitespace()
+                .nth(4)
+                .expect("a value")
+                .parse()
+                .expect("a number")
+        }
+    };
+    assert_eq!(value(&[], "a.png"), 124);
+    assert_eq!(value(&["--gamma", "2"], "b.png"), 114);
+    assert_eq!(value(&[], "c.ppm"), 114);
+    assert_eq!(value(&["--gamma", "srgb"], "d.ppm"), 124);
+    let out = rt_gpu(&["grey.toml", "--gamma", "bright"], dir.path());
+    assert!(!out.status.success() && stderr(&out).contains("srgb"));
+}
+
 #[test]
 fn scenes_lists_builtins() {
     let dir = tempfile::tempdir().expect("tempdir");

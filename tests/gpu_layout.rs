@@ -5,6 +5,7 @@ use rt_gpu::gpu::layout::{GpuFirstBounce, GpuLight, GpuMaterial, GpuParams, GpuQ
 use rt_gpu::gpu::shader::{Features, compose, validate};
 use rt_gpu::render::Integrator;
 use std::mem::{offset_of, size_of};
+use wgpu::naga;
 
 fn all_features() -> Features {
     Features {

@@ -380,7 +380,10 @@ fn preprocess(source: &str, features: &Features) -> Result<String, String> {
 }
 
 /// Parses and validates WGSL with naga, as wgpu will; the error is one line.
-pub fn validate(source: &str) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
+pub fn validate(
+    source: &str,
+) -> Result<(wgpu::naga::Module, wgpu::naga::valid::ModuleInfo), String> {
+    use wgpu::naga;
     let module = naga::front::wgsl::parse_str(source).map_err(|e| {
         format!(
             "WGSL parse error: {}",

@@ -8,10 +8,6 @@ use rt_gpu::scene::Scene;
 use rt_gpu::scene::flat::FlatScene;
 
 pub fn renderer() -> Option<GpuRenderer> {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // Quiets Mesa's start-up complaint; tests run no concurrent environment readers here.
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
     match GpuContext::new(None) {
         Ok(ctx) => Some(GpuRenderer::new(ctx)),
         Err(e) if std::env::var_os("RT_GPU_REQUIRE_GPU").is_some() => {
