@@ -3,9 +3,6 @@
 // light (a path of one more segment, so only while that stays within max_depth), and light
 // found both ways is weighted by the power heuristic.
 
-// Roulette keeps a path with the probability of its largest throughput component, capped here.
-const MAX_SURVIVAL: f32 = 0.95;
-
 //#if NEE
 // Light reaching a lambertian hit from one light sample, times cos / pi and the MIS weight.
 fn direct_light(hit: Hit, u0: f32, u1: f32, u2: f32) -> vec3f {

@@ -131,16 +131,13 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     return true;
 }
 
-// Relative bound on a hit point's error: eight roundings of the coordinates it came from.
-const POINT_ERROR: f32 = 8.0 * 1.1920929e-7;
-
 // Moves a ray origin off a surface by a few units in the last place along n (Ray Tracing Gems,
 // ch. 6); callers first move it by the point's error bound (see leave).
 fn offset_component(p: f32, n: f32) -> f32 {
-    if abs(p) < 1.0 / 32.0 {
-        return p + (1.0 / 4294967296.0) * n;
+    if abs(p) < OFFSET_NEAR_ORIGIN {
+        return p + OFFSET_FLOAT_SCALE * n;
     }
-    var of_i = i32(32.0 * n);
+    var of_i = i32(OFFSET_INT_SCALE * n);
     if p < 0.0 {
         of_i = -of_i;
     }

@@ -17,7 +17,7 @@ fn in_tile(gid: vec3u) -> bool {
     return gid.x < params.tile_size.x && gid.y < params.tile_size.y;
 }
 
-@compute @workgroup_size(8, 8, 1)
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn render(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
         return;
@@ -60,15 +60,6 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
 
 //#if DEBUG
 // The first bounce of one sample per pixel, for comparing paths with the CPU reference.
-struct FirstBounce {
-    point: vec3f,
-    primitive: u32,
-    normal: vec3f,
-    hit: u32,
-    dir: vec3f,       // the scattered direction
-    scattered: u32,
-}
-
 @group(0) @binding(5) var<storage, read_write> bounces: array<FirstBounce>;
 
 // The closest hit of `ray` as a FirstBounce (not yet scattered), and the hit itself.
@@ -83,7 +74,7 @@ fn trace_debug(ray: Ray, hit: ptr<function, Hit>) -> FirstBounce {
     return out;
 }
 
-@compute @workgroup_size(8, 8, 1)
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
         return;
@@ -106,7 +97,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
 
 // Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:
 // origin, dir: direction) and its hit on output (dir is kept).
-@compute @workgroup_size(8, 8, 1)
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
         return;

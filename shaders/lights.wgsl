@@ -2,9 +2,6 @@
 // the nee integrator and scenes with lights.
 
 //#if NEE
-// Quad points seen this close to edge-on are not light-sampled; BSDF sampling covers them.
-const MIN_LIGHT_COSINE: f32 = 1e-7;
-
 //#if INLINE_SCENE
 // pick_light, light_of and light_at are generated with the scene's constants (see
 // inline_lights in src/gpu/shader.rs): no buffer loads at dynamic indices, which lavapipe

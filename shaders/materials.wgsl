@@ -98,7 +98,7 @@ fn fresnel(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
 fn background(dir: vec3f) -> vec3f {
 //#if SKY
     let t = 0.5 * (dir.y + 1.0);
-    return (1.0 - t) * vec3f(1.0) + t * vec3f(0.5, 0.7, 1.0);
+    return (1.0 - t) * vec3f(1.0) + t * SKY_ZENITH;
 //#else
     return params.background;
 //#endif

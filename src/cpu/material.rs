@@ -88,6 +88,9 @@ pub fn fresnel(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
     0.5 * (rs * rs + rp * rp)
 }
 
+/// The sky background's colour straight up (white at the horizon).
+pub const SKY_ZENITH: [f32; 3] = [0.5, 0.7, 1.0];
+
 /// Radiance arriving from the environment along unit direction `dir`.
 #[inline]
 pub fn background(bg: &Background, dir: Vec3) -> Vec3 {
@@ -95,7 +98,7 @@ pub fn background(bg: &Background, dir: Vec3) -> Vec3 {
         Background::Constant(c) => c,
         Background::Sky => {
             let t = 0.5 * (dir.y + 1.0);
-            (1.0 - t) * Vec3::ONE + t * Vec3::new(0.5, 0.7, 1.0)
+            (1.0 - t) * Vec3::ONE + t * Vec3::from(SKY_ZENITH)
         }
     }
 }

@@ -128,19 +128,22 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
 /// Relative bound on a hit point's error: eight roundings of the coordinates it came from.
 pub const POINT_ERROR: f32 = 8.0 * f32::EPSILON;
 
+/// Below this magnitude a coordinate is moved by a fixed amount (`OFFSET_FLOAT_SCALE`), above
+/// it by `OFFSET_INT_SCALE` units in its last place (see `offset_origin`).
+pub const OFFSET_NEAR_ORIGIN: f32 = 1.0 / 32.0;
+pub const OFFSET_FLOAT_SCALE: f32 = 1.0 / 4294967296.0;
+pub const OFFSET_INT_SCALE: f32 = 32.0;
+
 /// A ray origin moved off the surface at `p` along `n` by a few units in the last place of each
 /// coordinate (Wächter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection",
 /// Ray Tracing Gems ch. 6); callers first move it by the point's error bound (see `leave`).
 #[inline]
 pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 4294967296.0;
-    const INT_SCALE: f32 = 32.0;
     let offset = |p: f32, n: f32| -> f32 {
-        if p.abs() < ORIGIN {
-            p + FLOAT_SCALE * n
+        if p.abs() < OFFSET_NEAR_ORIGIN {
+            p + OFFSET_FLOAT_SCALE * n
         } else {
-            let of_i = (INT_SCALE * n) as i32;
+            let of_i = (OFFSET_INT_SCALE * n) as i32;
             let of_i = if p < 0.0 { -of_i } else { of_i };
             f32::from_bits((p.to_bits() as i32).wrapping_add(of_i) as u32)
         }

@@ -7,43 +7,165 @@ use crate::scene::flat::FlatScene;
 use crate::scene::{Background, Material};
 use bytemuck::{Pod, Zeroable};
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct GpuSphere {
-    pub center: [f32; 3],
-    pub radius: f32,
-    pub material: u32,
-    /// 1 + its index in the light list; 0 when it does not emit.
-    pub light: u32,
-    pub _pad: [u32; 2],
+/// A Rust type as a WGSL type, and a value of it as a WGSL literal.
+pub trait WgslType {
+    const WGSL: &'static str;
+    fn literal(&self) -> String;
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct GpuQuad {
-    pub q: [f32; 3],
-    pub d: f32,
-    pub normal: [f32; 3],
-    pub material: u32,
-    pub alpha_axis: [f32; 3],
-    /// 1 + its index in the light list; 0 when it does not emit.
-    pub light: u32,
-    pub beta_axis: [f32; 3],
-    pub edge_tolerance: f32,
+/// A WGSL float literal that reads back as exactly `x`.
+pub fn float_literal(x: f32) -> String {
+    format!("{x:?}")
 }
 
-/// A light for next-event estimation (see `scene::flat::Light`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct GpuLight {
-    pub position: [f32; 3],
-    pub cdf: f32,
-    pub u: [f32; 3],
-    pub pick: f32,
-    pub v: [f32; 3],
-    pub radius: f32,
-    pub normal: [f32; 3],
-    pub inv_area: f32,
+impl WgslType for f32 {
+    const WGSL: &'static str = "f32";
+    fn literal(&self) -> String {
+        float_literal(*self)
+    }
+}
+
+impl WgslType for u32 {
+    const WGSL: &'static str = "u32";
+    fn literal(&self) -> String {
+        format!("{self}u")
+    }
+}
+
+impl WgslType for [f32; 3] {
+    const WGSL: &'static str = "vec3f";
+    fn literal(&self) -> String {
+        let [x, y, z] = self.map(float_literal);
+        format!("vec3f({x}, {y}, {z})")
+    }
+}
+
+impl WgslType for [u32; 2] {
+    const WGSL: &'static str = "vec2u";
+    fn literal(&self) -> String {
+        format!("vec2u({}u, {}u)", self[0], self[1])
+    }
+}
+
+/// A struct the kernel shares: its WGSL declaration and constructor calls are generated from
+/// the Rust definition, so the two cannot drift apart. Fields named `_pad` are explicit padding
+/// where WGSL pads implicitly (a vec3f is 16-byte aligned); `tests/gpu_layout.rs` checks that
+/// naga lays the generated declaration out exactly as Rust does.
+pub trait WgslStruct {
+    const WGSL_NAME: &'static str;
+    /// (name, WGSL type) of every field, padding included, in order.
+    fn wgsl_fields() -> &'static [(&'static str, &'static str)];
+    /// Every field's value as a WGSL literal, padding included, in order.
+    fn wgsl_values(&self) -> Vec<String>;
+    /// Rust's layout: the struct's size and each field's offset, padding included.
+    fn rust_layout() -> (usize, Vec<(&'static str, usize)>);
+
+    /// `struct Name { field: type, ... }`, without the padding fields.
+    fn wgsl_declaration() -> String {
+        let mut out = format!("struct {} {{\n", Self::WGSL_NAME);
+        for (name, ty) in Self::wgsl_fields() {
+            if !name.starts_with("_pad") {
+                out.push_str(&format!("    {name}: {ty},\n"));
+            }
+        }
+        out.push_str("}\n");
+        out
+    }
+
+    /// `Name(v1, v2, ...)`, a WGSL constructor of this value.
+    fn wgsl_constructor(&self) -> String {
+        let values: Vec<String> = Self::wgsl_fields()
+            .iter()
+            .zip(self.wgsl_values())
+            .filter(|((name, _), _)| !name.starts_with("_pad"))
+            .map(|(_, value)| value)
+            .collect();
+        format!("{}({})", Self::WGSL_NAME, values.join(", "))
+    }
+}
+
+/// Defines a `#[repr(C)]` Pod struct and its [`WgslStruct`] description from one field list.
+macro_rules! gpu_struct {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident as $wgsl:literal {
+            $($(#[$field_meta:meta])* $field:ident: $ty:ty,)*
+        }
+    ) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+        pub struct $name {
+            $($(#[$field_meta])* pub $field: $ty,)*
+        }
+
+        impl WgslStruct for $name {
+            const WGSL_NAME: &'static str = $wgsl;
+            fn wgsl_fields() -> &'static [(&'static str, &'static str)] {
+                &[$((stringify!($field), <$ty as WgslType>::WGSL),)*]
+            }
+            fn wgsl_values(&self) -> Vec<String> {
+                vec![$(WgslType::literal(&self.$field),)*]
+            }
+            fn rust_layout() -> (usize, Vec<(&'static str, usize)>) {
+                (
+                    std::mem::size_of::<$name>(),
+                    vec![$((stringify!($field), std::mem::offset_of!($name, $field)),)*],
+                )
+            }
+        }
+    };
+}
+
+gpu_struct! {
+    pub struct GpuSphere as "Sphere" {
+        center: [f32; 3],
+        /// Negative: the normal faces inward.
+        radius: f32,
+        material: u32,
+        /// 1 + its index in the light list; 0 when it does not emit.
+        light: u32,
+        _pad: [u32; 2],
+    }
+}
+
+gpu_struct! {
+    /// The parallelogram q + a u + b v, a, b in [0, 1] (see `scene::flat::Quad` for the axes).
+    pub struct GpuQuad as "Quad" {
+        q: [f32; 3],
+        /// Plane: dot(normal, p) = d.
+        d: f32,
+        normal: [f32; 3],
+        material: u32,
+        alpha_axis: [f32; 3],
+        /// 1 + its index in the light list; 0 when it does not emit.
+        light: u32,
+        beta_axis: [f32; 3],
+        /// Counts as hit this far (a fraction of each edge) past its edges.
+        edge_tolerance: f32,
+    }
+}
+
+gpu_struct! {
+    /// A light for next-event estimation (see `scene::flat::Light`): a quad (uniform on its
+    /// area) or a sphere (radius > 0; uniform in the cone it subtends).
+    pub struct GpuLight as "Light" {
+        /// Quad corner, or sphere centre.
+        position: [f32; 3],
+        /// Chance of picking this light or one before it.
+        cdf: f32,
+        /// Quad edges.
+        u: [f32; 3],
+        /// Chance of picking this light.
+        pick: f32,
+        v: [f32; 3],
+        /// Sphere: |radius|; quad: 0.
+        radius: f32,
+        /// Quad unit normal.
+        normal: [f32; 3],
+        /// Quad: 1 / area.
+        inv_area: f32,
+    }
 }
 
 pub const MAT_LAMBERTIAN: u32 = 0;
@@ -51,58 +173,150 @@ pub const MAT_METAL: u32 = 1;
 pub const MAT_DIELECTRIC: u32 = 2;
 pub const MAT_LIGHT: u32 = 3;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct GpuMaterial {
-    pub albedo: [f32; 3],
-    pub kind: u32,
-    pub emission: [f32; 3],
-    /// Metal: fuzz; dielectric: ior; light: 1 if two-sided.
-    pub param: f32,
+gpu_struct! {
+    pub struct GpuMaterial as "Material" {
+        /// Lambertian, metal.
+        albedo: [f32; 3],
+        /// One of the `MAT_*` constants.
+        kind: u32,
+        /// Lambertian emission, light radiance.
+        emission: [f32; 3],
+        /// Metal: fuzz; dielectric: ior; light: 1 if two-sided.
+        param: f32,
+    }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct GpuParams {
-    pub origin: [f32; 3],
-    pub lens_radius: f32,
-    pub to_upper_left: [f32; 3],
-    pub width: u32,
-    pub horizontal: [f32; 3],
-    pub height: u32,
-    pub vertical: [f32; 3],
-    pub max_depth: u32,
-    pub right: [f32; 3],
-    pub seed: u32,
-    pub up: [f32; 3],
-    pub first_sample: u32,
-    pub background: [f32; 3],
-    pub sample_count: u32,
-    pub tile_origin: [u32; 2],
-    pub tile_size: [u32; 2],
-    pub sphere_count: u32,
-    pub quad_count: u32,
-    pub samples_before: u32,
-    pub sky: u32,
-    pub light_count: u32,
-    /// Russian roulette from this many segments on; 0: off.
-    pub roulette_depth: u32,
-    pub _pad: [u32; 2],
+gpu_struct! {
+    pub struct GpuParams as "Params" {
+        origin: [f32; 3],
+        lens_radius: f32,
+        to_upper_left: [f32; 3],
+        width: u32,
+        horizontal: [f32; 3],
+        height: u32,
+        vertical: [f32; 3],
+        max_depth: u32,
+        right: [f32; 3],
+        seed: u32,
+        up: [f32; 3],
+        /// Random-stream index of this dispatch's first sample.
+        first_sample: u32,
+        background: [f32; 3],
+        /// Samples per pixel in this dispatch.
+        sample_count: u32,
+        tile_origin: [u32; 2],
+        tile_size: [u32; 2],
+        sphere_count: u32,
+        quad_count: u32,
+        /// Samples already in the accumulator.
+        samples_before: u32,
+        /// 1: sky gradient background.
+        sky: u32,
+        light_count: u32,
+        /// Russian roulette from this many segments on; 0: off.
+        roulette_depth: u32,
+        _pad: [u32; 2],
+    }
 }
 
 /// The per-pixel accumulator: mean (w: non-finite sample count as bits), Kahan compensation, M2.
 pub const ACCUM_BYTES_PER_PIXEL: u64 = 3 * 16;
 
-/// The output of the `first_bounce` debug entry point, per pixel.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
-pub struct GpuFirstBounce {
-    pub point: [f32; 3],
-    pub primitive: u32,
-    pub normal: [f32; 3],
-    pub hit: u32,
-    pub dir: [f32; 3],
-    pub scattered: u32,
+/// Invocations per workgroup along x and along y.
+pub const WORKGROUP_SIZE: u32 = 8;
+
+gpu_struct! {
+    /// The output of the `first_bounce` debug entry point, per pixel.
+    pub struct GpuFirstBounce as "FirstBounce" {
+        point: [f32; 3],
+        primitive: u32,
+        normal: [f32; 3],
+        hit: u32,
+        /// The scattered direction.
+        dir: [f32; 3],
+        scattered: u32,
+    }
+}
+
+/// Constants the CPU reference and the kernel share, as WGSL `const` declarations.
+fn wgsl_constants() -> String {
+    use crate::cpu::shapes::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_NEAR_ORIGIN};
+    let constants: [(&str, String); 12] = [
+        ("MAT_LAMBERTIAN", MAT_LAMBERTIAN.literal()),
+        ("MAT_METAL", MAT_METAL.literal()),
+        ("MAT_DIELECTRIC", MAT_DIELECTRIC.literal()),
+        ("MAT_LIGHT", MAT_LIGHT.literal()),
+        ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
+        (
+            "MAX_SURVIVAL",
+            crate::cpu::integrator::MAX_SURVIVAL.literal(),
+        ),
+        (
+            "MIN_LIGHT_COSINE",
+            crate::cpu::lights::MIN_LIGHT_COSINE.literal(),
+        ),
+        ("POINT_ERROR", crate::cpu::shapes::POINT_ERROR.literal()),
+        ("OFFSET_NEAR_ORIGIN", OFFSET_NEAR_ORIGIN.literal()),
+        ("OFFSET_FLOAT_SCALE", OFFSET_FLOAT_SCALE.literal()),
+        ("OFFSET_INT_SCALE", OFFSET_INT_SCALE.literal()),
+        ("SKY_ZENITH", crate::cpu::material::SKY_ZENITH.literal()),
+    ];
+    let mut out = String::new();
+    for (name, value) in constants {
+        let ty = if value.starts_with("vec3f") {
+            "vec3f"
+        } else if value.ends_with('u') {
+            "u32"
+        } else {
+            "f32"
+        };
+        out.push_str(&format!("const {name}: {ty} = {value};\n"));
+    }
+    out
+}
+
+/// A shared struct's WGSL name, Rust size, and the offsets of its fields other than padding.
+pub type StructLayout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+fn layout_of<T: WgslStruct>() -> StructLayout {
+    let (size, fields) = T::rust_layout();
+    let fields = fields
+        .into_iter()
+        .filter(|(name, _)| !name.starts_with("_pad"))
+        .collect();
+    (T::WGSL_NAME, size, fields)
+}
+
+/// Rust's layout of every struct the kernel shares, for checking against naga's layout of the
+/// generated WGSL.
+pub fn shared_layouts() -> Vec<StructLayout> {
+    vec![
+        layout_of::<GpuSphere>(),
+        layout_of::<GpuQuad>(),
+        layout_of::<GpuLight>(),
+        layout_of::<GpuMaterial>(),
+        layout_of::<GpuParams>(),
+        layout_of::<GpuFirstBounce>(),
+    ]
+}
+
+/// The data both sides share, as WGSL: the struct declarations and the constants, generated
+/// from their Rust definitions; the kernel's modules start after it.
+pub fn wgsl_shared() -> String {
+    let mut out = String::from("// ---- shared with Rust, generated (src/gpu/layout.rs) ----\n");
+    out.push_str(&wgsl_constants());
+    for declaration in [
+        GpuSphere::wgsl_declaration(),
+        GpuQuad::wgsl_declaration(),
+        GpuLight::wgsl_declaration(),
+        GpuMaterial::wgsl_declaration(),
+        GpuParams::wgsl_declaration(),
+        GpuFirstBounce::wgsl_declaration(),
+    ] {
+        out.push('\n');
+        out.push_str(&declaration);
+    }
+    out
 }
 
 /// Scene buffers as uploaded. Empty arrays hold one zeroed element: a binding cannot be empty.

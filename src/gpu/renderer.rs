@@ -1,7 +1,9 @@
 //! Dispatching the kernel: buffers, tiles, sample slices, timing and readback into a [`Film`].
 
 use super::context::{GpuContext, GpuError};
-use super::layout::{ACCUM_BYTES_PER_PIXEL, GpuFirstBounce, GpuParams, SceneBuffers, base_params};
+use super::layout::{
+    ACCUM_BYTES_PER_PIXEL, GpuFirstBounce, GpuParams, SceneBuffers, WORKGROUP_SIZE, base_params,
+};
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
 use crate::render::RenderOptions;
@@ -346,7 +348,7 @@ impl GpuRenderer {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_pipeline(&kernel.pipeline);
                 pass.set_bind_group(0, &bind_group, &[]);
-                pass.dispatch_workgroups(width.div_ceil(8), 1, 1);
+                pass.dispatch_workgroups(width.div_ceil(WORKGROUP_SIZE), 1, 1);
             }
             self.ctx.queue.submit([encoder.finish()]);
             self.ctx.wait()?;
@@ -408,7 +410,11 @@ impl GpuRenderer {
                     });
                     pass.set_pipeline(&kernel.pipeline);
                     pass.set_bind_group(0, &bind_group, &[]);
-                    pass.dispatch_workgroups(width.div_ceil(8), rows.div_ceil(8), 1);
+                    pass.dispatch_workgroups(
+                        width.div_ceil(WORKGROUP_SIZE),
+                        rows.div_ceil(WORKGROUP_SIZE),
+                        1,
+                    );
                 }
                 if let Some(t) = &timer {
                     t.resolve(&mut encoder);
@@ -547,7 +553,11 @@ impl GpuRenderer {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&kernel.pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups(opts.width.div_ceil(8), opts.height.div_ceil(8), 1);
+            pass.dispatch_workgroups(
+                opts.width.div_ceil(WORKGROUP_SIZE),
+                opts.height.div_ceil(WORKGROUP_SIZE),
+                1,
+            );
         }
         self.ctx.queue.submit([encoder.finish()]);
         self.ctx.wait()?;

@@ -3,6 +3,7 @@
 //! only when the scene needs that feature: a scene without spheres gets no sphere code, one
 //! without glass no dielectric branch.
 
+use crate::gpu::layout::{SceneBuffers, WgslStruct, float_literal};
 use crate::render::Integrator;
 use crate::scene::flat::FlatScene;
 use crate::scene::{Background, Material};
@@ -175,6 +176,7 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         "// rt-gpu kernel, generated from shaders/*.wgsl for features: {}\n",
         on.join(" ")
     );
+    out.push_str(&crate::gpu::layout::wgsl_shared());
     if features.uniform_scene {
         out.push_str(&format!(
             "const SCENE_CAPACITY: u32 = {}u;\n",
@@ -195,44 +197,26 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     Ok(out)
 }
 
-/// A WGSL float literal that reads back as exactly `x`.
-fn lit(x: f32) -> String {
-    format!("{x:?}")
-}
-
-fn vec3(v: glam::Vec3) -> String {
-    format!("vec3f({}, {}, {})", lit(v.x), lit(v.y), lit(v.z))
-}
-
 /// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does).
 fn inline_scene(scene: &FlatScene, features: &Features) -> String {
+    let buffers = SceneBuffers::new(scene);
     let mut out = String::from(
         "\n// ---- the scene's primitives, generated ----\nfn inline_scene(ray: Ray, c: ptr<function, Closest>) {\n",
     );
     if features.spheres {
-        for (i, s) in scene.spheres.iter().enumerate() {
+        for (i, s) in buffers.spheres.iter().take(scene.spheres.len()).enumerate() {
             out.push_str(&format!(
-                "    consider_sphere(Sphere({}, {}, {}u, {}u), {i}u, ray, c);\n",
-                vec3(s.center),
-                lit(s.radius),
-                s.material,
-                s.light
+                "    consider_sphere({}, {i}u, ray, c);\n",
+                s.wgsl_constructor()
             ));
         }
     }
     if features.quads {
         let base = scene.spheres.len();
-        for (i, q) in scene.quads.iter().enumerate() {
+        for (i, q) in buffers.quads.iter().take(scene.quads.len()).enumerate() {
             out.push_str(&format!(
-                "    consider_quad(Quad({}, {}, {}, {}u, {}, {}u, {}, {}), {}u, ray, c);\n",
-                vec3(q.q),
-                lit(q.d),
-                vec3(q.normal),
-                q.material,
-                vec3(q.alpha_axis),
-                q.light,
-                vec3(q.beta_axis),
-                lit(q.edge_tolerance),
+                "    consider_quad({}, {}u, ray, c);\n",
+                q.wgsl_constructor(),
                 base + i
             ));
         }
@@ -262,18 +246,10 @@ fn switch_function(
 
 /// `material_at` as a switch over the scene's materials (the last is the default).
 fn inline_materials(scene: &FlatScene) -> String {
-    let mut constants: Vec<(usize, String)> = crate::gpu::layout::SceneBuffers::new(scene)
+    let mut constants: Vec<(usize, String)> = SceneBuffers::new(scene)
         .materials
         .iter()
-        .map(|m| {
-            format!(
-                "Material({}, {}u, {}, {})",
-                vec3(glam::Vec3::from(m.albedo)),
-                m.kind,
-                vec3(glam::Vec3::from(m.emission)),
-                lit(m.param)
-            )
-        })
+        .map(WgslStruct::wgsl_constructor)
         .enumerate()
         .collect();
     let (_, default) = constants
@@ -295,7 +271,7 @@ fn inline_lights(scene: &FlatScene) -> String {
     for (i, l) in scene.lights.iter().enumerate().take(last) {
         out.push_str(&format!(
             "    if u < {} {{\n        return {i}u;\n    }}\n",
-            lit(l.cdf)
+            float_literal(l.cdf)
         ));
     }
     out.push_str(&format!("    return {last}u;\n}}\n\n"));
@@ -313,22 +289,11 @@ fn inline_lights(scene: &FlatScene) -> String {
         emitters,
         "0u",
     ));
-    let mut constants: Vec<(usize, String)> = scene
+    let mut constants: Vec<(usize, String)> = SceneBuffers::new(scene)
         .lights
         .iter()
-        .map(|l| {
-            format!(
-                "Light({}, {}, {}, {}, {}, {}, {}, {})",
-                vec3(l.position),
-                lit(l.cdf),
-                vec3(l.u),
-                lit(l.pick),
-                vec3(l.v),
-                lit(l.radius),
-                vec3(l.normal),
-                lit(l.inv_area)
-            )
-        })
+        .take(scene.lights.len())
+        .map(WgslStruct::wgsl_constructor)
         .enumerate()
         .collect();
     let (_, default) = constants.pop().expect("nee kernels have a light");
