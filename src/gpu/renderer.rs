@@ -1,6 +1,7 @@
 //! Dispatching the kernel: buffers, tiles, sample slices, timing and readback into a [`Film`].
 
 use super::context::{GpuContext, GpuError};
+use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, GpuFirstBounce, GpuParams, SceneBuffers, WORKGROUP_SIZE, base_params,
 };
@@ -13,25 +14,12 @@ use std::io::Write;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
-/// GPU watchdogs kill long dispatches (~100 ms and up); dispatches aim well under that, so
-/// that a band of the image 2x costlier than the one measured before it still stays under.
-const TARGET_DISPATCH_SECONDS: f64 = 0.04;
-
-/// Rows of the first tile, before any dispatch has been timed.
-const PROBE_TILE_ROWS: u32 = 4;
-
-/// Mesa's llvmpipe (lavapipe) silently ends any invocation after 65535 loop iterations in
-/// total, across all its loops. Dispatches stay under this budget on every device (it costs
-/// nothing elsewhere), and the kernel counts the samples it really took so that a cut loop is
-/// an error, never a quietly wrong image.
-const LOOP_ITERATION_BUDGET: u64 = 60_000;
-
 /// A generous bound on the loop iterations one sample costs: the path loop, and in each segment
 /// one pass over each primitive list (none when the scene is inlined as straight-line code),
 /// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
 /// With NEE, a segment also scans the light list and traces a shadow ray.
-fn loop_iterations_per_sample(scene: &FlatScene, features: &Features, max_depth: u32) -> u64 {
+fn loop_cost(scene: &FlatScene, features: &Features, max_depth: u32) -> LoopCost {
     let primitives = if features.inline_scene {
         0
     } else {
@@ -42,16 +30,9 @@ fn loop_iterations_per_sample(scene: &FlatScene, features: &Features, max_depth:
     } else {
         3 + primitives
     };
-    2 + (max_depth as u64 + 1) * per_segment
-}
-
-/// Knobs tests use to force tiling and slicing; renders normally leave them `None`.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Tuning {
-    /// Most pixels per tile [default: what one storage binding holds].
-    pub max_tile_pixels: Option<u64>,
-    /// Samples per dispatch [default: sized from measured dispatch time].
-    pub samples_per_dispatch: Option<u32>,
+    LoopCost {
+        per_sample: 2 + (max_depth as u64 + 1) * per_segment,
+    }
 }
 
 /// A compiled kernel and the source it was built from.
@@ -173,14 +154,13 @@ impl GpuRenderer {
     }
 
     /// Most pixels one tile may hold: its accumulator must fit one storage binding.
-    fn max_tile_pixels(&self, tuning: &Tuning) -> u64 {
+    fn max_tile_pixels(&self) -> u64 {
         let binding = self
             .ctx
             .limits
             .max_storage_buffer_binding_size
             .min(self.ctx.limits.max_buffer_size);
-        let fits = binding / ACCUM_BYTES_PER_PIXEL;
-        tuning.max_tile_pixels.map_or(fits, |t| t.min(fits))
+        binding / ACCUM_BYTES_PER_PIXEL
     }
 
     /// The scene arrays as buffers of the kind `features` asks for: uniform arrays padded to
@@ -298,21 +278,26 @@ impl GpuRenderer {
             )));
         }
         let (width, height) = (opts.width, opts.height);
-        let max_tile_pixels = self.max_tile_pixels(tuning);
+        let max_tile_pixels = self.max_tile_pixels();
         if (width as u64) > max_tile_pixels {
             return Err(GpuError::TooLarge(format!(
                 "a {width}-pixel row does not fit one GPU storage binding ({max_tile_pixels} pixels)"
             )));
         }
-        let tile_rows = ((max_tile_pixels / width as u64).min(height as u64)) as u32;
-        let per_sample = loop_iterations_per_sample(scene, &kernel.features, opts.max_depth);
+        let cost = loop_cost(scene, &kernel.features, opts.max_depth);
         let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
-        if is_llvmpipe && per_sample > LOOP_ITERATION_BUDGET {
-            return Err(GpuError::TooLarge(format!(
-                "this scene needs up to {per_sample} loop iterations per sample, more than the {LOOP_ITERATION_BUDGET} rt-gpu allows one invocation on lavapipe (which silently ends it at 65535): use fewer primitives or a lower --max-depth, or --backend cpu"
-            )));
-        }
-        let max_slice = (LOOP_ITERATION_BUDGET / per_sample).clamp(1, u32::MAX as u64) as u32;
+        let max_slice = match cost.max_samples_per_dispatch() {
+            Some(slice) => slice,
+            None if is_llvmpipe => {
+                return Err(GpuError::TooLarge(format!(
+                    "this scene needs up to {} loop iterations per sample, more than the {LOOP_ITERATION_BUDGET} rt-gpu allows one invocation on lavapipe (which silently ends it at 65535): use fewer primitives or a lower --max-depth, or --backend cpu",
+                    cost.per_sample
+                )));
+            }
+            None => 1,
+        };
+        let mut sizer = DispatchSizer::new(width, max_tile_pixels, max_slice, *tuning);
+        let tile_rows = sizer.max_tile_rows().min(height);
         let scene_buffers = self.scene_buffers(scene, &kernel.features);
         // Params change every dispatch, so they live in a storage buffer: lavapipe folds the
         // values of uniform buffers into the shader and JIT-compiles (and keeps) one variant
@@ -358,32 +343,13 @@ impl GpuRenderer {
         let mut film = Film::new(width, height);
         let mut timings = Timings::default();
         let mut gpu_seconds = 0.0;
-        // Dispatch sizes come from the measured cost of one pixel-sample: tiles are as tall as
-        // one 1-spp dispatch may be (so even the first dispatch of a tile stays short), slices
-        // as long as the tile allows. Until the first measurement, a short probe tile.
-        // Costs differ across the image (a band of sky is cheap, a band of glass is not), so a
-        // tile grows at most 2x over the last one.
-        let mut per_pixel_sample: Option<f64> = None;
-        let mut last_rows = PROBE_TILE_ROWS / 2;
+        // Tiles and slices are sized by `sizer` from each dispatch's measured time.
         let mut y0 = 0;
         while y0 < height {
-            let rows = match per_pixel_sample {
-                _ if tuning.max_tile_pixels.is_some() => tile_rows,
-                None => PROBE_TILE_ROWS.min(tile_rows),
-                Some(cost) => {
-                    let fit = TARGET_DISPATCH_SECONDS / (cost * width as f64);
-                    (fit.floor() as u32)
-                        .clamp(1, tile_rows)
-                        .min(last_rows.saturating_mul(2))
-                }
-            }
-            .min(height - y0);
-            last_rows = rows;
-            let tile_pixels = rows as f64 * width as f64;
-            // A new tile's cost is unknown: its first dispatch takes one sample per pixel (which
-            // the tile height keeps near the target), later ones grow from its own timings.
-            let mut slice = tuning.samples_per_dispatch.unwrap_or(1).clamp(1, max_slice);
-            let tile_bytes = rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
+            let rows = sizer.next_tile_rows(height - y0);
+            let tile_pixels = rows as u64 * width as u64;
+            let mut slice = sizer.first_slice();
+            let tile_bytes = tile_pixels * ACCUM_BYTES_PER_PIXEL;
             {
                 let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
                 encoder.clear_buffer(&accum, 0, None);
@@ -444,13 +410,7 @@ impl GpuRenderer {
                         "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4} wall {wall:.4}"
                     );
                 }
-                let cost = seconds.max(1e-7) / (count as f64 * tile_pixels);
-                per_pixel_sample = Some(cost);
-                if tuning.samples_per_dispatch.is_none() {
-                    // Size the next slice from this one's time; grow at most 2x per step.
-                    let ideal = (TARGET_DISPATCH_SECONDS / (cost * tile_pixels)).floor() as u32;
-                    slice = ideal.clamp(1, count.saturating_mul(2)).min(max_slice);
-                }
+                slice = sizer.record(count, tile_pixels, seconds);
             }
             let bytes = self.read_back(&accum, tile_bytes)?;
             let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
