@@ -292,6 +292,7 @@ fn reference(
     })
 }
 
+#[cfg(feature = "cli")]
 fn progress_bar(message: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(1000).with_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {percent}% {elapsed}")
@@ -300,6 +301,21 @@ fn progress_bar(message: &str) -> indicatif::ProgressBar {
     );
     bar.set_message(message.to_string());
     bar
+}
+
+/// Without the `cli` feature, progress goes nowhere.
+#[cfg(not(feature = "cli"))]
+fn progress_bar(_message: &str) -> NoProgress {
+    NoProgress
+}
+
+#[cfg(not(feature = "cli"))]
+struct NoProgress;
+
+#[cfg(not(feature = "cli"))]
+impl NoProgress {
+    fn set_position(&self, _position: u64) {}
+    fn finish_and_clear(&self) {}
 }
 
 /// Runs every series' ladder and fits.

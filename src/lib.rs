@@ -4,11 +4,14 @@
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod backend;
 pub mod converge;
 pub mod cpu;
 pub mod film;
 pub mod gpu;
+pub mod options;
 pub mod output;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod render;
 pub mod rng;

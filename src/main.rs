@@ -1,12 +1,49 @@
 //! The `rt-gpu` command line.
 
 use anyhow::{Context, bail};
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_gpu::film::{check_image_size, check_memory};
 use rt_gpu::gpu::list_adapters;
 use rt_gpu::output::{ImageFormat, PendingOutput, Transfer};
 use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
+
+/// Where to render (the CLI's names for [`Backend`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BackendArg {
+    /// The WGSL compute kernel through wgpu (any Vulkan, Metal or DX12 device, or Mesa lavapipe).
+    Gpu,
+    /// The CPU reference renderer (rayon over all cores).
+    Cpu,
+}
+
+impl From<BackendArg> for Backend {
+    fn from(arg: BackendArg) -> Self {
+        match arg {
+            BackendArg::Gpu => Backend::Gpu,
+            BackendArg::Cpu => Backend::Cpu,
+        }
+    }
+}
+
+/// How paths find light (the CLI's names for [`Integrator`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum IntegratorArg {
+    /// Paths find light only by hitting it (the original project's estimator).
+    Naive,
+    /// Next-event estimation: each diffuse hit also samples a light with a shadow ray, combined
+    /// with BSDF sampling by multiple importance sampling (power heuristic).
+    Nee,
+}
+
+impl From<IntegratorArg> for Integrator {
+    fn from(arg: IntegratorArg) -> Self {
+        match arg {
+            IntegratorArg::Naive => Integrator::Naive,
+            IntegratorArg::Nee => Integrator::Nee,
+        }
+    }
+}
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
 use rt_gpu::scene::file::MAX_DEPTH_LIMIT;
 use rt_gpu::scene::flat::FlatScene;
@@ -91,10 +128,10 @@ struct ConvergeArgs {
     reference_spp: Option<u32>,
     /// Backends to compare, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "gpu,cpu")]
-    backends: Vec<Backend>,
+    backends: Vec<BackendArg>,
     /// Integrators to compare, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "naive,nee")]
-    integrators: Vec<Integrator>,
+    integrators: Vec<IntegratorArg>,
     /// Russian roulette from this many path segments on (0: off).
     #[arg(long, value_name = "N", default_value_t = 0)]
     roulette_depth: u32,
@@ -130,8 +167,8 @@ struct BenchArgs {
     size: (u32, u32),
     #[arg(long, value_name = "D", default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     max_depth: u32,
-    #[arg(long, value_enum, default_value_t = Integrator::Nee)]
-    integrator: Integrator,
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
+    integrator: IntegratorArg,
     /// GPU adapter (part of its name).
     #[arg(long)]
     adapter: Option<String>,
@@ -154,12 +191,12 @@ struct RenderArgs {
     #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     max_depth: Option<u32>,
     /// Where to render.
-    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
-    backend: Backend,
+    #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
+    backend: BackendArg,
     /// How paths find light: nee samples lights directly at diffuse hits (with multiple
     /// importance sampling); naive waits for paths to hit them (the original project's way).
-    #[arg(long, value_enum, default_value_t = Integrator::Nee)]
-    integrator: Integrator,
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
+    integrator: IntegratorArg,
     /// Russian roulette from this many path segments on: paths end at random, in proportion to
     /// how little they can still carry, and survivors are reweighted (unbiased) [0: off].
     #[arg(long, value_name = "N", default_value_t = 0)]
@@ -325,8 +362,8 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         width,
         height,
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
-        backends: args.backends.clone(),
-        integrators: args.integrators.clone(),
+        backends: args.backends.iter().map(|&b| b.into()).collect(),
+        integrators: args.integrators.iter().map(|&i| i.into()).collect(),
         roulette_depth: args.roulette_depth,
         budget: args.budget,
         reference: args.reference.clone(),
@@ -395,7 +432,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         first_sample: 0,
         seed: 1,
         max_depth: args.max_depth,
-        integrator: args.integrator,
+        integrator: args.integrator.into(),
         roulette_depth: 0,
     };
     let samples = width as f64 * height as f64 * args.spp as f64;
@@ -404,7 +441,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         scene.name,
         args.spp,
         args.max_depth,
-        args.integrator.name()
+        Integrator::from(args.integrator).name()
     )?;
     let mut rates = Vec::new();
     let mut failed = Vec::new();
@@ -520,7 +557,8 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let Some(scene_arg) = &args.scene else {
         bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
     };
-    if args.adapter.is_some() && args.backend == Backend::Cpu {
+    let backend = Backend::from(args.backend);
+    if args.adapter.is_some() && backend == Backend::Cpu {
         bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
     }
     let (scene, scene_file) = resolve_scene(scene_arg)?;
@@ -539,7 +577,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         first_sample: 0,
         seed: args.seed,
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
-        integrator: args.integrator,
+        integrator: args.integrator.into(),
         roulette_depth: args.roulette_depth,
     };
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
@@ -558,7 +596,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = scene_file.iter().map(|p| p.as_path()).collect();
     let pending = PendingOutput::claim(&output, &inputs)?;
 
-    let (rendered, seconds) = timed_render(args.backend, &gpu, &flat, &opts)?;
+    let (rendered, seconds) = timed_render(backend, &gpu, &flat, &opts)?;
     let film = &rendered.film;
     pending.commit_image(film, args.gamma)?;
 
@@ -573,7 +611,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         "{}: {width}x{height}, {} spp, {} [{}], {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
         scene.name,
         opts.spp,
-        args.backend.name(),
+        backend.name(),
         rendered.device,
         opts.integrator.name(),
         samples / seconds / 1e6,

@@ -2,7 +2,7 @@
 
 use super::sampling::unit_disk;
 use super::shapes::Ray;
-use crate::render::RenderOptions;
+use crate::options::RenderOptions;
 use crate::rng::Rng;
 use crate::scene::flat::CameraFrame;
 

@@ -10,7 +10,7 @@
 use super::lights;
 use super::material::{background, emitted, scatter};
 use super::shapes::{Ray, intersect, leave, spawn};
-use crate::render::{Integrator, RenderOptions};
+use crate::options::{Integrator, RenderOptions};
 use crate::rng::Rng;
 use crate::scene::Material;
 use crate::scene::flat::FlatScene;

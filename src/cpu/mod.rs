@@ -9,11 +9,53 @@ pub mod material;
 pub mod sampling;
 pub mod shapes;
 
+use crate::backend::{RenderBackend, Rendered};
 use crate::film::{Film, PixelStats};
-use crate::render::RenderOptions;
+use crate::options::{Integrator, RenderOptions};
 use crate::rng::Rng;
 use crate::scene::flat::FlatScene;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// The CPU reference as a [`RenderBackend`]: rayon over all cores.
+pub struct CpuBackend {
+    integrator: Integrator,
+}
+
+impl CpuBackend {
+    pub fn new(integrator: Integrator) -> Self {
+        CpuBackend { integrator }
+    }
+}
+
+impl RenderBackend for CpuBackend {
+    fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+
+    fn device(&self) -> String {
+        format!("cpu ({} threads)", rayon::current_num_threads())
+    }
+
+    fn render(
+        &self,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+        on_progress: &(dyn Fn(f64) + Sync),
+    ) -> anyhow::Result<Rendered> {
+        let rows = AtomicU32::new(0);
+        let film = render(scene, opts, &|| {
+            let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
+            on_progress(done as f64 / opts.height as f64);
+        });
+        Ok(Rendered {
+            film,
+            gpu_seconds: None,
+            longest_dispatch_seconds: None,
+            device: self.device(),
+        })
+    }
+}
 
 /// Renders samples `opts.first_sample .. opts.first_sample + opts.spp` of every pixel.
 /// `on_row` is called once per finished image row (for progress bars).

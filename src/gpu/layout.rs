@@ -2,7 +2,7 @@
 //! `shaders/common.wgsl` (vec3f is 16-byte aligned there, hence the explicit padding).
 //! `tests/gpu_layout.rs` checks sizes and field offsets against naga's layout of the WGSL.
 
-use crate::render::RenderOptions;
+use crate::options::RenderOptions;
 use crate::scene::flat::FlatScene;
 use crate::scene::{Background, Material};
 use bytemuck::{Pod, Zeroable};

@@ -3,12 +3,14 @@
 //! dispatches and readback (`renderer`). The rendering math
 //! itself lives in `shaders/`.
 
+pub mod backend;
 pub mod context;
 pub mod dispatch;
 pub mod layout;
 pub mod renderer;
 pub mod shader;
 
+pub use backend::GpuBackend;
 pub use context::{GpuContext, GpuError, list_adapters};
 pub use dispatch::Tuning;
 pub use renderer::{GpuRenderer, Kernel, Timings};

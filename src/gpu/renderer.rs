@@ -7,7 +7,7 @@ use super::layout::{
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
-use crate::render::RenderOptions;
+use crate::options::RenderOptions;
 use crate::scene::flat::FlatScene;
 use glam::DVec3;
 use std::io::Write;

@@ -4,7 +4,7 @@
 //! without glass no dielectric branch.
 
 use crate::gpu::layout::{SceneBuffers, WgslStruct, float_literal};
-use crate::render::Integrator;
+use crate::options::Integrator;
 use crate::scene::flat::FlatScene;
 use crate::scene::{Background, Material};
 

@@ -1,0 +1,72 @@
+//! What a render is asked to do: plain data that every backend reads and none defines (this
+//! module imports nothing of the crate's).
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel in this render.
+    pub spp: u32,
+    /// Index of the first sample: a render continuing an earlier one of `n` samples starts at `n`.
+    pub first_sample: u32,
+    pub seed: u32,
+    /// The number of path segments.
+    pub max_depth: u32,
+    pub integrator: Integrator,
+    /// Russian roulette from this many segments on (0: off). Unbiased: a path survives with the
+    /// probability of its largest throughput component (at most 0.95) and is reweighted.
+    pub roulette_depth: u32,
+}
+
+impl RenderOptions {
+    /// `width` x `height` at `spp` samples, seed 0, the default integrator, no roulette.
+    pub fn new(width: u32, height: u32, spp: u32, max_depth: u32) -> Self {
+        RenderOptions {
+            width,
+            height,
+            spp,
+            first_sample: 0,
+            seed: 0,
+            max_depth,
+            integrator: Integrator::default(),
+            roulette_depth: 0,
+        }
+    }
+}
+
+/// How a path finds light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Integrator {
+    /// Paths find light only by hitting it (the original project's estimator).
+    Naive,
+    /// Next-event estimation: each diffuse hit also samples a light with a shadow ray, combined
+    /// with BSDF sampling by multiple importance sampling (power heuristic).
+    #[default]
+    Nee,
+}
+
+impl Integrator {
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Naive => "naive",
+            Integrator::Nee => "nee",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// The WGSL compute kernel through wgpu (any Vulkan, Metal or DX12 device, or Mesa lavapipe).
+    Gpu,
+    /// The CPU reference renderer (rayon over all cores).
+    Cpu,
+}
+
+impl Backend {
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Gpu => "gpu",
+            Backend::Cpu => "cpu",
+        }
+    }
+}
