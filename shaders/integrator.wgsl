@@ -4,30 +4,38 @@
 // found both ways is weighted by the power heuristic.
 
 //#if NEE
-// Light reaching a lambertian hit from one light sample, times cos / pi and the MIS weight.
-fn direct_light(hit: Hit, u0: f32, u1: f32, u2: f32) -> vec3f {
+// One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
+// arriving times the MIS weight and the BSDF pdf over the light pdf; their product is the
+// sample's contribution (zero if the light is below the surface or occluded).
+struct DirectLight {
+    weight: vec3f,
+    light: vec3f,
+}
+
+fn direct_light(m: Material, hit: Hit, u0: f32, u1: f32, u2: f32) -> DirectLight {
+    let none = DirectLight(vec3f(0.0), vec3f(0.0));
     let index = pick_light(u0);
     let s = sample_light(light_at(index), hit.point, u1, u2);
     if !(s.pdf > 0.0) {
-        return vec3f(0.0);
+        return none;
     }
-    let cos = dot(hit.normal, s.dir);
-    if !(cos > 0.0) {
-        return vec3f(0.0);
+    let b = bsdf(m, hit, s.dir);
+    if !(b.pdf > 0.0) {
+        return none;
     }
     // The shadow ray leaves the offset origin aimed at the sampled point itself (a tiny light
     // is not missed by the width of the offset); whatever it hits first must be that light.
     let origin = leave(hit, hit.normal);
     let to_light = s.point - origin;
     if !(dot(to_light, to_light) > 0.0) {
-        return vec3f(0.0);
+        return none;
     }
     var shadow: Hit;
     if !intersect(Ray(origin, normalize(to_light)), &shadow) || light_of(shadow.primitive) != index + 1u {
-        return vec3f(0.0);
+        return none;
     }
     let le = emitted(material_at(shadow.material), shadow.front_face);
-    return le * light_sample_factor(s.pdf, cos / PI);
+    return DirectLight(b.weight, le * light_sample_factor(s.pdf, b.pdf));
 }
 //#endif
 
@@ -36,8 +44,8 @@ fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
     var total = vec3f(0.0);
     var throughput = vec3f(1.0);
 //#if NEE
-    // The pdf with which a lambertian bounce chose `ray` from `origin`; 0 when light sampling
-    // could not have chosen it (camera rays, metal, glass), so light it finds counts in full.
+    // The pdf with which the BSDF chose `ray` from `origin`; 0 when light sampling could not
+    // have chosen it (camera rays, delta BSDFs), so light it finds counts in full.
     var bsdf_pdf = 0.0;
     var origin = ray.origin;
 //#endif
@@ -64,12 +72,13 @@ fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
         }
 //#if NEE
         bsdf_pdf = 0.0;
-        let diffuse = m.kind == MAT_LAMBERTIAN;
-        if diffuse {
+        let light_sampled = samples_lights(m);
+        if light_sampled {
             let u0 = rng_next(rng);
             let u1 = rng_next(rng);
             let u2 = rng_next(rng);
-            total += throughput * m.albedo * direct_light(hit, u0, u1, u2);
+            let d = direct_light(m, hit, u0, u1, u2);
+            total += throughput * d.weight * d.light;
         }
 //#endif
         let s = scatter(m, ray.dir, hit, rng);
@@ -78,8 +87,8 @@ fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
         }
         throughput *= s.attenuation;
 //#if NEE
-        if diffuse {
-            bsdf_pdf = max(dot(hit.normal, s.dir), 0.0) / PI;
+        if light_sampled {
+            bsdf_pdf = bsdf(m, hit, s.dir).pdf;
         }
         origin = hit.point;
 //#endif

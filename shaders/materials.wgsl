@@ -1,5 +1,6 @@
-// Emission, scattering and the background (twin: src/cpu/material.rs). Random numbers per
-// bounce: lambertian 2, metal 2, dielectric 1, light 0.
+// Materials (twin: src/cpu/material.rs) as the integrator sees them: emitted, scatter (the BSDF
+// sampled) and, for BSDFs light sampling can reach, bsdf toward a direction; the path loop
+// never names a material. Random numbers per bounce: lambertian 2, metal 2, dielectric 1, light 0.
 
 struct Scattered {
     attenuation: vec3f,
@@ -32,6 +33,34 @@ fn emitted(m: Material, front_face: bool) -> vec3f {
 //#endif
     return vec3f(0.0);
 }
+
+//#if NEE
+// Whether next-event estimation samples lights here: the BSDF is neither a delta nor absent.
+fn samples_lights(m: Material) -> bool {
+    return m.kind == MAT_LAMBERTIAN;
+}
+
+// The BSDF toward unit `dir`: weight = BSDF x cos / pdf, and the solid-angle pdf with which
+// scatter picks `dir`; pdf 0 where scatter cannot pick it.
+struct Bsdf {
+    weight: vec3f,
+    pdf: f32,
+}
+
+fn bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {
+    var out = Bsdf(vec3f(0.0), 0.0);
+//#if LAMBERTIAN
+    if m.kind == MAT_LAMBERTIAN {
+        // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
+        let cos = dot(hit.normal, dir);
+        if cos > 0.0 {
+            out = Bsdf(m.albedo, cos / PI);
+        }
+    }
+//#endif
+    return out;
+}
+//#endif
 
 fn reflect_dir(d: vec3f, n: vec3f) -> vec3f {
     return d - 2.0 * dot(d, n) * n;

@@ -8,14 +8,13 @@
 //! k + 1 <= max_depth: both integrators sum over exactly the same paths.
 
 use super::lights;
-use super::material::{background, emitted, scatter};
-use super::shapes::{Ray, intersect, leave, spawn};
+use super::material::{background, bsdf, emitted, samples_lights, scatter};
+use super::shapes::{Hit, Ray, intersect, leave, spawn};
 use crate::options::{Integrator, RenderOptions};
 use crate::rng::Rng;
 use crate::scene::Material;
 use crate::scene::flat::FlatScene;
 use glam::Vec3;
-use std::f32::consts::FRAC_1_PI;
 
 /// Roulette keeps a path with the probability of its largest throughput component, capped here
 /// so bright paths still end eventually.
@@ -30,8 +29,8 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
     let nee = uses_nee(scene, opts);
     let mut total = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
-    // The pdf with which a lambertian bounce chose `ray`, from `origin`; 0 when light sampling
-    // could not have chosen it (camera rays, metal and glass), so light it finds counts in full.
+    // The pdf with which the BSDF chose `ray`, from `origin`; 0 when light sampling could not
+    // have chosen it (camera rays, delta BSDFs), so light it finds counts in full.
     let mut bsdf_pdf = 0.0;
     let mut origin = ray.origin;
     for segment in 0..opts.max_depth {
@@ -52,16 +51,19 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
             break; // no longer path counts
         }
         bsdf_pdf = 0.0;
-        if nee && let Material::Lambertian { albedo, .. } = *material {
+        let light_sampled = nee && samples_lights(material);
+        if light_sampled {
             let (u0, u1, u2) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
-            total += throughput * albedo * direct_light(scene, &hit, u0, u1, u2);
+            if let Some((weight, light)) = direct_light(scene, material, &hit, u0, u1, u2) {
+                total += throughput * weight * light;
+            }
         }
         let Some((attenuation, dir)) = scatter(material, ray.dir, &hit, rng) else {
             break;
         };
         throughput *= attenuation;
-        if nee && matches!(material, Material::Lambertian { .. }) {
-            bsdf_pdf = hit.normal.dot(dir).max(0.0) * FRAC_1_PI;
+        if light_sampled {
+            bsdf_pdf = bsdf(material, &hit, dir).map_or(0.0, |(_, pdf)| pdf);
         }
         origin = hit.point;
         ray = spawn(&hit, dir);
@@ -87,35 +89,39 @@ fn hit_light(scene: &FlatScene, primitive: u32) -> u32 {
     }
 }
 
-/// Light arriving at a lambertian `hit` from one light sample, times cos / pi and the MIS
-/// weight (the caller multiplies by albedo): zero if the light is below the surface or occluded.
+/// One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
+/// arriving, times the MIS weight and the BSDF pdf over the light pdf, so that their product is
+/// the sample's contribution; `None` if the light is below the surface or occluded.
 #[inline]
-fn direct_light(scene: &FlatScene, hit: &super::shapes::Hit, u0: f32, u1: f32, u2: f32) -> Vec3 {
+fn direct_light(
+    scene: &FlatScene,
+    material: &Material,
+    hit: &Hit,
+    u0: f32,
+    u1: f32,
+    u2: f32,
+) -> Option<(Vec3, Vec3)> {
     let index = lights::pick_light(scene, u0);
-    let Some(sample) = lights::sample(&scene.lights[index], hit.point, u1, u2) else {
-        return Vec3::ZERO;
-    };
-    let cos = hit.normal.dot(sample.dir);
-    if !(cos > 0.0) {
-        return Vec3::ZERO;
-    }
+    let sample = lights::sample(&scene.lights[index], hit.point, u1, u2)?;
+    let (weight, bsdf_pdf) = bsdf(material, hit, sample.dir)?;
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
     // light is not missed by the width of the offset. Whatever it hits first must be that light.
     let origin = leave(hit, hit.normal);
     let to_light = sample.point - origin;
     if !(to_light.length_squared() > 0.0) {
-        return Vec3::ZERO;
+        return None;
     }
     let shadow_ray = Ray {
         origin,
         dir: to_light.normalize(),
     };
-    let Some(shadow) = intersect(scene, &shadow_ray) else {
-        return Vec3::ZERO;
-    };
+    let shadow = intersect(scene, &shadow_ray)?;
     if hit_light(scene, shadow.primitive) != index as u32 + 1 {
-        return Vec3::ZERO;
+        return None;
     }
     let le = emitted(&scene.materials[shadow.material as usize], &shadow);
-    le * lights::light_sample_factor(sample.pdf, cos * FRAC_1_PI)
+    Some((
+        weight,
+        le * lights::light_sample_factor(sample.pdf, bsdf_pdf),
+    ))
 }

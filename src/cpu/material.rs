@@ -1,5 +1,8 @@
-//! Emission and scattering (twin: `shaders/materials.wgsl`). Random numbers drawn per bounce are
-//! fixed per material (lambertian 2, metal 2, dielectric 1, light 0) so both backends stay in step.
+//! Materials (twin: `shaders/materials.wgsl`), as the integrator sees them: what a surface emits
+//! (`emitted`), how a path continues (`scatter`, the BSDF sampled), and, for BSDFs that light
+//! sampling can reach, their value toward a given direction (`bsdf`). The path loop uses only
+//! these; it never names a material. Random numbers drawn per bounce are fixed per material
+//! (lambertian 2, metal 2, dielectric 1, light 0) so both backends stay in step.
 
 use super::sampling::unit_vector;
 use super::shapes::Hit;
@@ -17,6 +20,30 @@ pub fn emitted(material: &Material, hit: &Hit) -> Vec3 {
             two_sided,
         } if hit.front_face || two_sided => radiance,
         _ => Vec3::ZERO,
+    }
+}
+
+/// Whether next-event estimation samples lights at this material: its BSDF is not a delta
+/// (metal and glass reflect into single directions that a light sample never picks) and not
+/// absent (lights).
+#[inline]
+pub fn samples_lights(material: &Material) -> bool {
+    matches!(material, Material::Lambertian { .. })
+}
+
+/// The BSDF toward unit direction `dir`, for light sampling and multiple importance sampling:
+/// `(weight, pdf)`, where `pdf` is the solid-angle density with which [`scatter`] picks `dir`
+/// and `weight` = BSDF x cosine / pdf (the factor a path sampled that way carries). `None` if
+/// `scatter` cannot pick `dir` (below the surface; delta or absent BSDFs).
+#[inline]
+pub fn bsdf(material: &Material, hit: &Hit, dir: Vec3) -> Option<(Vec3, f32)> {
+    match *material {
+        // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
+        Material::Lambertian { albedo, .. } => {
+            let cos = hit.normal.dot(dir);
+            (cos > 0.0).then_some((albedo, cos * std::f32::consts::FRAC_1_PI))
+        }
+        _ => None,
     }
 }
 
