@@ -7,7 +7,15 @@ struct Hit {
     normal: vec3f,      // faces the incoming ray
     material: u32,
     front_face: bool,   // the ray hit the outward (u x v) side
-    primitive: u32,     // spheres first, then quads
+    primitive: u32,     // packed: kind << PRIMITIVE_INDEX_BITS | index among that kind
+}
+
+fn primitive_kind(primitive: u32) -> u32 {
+    return primitive >> PRIMITIVE_INDEX_BITS;
+}
+
+fn primitive_index(primitive: u32) -> u32 {
+    return primitive & ((1u << PRIMITIVE_INDEX_BITS) - 1u);
 }
 
 //#if QUADS
@@ -38,7 +46,7 @@ struct Closest {
     t: f32,
     center: vec3f,      // sphere centre
     d: f32,             // quad: plane offset; sphere: radius
-    primitive: u32,
+    primitive: u32,     // packed, as in Hit
     material: u32,
     found: bool,
 }
@@ -61,7 +69,7 @@ fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
     if t > 0.0 && t < (*c).t {
         (*c).t = t;
         (*c).found = true;
-        (*c).primitive = index;
+        (*c).primitive = (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index;
         (*c).material = s.material;
         (*c).outward = (ray.origin + t * ray.dir - s.center) / s.radius;
         (*c).center = s.center;
@@ -76,7 +84,7 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
     if t > 0.0 && t < (*c).t {
         (*c).t = t;
         (*c).found = true;
-        (*c).primitive = index;
+        (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index;
         (*c).material = q.material;
         (*c).outward = q.normal;
         (*c).d = q.d;
@@ -98,7 +106,7 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 //#endif
 //#if QUADS
     for (var i = 0u; i < params.quad_count; i++) {
-        consider_quad(quads[i], params.sphere_count + i, ray, &c);
+        consider_quad(quads[i], i, ray, &c);
     }
 //#endif
 //#endif
@@ -114,7 +122,7 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     let p = abs(point);
     var error = POINT_ERROR * (max(p.x, max(p.y, p.z)) + abs(c.d));
 //#if SPHERES
-    if c.primitive < params.sphere_count {
+    if primitive_kind(c.primitive) == KIND_SPHERE {
         let from_center = along_ray - c.center;
         point = c.center + from_center * (abs(c.d) / length(from_center));
         let ce = abs(c.center);

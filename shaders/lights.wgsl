@@ -18,18 +18,20 @@ fn pick_light(u: f32) -> u32 {
     return last;
 }
 
-// 1 + the light index of a primitive (spheres first), or 0.
+// 1 + the light index of a (packed) primitive, or 0.
 fn light_of(primitive: u32) -> u32 {
+    let index = primitive_index(primitive);
 //#if SPHERES
-    if primitive < params.sphere_count {
-        return spheres[primitive].light;
+    if primitive_kind(primitive) == KIND_SPHERE {
+        return spheres[index].light;
     }
 //#endif
 //#if QUADS
-    return quads[primitive - params.sphere_count].light;
-//#else
-    return 0u;
+    if primitive_kind(primitive) == KIND_QUAD {
+        return quads[index].light;
+    }
 //#endif
+    return 0u;
 }
 
 fn light_at(i: u32) -> Light {

@@ -50,7 +50,7 @@ fn first_bounces_match_the_cpu() {
                                 &mut rng,
                             );
                             g.hit == 1
-                                && g.primitive == h.primitive
+                                && g.primitive == h.primitive.packed()
                                 && (Vec3::from(g.point) - h.point).length() <= 1e-4 * scale
                                 && (Vec3::from(g.normal) - h.normal).length() <= 1e-3
                                 && match scattered {

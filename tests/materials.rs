@@ -16,7 +16,7 @@ fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
         normal,
         front_face,
         material: 0,
-        primitive: 0,
+        primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
     }
 }
 

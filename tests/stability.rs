@@ -485,7 +485,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                     normal,
                     front_face,
                     material: 0,
-                    primitive: 0,
+                    primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
                 };
                 for k in 0..200 {
                     let mut rng = rt_gpu::rng::Rng::for_sample(k, 0, 5);
@@ -515,7 +515,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
         normal: Vec3::Y,
         front_face: false,
         material: 0,
-        primitive: 0,
+        primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
     };
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {

@@ -39,7 +39,7 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
             break;
         };
         let material = &scene.materials[hit.material as usize];
-        let light = hit_light(scene, hit.primitive);
+        let light = scene.light_of(hit.primitive);
         let mut weight = 1.0;
         if nee && bsdf_pdf > 0.0 && light > 0 {
             let l = &scene.lights[light as usize - 1];
@@ -78,17 +78,6 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
     total
 }
 
-/// 1 + the light index of primitive `primitive` (spheres first), or 0.
-#[inline]
-fn hit_light(scene: &FlatScene, primitive: u32) -> u32 {
-    let spheres = scene.spheres.len() as u32;
-    if primitive < spheres {
-        scene.spheres[primitive as usize].light
-    } else {
-        scene.quads[(primitive - spheres) as usize].light
-    }
-}
-
 /// One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
 /// arriving, times the MIS weight and the BSDF pdf over the light pdf, so that their product is
 /// the sample's contribution; `None` if the light is below the surface or occluded.
@@ -116,7 +105,7 @@ fn direct_light(
         dir: to_light.normalize(),
     };
     let shadow = intersect(scene, &shadow_ray)?;
-    if hit_light(scene, shadow.primitive) != index as u32 + 1 {
+    if scene.light_of(shadow.primitive) != index as u32 + 1 {
         return None;
     }
     let le = emitted(&scene.materials[shadow.material as usize], &shadow);

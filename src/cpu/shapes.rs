@@ -1,6 +1,6 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
-use crate::scene::flat::{FlatScene, Quad, Sphere};
+use crate::scene::flat::{FlatScene, PrimitiveRef, Quad, Sphere};
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,8 +27,8 @@ pub struct Hit {
     pub normal: Vec3,
     pub front_face: bool,
     pub material: u32,
-    /// Index into spheres, then quads (spheres first), for tests and debugging.
-    pub primitive: u32,
+    /// Which primitive was hit.
+    pub primitive: PrimitiveRef,
 }
 
 /// Distance along the ray to `sphere` within (t_min, t_max), if any.
@@ -78,19 +78,18 @@ pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
 /// The closest hit along `ray` beyond its origin.
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     let mut closest = f32::INFINITY;
-    let mut found: Option<(u32, Vec3)> = None;
+    let mut found: Option<(PrimitiveRef, Vec3)> = None;
     for (i, sphere) in scene.spheres.iter().enumerate() {
         if let Some(t) = hit_sphere(sphere, ray, 0.0, closest) {
             closest = t;
             let outward = (ray.at(t) - sphere.center) / sphere.radius;
-            found = Some((i as u32, outward));
+            found = Some((PrimitiveRef::Sphere(i as u32), outward));
         }
     }
-    let quad_base = scene.spheres.len() as u32;
     for (i, quad) in scene.quads.iter().enumerate() {
         if let Some(t) = hit_quad(quad, ray, 0.0, closest) {
             closest = t;
-            found = Some((quad_base + i as u32, quad.normal));
+            found = Some((PrimitiveRef::Quad(i as u32), quad.normal));
         }
     }
     let (primitive, outward) = found?;
@@ -101,17 +100,20 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     // t (which cancels in the sphere's near root), and that can dwarf the point's own
     // coordinates (a floor at y = 0 seen from 1e6 away), so the point is put back onto the
     // surface, whose own rounding follows the shape's coordinates.
-    let (material, point, error) = if primitive < quad_base {
-        let s = &scene.spheres[primitive as usize];
-        let from_center = along_ray - s.center;
-        let point = s.center + from_center * (s.radius.abs() / from_center.length());
-        let scale = s.center.abs().max_element() + s.radius.abs();
-        (s.material, point, POINT_ERROR * scale)
-    } else {
-        let q = &scene.quads[(primitive - quad_base) as usize];
-        let point = along_ray - (q.normal.dot(along_ray) - q.d) * q.normal;
-        let scale = point.abs().max_element() + q.d.abs();
-        (q.material, point, POINT_ERROR * scale)
+    let (material, point, error) = match primitive {
+        PrimitiveRef::Sphere(i) => {
+            let s = &scene.spheres[i as usize];
+            let from_center = along_ray - s.center;
+            let point = s.center + from_center * (s.radius.abs() / from_center.length());
+            let scale = s.center.abs().max_element() + s.radius.abs();
+            (s.material, point, POINT_ERROR * scale)
+        }
+        PrimitiveRef::Quad(i) => {
+            let q = &scene.quads[i as usize];
+            let point = along_ray - (q.normal.dot(along_ray) - q.d) * q.normal;
+            let scale = point.abs().max_element() + q.d.abs();
+            (q.material, point, POINT_ERROR * scale)
+        }
     };
     let front_face = ray.dir.dot(outward) < 0.0;
     Some(Hit {

@@ -229,6 +229,7 @@ gpu_struct! {
     /// The output of the `first_bounce` debug entry point, per pixel.
     pub struct GpuFirstBounce as "FirstBounce" {
         point: [f32; 3],
+        /// Packed: see `scene::flat::PrimitiveRef::packed`.
         primitive: u32,
         normal: [f32; 3],
         hit: u32,
@@ -241,12 +242,16 @@ gpu_struct! {
 /// Constants the CPU reference and the kernel share, as WGSL `const` declarations.
 fn wgsl_constants() -> String {
     use crate::cpu::shapes::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_NEAR_ORIGIN};
-    let constants: [(&str, String); 12] = [
+    use crate::scene::flat::{KIND_QUAD, KIND_SPHERE, PRIMITIVE_INDEX_BITS};
+    let constants: [(&str, String); 15] = [
         ("MAT_LAMBERTIAN", MAT_LAMBERTIAN.literal()),
         ("MAT_METAL", MAT_METAL.literal()),
         ("MAT_DIELECTRIC", MAT_DIELECTRIC.literal()),
         ("MAT_LIGHT", MAT_LIGHT.literal()),
         ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
+        ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
+        ("KIND_SPHERE", KIND_SPHERE.literal()),
+        ("KIND_QUAD", KIND_QUAD.literal()),
         (
             "MAX_SURVIVAL",
             crate::cpu::integrator::MAX_SURVIVAL.literal(),

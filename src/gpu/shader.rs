@@ -197,7 +197,8 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     Ok(out)
 }
 
-/// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does).
+/// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does), each
+/// with its index among its kind.
 fn inline_scene(scene: &FlatScene, features: &Features) -> String {
     let buffers = SceneBuffers::new(scene);
     let mut out = String::from(
@@ -212,12 +213,10 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
         }
     }
     if features.quads {
-        let base = scene.spheres.len();
         for (i, q) in buffers.quads.iter().take(scene.quads.len()).enumerate() {
             out.push_str(&format!(
-                "    consider_quad({}, {}u, ray, c);\n",
-                q.wgsl_constructor(),
-                base + i
+                "    consider_quad({}, {i}u, ray, c);\n",
+                q.wgsl_constructor()
             ));
         }
     }
@@ -276,11 +275,8 @@ fn inline_lights(scene: &FlatScene) -> String {
     }
     out.push_str(&format!("    return {last}u;\n}}\n\n"));
     let emitters = scene
-        .spheres
-        .iter()
-        .map(|s| s.light)
-        .chain(scene.quads.iter().map(|q| q.light))
-        .enumerate()
+        .primitives()
+        .map(|p| (p.packed() as usize, scene.light_of(p)))
         .filter(|(_, light)| *light > 0)
         .map(|(primitive, light)| (primitive, format!("{light}u")));
     out.push_str(&switch_function(

@@ -80,6 +80,41 @@ pub struct CameraFrame {
     pub lens_radius: f32,
 }
 
+/// A primitive of a flat scene: its kind and its index among the primitives of that kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PrimitiveRef {
+    Sphere(u32),
+    Quad(u32),
+}
+
+/// A packed [`PrimitiveRef`] (as the kernel passes it) holds the kind above this many bits of
+/// index.
+pub const PRIMITIVE_INDEX_BITS: u32 = 28;
+/// Most primitives of one kind a scene may have.
+pub const MAX_PRIMITIVES_PER_KIND: usize = 1 << PRIMITIVE_INDEX_BITS;
+pub const KIND_SPHERE: u32 = 0;
+pub const KIND_QUAD: u32 = 1;
+
+impl PrimitiveRef {
+    /// One number for both backends: kind << PRIMITIVE_INDEX_BITS | index.
+    pub fn packed(self) -> u32 {
+        match self {
+            PrimitiveRef::Sphere(i) => KIND_SPHERE << PRIMITIVE_INDEX_BITS | i,
+            PrimitiveRef::Quad(i) => KIND_QUAD << PRIMITIVE_INDEX_BITS | i,
+        }
+    }
+
+    /// The reference `packed` came from, if it is one.
+    pub fn unpacked(packed: u32) -> Option<Self> {
+        let index = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
+        match packed >> PRIMITIVE_INDEX_BITS {
+            KIND_SPHERE => Some(PrimitiveRef::Sphere(index)),
+            KIND_QUAD => Some(PrimitiveRef::Quad(index)),
+            _ => None,
+        }
+    }
+}
+
 /// Flat scenes are re-centred near the camera in steps of this size (a power of two, so the
 /// shift is exact): a scene whose camera is within this distance of the origin is not moved.
 pub const RECENTRE_STEP: f64 = 1024.0;
@@ -188,6 +223,11 @@ impl FlatScene {
                 }
             }
         }
+        if spheres.len() > MAX_PRIMITIVES_PER_KIND || quads.len() > MAX_PRIMITIVES_PER_KIND {
+            return Err(SceneError::Invalid(format!(
+                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres and as many quads"
+            )));
+        }
         let mut flat = FlatScene {
             origin,
             camera: camera_frame(scene, origin, width, height),
@@ -201,7 +241,23 @@ impl FlatScene {
         Ok(flat)
     }
 
-    /// Fills `lights` with every emitting primitive (spheres first, as primitives are numbered)
+    /// Every primitive, spheres then quads (the order both backends test them in).
+    pub fn primitives(&self) -> impl Iterator<Item = PrimitiveRef> + '_ {
+        (0..self.spheres.len() as u32)
+            .map(PrimitiveRef::Sphere)
+            .chain((0..self.quads.len() as u32).map(PrimitiveRef::Quad))
+    }
+
+    /// 1 + the index in `lights` of primitive `p`, or 0 when it does not emit.
+    #[inline]
+    pub fn light_of(&self, p: PrimitiveRef) -> u32 {
+        match p {
+            PrimitiveRef::Sphere(i) => self.spheres[i as usize].light,
+            PrimitiveRef::Quad(i) => self.quads[i as usize].light,
+        }
+    }
+
+    /// Fills `lights` with every emitting primitive (spheres, then quads)
     /// and links each primitive to its light. Lights are picked in proportion to their power,
     /// pi * luminance * area (twice that for two-sided ones).
     pub fn collect_lights(&mut self) {
@@ -316,6 +372,23 @@ fn camera_frame(scene: &Scene, origin: DVec3, width: u32, height: u32) -> Camera
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn primitive_refs_pack_and_unpack() {
+        for p in [
+            PrimitiveRef::Sphere(0),
+            PrimitiveRef::Sphere(MAX_PRIMITIVES_PER_KIND as u32 - 1),
+            PrimitiveRef::Quad(0),
+            PrimitiveRef::Quad(12345),
+        ] {
+            assert_eq!(PrimitiveRef::unpacked(p.packed()), Some(p));
+        }
+        assert_ne!(
+            PrimitiveRef::Sphere(3).packed(),
+            PrimitiveRef::Quad(3).packed()
+        );
+        assert_eq!(PrimitiveRef::unpacked(u32::MAX), None);
+    }
 
     #[test]
     fn box_faces_point_outward() {
