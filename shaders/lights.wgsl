@@ -55,6 +55,12 @@ fn basis(n: vec3f) -> Basis {
     );
 }
 
+// The kernel's encoding of src/scene/flat.rs's LightShape: a sphere is the light with a
+// radius (see gpu_light in src/gpu/layout.rs); quads have radius 0.
+fn light_is_sphere(l: Light) -> bool {
+    return l.radius > 0.0;
+}
+
 // The cone a sphere subtends from x: unit axis and 1 - cos(half angle); w = 0 when x is
 // inside the sphere or the cone is too thin to represent.
 fn sphere_cone(center: vec3f, radius: f32, x: vec3f) -> vec4f {
@@ -85,7 +91,7 @@ fn quad_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
 
 // Solid-angle pdf of light sampling choosing the direction from x that reaches l at p.
 fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
-    if l.radius > 0.0 {
+    if light_is_sphere(l) {
         let cone = sphere_cone(l.position, l.radius, x);
         if cone.w > 0.0 {
             return l.pick / (2.0 * PI * cone.w);
@@ -105,7 +111,7 @@ struct LightSample {
 fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
     var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
 //#if SPHERES
-    if l.radius > 0.0 {
+    if light_is_sphere(l) {
         let cone = sphere_cone(l.position, l.radius, x);
         if cone.w > 0.0 {
             let axis = cone.xyz;

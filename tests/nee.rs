@@ -16,7 +16,7 @@ use rt_gpu::cpu::shapes::{Ray, hit_quad, hit_sphere};
 use rt_gpu::gpu::Tuning;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
-use rt_gpu::scene::flat::{Light, Quad, Sphere};
+use rt_gpu::scene::flat::{Light, LightShape, Quad, Sphere};
 use rt_gpu::scene::{Material, Scene, Shape};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
@@ -267,27 +267,26 @@ const X: Vec3 = Vec3::new(0.3, -0.2, 0.1);
 
 fn quad_light(quad: &Quad) -> Light {
     Light {
-        position: quad.q,
+        shape: LightShape::Quad {
+            corner: quad.q,
+            u: quad.u,
+            v: quad.v,
+            normal: quad.normal,
+            inv_area: 1.0 / quad.u.cross(quad.v).length(),
+        },
         cdf: 1.0,
-        u: quad.u,
         pick: 1.0,
-        v: quad.v,
-        radius: 0.0,
-        normal: quad.normal,
-        inv_area: 1.0 / quad.u.cross(quad.v).length(),
     }
 }
 
 fn sphere_light() -> Light {
     Light {
-        position: Vec3::new(1.0, 2.0, -1.5),
+        shape: LightShape::Sphere {
+            center: Vec3::new(1.0, 2.0, -1.5),
+            radius: 0.6,
+        },
         cdf: 1.0,
-        u: Vec3::ZERO,
         pick: 1.0,
-        v: Vec3::ZERO,
-        radius: 0.6,
-        normal: Vec3::ZERO,
-        inv_area: 0.0,
     }
 }
 
@@ -301,37 +300,36 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
     let quad = tilted_quad();
     let reaches = |dir: Vec3| -> Option<Vec3> {
         let ray = Ray { origin: X, dir };
-        let t = if light.is_sphere() {
-            let s = Sphere {
-                center: light.position,
-                radius: light.radius,
-                material: 0,
-                light: 1,
-            };
-            hit_sphere(&s, &ray, 0.0, f32::INFINITY)
-        } else {
-            hit_quad(&quad, &ray, 0.0, f32::INFINITY)
+        let t = match light.shape {
+            LightShape::Sphere { center, radius } => {
+                let s = Sphere {
+                    center,
+                    radius,
+                    material: 0,
+                    light: 1,
+                };
+                hit_sphere(&s, &ray, 0.0, f32::INFINITY)
+            }
+            LightShape::Quad { .. } => hit_quad(&quad, &ray, 0.0, f32::INFINITY),
         };
         t.map(|t| ray.at(t))
     };
     let pdf = |dir: Vec3| reaches(dir).map_or(0.0, |p| lights::pdf(light, X, p, dir)) as f64;
-    let centre = if light.is_sphere() {
-        light.position
-    } else {
-        light.position + 0.5 * (light.u + light.v)
+    let centre = match light.shape {
+        LightShape::Sphere { center, .. } => center,
+        LightShape::Quad { corner, u, v, .. } => corner + 0.5 * (u + v),
     };
     let axis = (centre - X).normalize();
     let (t, b) = lights::basis(axis);
     let c_max = 1.2
-        * if light.is_sphere() {
-            lights::sphere_cone(light.position, light.radius, X)
-                .expect("outside")
-                .1 as f64
-        } else {
-            [Vec3::ZERO, light.u, light.v, light.u + light.v]
+        * match light.shape {
+            LightShape::Sphere { center, radius } => {
+                lights::sphere_cone(center, radius, X).expect("outside").1 as f64
+            }
+            LightShape::Quad { corner, u, v, .. } => [Vec3::ZERO, u, v, u + v]
                 .iter()
-                .map(|&c| 1.0 - axis.dot((light.position + c - X).normalize()) as f64)
-                .fold(0.0, f64::max)
+                .map(|&c| 1.0 - axis.dot((corner + c - X).normalize()) as f64)
+                .fold(0.0, f64::max),
         };
     let (n_theta, n_phi, sub) = (24usize, 24usize, 24usize);
     let cell_solid_angle = c_max * 2.0 * PI / (n_theta * n_phi) as f64;
@@ -406,8 +404,8 @@ fn light_sampling_directions_follow_their_pdf() {
         let p = chi_square_p(name, &light, |u1, u2| {
             let s = lights::sample(&light, X, u1, u2).expect("samples");
             // The point it reports is on the light, along the direction.
-            let on_light = if light.is_sphere() {
-                ((s.point - light.position).length() - light.radius).abs() < 1e-5
+            let on_light = if let LightShape::Sphere { center, radius } = light.shape {
+                ((s.point - center).length() - radius).abs() < 1e-5
             } else {
                 (s.point - quad.q).dot(quad.normal).abs() < 1e-5
             };

@@ -3,7 +3,7 @@
 //! multiple importance sampling also needs for directions BSDF sampling found.
 
 use super::shapes::{Ray, hit_sphere};
-use crate::scene::flat::{FlatScene, Light, Sphere};
+use crate::scene::flat::{FlatScene, Light, LightShape, Sphere};
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -51,28 +51,30 @@ pub fn sphere_cone(center: Vec3, radius: f32, x: Vec3) -> Option<(Vec3, f32)> {
 }
 
 /// Solid-angle pdf of light sampling choosing a quad light's point `p` from `x`, seen along
-/// unit `dir` (includes the pick probability); 0 where light sampling never goes.
+/// unit `dir`, for a light picked with probability `pick` whose unit normal is `normal` and
+/// whose area is 1 / `inv_area`; 0 where light sampling never goes.
 #[inline]
-pub fn quad_pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
-    let cos_light = light.normal.dot(dir).abs();
+pub fn quad_pdf(pick: f32, normal: Vec3, inv_area: f32, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
+    let cos_light = normal.dot(dir).abs();
     if !(cos_light > MIN_LIGHT_COSINE) {
         return 0.0;
     }
     let dist2 = (p - x).length_squared();
-    light.pick * light.inv_area * dist2 / cos_light
+    pick * inv_area * dist2 / cos_light
 }
 
 /// Solid-angle pdf of light sampling choosing direction toward `light` from `x`, for a
 /// direction that reaches the light at `p` (includes the pick probability).
 #[inline]
 pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
-    if light.is_sphere() {
-        match sphere_cone(light.position, light.radius, x) {
+    match light.shape {
+        LightShape::Sphere { center, radius } => match sphere_cone(center, radius, x) {
             Some((_, one_minus_cos)) => light.pick / (2.0 * PI * one_minus_cos),
             None => 0.0,
-        }
-    } else {
-        quad_pdf(light, x, p, dir)
+        },
+        LightShape::Quad {
+            normal, inv_area, ..
+        } => quad_pdf(light.pick, normal, inv_area, x, p, dir),
     }
 }
 
@@ -88,41 +90,50 @@ pub struct LightSample {
 /// A light sample from two uniform numbers; `None` where the light cannot be sampled from `x`.
 #[inline]
 pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
-    if light.is_sphere() {
-        let (axis, one_minus_cos) = sphere_cone(light.position, light.radius, x)?;
-        // Uniform in the cone: 1 - cos(theta) uniform in [0, 1 - cos_max]; sin^2 from it
-        // directly, so thin cones keep their width.
-        let a = u1 * one_minus_cos;
-        let cos_theta = 1.0 - a;
-        let sin_theta = (a * (2.0 - a)).max(0.0).sqrt();
-        let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
-        let (t, b) = basis(axis);
-        let dir = (cos_theta * axis + sin_theta * (cos_phi * t + sin_phi * b)).normalize();
-        // Where it meets the sphere (a direction in the cone, from outside: the near root; at
-        // the cone's rim, where rounding can miss, the closest approach).
-        let sphere = Sphere {
-            center: light.position,
-            radius: light.radius,
-            material: 0,
-            light: 0,
-        };
-        let t = hit_sphere(&sphere, &Ray { origin: x, dir }, 0.0, f32::INFINITY)
-            .unwrap_or_else(|| dir.dot(light.position - x));
-        Some(LightSample {
-            dir,
-            pdf: light.pick / (2.0 * PI * one_minus_cos),
-            point: x + t * dir,
-        })
-    } else {
-        let point = light.position + u1 * light.u + u2 * light.v;
-        let to_light = point - x;
-        let dist2 = to_light.length_squared();
-        if !(dist2 > 0.0) {
-            return None;
+    match light.shape {
+        LightShape::Sphere { center, radius } => {
+            let (axis, one_minus_cos) = sphere_cone(center, radius, x)?;
+            // Uniform in the cone: 1 - cos(theta) uniform in [0, 1 - cos_max]; sin^2 from it
+            // directly, so thin cones keep their width.
+            let a = u1 * one_minus_cos;
+            let cos_theta = 1.0 - a;
+            let sin_theta = (a * (2.0 - a)).max(0.0).sqrt();
+            let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
+            let (t, b) = basis(axis);
+            let dir = (cos_theta * axis + sin_theta * (cos_phi * t + sin_phi * b)).normalize();
+            // Where it meets the sphere (a direction in the cone, from outside: the near root;
+            // at the cone's rim, where rounding can miss, the closest approach).
+            let sphere = Sphere {
+                center,
+                radius,
+                material: 0,
+                light: 0,
+            };
+            let t = hit_sphere(&sphere, &Ray { origin: x, dir }, 0.0, f32::INFINITY)
+                .unwrap_or_else(|| dir.dot(center - x));
+            Some(LightSample {
+                dir,
+                pdf: light.pick / (2.0 * PI * one_minus_cos),
+                point: x + t * dir,
+            })
         }
-        let dir = to_light / dist2.sqrt();
-        let pdf = quad_pdf(light, x, point, dir);
-        (pdf > 0.0).then_some(LightSample { dir, pdf, point })
+        LightShape::Quad {
+            corner,
+            u,
+            v,
+            normal,
+            inv_area,
+        } => {
+            let point = corner + u1 * u + u2 * v;
+            let to_light = point - x;
+            let dist2 = to_light.length_squared();
+            if !(dist2 > 0.0) {
+                return None;
+            }
+            let dir = to_light / dist2.sqrt();
+            let pdf = quad_pdf(light.pick, normal, inv_area, x, point, dir);
+            (pdf > 0.0).then_some(LightSample { dir, pdf, point })
+        }
     }
 }
 

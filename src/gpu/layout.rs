@@ -3,7 +3,7 @@
 //! `tests/gpu_layout.rs` checks sizes and field offsets against naga's layout of the WGSL.
 
 use crate::options::RenderOptions;
-use crate::scene::flat::FlatScene;
+use crate::scene::flat::{FlatScene, Light, LightShape};
 use crate::scene::{Background, Material};
 use bytemuck::{Pod, Zeroable};
 
@@ -369,20 +369,7 @@ impl SceneBuffers {
         if materials.is_empty() {
             materials.push(GpuMaterial::default());
         }
-        let mut lights: Vec<GpuLight> = scene
-            .lights
-            .iter()
-            .map(|l| GpuLight {
-                position: l.position.to_array(),
-                cdf: l.cdf,
-                u: l.u.to_array(),
-                pick: l.pick,
-                v: l.v.to_array(),
-                radius: l.radius,
-                normal: l.normal.to_array(),
-                inv_area: l.inv_area,
-            })
-            .collect();
+        let mut lights: Vec<GpuLight> = scene.lights.iter().map(gpu_light).collect();
         if lights.is_empty() {
             lights.push(GpuLight::default());
         }
@@ -393,6 +380,35 @@ impl SceneBuffers {
             lights,
         }
     }
+}
+
+/// A light as the kernel reads it: a sphere is the one with a radius (quads have radius 0).
+fn gpu_light(l: &Light) -> GpuLight {
+    let mut out = GpuLight {
+        cdf: l.cdf,
+        pick: l.pick,
+        ..Default::default()
+    };
+    match l.shape {
+        LightShape::Sphere { center, radius } => {
+            out.position = center.to_array();
+            out.radius = radius;
+        }
+        LightShape::Quad {
+            corner,
+            u,
+            v,
+            normal,
+            inv_area,
+        } => {
+            out.position = corner.to_array();
+            out.u = u.to_array();
+            out.v = v.to_array();
+            out.normal = normal.to_array();
+            out.inv_area = inv_area;
+        }
+    }
+    out
 }
 
 fn gpu_material(m: &Material) -> GpuMaterial {

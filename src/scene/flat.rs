@@ -138,31 +138,30 @@ pub struct FlatScene {
     pub lights: Vec<Light>,
 }
 
-/// An emitting primitive as light sampling sees it: a quad (sampled uniformly on its area) or
-/// a sphere (sampled uniformly in the cone it subtends), picked in proportion to its power.
+/// An emitting primitive as light sampling sees it, picked in proportion to its power.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
-    /// Quad corner `q`, or sphere centre.
-    pub position: Vec3,
+    pub shape: LightShape,
     /// Chance of picking this light or one before it; the last light's is exactly 1.
     pub cdf: f32,
-    /// Quad edges; zero for a sphere.
-    pub u: Vec3,
     /// Chance of picking this light.
     pub pick: f32,
-    pub v: Vec3,
-    /// Sphere: |radius|; quad: 0.
-    pub radius: f32,
-    /// Quad: unit normal `u x v / |u x v|`.
-    pub normal: Vec3,
-    /// Quad: 1 / area.
-    pub inv_area: f32,
 }
 
-impl Light {
-    pub fn is_sphere(&self) -> bool {
-        self.radius > 0.0
-    }
+/// How a light is sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightShape {
+    /// Uniformly in the cone it subtends; `radius` is |radius| (a hollow sphere emits too).
+    Sphere { center: Vec3, radius: f32 },
+    /// Uniformly on its area, `corner + a u + b v`.
+    Quad {
+        corner: Vec3,
+        u: Vec3,
+        v: Vec3,
+        /// Unit normal `u x v / |u x v|`.
+        normal: Vec3,
+        inv_area: f32,
+    },
 }
 
 /// Radiance and whether both faces emit, for materials that emit.
@@ -274,14 +273,12 @@ impl FlatScene {
                 let sides = if two_sided { 2.0 } else { 1.0 };
                 powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
                 lights.push(Light {
-                    position: sphere.center,
+                    shape: LightShape::Sphere {
+                        center: sphere.center,
+                        radius: r,
+                    },
                     cdf: 0.0,
-                    u: Vec3::ZERO,
                     pick: 0.0,
-                    v: Vec3::ZERO,
-                    radius: r,
-                    normal: Vec3::ZERO,
-                    inv_area: 0.0,
                 });
                 sphere.light = lights.len() as u32;
             }
@@ -295,14 +292,15 @@ impl FlatScene {
                 let sides = if two_sided { 2.0 } else { 1.0 };
                 powers.push(std::f64::consts::PI * luminance(radiance) * area as f64 * sides);
                 lights.push(Light {
-                    position: quad.q,
+                    shape: LightShape::Quad {
+                        corner: quad.q,
+                        u: quad.u,
+                        v: quad.v,
+                        normal: quad.normal,
+                        inv_area: 1.0 / area,
+                    },
                     cdf: 0.0,
-                    u: quad.u,
                     pick: 0.0,
-                    v: quad.v,
-                    radius: 0.0,
-                    normal: quad.normal,
-                    inv_area: 1.0 / area,
                 });
                 quad.light = lights.len() as u32;
             }
