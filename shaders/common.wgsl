@@ -7,9 +7,11 @@ struct Ray {
     dir: vec3f,
 }
 
-// Storage, not uniform: lavapipe compiles a shader variant for every distinct uniform value it
-// can fold, and these change every dispatch (see GpuRenderer::render).
-@group(0) @binding(0) var<storage, read> params: Params;
+// Per render: uniform, which lavapipe folds into the kernel (constant loop bounds).
+@group(0) @binding(0) var<uniform> params: Params;
+// Per dispatch: storage, since lavapipe compiles (and keeps) a kernel variant for every new
+// uniform value it folds (see GpuDispatch in src/gpu/layout.rs).
+@group(0) @binding(7) var<storage, read> dispatch: Dispatch;
 // Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
 //#if UNIFORM_SCENE

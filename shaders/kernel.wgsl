@@ -14,7 +14,7 @@ fn all_finite(v: vec3f) -> bool {
 
 // Workgroups overhang the tile's edges; those invocations do nothing.
 fn in_tile(gid: vec3u) -> bool {
-    return gid.x < params.tile_size.x && gid.y < params.tile_size.y;
+    return gid.x < dispatch.tile_size.x && gid.y < dispatch.tile_size.y;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
@@ -22,10 +22,10 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
         return;
     }
-    let x = params.tile_origin.x + gid.x;
-    let y = params.tile_origin.y + gid.y;
+    let x = dispatch.tile_origin.x + gid.x;
+    let y = dispatch.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
-    let slot = 3u * (gid.y * params.tile_size.x + gid.x);
+    let slot = 3u * (gid.y * dispatch.tile_size.x + gid.x);
     let first = accum[slot];
     var mean = first.xyz;
     var invalid = bitcast<u32>(first.w);
@@ -33,15 +33,15 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var compensation = second.xyz;
     var count = bitcast<u32>(second.w);
     var m2 = accum[slot + 2u].xyz;
-    for (var s = 0u; s < params.sample_count; s++) {
-        var rng = rng_for_sample(pixel, params.first_sample + s, params.seed);
+    for (var s = 0u; s < dispatch.sample_count; s++) {
+        var rng = rng_for_sample(pixel, dispatch.first_sample + s, dispatch.seed);
         let ray = generate_ray(x, y, &rng);
         var l = radiance(ray, &rng);
         if !all_finite(l) {
             l = vec3f(0.0);
             invalid += 1u;
         }
-        let n = f32(params.samples_before + s + 1u);
+        let n = f32(dispatch.samples_before + s + 1u);
         let delta = l - mean;
         // Kahan-compensated mean += delta / n. Drivers may compile with fast-math, under which
         // (mean + step - mean) - step folds to 0; passing `next` through a select on a value
@@ -79,10 +79,10 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
         return;
     }
-    let x = params.tile_origin.x + gid.x;
-    let y = params.tile_origin.y + gid.y;
+    let x = dispatch.tile_origin.x + gid.x;
+    let y = dispatch.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
-    var rng = rng_for_sample(pixel, params.first_sample, params.seed);
+    var rng = rng_for_sample(pixel, dispatch.first_sample, dispatch.seed);
     let ray = generate_ray(x, y, &rng);
     var hit: Hit;
     var out = trace_debug(ray, &hit);
@@ -92,7 +92,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
         out.dir = s.dir;
         out.scattered = select(0u, 1u, s.ok);
     }
-    bounces[gid.y * params.tile_size.x + gid.x] = out;
+    bounces[gid.y * dispatch.tile_size.x + gid.x] = out;
 }
 
 // Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:
@@ -102,7 +102,7 @@ fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid) {
         return;
     }
-    let slot = gid.y * params.tile_size.x + gid.x;
+    let slot = gid.y * dispatch.tile_size.x + gid.x;
     var hit: Hit;
     bounces[slot] = trace_debug(Ray(bounces[slot].point, bounces[slot].dir), &hit);
 }

@@ -36,7 +36,7 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
     // The declarations are generated from the Rust structs; naga lays them out independently.
     let layouts = rt_gpu::gpu::layout::shared_layouts();
-    assert_eq!(layouts.len(), 6);
+    assert_eq!(layouts.len(), 7);
     for (name, rust_size, rust_fields) in layouts {
         let ty = module
             .types

@@ -187,6 +187,8 @@ gpu_struct! {
 }
 
 gpu_struct! {
+    /// What stays the same for a whole render: a uniform buffer, which drivers such as lavapipe
+    /// fold into the kernel (one variant per render: constant loop bounds).
     pub struct GpuParams as "Params" {
         origin: [f32; 3],
         lens_radius: f32,
@@ -197,25 +199,33 @@ gpu_struct! {
         vertical: [f32; 3],
         max_depth: u32,
         right: [f32; 3],
-        seed: u32,
-        up: [f32; 3],
-        /// Random-stream index of this dispatch's first sample.
-        first_sample: u32,
-        background: [f32; 3],
-        /// Samples per pixel in this dispatch.
-        sample_count: u32,
-        tile_origin: [u32; 2],
-        tile_size: [u32; 2],
         sphere_count: u32,
+        up: [f32; 3],
         quad_count: u32,
-        /// Samples already in the accumulator.
-        samples_before: u32,
+        background: [f32; 3],
+        light_count: u32,
         /// 1: sky gradient background.
         sky: u32,
-        light_count: u32,
         /// Russian roulette from this many segments on; 0: off.
         roulette_depth: u32,
         _pad: [u32; 2],
+    }
+}
+
+gpu_struct! {
+    /// What changes from dispatch to dispatch (and the seed, which changes between the renders
+    /// of one session): a storage buffer, never folded into the kernel. As uniforms, lavapipe
+    /// compiled and kept a kernel variant for every new value: about 1 MB per dispatch.
+    pub struct GpuDispatch as "Dispatch" {
+        tile_origin: [u32; 2],
+        tile_size: [u32; 2],
+        /// Random-stream index of this dispatch's first sample.
+        first_sample: u32,
+        /// Samples per pixel in this dispatch.
+        sample_count: u32,
+        /// Samples already in the accumulator.
+        samples_before: u32,
+        seed: u32,
     }
 }
 
@@ -301,6 +311,7 @@ pub fn shared_layouts() -> Vec<StructLayout> {
         layout_of::<GpuLight>(),
         layout_of::<GpuMaterial>(),
         layout_of::<GpuParams>(),
+        layout_of::<GpuDispatch>(),
         layout_of::<GpuFirstBounce>(),
     ]
 }
@@ -316,6 +327,7 @@ pub fn wgsl_shared() -> String {
         GpuLight::wgsl_declaration(),
         GpuMaterial::wgsl_declaration(),
         GpuParams::wgsl_declaration(),
+        GpuDispatch::wgsl_declaration(),
         GpuFirstBounce::wgsl_declaration(),
     ] {
         out.push('\n');
@@ -443,7 +455,7 @@ fn gpu_material(m: &Material) -> GpuMaterial {
     }
 }
 
-/// Parameters for a dispatch over the whole image; the renderer sets the tile and sample range.
+/// The per-render parameters of rendering `scene` with `opts`.
 pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
     let c = &scene.camera;
     let (background, sky) = match scene.background {
@@ -460,19 +472,26 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         vertical: c.vertical.to_array(),
         max_depth: opts.max_depth,
         right: c.right.to_array(),
-        seed: opts.seed,
-        up: c.up.to_array(),
-        first_sample: opts.first_sample,
-        background,
-        sample_count: 0,
-        tile_origin: [0, 0],
-        tile_size: [opts.width, opts.height],
         sphere_count: scene.spheres.len() as u32,
+        up: c.up.to_array(),
         quad_count: scene.quads.len() as u32,
-        samples_before: 0,
-        sky,
+        background,
         light_count: scene.lights.len() as u32,
+        sky,
         roulette_depth: opts.roulette_depth,
         _pad: [0; 2],
+    }
+}
+
+/// A dispatch over the whole image from `opts.first_sample`, no samples yet; the renderer sets
+/// the tile and the sample range.
+pub fn whole_image_dispatch(opts: &RenderOptions) -> GpuDispatch {
+    GpuDispatch {
+        tile_origin: [0, 0],
+        tile_size: [opts.width, opts.height],
+        first_sample: opts.first_sample,
+        sample_count: 0,
+        samples_before: 0,
+        seed: opts.seed,
     }
 }

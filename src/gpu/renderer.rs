@@ -3,7 +3,8 @@
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
-    ACCUM_BYTES_PER_PIXEL, GpuFirstBounce, GpuParams, SceneBuffers, WORKGROUP_SIZE, base_params,
+    ACCUM_BYTES_PER_PIXEL, GpuDispatch, GpuFirstBounce, SceneBuffers, WORKGROUP_SIZE, base_params,
+    whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -103,13 +104,14 @@ impl GpuRenderer {
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &[
-                buffer_entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(0, wgpu::BufferBindingType::Uniform),
                 buffer_entry(1, scene_ty),
                 buffer_entry(2, scene_ty),
                 buffer_entry(3, scene_ty),
                 buffer_entry(4, read_write),
                 buffer_entry(5, read_write),
                 buffer_entry(6, scene_ty),
+                buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -197,7 +199,7 @@ impl GpuRenderer {
     fn bind_group(
         &self,
         kernel: &Kernel,
-        params: &wgpu::Buffer,
+        [params, dispatch]: [&wgpu::Buffer; 2],
         scene: &[wgpu::Buffer; 4],
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
@@ -221,7 +223,18 @@ impl GpuRenderer {
                     entry(4, accum),
                     entry(5, debug),
                     entry(6, &scene[3]),
+                    entry(7, dispatch),
                 ],
+            })
+    }
+
+    fn uniform_buffer(&self, label: &str, contents: &[u8]) -> wgpu::Buffer {
+        self.ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::UNIFORM,
             })
     }
 
@@ -299,12 +312,14 @@ impl GpuRenderer {
         let mut sizer = DispatchSizer::new(width, max_tile_pixels, max_slice, *tuning);
         let tile_rows = sizer.max_tile_rows().min(height);
         let scene_buffers = self.scene_buffers(scene, &kernel.features);
-        // Params change every dispatch, so they live in a storage buffer: lavapipe folds the
-        // values of uniform buffers into the shader and JIT-compiles (and keeps) one variant
-        // per distinct value, which leaked about 1 MB per dispatch and cost time.
-        let params_buffer = self.buffer(
-            "params",
-            std::mem::size_of::<GpuParams>() as u64,
+        // Per-render params are uniform (lavapipe folds them into the kernel: one variant per
+        // render); what changes every dispatch is in storage (folded, each new value compiled
+        // and kept a variant: ~1 MB per dispatch).
+        let params_buffer =
+            self.uniform_buffer("params", bytemuck::bytes_of(&base_params(scene, opts)));
+        let dispatch_buffer = self.buffer(
+            "dispatch",
+            std::mem::size_of::<GpuDispatch>() as u64,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let debug = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
@@ -316,18 +331,23 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
         );
-        let bind_group = self.bind_group(kernel, &params_buffer, &scene_buffers, &accum, &debug);
+        let bind_group = self.bind_group(
+            kernel,
+            [&params_buffer, &dispatch_buffer],
+            &scene_buffers,
+            &accum,
+            &debug,
+        );
         let timer = self.ctx.timestamps.then(|| DispatchTimer::new(self));
 
         // Drivers such as lavapipe compile a pipeline at its first dispatch: run one empty
         // dispatch (zero samples) first so compilation is not timed as, or inside, a slice.
         {
-            let mut params = base_params(scene, opts);
-            params.tile_size = [width, 1];
-            params.sample_count = 0;
+            let mut dispatch = whole_image_dispatch(opts);
+            dispatch.tile_size = [width, 1];
             self.ctx
                 .queue
-                .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&params));
+                .write_buffer(&dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -358,15 +378,17 @@ impl GpuRenderer {
             let mut done = 0;
             while done < opts.spp {
                 let count = slice.min(opts.spp - done);
-                let mut params = base_params(scene, opts);
-                params.tile_origin = [0, y0];
-                params.tile_size = [width, rows];
-                params.first_sample = opts.first_sample + done;
-                params.samples_before = done;
-                params.sample_count = count;
+                let dispatch = GpuDispatch {
+                    tile_origin: [0, y0],
+                    tile_size: [width, rows],
+                    first_sample: opts.first_sample + done,
+                    samples_before: done,
+                    sample_count: count,
+                    ..whole_image_dispatch(opts)
+                };
                 self.ctx
                     .queue
-                    .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&params));
+                    .write_buffer(&dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
 
                 let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
                 {
@@ -497,17 +519,25 @@ impl GpuRenderer {
                 contents: &contents,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             });
-        let params_buffer = self
-            .ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("params"),
-                contents: bytemuck::bytes_of(&base_params(scene, opts)),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
+        let params_buffer =
+            self.uniform_buffer("params", bytemuck::bytes_of(&base_params(scene, opts)));
+        let dispatch_buffer =
+            self.ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("dispatch"),
+                    contents: bytemuck::bytes_of(&whole_image_dispatch(opts)),
+                    usage: wgpu::BufferUsages::STORAGE,
+                });
         let accum = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
         let buffers = self.scene_buffers(scene, &kernel.features);
-        let bind_group = self.bind_group(&kernel, &params_buffer, &buffers, &accum, &out);
+        let bind_group = self.bind_group(
+            &kernel,
+            [&params_buffer, &dispatch_buffer],
+            &buffers,
+            &accum,
+            &out,
+        );
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
