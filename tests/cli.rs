@@ -4,6 +4,9 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+/// A render that takes milliseconds (add `-o FILE`).
+const TINY_CPU_RENDER: &[&str] = &["cornell", "--backend", "cpu", "--spp", "1", "--size", "4x4"];
+
 fn rt_gpu(args: &[&str], dir: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
         .args(args)
@@ -437,20 +440,7 @@ fn a_symlinked_output_stays_a_link() {
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("real.png"), b"old").expect("write");
     std::os::unix::fs::symlink("real.png", dir.path().join("link.png")).expect("symlink");
-    let out = rt_gpu(
-        &[
-            "cornell",
-            "--backend",
-            "cpu",
-            "--spp",
-            "1",
-            "--size",
-            "4x4",
-            "-o",
-            "link.png",
-        ],
-        dir.path(),
-    );
+    let out = rt_gpu(&[TINY_CPU_RENDER, &["-o", "link.png"]].concat(), dir.path());
     assert!(out.status.success(), "{}", stderr(&out));
     let link = std::fs::symlink_metadata(dir.path().join("link.png")).expect("exists");
     assert!(
@@ -536,17 +526,8 @@ fn closed_pipes_and_full_devices_do_not_panic() {
     assert_eq!(err.lines().count(), 1, "{err}");
     // A render whose stderr (progress, summary) cannot be written still writes its image.
     let status = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
-        .args([
-            "cornell",
-            "--backend",
-            "cpu",
-            "--spp",
-            "1",
-            "--size",
-            "4x4",
-            "-o",
-            "x.png",
-        ])
+        .args(TINY_CPU_RENDER)
+        .args(["-o", "x.png"])
         .current_dir(dir.path())
         .stderr(full())
         .status()
