@@ -322,11 +322,6 @@ impl PendingOutput {
         })
     }
 
-    /// The destination as the user named it.
-    pub fn path(&self) -> &Path {
-        &self.shown
-    }
-
     /// Writes `film`'s mean image in the format the destination's extension names, 8-bit
     /// formats with `transfer` [default: the format's own].
     pub fn commit_image(self, film: &Film, transfer: Option<Transfer>) -> anyhow::Result<()> {
