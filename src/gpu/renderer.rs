@@ -179,15 +179,7 @@ impl GpuRenderer {
         } else {
             wgpu::BufferUsages::STORAGE
         };
-        let make = |label, contents: &[u8]| {
-            self.ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage,
-                })
-        };
+        let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
         [
             make("spheres", bytemuck::cast_slice(&buffers.spheres)),
             make("quads", bytemuck::cast_slice(&buffers.quads)),
@@ -228,13 +220,13 @@ impl GpuRenderer {
             })
     }
 
-    fn uniform_buffer(&self, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    fn buffer_with(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
                 contents,
-                usage: wgpu::BufferUsages::UNIFORM,
+                usage,
             })
     }
 
@@ -315,8 +307,11 @@ impl GpuRenderer {
         // Per-render params are uniform (lavapipe folds them into the kernel: one variant per
         // render); what changes every dispatch is in storage (folded, each new value compiled
         // and kept a variant: ~1 MB per dispatch).
-        let params_buffer =
-            self.uniform_buffer("params", bytemuck::bytes_of(&base_params(scene, opts)));
+        let params_buffer = self.buffer_with(
+            "params",
+            bytemuck::bytes_of(&base_params(scene, opts)),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let dispatch_buffer = self.buffer(
             "dispatch",
             std::mem::size_of::<GpuDispatch>() as u64,
@@ -511,24 +506,21 @@ impl GpuRenderer {
         let size = (slots.len().max(1) * std::mem::size_of::<GpuFirstBounce>()) as u64;
         let mut contents = bytemuck::cast_slice(&slots).to_vec();
         contents.resize(size as usize, 0);
-        let out = self
-            .ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("debug slots"),
-                contents: &contents,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            });
-        let params_buffer =
-            self.uniform_buffer("params", bytemuck::bytes_of(&base_params(scene, opts)));
-        let dispatch_buffer =
-            self.ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("dispatch"),
-                    contents: bytemuck::bytes_of(&whole_image_dispatch(opts)),
-                    usage: wgpu::BufferUsages::STORAGE,
-                });
+        let out = self.buffer_with(
+            "debug slots",
+            &contents,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let params_buffer = self.buffer_with(
+            "params",
+            bytemuck::bytes_of(&base_params(scene, opts)),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let dispatch_buffer = self.buffer_with(
+            "dispatch",
+            bytemuck::bytes_of(&whole_image_dispatch(opts)),
+            wgpu::BufferUsages::STORAGE,
+        );
         let accum = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
         let buffers = self.scene_buffers(scene, &kernel.features);
         let bind_group = self.bind_group(
