@@ -1,7 +1,7 @@
 // The path loop (twin: src/cpu/integrator.rs): segment k adds the emission it hits, or the
-// background it escapes to, for k <= max_depth. With NEE, each lambertian hit also samples a
-// light (a path of one more segment, so only while that stays within max_depth), and light
-// found both ways is weighted by the power heuristic.
+// background it escapes to, for k <= max_depth. With NEE, each hit on a material that samples
+// lights also samples a light (a path of one more segment, so only while that stays within
+// max_depth), and light found both ways is weighted by the power heuristic.
 
 //#if NEE
 // One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light

@@ -40,15 +40,23 @@ fn quad_distance(q: Quad, ray: Ray) -> f32 {
 }
 //#endif
 
-// The closest hit found so far along a ray.
+// The closest hit found so far along a ray, and what its shape needs to complete the hit
+// (see surface below).
 struct Closest {
     outward: vec3f,
     t: f32,
-    center: vec3f,      // sphere centre
-    d: f32,             // quad: plane offset; sphere: radius
+    center: vec3f,      // sphere
+    radius: f32,        // sphere
+    plane_offset: f32,  // quad
     primitive: u32,     // packed, as in Hit
     material: u32,
     found: bool,
+}
+
+// Where a hit lies: the point put back onto the surface, and a bound on its error.
+struct Surface {
+    point: vec3f,
+    error: f32,
 }
 
 //#if SPHERES
@@ -73,7 +81,7 @@ fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
         (*c).material = s.material;
         (*c).outward = (ray.origin + t * ray.dir - s.center) / s.radius;
         (*c).center = s.center;
-        (*c).d = s.radius;
+        (*c).radius = s.radius;
     }
 }
 //#endif
@@ -87,14 +95,14 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
         (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index;
         (*c).material = q.material;
         (*c).outward = q.normal;
-        (*c).d = q.d;
+        (*c).plane_offset = q.d;
     }
 }
 //#endif
 
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0u, 0u, false);
+    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false);
 //#if INLINE_SCENE
     // The scene's primitives are constants in this kernel (see inline_scene below).
     inline_scene(ray, &c);
@@ -115,28 +123,43 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     }
     let n = normalize(c.outward);
     let front = dot(ray.dir, n) < 0.0;
-    // The hit point put back onto the surface, and a bound on its error (see
-    // src/cpu/shapes.rs).
     let along_ray = ray.origin + c.t * ray.dir;
-    var point = along_ray - (dot(n, along_ray) - c.d) * n;
-    let p = abs(point);
-    var error = POINT_ERROR * (max(p.x, max(p.y, p.z)) + abs(c.d));
+    var surface: Surface;
+    switch primitive_kind(c.primitive) {
 //#if SPHERES
-    if primitive_kind(c.primitive) == KIND_SPHERE {
-        let from_center = along_ray - c.center;
-        point = c.center + from_center * (abs(c.d) / length(from_center));
-        let ce = abs(c.center);
-        error = POINT_ERROR * (max(ce.x, max(ce.y, ce.z)) + abs(c.d));
-    }
+        case KIND_SPHERE: {
+            surface = sphere_surface(c, along_ray);
+        }
 //#endif
+        default: {
+            surface = quad_surface(c, along_ray, n);
+        }
+    }
     (*hit).t = c.t;
-    (*hit).point = point;
-    (*hit).error = error;
+    (*hit).point = surface.point;
+    (*hit).error = surface.error;
     (*hit).normal = select(-n, n, front);
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
     return true;
+}
+
+// The hit point put back onto the surface and a bound on its error, per shape (see
+// src/cpu/shapes.rs).
+//#if SPHERES
+fn sphere_surface(c: Closest, along_ray: vec3f) -> Surface {
+    let from_center = along_ray - c.center;
+    let point = c.center + from_center * (abs(c.radius) / length(from_center));
+    let ce = abs(c.center);
+    return Surface(point, POINT_ERROR * (max(ce.x, max(ce.y, ce.z)) + abs(c.radius)));
+}
+//#endif
+
+fn quad_surface(c: Closest, along_ray: vec3f, n: vec3f) -> Surface {
+    let point = along_ray - (dot(n, along_ray) - c.plane_offset) * n;
+    let p = abs(point);
+    return Surface(point, POINT_ERROR * (max(p.x, max(p.y, p.z)) + abs(c.plane_offset)));
 }
 
 // Moves a ray origin off a surface by a few units in the last place along n (Ray Tracing Gems,

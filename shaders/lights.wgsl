@@ -55,12 +55,6 @@ fn basis(n: vec3f) -> Basis {
     );
 }
 
-// The kernel's encoding of src/scene/flat.rs's LightShape: a sphere is the light with a
-// radius (see gpu_light in src/gpu/layout.rs); quads have radius 0.
-fn light_is_sphere(l: Light) -> bool {
-    return l.radius > 0.0;
-}
-
 // The cone a sphere subtends from x: unit axis and 1 - cos(half angle); w = 0 when x is
 // inside the sphere or the cone is too thin to represent.
 fn sphere_cone(center: vec3f, radius: f32, x: vec3f) -> vec4f {
@@ -79,20 +73,21 @@ fn sphere_cone(center: vec3f, radius: f32, x: vec3f) -> vec4f {
     return vec4f(to_center / sqrt(d2), one_minus_cos);
 }
 
-// Solid-angle pdf of picking quad light l and its point p from x, seen along unit dir.
+// Solid-angle pdf of picking quad light l (size: 1 / area) and its point p from x, seen along
+// unit dir.
 fn quad_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
     let cos_light = abs(dot(l.normal, dir));
     if !(cos_light > MIN_LIGHT_COSINE) {
         return 0.0;
     }
     let to_p = p - x;
-    return l.pick * l.inv_area * dot(to_p, to_p) / cos_light;
+    return l.pick * l.size * dot(to_p, to_p) / cos_light;
 }
 
 // Solid-angle pdf of light sampling choosing the direction from x that reaches l at p.
 fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
-    if light_is_sphere(l) {
-        let cone = sphere_cone(l.position, l.radius, x);
+    if l.kind == KIND_SPHERE {
+        let cone = sphere_cone(l.position, l.size, x);
         if cone.w > 0.0 {
             return l.pick / (2.0 * PI * cone.w);
         }
@@ -111,8 +106,8 @@ struct LightSample {
 fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
     var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
 //#if SPHERES
-    if light_is_sphere(l) {
-        let cone = sphere_cone(l.position, l.radius, x);
+    if l.kind == KIND_SPHERE {
+        let cone = sphere_cone(l.position, l.size, x);
         if cone.w > 0.0 {
             let axis = cone.xyz;
             let a = u1 * cone.w;
@@ -124,7 +119,7 @@ fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
             out.pdf = l.pick / (2.0 * PI * cone.w);
             // Where it meets the sphere (a direction in the cone, from outside: the near root; at
             // the cone's rim, where rounding can miss, the closest approach).
-            let dist = sphere_distance(Sphere(l.position, l.radius, 0u, 0u), Ray(x, out.dir));
+            let dist = sphere_distance(Sphere(l.position, l.size, 0u, 0u), Ray(x, out.dir));
             out.point = x + select(dot(out.dir, l.position - x), dist, dist > 0.0) * out.dir;
         }
         return out;

@@ -3,14 +3,12 @@
 
 const PI: f32 = 3.14159265358979;
 
-//#if LAMBERTIAN || METAL
 fn unit_vector(u1: f32, u2: f32) -> vec3f {
     let z = 1.0 - 2.0 * u1;
     let r = sqrt(max(1.0 - z * z, 0.0));
     let phi = PI * (2.0 * u2 - 1.0);
     return vec3f(r * cos(phi), r * sin(phi), z);
 }
-//#endif
 
 //#if LENS
 fn unit_disk(u1: f32, u2: f32) -> vec2f {

@@ -9,6 +9,7 @@ pub mod converge;
 pub mod cpu;
 pub mod film;
 pub mod gpu;
+pub mod material;
 pub mod options;
 pub mod output;
 #[cfg(feature = "plot")]

@@ -96,7 +96,10 @@ fn closed_emitting_sphere_gives_the_geometric_series() {
         Vec3::new(0.1, 0.2, -1.0),
         70.0,
         Background::Constant(Vec3::splat(100.0)),
-        vec![Material::Lambertian { albedo, emission }],
+        vec![Material::Lambertian(rt_gpu::material::Lambertian {
+            albedo,
+            emission,
+        })],
         vec![common::object(
             Shape::Sphere {
                 center: Vec3::ZERO,

@@ -7,7 +7,6 @@ use common::gpu::{render_gpu, render_gpu_with, renderer};
 use common::stats::compare;
 use glam::Vec3;
 use rt_gpu::cpu::camera::generate_ray;
-use rt_gpu::cpu::material::scatter;
 use rt_gpu::cpu::shapes::intersect;
 use rt_gpu::gpu::{GpuError, Tuning};
 use rt_gpu::rng::Rng;
@@ -43,12 +42,8 @@ fn first_bounces_match_the_cpu() {
                     let same = match hit {
                         None => g.hit == 0,
                         Some(h) => {
-                            let scattered = scatter(
-                                &flat.materials[h.material as usize],
-                                ray.dir,
-                                &h,
-                                &mut rng,
-                            );
+                            let scattered = (flat.materials[h.material as usize])
+                                .scatter(ray.dir, &h, &mut rng);
                             g.hit == 1
                                 && g.primitive == h.primitive.packed()
                                 && (Vec3::from(g.point) - h.point).length() <= 1e-4 * scale
@@ -153,10 +148,10 @@ fn equivalence_test_detects_small_real_differences() {
         .iter()
         .position(|n| n == "light")
         .expect("light");
-    two_sided.materials[light] = Material::Light {
+    two_sided.materials[light] = Material::Light(rt_gpu::material::Light {
         radiance: Vec3::splat(15.0),
         two_sided: true,
-    };
+    });
     let verdict = compare(
         &cpu,
         &render_gpu(&gpu, &two_sided, &cornell_opts(2), &Tuning::default()),

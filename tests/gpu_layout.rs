@@ -5,23 +5,25 @@ use rt_gpu::gpu::shader::{Features, compose, validate};
 use rt_gpu::render::Integrator;
 use wgpu::naga;
 
-fn all_features() -> Features {
-    Features {
-        spheres: true,
-        quads: true,
-        lambertian: true,
-        metal: true,
-        dielectric: true,
-        light: true,
-        emissive: true,
-        lens: true,
-        sky: false,
-        debug: true,
-        nee: true,
-        uniform_scene: false,
-        scene_capacity: 1,
-        inline_scene: false,
+/// No switch on; arrays sized for small scenes.
+fn no_features() -> Features {
+    let mut features = Features::of(&small_scene());
+    for (name, _) in features.flags() {
+        features.set(name, false).expect("a known switch");
     }
+    features.scene_capacity = 32;
+    features
+}
+
+fn all_features() -> Features {
+    let mut features = no_features();
+    for (name, _) in features.flags() {
+        features.set(name, true).expect("a known switch");
+    }
+    for off in ["SKY", "UNIFORM_SCENE", "INLINE_SCENE"] {
+        features.set(off, false).expect("a known switch");
+    }
+    features
 }
 
 /// A scene with a sphere and a box, for kernels that hold the scene as constants.
@@ -60,27 +62,20 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     }
 }
 
-/// Feature switches the kernel has; `features_from_bits` sets them from bits in this order.
-const FEATURE_COUNT: u32 = 13;
-
+/// Switch i (in the order of `Features::flags`) on where bit i is set.
 fn features_from_bits(bits: u32) -> Features {
-    let on = |i: u32| bits & (1 << i) != 0;
-    Features {
-        spheres: on(0),
-        quads: on(1),
-        lambertian: on(2),
-        metal: on(3),
-        dielectric: on(4),
-        light: on(5),
-        emissive: on(6),
-        lens: on(7),
-        sky: on(8),
-        debug: on(9),
-        uniform_scene: on(10),
-        scene_capacity: 32,
-        inline_scene: on(11),
-        nee: on(12),
+    let mut features = no_features();
+    for (i, (name, _)) in no_features().flags().into_iter().enumerate() {
+        features
+            .set(name, bits & (1 << i) != 0)
+            .expect("a known switch");
     }
+    features
+}
+
+/// How many switches the kernel has: material kinds and their extra features among them.
+fn feature_count() -> u32 {
+    no_features().flags().len() as u32
 }
 
 fn assert_validates(bits: u32) {
@@ -131,18 +126,14 @@ fn pairwise_covering(features: u32) -> Vec<u32> {
 /// feature. The full set: `cargo test --test gpu_layout -- --ignored`.
 #[test]
 fn kernel_variants_validate() {
-    let switches = Features::of(&small_scene()).flags().len() as u32;
-    assert_eq!(
-        switches, FEATURE_COUNT,
-        "a new feature: add it to features_from_bits"
-    );
-    let all = (1 << FEATURE_COUNT) - 1;
+    let count = feature_count();
+    let all = (1 << count) - 1;
     let mut rows = vec![0, all];
-    for i in 0..FEATURE_COUNT {
+    for i in 0..count {
         rows.push(1 << i);
         rows.push(all & !(1 << i));
     }
-    let pairwise = pairwise_covering(FEATURE_COUNT);
+    let pairwise = pairwise_covering(count);
     assert!(pairwise.len() <= 24, "{} rows", pairwise.len());
     rows.extend(pairwise);
     for bits in rows {
@@ -154,7 +145,7 @@ fn kernel_variants_validate() {
 #[test]
 #[ignore = "slow: 2^13 kernels; the pairwise set above runs by default"]
 fn every_kernel_variant_validates() {
-    for bits in 0u32..1 << FEATURE_COUNT {
+    for bits in 0u32..1 << feature_count() {
         assert_validates(bits);
     }
 }
@@ -177,7 +168,7 @@ fn kernels_leave_out_unused_code() {
         "dielectric code in a scene without glass"
     );
     assert!(
-        !empty.contains("MAT_METAL {"),
+        !empty.contains("fn metal_scatter"),
         "metal code in a scene without metal"
     );
     // Small scenes are constants in the kernel: one test per primitive, no buffer loop.
@@ -189,7 +180,7 @@ fn kernels_leave_out_unused_code() {
         "quad code in a scene without quads"
     );
     assert_eq!(spheres.matches("    consider_sphere(Sphere(").count(), 4);
-    assert!(spheres.contains("fresnel") && spheres.contains("MAT_METAL {"));
+    assert!(spheres.contains("fresnel") && spheres.contains("fn metal_scatter"));
     // A scene too large to inline loops over its buffers.
     let showcase = kernel("showcase");
     assert!(showcase.contains("spheres[i]") && showcase.contains("quads[i]"));

@@ -2,8 +2,9 @@
 //! scattering is cosine-distributed.
 
 use glam::Vec3;
-use rt_gpu::cpu::material::{fresnel, reflect, refract_cos, scatter};
 use rt_gpu::cpu::shapes::Hit;
+use rt_gpu::material::dielectric::{fresnel, refract_cos};
+use rt_gpu::material::reflect;
 use rt_gpu::rng::Rng;
 use rt_gpu::scene::Material;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -45,13 +46,9 @@ fn total_internal_reflection_beyond_the_critical_angle() {
     let dir_in = Vec3::new(angle.sin(), -angle.cos(), 0.0);
     for seed in 0..64 {
         let mut rng = Rng::for_sample(0, 0, seed);
-        let (att, out) = scatter(
-            &Material::Dielectric { ior: 1.5 },
-            dir_in,
-            &hit_with_normal(n, false),
-            &mut rng,
-        )
-        .expect("scatters");
+        let (att, out) = (Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }))
+            .scatter(dir_in, &hit_with_normal(n, false), &mut rng)
+            .expect("scatters");
         assert_eq!(att, Vec3::ONE);
         assert!((out - reflect(dir_in, n)).length() < 1e-6);
     }
@@ -61,27 +58,28 @@ fn total_internal_reflection_beyond_the_critical_angle() {
 fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
     let n = Vec3::Y;
     let dir_in = Vec3::new(1.0, -1.0, 0.0).normalize();
-    let mirror = Material::Metal {
+    let mirror = Material::Metal(rt_gpu::material::Metal {
         albedo: Vec3::new(0.8, 0.6, 0.2),
         fuzz: 0.0,
-    };
+    });
     let mut rng = Rng::for_sample(1, 2, 3);
-    let (att, out) =
-        scatter(&mirror, dir_in, &hit_with_normal(n, true), &mut rng).expect("reflects");
+    let (att, out) = mirror
+        .scatter(dir_in, &hit_with_normal(n, true), &mut rng)
+        .expect("reflects");
     assert_eq!(att, Vec3::new(0.8, 0.6, 0.2));
     assert!((out - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
 
     // At grazing incidence with full fuzz, some rays end below the surface: those are absorbed,
     // the rest leave above it.
     let grazing = Vec3::new(1.0, -0.01, 0.0).normalize();
-    let fuzzy = Material::Metal {
+    let fuzzy = Material::Metal(rt_gpu::material::Metal {
         albedo: Vec3::ONE,
         fuzz: 1.0,
-    };
+    });
     let mut absorbed = 0;
     for i in 0..1000 {
         let mut rng = Rng::for_sample(i, 0, 9);
-        match scatter(&fuzzy, grazing, &hit_with_normal(n, true), &mut rng) {
+        match fuzzy.scatter(grazing, &hit_with_normal(n, true), &mut rng) {
             Some((_, out)) => assert!(out.dot(n) > 0.0),
             None => absorbed += 1,
         }
@@ -127,7 +125,8 @@ fn lambertian_scattering_is_cosine_distributed() {
     let hit = hit_with_normal(normal, true);
     let p = chi_square_p_value(normal, |i| {
         let mut rng = Rng::for_sample(i, 0, 42);
-        scatter(&lambertian, -normal, &hit, &mut rng)
+        lambertian
+            .scatter(-normal, &hit, &mut rng)
             .expect("scatters")
             .1
     });

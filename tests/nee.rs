@@ -34,10 +34,10 @@ fn cornell_with_sphere_light() -> Scene {
     let glow = add_material(
         &mut scene,
         "glow",
-        Material::Light {
+        Material::Light(rt_gpu::material::Light {
             radiance: Vec3::new(2.0, 1.5, 1.0),
             two_sided: false,
-        },
+        }),
     );
     scene.objects.push(object(
         Shape::Sphere {
@@ -56,18 +56,18 @@ fn spheres_with_lights() -> Scene {
     let lamp = add_material(
         &mut scene,
         "lamp",
-        Material::Light {
+        Material::Light(rt_gpu::material::Light {
             radiance: Vec3::splat(6.0),
             two_sided: false,
-        },
+        }),
     );
     let ember = add_material(
         &mut scene,
         "ember",
-        Material::Lambertian {
+        Material::Lambertian(rt_gpu::material::Lambertian {
             albedo: Vec3::splat(0.5),
             emission: Vec3::new(8.0, 2.0, 1.0),
-        },
+        }),
     );
     // Facing down: u x v = -y.
     scene.objects.push(object(
@@ -165,10 +165,10 @@ fn nee_comparison_detects_small_real_differences() {
         ("two-sided light", 15.0, true),
     ] {
         let mut changed = scene.clone();
-        changed.materials[light] = Material::Light {
+        changed.materials[light] = Material::Light(rt_gpu::material::Light {
             radiance: Vec3::splat(radiance),
             two_sided,
-        };
+        });
         let verdict = compare(&naive, &render_cpu(&changed, &cornell(2, true)));
         eprintln!("{label}: {verdict:?}");
         assert!(!verdict.passed(), "{label} went undetected: {verdict:?}");

@@ -19,9 +19,11 @@ use rt_gpu::scene::flat::FlatScene;
 /// `name` with `extra` unused materials defined before its own (so every used index moves).
 fn with_unused_materials(name: &str, extra: usize) -> rt_gpu::scene::Scene {
     let mut scene = builtin(name).expect("built-in");
-    let unused = (0..extra).map(|i| Material::Metal {
-        albedo: Vec3::splat((i % 7) as f32 / 7.0),
-        fuzz: 0.5,
+    let unused = (0..extra).map(|i| {
+        Material::Metal(rt_gpu::material::Metal {
+            albedo: Vec3::splat((i % 7) as f32 / 7.0),
+            fuzz: 0.5,
+        })
     });
     scene.materials.splice(0..0, unused);
     scene

@@ -348,8 +348,8 @@ fn same_at_every_scale(gpu: Option<&GpuRenderer>, scene_name: &str) {
 fn with_glass_ior(scene: &Scene, ior: f32) -> Scene {
     let mut out = scene.clone();
     for m in &mut out.materials {
-        if let Material::Dielectric { .. } = m {
-            *m = Material::Dielectric { ior };
+        if let Material::Dielectric(_) = m {
+            *m = Material::Dielectric(rt_gpu::material::Dielectric { ior });
         }
     }
     out
@@ -410,7 +410,7 @@ fn extreme_glass_is_finite_and_agrees() {
         );
     }
     let materials = vec![
-        Material::Dielectric { ior: 1.5 },
+        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }),
         Material::lambertian(Vec3::new(0.8, 0.3, 0.2)),
     ];
     let sphere = |center: Vec3, radius: f32, material: u32| {
@@ -448,27 +448,26 @@ fn extreme_glass_is_finite_and_agrees() {
 /// incidence from inside reflects totally.
 #[test]
 fn scattering_keeps_throughput_finite_and_non_negative() {
-    use rt_gpu::cpu::material::scatter;
     use rt_gpu::cpu::shapes::Hit;
     let materials = [
         Material::lambertian(Vec3::ONE),
-        Material::Metal {
+        Material::Metal(rt_gpu::material::Metal {
             albedo: Vec3::ONE,
             fuzz: 0.0,
-        },
-        Material::Metal {
+        }),
+        Material::Metal(rt_gpu::material::Metal {
             albedo: Vec3::ONE,
             fuzz: 0.5,
-        },
-        Material::Metal {
+        }),
+        Material::Metal(rt_gpu::material::Metal {
             albedo: Vec3::ONE,
             fuzz: 1.0,
-        },
-        Material::Dielectric { ior: 1.0 },
-        Material::Dielectric { ior: 1.0001 },
-        Material::Dielectric { ior: 1.5 },
-        Material::Dielectric { ior: 2.42 },
-        Material::Dielectric { ior: 10.0 },
+        }),
+        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.0 }),
+        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.0001 }),
+        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }),
+        Material::Dielectric(rt_gpu::material::Dielectric { ior: 2.42 }),
+        Material::Dielectric(rt_gpu::material::Dielectric { ior: 10.0 }),
     ];
     let normal = Vec3::new(0.3, 0.8, -0.52).normalize();
     let (t, _) = rt_gpu::cpu::lights::basis(normal);
@@ -489,7 +488,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                 };
                 for k in 0..200 {
                     let mut rng = rt_gpu::rng::Rng::for_sample(k, 0, 5);
-                    if let Some((attenuation, dir)) = scatter(m, dir_in, &hit, &mut rng) {
+                    if let Some((attenuation, dir)) = m.scatter(dir_in, &hit, &mut rng) {
                         assert!(
                             attenuation.is_finite()
                                 && attenuation.min_element() >= 0.0
@@ -520,7 +519,8 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
         let mut rng = rt_gpu::rng::Rng::for_sample(k, 0, 6);
-        let (_, dir) = scatter(&Material::Dielectric { ior: 1.5 }, dir_in, &hit, &mut rng)
+        let (_, dir) = (Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }))
+            .scatter(dir_in, &hit, &mut rng)
             .expect("glass always scatters");
         assert!(
             dir.y > 0.0,
@@ -538,10 +538,10 @@ fn closed_furnaces_never_gain_energy() {
     let gpu = renderer();
     let e = 0.25;
     let depth = 6;
-    let white_glow = Material::Lambertian {
+    let white_glow = Material::Lambertian(rt_gpu::material::Lambertian {
         albedo: Vec3::ONE,
         emission: Vec3::splat(e),
-    };
+    });
     let sphere = |center: Vec3, radius: f32, material: u32| {
         object(Shape::Sphere { center, radius }, material)
     };
@@ -560,10 +560,10 @@ fn closed_furnaces_never_gain_energy() {
         Background::Constant(Vec3::ZERO),
         vec![
             white_glow,
-            Material::Metal {
+            Material::Metal(rt_gpu::material::Metal {
                 albedo: Vec3::ONE,
                 fuzz: 0.3,
-            },
+            }),
         ],
         vec![sphere(Vec3::ZERO, 0.2, 0), sphere(Vec3::ZERO, 2.0, 1)],
     );
@@ -624,10 +624,10 @@ fn tiny_bright_lights_and_edge_on_lights() {
         Background::Constant(Vec3::ZERO),
         vec![
             Material::lambertian(Vec3::splat(albedo)),
-            Material::Light {
+            Material::Light(rt_gpu::material::Light {
                 radiance: Vec3::splat(radiance),
                 two_sided: false,
-            },
+            }),
         ],
         vec![
             object(

@@ -2,13 +2,14 @@
 //! `ray_color`, made iterative. Segment k (1-based) adds the emission it hits, or the background
 //! it escapes to, for k <= max_depth.
 //!
-//! With next-event estimation (`Integrator::Nee`), each lambertian hit also samples a light
-//! directly with a shadow ray, and light found both ways is weighted by the power heuristic.
+//! With next-event estimation (`Integrator::Nee`), each hit on a material that samples lights (a
+//! non-delta BSDF: lambertian) also samples a light directly with a shadow ray, and light found
+//! both ways is weighted by the power heuristic.
 //! A light sample taken at the k-th hit forms a path of k + 1 segments, so it is taken only when
 //! k + 1 <= max_depth: both integrators sum over exactly the same paths.
 
+use super::background::background;
 use super::lights;
-use super::material::{background, bsdf, emitted, samples_lights, scatter};
 use super::shapes::{Hit, Ray, intersect, leave, spawn};
 use crate::options::{Integrator, RenderOptions};
 use crate::rng::Rng;
@@ -46,24 +47,24 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
             let light_pdf = lights::pdf(l, origin, hit.point, ray.dir);
             weight = lights::power_heuristic(bsdf_pdf, light_pdf);
         }
-        total += throughput * weight * emitted(material, &hit);
+        total += throughput * weight * material.emitted(&hit);
         if segment + 1 == opts.max_depth {
             break; // no longer path counts
         }
         bsdf_pdf = 0.0;
-        let light_sampled = nee && samples_lights(material);
+        let light_sampled = nee && material.samples_lights();
         if light_sampled {
             let (u0, u1, u2) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
             if let Some((weight, light)) = direct_light(scene, material, &hit, u0, u1, u2) {
                 total += throughput * weight * light;
             }
         }
-        let Some((attenuation, dir)) = scatter(material, ray.dir, &hit, rng) else {
+        let Some((attenuation, dir)) = material.scatter(ray.dir, &hit, rng) else {
             break;
         };
         throughput *= attenuation;
         if light_sampled {
-            bsdf_pdf = bsdf(material, &hit, dir).map_or(0.0, |(_, pdf)| pdf);
+            bsdf_pdf = material.bsdf(&hit, dir).map_or(0.0, |(_, pdf)| pdf);
         }
         origin = hit.point;
         ray = spawn(&hit, dir);
@@ -92,7 +93,7 @@ fn direct_light(
 ) -> Option<(Vec3, Vec3)> {
     let index = lights::pick_light(scene, u0);
     let sample = lights::sample(&scene.lights[index], hit.point, u1, u2)?;
-    let (weight, bsdf_pdf) = bsdf(material, hit, sample.dir)?;
+    let (weight, bsdf_pdf) = material.bsdf(hit, sample.dir)?;
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
     // light is not missed by the width of the offset. Whatever it hits first must be that light.
     let origin = leave(hit, hit.normal);
@@ -108,7 +109,7 @@ fn direct_light(
     if scene.light_of(shadow.primitive) != index as u32 + 1 {
         return None;
     }
-    let le = emitted(&scene.materials[shadow.material as usize], &shadow);
+    let le = scene.materials[shadow.material as usize].emitted(&shadow);
     Some((
         weight,
         le * lights::light_sample_factor(sample.pdf, bsdf_pdf),

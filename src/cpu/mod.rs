@@ -2,10 +2,10 @@
 //! in the same order as the WGSL kernel, one counter-based random stream per sample, rayon over
 //! image rows.
 
+pub mod background;
 pub mod camera;
 pub mod integrator;
 pub mod lights;
-pub mod material;
 pub mod sampling;
 pub mod shapes;
 

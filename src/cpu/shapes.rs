@@ -100,19 +100,14 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     // t (which cancels in the sphere's near root), and that can dwarf the point's own
     // coordinates (a floor at y = 0 seen from 1e6 away), so the point is put back onto the
     // surface, whose own rounding follows the shape's coordinates.
-    let (material, point, error) = match primitive {
+    let (material, (point, error)) = match primitive {
         PrimitiveRef::Sphere(i) => {
             let s = &scene.spheres[i as usize];
-            let from_center = along_ray - s.center;
-            let point = s.center + from_center * (s.radius.abs() / from_center.length());
-            let scale = s.center.abs().max_element() + s.radius.abs();
-            (s.material, point, POINT_ERROR * scale)
+            (s.material, sphere_surface(s, along_ray))
         }
         PrimitiveRef::Quad(i) => {
             let q = &scene.quads[i as usize];
-            let point = along_ray - (q.normal.dot(along_ray) - q.d) * q.normal;
-            let scale = point.abs().max_element() + q.d.abs();
-            (q.material, point, POINT_ERROR * scale)
+            (q.material, quad_surface(q, along_ray))
         }
     };
     let front_face = ray.dir.dot(outward) < 0.0;
@@ -125,6 +120,23 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         material,
         primitive,
     })
+}
+
+/// A point near `sphere`'s surface put back onto it, and a bound on the result's error.
+#[inline]
+pub fn sphere_surface(sphere: &Sphere, along_ray: Vec3) -> (Vec3, f32) {
+    let from_center = along_ray - sphere.center;
+    let point = sphere.center + from_center * (sphere.radius.abs() / from_center.length());
+    let scale = sphere.center.abs().max_element() + sphere.radius.abs();
+    (point, POINT_ERROR * scale)
+}
+
+/// A point near `quad`'s plane put back onto it, and a bound on the result's error.
+#[inline]
+pub fn quad_surface(quad: &Quad, along_ray: Vec3) -> (Vec3, f32) {
+    let point = along_ray - (quad.normal.dot(along_ray) - quad.d) * quad.normal;
+    let scale = point.abs().max_element() + quad.d.abs();
+    (point, POINT_ERROR * scale)
 }
 
 /// Relative bound on a hit point's error: eight roundings of the coordinates it came from.

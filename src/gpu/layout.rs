@@ -148,7 +148,7 @@ gpu_struct! {
 
 gpu_struct! {
     /// A light for next-event estimation (see `scene::flat::Light`): a quad (uniform on its
-    /// area) or a sphere (radius > 0; uniform in the cone it subtends).
+    /// area) or a sphere (uniform in the cone it subtends), told apart by `kind`.
     pub struct GpuLight as "Light" {
         /// Quad corner, or sphere centre.
         position: [f32; 3],
@@ -159,29 +159,23 @@ gpu_struct! {
         /// Chance of picking this light.
         pick: f32,
         v: [f32; 3],
-        /// Sphere: |radius|; quad: 0.
-        radius: f32,
+        /// `KIND_SPHERE` or `KIND_QUAD` (as `PrimitiveRef`): which shape, and so what `size`
+        /// means.
+        kind: u32,
         /// Quad unit normal.
         normal: [f32; 3],
-        /// Quad: 1 / area.
-        inv_area: f32,
+        /// Sphere: |radius|; quad: 1 / area.
+        size: f32,
     }
 }
 
-pub const MAT_LAMBERTIAN: u32 = 0;
-pub const MAT_METAL: u32 = 1;
-pub const MAT_DIELECTRIC: u32 = 2;
-pub const MAT_LIGHT: u32 = 3;
-
 gpu_struct! {
     pub struct GpuMaterial as "Material" {
-        /// Lambertian, metal.
+        // What albedo, emission and param hold is each material's own (its `gpu` method says).
         albedo: [f32; 3],
-        /// One of the `MAT_*` constants.
+        /// Index in `material::KINDS`; WGSL `MAT_<FEATURE>`.
         kind: u32,
-        /// Lambertian emission, light radiance.
         emission: [f32; 3],
-        /// Metal: fuzz; dielectric: ior; light: 1 if two-sided.
         param: f32,
     }
 }
@@ -253,11 +247,10 @@ gpu_struct! {
 fn wgsl_constants() -> String {
     use crate::cpu::shapes::{OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_NEAR_ORIGIN};
     use crate::scene::flat::{KIND_QUAD, KIND_SPHERE, PRIMITIVE_INDEX_BITS};
-    let constants: [(&str, String); 15] = [
-        ("MAT_LAMBERTIAN", MAT_LAMBERTIAN.literal()),
-        ("MAT_METAL", MAT_METAL.literal()),
-        ("MAT_DIELECTRIC", MAT_DIELECTRIC.literal()),
-        ("MAT_LIGHT", MAT_LIGHT.literal()),
+    let kinds = crate::material::KINDS
+        .iter()
+        .map(|k| (format!("MAT_{}", k.feature), k.kind.literal()));
+    let constants = [
         ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
         ("KIND_SPHERE", KIND_SPHERE.literal()),
@@ -274,10 +267,11 @@ fn wgsl_constants() -> String {
         ("OFFSET_NEAR_ORIGIN", OFFSET_NEAR_ORIGIN.literal()),
         ("OFFSET_FLOAT_SCALE", OFFSET_FLOAT_SCALE.literal()),
         ("OFFSET_INT_SCALE", OFFSET_INT_SCALE.literal()),
-        ("SKY_ZENITH", crate::cpu::material::SKY_ZENITH.literal()),
-    ];
+        ("SKY_ZENITH", crate::cpu::background::SKY_ZENITH.literal()),
+    ]
+    .map(|(name, value)| (name.to_string(), value));
     let mut out = String::new();
-    for (name, value) in constants {
+    for (name, value) in kinds.chain(constants) {
         let ty = if value.starts_with("vec3f") {
             "vec3f"
         } else if value.ends_with('u') {
@@ -371,7 +365,7 @@ impl SceneBuffers {
                 edge_tolerance: q.edge_tolerance,
             })
             .collect();
-        let mut materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
+        let mut materials: Vec<GpuMaterial> = scene.materials.iter().map(Material::gpu).collect();
         if spheres.is_empty() {
             spheres.push(GpuSphere::default());
         }
@@ -394,8 +388,9 @@ impl SceneBuffers {
     }
 }
 
-/// A light as the kernel reads it: a sphere is the one with a radius (quads have radius 0).
+/// A light as the kernel reads it: a tagged union of the `LightShape`s.
 fn gpu_light(l: &Light) -> GpuLight {
+    use crate::scene::flat::{KIND_QUAD, KIND_SPHERE};
     let mut out = GpuLight {
         cdf: l.cdf,
         pick: l.pick,
@@ -403,8 +398,9 @@ fn gpu_light(l: &Light) -> GpuLight {
     };
     match l.shape {
         LightShape::Sphere { center, radius } => {
+            out.kind = KIND_SPHERE;
             out.position = center.to_array();
-            out.radius = radius;
+            out.size = radius;
         }
         LightShape::Quad {
             corner,
@@ -413,46 +409,15 @@ fn gpu_light(l: &Light) -> GpuLight {
             normal,
             inv_area,
         } => {
+            out.kind = KIND_QUAD;
             out.position = corner.to_array();
             out.u = u.to_array();
             out.v = v.to_array();
             out.normal = normal.to_array();
-            out.inv_area = inv_area;
+            out.size = inv_area;
         }
     }
     out
-}
-
-fn gpu_material(m: &Material) -> GpuMaterial {
-    match *m {
-        Material::Lambertian { albedo, emission } => GpuMaterial {
-            albedo: albedo.to_array(),
-            kind: MAT_LAMBERTIAN,
-            emission: emission.to_array(),
-            param: 0.0,
-        },
-        Material::Metal { albedo, fuzz } => GpuMaterial {
-            albedo: albedo.to_array(),
-            kind: MAT_METAL,
-            emission: [0.0; 3],
-            param: fuzz,
-        },
-        Material::Dielectric { ior } => GpuMaterial {
-            albedo: [1.0; 3],
-            kind: MAT_DIELECTRIC,
-            emission: [0.0; 3],
-            param: ior,
-        },
-        Material::Light {
-            radiance,
-            two_sided,
-        } => GpuMaterial {
-            albedo: [0.0; 3],
-            kind: MAT_LIGHT,
-            emission: radiance.to_array(),
-            param: if two_sided { 1.0 } else { 0.0 },
-        },
-    }
 }
 
 /// The per-render parameters of rendering `scene` with `opts`.

@@ -4,9 +4,10 @@
 //! without glass no dielectric branch.
 
 use crate::gpu::layout::{SceneBuffers, WgslStruct, float_literal};
+use crate::material::{self, KINDS, MaterialKind};
 use crate::options::Integrator;
+use crate::scene::Background;
 use crate::scene::flat::FlatScene;
-use crate::scene::{Background, Material};
 
 /// The kernel's modules, in dependency order.
 const MODULES: &[(&str, &str)] = &[
@@ -22,6 +23,11 @@ const MODULES: &[(&str, &str)] = &[
         "materials.wgsl",
         include_str!("../../shaders/materials.wgsl"),
     ),
+    // Here: each material the scene uses (shaders/materials/), then their dispatch.
+    (
+        "background.wgsl",
+        include_str!("../../shaders/background.wgsl"),
+    ),
     ("lights.wgsl", include_str!("../../shaders/lights.wgsl")),
     (
         "integrator.wgsl",
@@ -35,12 +41,9 @@ const MODULES: &[(&str, &str)] = &[
 pub struct Features {
     pub spheres: bool,
     pub quads: bool,
-    pub lambertian: bool,
-    pub metal: bool,
-    pub dielectric: bool,
-    pub light: bool,
-    /// Lambertian surfaces with emission.
-    pub emissive: bool,
+    /// The material features on, as bits in the order of [`material::features`]: each material
+    /// kind the scene uses, and the extra features its instances need.
+    pub materials: u32,
     /// A camera with an aperture.
     pub lens: bool,
     pub sky: bool,
@@ -68,14 +71,20 @@ pub const LARGEST_ELEMENT_BYTES: u64 = 64;
 impl Features {
     pub fn of(scene: &FlatScene) -> Self {
         // Only materials some primitive uses: a scene may define more than it places.
-        let used: Vec<&Material> = scene
+        let mut materials = 0;
+        for m in scene
             .spheres
             .iter()
             .map(|s| s.material)
             .chain(scene.quads.iter().map(|q| q.material))
             .map(|m| &scene.materials[m as usize])
-            .collect();
-        let has = |f: fn(&Material) -> bool| used.iter().any(|m| f(m));
+        {
+            for feature in
+                std::iter::once(m.kind().feature).chain(m.extra_features().iter().copied())
+            {
+                materials |= material_bit(feature);
+            }
+        }
         // Uniform arrays have a fixed size: the next power of two (fewer distinct kernels).
         let longest = scene
             .spheres
@@ -87,13 +96,7 @@ impl Features {
         Features {
             spheres: !scene.spheres.is_empty(),
             quads: !scene.quads.is_empty(),
-            lambertian: has(|m| matches!(m, Material::Lambertian { .. })),
-            metal: has(|m| matches!(m, Material::Metal { .. })),
-            dielectric: has(|m| matches!(m, Material::Dielectric { .. })),
-            light: has(|m| matches!(m, Material::Light { .. })),
-            emissive: has(
-                |m| matches!(m, Material::Lambertian { emission, .. } if *emission != glam::Vec3::ZERO),
-            ),
+            materials,
             lens: scene.camera.lens_radius > 0.0,
             sky: scene.background == Background::Sky,
             debug: false,
@@ -116,11 +119,7 @@ impl Features {
         Features {
             spheres: true,
             quads: true,
-            lambertian: true,
-            metal: true,
-            dielectric: true,
-            light: true,
-            emissive: true,
+            materials: (1 << material::features().len()) - 1,
             uniform_scene: false,
             inline_scene: false,
             ..own
@@ -128,31 +127,68 @@ impl Features {
     }
 
     /// These features for rendering `scene` with `integrator`. Without lights, or without
-    /// diffuse surfaces to take light samples at, nee computes exactly what naive does, so the
-    /// kernel leaves it out.
+    /// surfaces to take light samples at, nee computes exactly what naive does, so the kernel
+    /// leaves it out.
     pub fn with_integrator(self, scene: &FlatScene, integrator: Integrator) -> Self {
+        let samples_lights = self.kinds().any(|k| k.samples_lights);
         Features {
-            nee: integrator == Integrator::Nee && !scene.lights.is_empty() && self.lambertian,
+            nee: integrator == Integrator::Nee && !scene.lights.is_empty() && samples_lights,
             ..self
         }
     }
 
-    pub fn flags(&self) -> [(&'static str, bool); 13] {
-        [
-            ("SPHERES", self.spheres),
-            ("QUADS", self.quads),
-            ("LAMBERTIAN", self.lambertian),
-            ("METAL", self.metal),
-            ("DIELECTRIC", self.dielectric),
-            ("LIGHT", self.light),
-            ("EMISSIVE", self.emissive),
+    /// The material kinds whose code the kernel holds.
+    pub fn kinds(&self) -> impl Iterator<Item = &'static MaterialKind> + '_ {
+        KINDS
+            .iter()
+            .filter(|k| self.materials & material_bit(k.feature) != 0)
+    }
+
+    /// Every switch by name, in a fixed order: what `//#if` blocks test.
+    pub fn flags(&self) -> Vec<(&'static str, bool)> {
+        let mut flags = vec![("SPHERES", self.spheres), ("QUADS", self.quads)];
+        flags.extend(
+            material::features()
+                .into_iter()
+                .map(|name| (name, self.materials & material_bit(name) != 0)),
+        );
+        flags.extend([
             ("LENS", self.lens),
             ("SKY", self.sky),
             ("DEBUG", self.debug),
             ("NEE", self.nee),
             ("UNIFORM_SCENE", self.uniform_scene),
             ("INLINE_SCENE", self.inline_scene),
-        ]
+        ]);
+        flags
+    }
+
+    /// Turns the switch `name` (one of [`Features::flags`]) on or off.
+    pub fn set(&mut self, name: &str, on: bool) -> Result<(), String> {
+        let switch = match name {
+            "SPHERES" => &mut self.spheres,
+            "QUADS" => &mut self.quads,
+            "LENS" => &mut self.lens,
+            "SKY" => &mut self.sky,
+            "DEBUG" => &mut self.debug,
+            "NEE" => &mut self.nee,
+            "UNIFORM_SCENE" => &mut self.uniform_scene,
+            "INLINE_SCENE" => &mut self.inline_scene,
+            _ => {
+                let bit = material_bit(name);
+                if bit == 0 {
+                    return Err(format!("unknown shader feature {name}"));
+                }
+                self.materials = if on {
+                    self.materials | bit
+                } else {
+                    self.materials & !bit
+                };
+                return Ok(());
+            }
+        };
+        *switch = on;
+        Ok(())
     }
 
     fn enabled(&self, name: &str) -> Result<bool, String> {
@@ -162,6 +198,14 @@ impl Features {
             .map(|(_, on)| *on)
             .ok_or_else(|| format!("unknown shader feature {name}"))
     }
+}
+
+/// The bit of material feature `name` in [`Features::materials`]; 0 if there is none.
+fn material_bit(name: &str) -> u32 {
+    material::features()
+        .iter()
+        .position(|f| *f == name)
+        .map_or(0, |i| 1 << i)
 }
 
 /// The kernel source for `features`, built for `scene` (whose primitives it may hold as constants).
@@ -186,6 +230,16 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     for (name, source) in MODULES {
         out.push_str(&format!("\n// ---- {name} ----\n"));
         out.push_str(&preprocess(source, features).map_err(|e| format!("shaders/{name}: {e}"))?);
+        if *name == "materials.wgsl" {
+            for kind in features.kinds() {
+                let name = format!("materials/{}.wgsl", kind.name);
+                out.push_str(&format!("\n// ---- {name} ----\n"));
+                out.push_str(
+                    &preprocess(kind.wgsl, features).map_err(|e| format!("shaders/{name}: {e}"))?,
+                );
+            }
+            out.push_str(&material_dispatch(features));
+        }
     }
     if features.inline_scene {
         out.push_str(&inline_scene(scene, features));
@@ -195,6 +249,51 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         }
     }
     Ok(out)
+}
+
+/// The material interface as switches on the kind over the materials the kernel holds:
+/// `emitted`, `scatter`, and with nee `samples_lights` and `bsdf`.
+fn material_dispatch(features: &Features) -> String {
+    let mut out = String::from("\n// ---- the material interface, generated ----\n");
+    let case = |kind: &MaterialKind, call: &str| {
+        format!(
+            "    if m.kind == MAT_{} {{\n        return {}_{call};\n    }}\n",
+            kind.feature, kind.name
+        )
+    };
+    out.push_str("fn emitted(m: Material, front_face: bool) -> vec3f {\n");
+    for kind in features.kinds() {
+        if let Some(feature) = kind.emits_under
+            && features.enabled(feature) == Ok(true)
+        {
+            out.push_str(&case(kind, "emitted(m, front_face)"));
+        }
+    }
+    out.push_str("    return vec3f(0.0);\n}\n\n");
+    if features.nee {
+        let lit: Vec<String> = features
+            .kinds()
+            .filter(|k| k.samples_lights)
+            .map(|k| format!("m.kind == MAT_{}", k.feature))
+            .collect();
+        out.push_str(&format!(
+            "// Whether next-event estimation samples lights here: the BSDF is neither a delta nor absent.\nfn samples_lights(m: Material) -> bool {{\n    return {};\n}}\n\n",
+            if lit.is_empty() { "false".to_string() } else { lit.join(" || ") }
+        ));
+        out.push_str("fn bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {\n");
+        for kind in features.kinds().filter(|k| k.samples_lights) {
+            out.push_str(&case(kind, "bsdf(m, hit, dir)"));
+        }
+        out.push_str("    return Bsdf(vec3f(0.0), 0.0);\n}\n\n");
+    }
+    out.push_str(
+        "fn scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {\n",
+    );
+    for kind in features.kinds() {
+        out.push_str(&case(kind, "scatter(m, dir_in, hit, rng)"));
+    }
+    out.push_str("    return Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));\n}\n");
+    out
 }
 
 /// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does), each

@@ -282,6 +282,52 @@ impl<'de> Deserialize<'de> for Albedo {
     }
 }
 
+/// Checked values as serde `with` modules, for the plain-data types that scene files describe
+/// directly (materials): `#[serde(with = "checked::albedo")] albedo: Vec3`.
+pub mod checked {
+    use super::{Albedo, Colour, Num, V3};
+    use glam::Vec3;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// A finite number.
+    pub mod number {
+        use super::*;
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+            Num::deserialize(d).map(|n| n.0)
+        }
+        pub fn serialize<S: Serializer>(x: &f32, s: S) -> Result<S::Ok, S::Error> {
+            Num(*x).serialize(s)
+        }
+    }
+
+    /// A colour: three finite numbers, none negative.
+    pub mod colour {
+        use super::*;
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+            Colour::deserialize(d).map(|c| c.0.vec())
+        }
+        pub fn serialize<S: Serializer>(v: &Vec3, s: S) -> Result<S::Ok, S::Error> {
+            V3::from(*v).serialize(s)
+        }
+    }
+
+    /// A reflectance: a colour with every component in [0, 1].
+    pub mod albedo {
+        use super::*;
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+            Albedo::deserialize(d).map(|a| a.0.vec())
+        }
+        pub fn serialize<S: Serializer>(v: &Vec3, s: S) -> Result<S::Ok, S::Error> {
+            V3::from(*v).serialize(s)
+        }
+    }
+
+    /// For `skip_serializing_if`: an all-zero colour is the default.
+    pub fn is_black(v: &Vec3) -> bool {
+        *v == Vec3::ZERO
+    }
+}
+
 // ---- The document ---------------------------------------------------------------------------
 
 #[derive(Deserialize, Serialize)]
@@ -291,7 +337,7 @@ struct SceneDoc {
     render: Option<RenderDoc>,
     camera: Spanned<CameraDoc>,
     #[serde(default)]
-    materials: BTreeMap<String, Spanned<MaterialDoc>>,
+    materials: BTreeMap<String, Spanned<Material>>,
     #[serde(default, rename = "object")]
     objects: Vec<Spanned<ObjectDoc>>,
 }
@@ -345,29 +391,6 @@ struct CameraDoc {
     aperture: Option<Num>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     focus_distance: Option<Num>,
-}
-
-#[derive(Deserialize, Serialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum MaterialDoc {
-    Lambertian {
-        albedo: Albedo,
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        emission: Option<Colour>,
-    },
-    Metal {
-        albedo: Albedo,
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        fuzz: Option<Num>,
-    },
-    Dielectric {
-        ior: Num,
-    },
-    Light {
-        radiance: Colour,
-        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-        two_sided: bool,
-    },
 }
 
 /// (Its `Spanned` fields are moved to whole-text positions in `parse`: add new ones there.)
@@ -483,45 +506,10 @@ impl SceneDoc {
             // Material tables are internally tagged, where serde cannot track spans of their
             // fields: errors point at the material.
             let span = Some(doc.span());
-            let material = match doc.into_inner() {
-                MaterialDoc::Lambertian { albedo, emission } => Material::Lambertian {
-                    albedo: albedo.0.vec(),
-                    emission: emission.map(|e| e.0.vec()).unwrap_or(Vec3::ZERO),
-                },
-                MaterialDoc::Metal { albedo, fuzz } => {
-                    let fuzz = fuzz.map(|f| f.0).unwrap_or(0.0);
-                    if !(0.0..=1.0).contains(&fuzz) {
-                        return Err((
-                            span,
-                            format!(
-                                "material \"{}\": fuzz must be in [0, 1], got {fuzz}",
-                                quoted(&name)
-                            ),
-                        ));
-                    }
-                    Material::Metal {
-                        albedo: albedo.0.vec(),
-                        fuzz,
-                    }
-                }
-                MaterialDoc::Dielectric { ior } => {
-                    let ior = ior.0;
-                    if !(ior > 0.0) {
-                        return Err((
-                            span,
-                            format!("material \"{}\": ior must be > 0, got {ior}", quoted(&name)),
-                        ));
-                    }
-                    Material::Dielectric { ior }
-                }
-                MaterialDoc::Light {
-                    radiance,
-                    two_sided,
-                } => Material::Light {
-                    radiance: radiance.0.vec(),
-                    two_sided,
-                },
-            };
+            let material = doc.into_inner();
+            material
+                .validate()
+                .map_err(|message| (span, format!("material \"{}\": {message}", quoted(&name))))?;
             material_index.insert(name.clone(), materials.len() as u32);
             materials.push(material);
             material_names.push(name);
@@ -627,24 +615,7 @@ impl SceneDoc {
             .iter()
             .zip(names)
             .map(|(m, name)| {
-                let doc = match *m {
-                    Material::Lambertian { albedo, emission } => MaterialDoc::Lambertian {
-                        albedo: Albedo(V3::from(albedo)),
-                        emission: (emission != Vec3::ZERO).then(|| Colour(V3::from(emission))),
-                    },
-                    Material::Metal { albedo, fuzz } => MaterialDoc::Metal {
-                        albedo: Albedo(V3::from(albedo)),
-                        fuzz: Some(Num(fuzz)),
-                    },
-                    Material::Dielectric { ior } => MaterialDoc::Dielectric { ior: Num(ior) },
-                    Material::Light {
-                        radiance,
-                        two_sided,
-                    } => MaterialDoc::Light {
-                        radiance: Colour(V3::from(radiance)),
-                        two_sided,
-                    },
-                };
+                let doc = *m;
                 (name.clone(), Spanned::new(0..0, doc))
             })
             .collect();

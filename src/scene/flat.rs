@@ -164,18 +164,6 @@ pub enum LightShape {
     },
 }
 
-/// Radiance and whether both faces emit, for materials that emit.
-pub fn emission_of(material: &Material) -> Option<(Vec3, bool)> {
-    match *material {
-        Material::Light {
-            radiance,
-            two_sided,
-        } if radiance != Vec3::ZERO => Some((radiance, two_sided)),
-        Material::Lambertian { emission, .. } if emission != Vec3::ZERO => Some((emission, true)),
-        _ => None,
-    }
-}
-
 impl FlatScene {
     /// Flattens `scene` for an image of `width` x `height` pixels.
     pub fn new(scene: &Scene, width: u32, height: u32) -> Result<Self, SceneError> {
@@ -266,7 +254,7 @@ impl FlatScene {
         for sphere in &mut self.spheres {
             sphere.light = 0;
             if let Some((radiance, two_sided)) =
-                emission_of(&self.materials[sphere.material as usize])
+                self.materials[sphere.material as usize].area_light()
             {
                 let r = sphere.radius.abs();
                 let area = 4.0 * std::f64::consts::PI * (r as f64).powi(2);
@@ -285,8 +273,7 @@ impl FlatScene {
         }
         for quad in &mut self.quads {
             quad.light = 0;
-            if let Some((radiance, two_sided)) =
-                emission_of(&self.materials[quad.material as usize])
+            if let Some((radiance, two_sided)) = self.materials[quad.material as usize].area_light()
             {
                 let area = quad.u.cross(quad.v).length();
                 let sides = if two_sided { 2.0 } else { 1.0 };

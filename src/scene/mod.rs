@@ -24,27 +24,7 @@ pub struct Camera {
     pub focus_distance: Option<f32>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Material {
-    /// Ideal diffuse reflector. `emission` (both faces) makes it glow, as the furnace tests need.
-    Lambertian { albedo: Vec3, emission: Vec3 },
-    /// Mirror reflection perturbed by `fuzz` in [0, 1]; rays fuzzed below the surface are absorbed.
-    Metal { albedo: Vec3, fuzz: f32 },
-    /// Smooth glass: exact unpolarised Fresnel, refraction by Snell's law, total internal reflection.
-    Dielectric { ior: f32 },
-    /// Diffuse area light. It emits from its front face (along the shape's normal) unless
-    /// `two_sided`, and reflects nothing.
-    Light { radiance: Vec3, two_sided: bool },
-}
-
-impl Material {
-    pub fn lambertian(albedo: Vec3) -> Self {
-        Material::Lambertian {
-            albedo,
-            emission: Vec3::ZERO,
-        }
-    }
-}
+pub use crate::material::Material;
 
 /// Rigid placement of an object: rotate about +y (right-handed, degrees), then translate.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -186,6 +166,11 @@ impl Scene {
         self.camera.validate()?;
         if self.material_names.len() != self.materials.len() {
             return Err(SceneError::Invalid("every material needs a name".into()));
+        }
+        for (material, name) in self.materials.iter().zip(&self.material_names) {
+            material
+                .validate()
+                .map_err(|e| SceneError::Invalid(format!("material \"{name}\": {e}")))?;
         }
         for (i, object) in self.objects.iter().enumerate() {
             if object.material as usize >= self.materials.len() {

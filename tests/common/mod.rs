@@ -83,10 +83,10 @@ pub fn furnace_scene() -> Scene {
         Background::Constant(Vec3::new(0.9, 0.8, 0.7)),
         vec![
             Material::lambertian(Vec3::new(0.6, 0.5, 0.4)),
-            Material::Metal {
+            Material::Metal(rt_gpu::material::Metal {
                 albedo: Vec3::splat(0.9),
                 fuzz: 0.3,
-            },
+            }),
         ],
         vec![
             object(

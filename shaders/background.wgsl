@@ -1,0 +1,10 @@
+// What escaped rays see (twin: src/cpu/background.rs).
+
+fn background(dir: vec3f) -> vec3f {
+//#if SKY
+    let t = 0.5 * (dir.y + 1.0);
+    return (1.0 - t) * vec3f(1.0) + t * SKY_ZENITH;
+//#else
+    return params.background;
+//#endif
+}

@@ -1,0 +1,24 @@
+// Ideal diffuse reflection (twin: src/material/lambertian.rs). Random numbers per scatter: 2.
+// Packed: albedo, emission.
+
+fn lambertian_emitted(m: Material, front_face: bool) -> vec3f {
+    return m.emission;
+}
+
+fn lambertian_bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {
+    // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
+    let cos = dot(hit.normal, dir);
+    if cos > 0.0 {
+        return Bsdf(m.albedo, cos / PI);
+    }
+    return Bsdf(vec3f(0.0), 0.0);
+}
+
+fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+    // normal + a uniform unit vector is cosine-distributed about the normal.
+    let u1 = rng_next(rng);
+    let u2 = rng_next(rng);
+    let d = hit.normal + unit_vector(u1, u2);
+    let len2 = dot(d, d);
+    return Scattered(m.albedo, true, select(hit.normal, d / sqrt(len2), len2 > 1e-12));
+}

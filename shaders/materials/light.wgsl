@@ -1,0 +1,13 @@
+// A diffuse area light (twin: src/material/light.rs): emits from its front face unless
+// two-sided, reflects nothing. Packed: emission: radiance; param: 1 if two-sided.
+
+fn light_emitted(m: Material, front_face: bool) -> vec3f {
+    if front_face || m.param > 0.5 {
+        return m.emission;
+    }
+    return vec3f(0.0);
+}
+
+fn light_scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+    return Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));
+}

@@ -1,0 +1,19 @@
+//! What escaped rays see (twin: `shaders/background.wgsl`).
+
+use crate::scene::Background;
+use glam::Vec3;
+
+/// The sky background's colour straight up (white at the horizon).
+pub const SKY_ZENITH: [f32; 3] = [0.5, 0.7, 1.0];
+
+/// Radiance arriving from the environment along unit direction `dir`.
+#[inline]
+pub fn background(bg: &Background, dir: Vec3) -> Vec3 {
+    match *bg {
+        Background::Constant(c) => c,
+        Background::Sky => {
+            let t = 0.5 * (dir.y + 1.0);
+            (1.0 - t) * Vec3::ONE + t * Vec3::from(SKY_ZENITH)
+        }
+    }
+}

@@ -1,0 +1,199 @@
+//! Materials, one file each: the material's parameters (plain data, and with serde its
+//! scene-file syntax), its CPU reference BSDF (the [`MaterialModel`] methods) and how it is
+//! packed for the GPU; its WGSL twin is `shaders/materials/<file name>.wgsl`. The path loops on
+//! both backends see only the interface below and never name a material.
+//!
+//! Adding a material: write its file here and its WGSL twin, add one line to `registry!` below
+//! (which gives it its scene-file `type` name, kernel kind and feature), document it in
+//! `scenes/README.md`.
+
+use crate::cpu::shapes::Hit;
+use crate::gpu::layout::GpuMaterial;
+use crate::rng::Rng;
+use glam::Vec3;
+
+/// What each material provides. The CPU methods are the reference twins of the WGSL functions
+/// `<name>_scatter`, `<name>_emitted` and `<name>_bsdf` in `shaders/materials/<name>.wgsl`;
+/// both draw the same random numbers in the same order.
+pub trait MaterialModel {
+    /// The kernel feature that includes its WGSL twin: the file name in upper case.
+    const FEATURE: &'static str;
+    /// Features its WGSL twin's `//#if` blocks may test beyond [`Self::FEATURE`].
+    const EXTRA_FEATURES: &'static [&'static str] = &[];
+    /// The feature under which the kernel calls its twin's `<name>_emitted`; `None`: it never
+    /// emits, and its twin has no `<name>_emitted`.
+    const EMITS_UNDER: Option<&'static str> = None;
+    /// Whether next-event estimation samples lights at it: its BSDF is neither a delta (a light
+    /// sample never picks a mirror's direction) nor absent. Its twin then has `<name>_bsdf`.
+    const SAMPLES_LIGHTS: bool = false;
+
+    /// Its parameter ranges; the message names the parameter.
+    fn validate(&self) -> Result<(), String> {
+        Ok(())
+    }
+    /// The [`Self::EXTRA_FEATURES`] this instance needs.
+    fn extra_features(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// Radiance leaving the surface toward the ray.
+    fn emitted(&self, _hit: &Hit) -> Vec3 {
+        Vec3::ZERO
+    }
+    /// Radiance and whether both faces emit, if it emits: such surfaces join the light list.
+    fn area_light(&self) -> Option<(Vec3, bool)> {
+        None
+    }
+    /// The BSDF toward unit direction `dir`, for light sampling and multiple importance
+    /// sampling: `(weight, pdf)`, where `pdf` is the solid-angle density with which `scatter`
+    /// picks `dir` and `weight` = BSDF x cosine / pdf. `None` if `scatter` cannot pick `dir`.
+    /// Called only where [`Self::SAMPLES_LIGHTS`].
+    fn bsdf(&self, _hit: &Hit, _dir: Vec3) -> Option<(Vec3, f32)> {
+        None
+    }
+    /// The throughput factor and direction of the continued path (the BSDF sampled), or `None`
+    /// if the path ends here.
+    fn scatter(&self, dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)>;
+    /// Its GPU form; `kind` is filled in from the registry.
+    fn gpu(&self) -> GpuMaterial;
+}
+
+/// A material kind as the kernel builder sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct MaterialKind {
+    /// Scene-file `type`, WGSL file name and function-name prefix.
+    pub name: &'static str,
+    /// `GpuMaterial::kind`; the WGSL constant `MAT_<FEATURE>`.
+    pub kind: u32,
+    pub feature: &'static str,
+    pub extra_features: &'static [&'static str],
+    pub emits_under: Option<&'static str>,
+    pub samples_lights: bool,
+    /// The WGSL twin.
+    pub wgsl: &'static str,
+}
+
+macro_rules! registry {
+    ($($module:ident :: $ty:ident,)+) => {
+        $(pub mod $module; pub use $module::$ty;)+
+
+        /// A material of any kind; scene files name the kind with `type = "<file name>"`.
+        #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+        #[serde(tag = "type", rename_all = "snake_case")]
+        pub enum Material {
+            $($ty($ty),)+
+        }
+
+        #[repr(u32)]
+        enum KindIndex {
+            $($ty,)+
+        }
+
+        /// Every material kind, in `GpuMaterial::kind` order.
+        pub const KINDS: &[MaterialKind] = &[$(MaterialKind {
+            name: stringify!($module),
+            kind: KindIndex::$ty as u32,
+            feature: <$ty as MaterialModel>::FEATURE,
+            extra_features: <$ty as MaterialModel>::EXTRA_FEATURES,
+            emits_under: <$ty as MaterialModel>::EMITS_UNDER,
+            samples_lights: <$ty as MaterialModel>::SAMPLES_LIGHTS,
+            wgsl: include_str!(concat!("../../shaders/materials/", stringify!($module), ".wgsl")),
+        },)+];
+
+        // Each method passes to the material's own.
+        impl Material {
+            /// Its entry in [`KINDS`].
+            pub fn kind(&self) -> &'static MaterialKind {
+                match self { $(Material::$ty(_) => &KINDS[KindIndex::$ty as usize],)+ }
+            }
+            pub fn samples_lights(&self) -> bool {
+                self.kind().samples_lights
+            }
+            pub fn validate(&self) -> Result<(), String> {
+                match self { $(Material::$ty(m) => m.validate(),)+ }
+            }
+            pub fn extra_features(&self) -> &'static [&'static str] {
+                match self { $(Material::$ty(m) => m.extra_features(),)+ }
+            }
+            #[inline]
+            pub fn emitted(&self, hit: &Hit) -> Vec3 {
+                match self { $(Material::$ty(m) => m.emitted(hit),)+ }
+            }
+            pub fn area_light(&self) -> Option<(Vec3, bool)> {
+                match self { $(Material::$ty(m) => m.area_light(),)+ }
+            }
+            #[inline]
+            pub fn bsdf(&self, hit: &Hit, dir: Vec3) -> Option<(Vec3, f32)> {
+                match self { $(Material::$ty(m) => m.bsdf(hit, dir),)+ }
+            }
+            #[inline]
+            pub fn scatter(&self, dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
+                match self { $(Material::$ty(m) => m.scatter(dir_in, hit, rng),)+ }
+            }
+            pub fn gpu(&self) -> GpuMaterial {
+                let packed = match self { $(Material::$ty(m) => m.gpu(),)+ };
+                GpuMaterial { kind: self.kind().kind, ..packed }
+            }
+        }
+    };
+}
+
+registry! {
+    lambertian::Lambertian,
+    metal::Metal,
+    dielectric::Dielectric,
+    light::Light,
+}
+
+impl Material {
+    /// A diffuse reflector that does not glow.
+    pub fn lambertian(albedo: Vec3) -> Self {
+        Material::Lambertian(Lambertian {
+            albedo,
+            emission: Vec3::ZERO,
+        })
+    }
+}
+
+/// Every kernel feature a material can turn on, each once.
+pub fn features() -> Vec<&'static str> {
+    let mut out = Vec::new();
+    for kind in KINDS {
+        for feature in std::iter::once(&kind.feature).chain(kind.extra_features) {
+            if !out.contains(feature) {
+                out.push(*feature);
+            }
+        }
+    }
+    out
+}
+
+/// Mirror reflection of `d` about unit normal `n`.
+#[inline]
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_names_agree() {
+        for kind in KINDS {
+            assert_eq!(kind.feature, kind.name.to_uppercase(), "{}", kind.name);
+            assert!(kind.wgsl.contains(&format!("fn {}_scatter(", kind.name)));
+            assert_eq!(
+                kind.emits_under.is_some(),
+                kind.wgsl.contains(&format!("fn {}_emitted(", kind.name)),
+                "{}: EMITS_UNDER and its twin's {0}_emitted",
+                kind.name
+            );
+            assert_eq!(
+                kind.samples_lights,
+                kind.wgsl.contains(&format!("fn {}_bsdf(", kind.name)),
+                "{}: SAMPLES_LIGHTS and its twin's {0}_bsdf",
+                kind.name
+            );
+        }
+    }
+}
