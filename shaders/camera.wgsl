@@ -1,16 +1,16 @@
 // Primary rays (twin: src/cpu/camera.rs): pixel x covers [x, x+1)/width, row 0 is the top.
 
-fn generate_ray(x: u32, y: u32, rng: ptr<function, u32>) -> Ray {
-    let jx = rng_next(rng);
-    let jy = rng_next(rng);
+fn generate_ray(x: u32, y: u32, sampler: ptr<function, Sampler>) -> Ray {
+    let jx = sampler_next(sampler);
+    let jy = sampler_next(sampler);
     let s = (f32(x) + jx) / f32(params.width);
     let t = (f32(y) + jy) / f32(params.height);
     // Relative to the camera, so the direction's precision does not depend on where it is.
     var to_target = params.to_upper_left + s * params.horizontal - t * params.vertical;
     var origin = params.origin;
 //#if LENS
-    let u1 = rng_next(rng);
-    let u2 = rng_next(rng);
+    let u1 = sampler_next(sampler);
+    let u2 = sampler_next(sampler);
     let d = unit_disk(u1, u2);
     let on_lens = params.lens_radius * (d.x * params.right + d.y * params.up);
     origin += on_lens;

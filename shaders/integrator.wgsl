@@ -39,7 +39,7 @@ fn direct_light(m: Material, hit: Hit, u0: f32, u1: f32, u2: f32) -> DirectLight
 }
 //#endif
 
-fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
+fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
     var ray = primary;
     var total = vec3f(0.0);
     var throughput = vec3f(1.0);
@@ -74,14 +74,16 @@ fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
         bsdf_pdf = 0.0;
         let light_sampled = samples_lights(m);
         if light_sampled {
-            let u0 = rng_next(rng);
-            let u1 = rng_next(rng);
-            let u2 = rng_next(rng);
+            sampler_begin(sampler);
+            let u0 = sampler_next(sampler);
+            let u1 = sampler_next(sampler);
+            let u2 = sampler_next(sampler);
             let d = direct_light(m, hit, u0, u1, u2);
             total += throughput * d.weight * d.light;
         }
 //#endif
-        let s = scatter(m, ray.dir, hit, rng);
+        sampler_begin(sampler);
+        let s = scatter(m, ray.dir, hit, sampler);
         if !s.ok {
             break;
         }
@@ -95,7 +97,8 @@ fn radiance(primary: Ray, rng: ptr<function, u32>) -> vec3f {
         ray = spawn(hit, s.dir);
         if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
             let survival = min(max(throughput.x, max(throughput.y, throughput.z)), MAX_SURVIVAL);
-            if !(rng_next(rng) < survival) {
+            sampler_begin(sampler);
+            if !(sampler_next(sampler) < survival) {
                 break;
             }
             throughput /= survival;

@@ -1,8 +1,9 @@
 // Entry points: one invocation per pixel of the current tile.
 
-// Per pixel of the tile, three vec4s: the running mean (w: count of non-finite samples, as
+// Per pixel of the tile, four vec4s: the running mean (w: count of non-finite samples, as
 // bits), the Kahan compensation of the mean (w: samples accumulated, as bits, so the host can
-// prove no loop was cut short), and Welford's M2. Updated sample by sample in sample order, so
+// prove no loop was cut short), Welford's M2, and the running mean of the odd-index samples
+// (replica 1 of a stratified sampler; see src/film.rs). Updated sample by sample in sample order, so
 // the result does not depend on how a render is sliced into dispatches.
 @group(0) @binding(4) var<storage, read_write> accum: array<vec4f>;
 
@@ -25,7 +26,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     let x = dispatch.tile_origin.x + gid.x;
     let y = dispatch.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
-    let slot = 3u * (gid.y * dispatch.tile_size.x + gid.x);
+    let slot = 4u * (gid.y * dispatch.tile_size.x + gid.x);
     let first = accum[slot];
     var mean = first.xyz;
     var invalid = bitcast<u32>(first.w);
@@ -33,10 +34,15 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var compensation = second.xyz;
     var count = bitcast<u32>(second.w);
     var m2 = accum[slot + 2u].xyz;
+    var odd_mean = accum[slot + 3u].xyz;
+    // Odd sample indices so far: those in [first of the render, first of this dispatch).
+    let render_first = dispatch.first_sample - dispatch.samples_before;
+    var odd_n = dispatch.first_sample / 2u - render_first / 2u;
     for (var s = 0u; s < dispatch.sample_count; s++) {
-        var rng = rng_for_sample(pixel, dispatch.first_sample + s, dispatch.seed);
-        let ray = generate_ray(x, y, &rng);
-        var l = radiance(ray, &rng);
+        let index = dispatch.first_sample + s;
+        var sampler = sampler_for_sample(pixel, index, dispatch.seed);
+        let ray = generate_ray(x, y, &sampler);
+        var l = radiance(ray, &sampler);
         if !all_finite(l) {
             l = vec3f(0.0);
             invalid += 1u;
@@ -51,11 +57,16 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
         compensation = (next - mean) - step;
         mean = next;
         m2 += delta * (l - mean);
+        if (index & 1u) == 1u {
+            odd_n += 1u;
+            odd_mean += (l - odd_mean) / f32(odd_n);
+        }
         count += 1u;
     }
     accum[slot] = vec4f(mean, bitcast<f32>(invalid));
     accum[slot + 1u] = vec4f(compensation, bitcast<f32>(count));
     accum[slot + 2u] = vec4f(m2, 0.0);
+    accum[slot + 3u] = vec4f(odd_mean, 0.0);
 }
 
 //#if DEBUG
@@ -82,17 +93,41 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     let x = dispatch.tile_origin.x + gid.x;
     let y = dispatch.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
-    var rng = rng_for_sample(pixel, dispatch.first_sample, dispatch.seed);
-    let ray = generate_ray(x, y, &rng);
+    var sampler = sampler_for_sample(pixel, dispatch.first_sample, dispatch.seed);
+    let ray = generate_ray(x, y, &sampler);
     var hit: Hit;
     var out = trace_debug(ray, &hit);
     out.dir = vec3f(0.0);
     if out.hit == 1u {
-        let s = scatter(material_at(hit.material), ray.dir, hit, &rng);
+        let s = scatter(material_at(hit.material), ray.dir, hit, &sampler);
         out.dir = s.dir;
         out.scattered = select(0u, 1u, s.ok);
     }
     bounces[gid.y * dispatch.tile_size.x + gid.x] = out;
+}
+
+// The first numbers of each pixel's sample dispatch.first_sample, as bits, for comparing the
+// sampler with its CPU twin: 4 (a whole group), begin, 3, begin, 5 (the fifth wraps into a new
+// group).
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
+fn draw_samples(@builtin(global_invocation_id) gid: vec3u) {
+    if !in_tile(gid) {
+        return;
+    }
+    let pixel = (dispatch.tile_origin.y + gid.y) * params.width + dispatch.tile_origin.x + gid.x;
+    var sampler = sampler_for_sample(pixel, dispatch.first_sample, dispatch.seed);
+    var u: array<u32, 12>;
+    for (var i = 0u; i < 12u; i++) {
+        if i == 4u || i == 7u {
+            sampler_begin(&sampler);
+        }
+        u[i] = bitcast<u32>(sampler_next(&sampler));
+    }
+    bounces[gid.y * dispatch.tile_size.x + gid.x] = FirstBounce(
+        bitcast<vec3f>(vec3u(u[0], u[1], u[2])), u[3],
+        bitcast<vec3f>(vec3u(u[4], u[5], u[6])), u[7],
+        bitcast<vec3f>(vec3u(u[8], u[9], u[10])), u[11],
+    );
 }
 
 // Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:

@@ -36,12 +36,13 @@ pub fn errors(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Errors {
     }
 }
 
-/// A render's own estimate of its RMSE: the root of the mean variance of its pixel means.
+/// A render's own estimate of its RMSE: the root of the mean variance of its pixel means (from
+/// independent randomisations under a stratified sampler; see `Film::variance_of_mean`).
 pub fn estimated_rmse(film: &Film) -> f64 {
     let sum: f64 = film
         .pixels
         .iter()
-        .map(|p| p.variance_of_mean().element_sum())
+        .map(|p| film.variance_of_mean(p).element_sum())
         .sum();
     (sum / (film.pixels.len() * 3).max(1) as f64).sqrt()
 }
@@ -163,6 +164,7 @@ fn options(o: &ConvergeOptions, spp: u32, seed: u32, integrator: Integrator) -> 
         seed,
         max_depth: o.max_depth,
         integrator,
+        sampler: crate::options::SamplerKind::Independent,
         roulette_depth: o.roulette_depth,
     }
 }

@@ -1,16 +1,26 @@
 //! The film: every pixel's running mean and variance in f64, so each render knows its own noise.
+//!
+//! With independent samples the variance of a pixel's mean is its sample variance over n. With
+//! a stratified sampler it is far lower, and the sample variance says nothing about it; there
+//! the estimate comes from two independent randomisations, the replicas the sampler deals even
+//! and odd sample indices into (`crate::sampler::REPLICAS`): the film keeps the odd samples'
+//! mean beside the overall one.
 
 use glam::{DVec3, Vec3};
 
-/// Welford's running mean and sum of squared deviations of one pixel's samples.
+/// Welford's running mean and sum of squared deviations of one pixel's samples, and the mean of
+/// its odd-index samples (replica 1).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelStats {
     pub n: u64,
     pub mean: DVec3,
     pub m2: DVec3,
+    pub odd_n: u64,
+    pub odd_mean: DVec3,
 }
 
 impl PixelStats {
+    /// Adds a sample whose index is unknown (replica statistics stay empty).
     #[inline]
     pub fn add(&mut self, sample: Vec3) {
         let x = sample.as_dvec3();
@@ -18,6 +28,39 @@ impl PixelStats {
         let delta = x - self.mean;
         self.mean += delta / self.n as f64;
         self.m2 += delta * (x - self.mean);
+    }
+
+    /// Adds sample number `index` of the pixel.
+    #[inline]
+    pub fn add_indexed(&mut self, sample: Vec3, index: u32) {
+        self.add(sample);
+        if index % 2 == 1 {
+            self.odd_n += 1;
+            self.odd_mean += (sample.as_dvec3() - self.odd_mean) / self.odd_n as f64;
+        }
+    }
+
+    /// The mean of the even-index samples (replica 0), if there are any.
+    pub fn even_mean(&self) -> Option<DVec3> {
+        let even_n = self.n.checked_sub(self.odd_n).filter(|&n| n > 0)?;
+        Some((self.mean * self.n as f64 - self.odd_mean * self.odd_n as f64) / even_n as f64)
+    }
+
+    /// Variance of the pixel's mean from the spread of its two replicas' means, independent
+    /// randomised estimates: (m0 - m1)^2 / 4 for equal halves, n0 n1 (m0 - m1)^2 / n^2 in
+    /// general (one degree of freedom per pixel: noisy alone, unbiased in sums over pixels).
+    /// `None` while a replica has no samples.
+    pub fn replica_variance_of_mean(&self) -> Option<DVec3> {
+        let even = self.even_mean()?;
+        (self.odd_n > 0).then(|| {
+            let d = even - self.odd_mean;
+            let (n0, n1, n) = (
+                (self.n - self.odd_n) as f64,
+                self.odd_n as f64,
+                self.n as f64,
+            );
+            d * d * (n0 * n1 / (n * n))
+        })
     }
 
     /// Combines two disjoint sets of samples (Chan et al.'s parallel update).
@@ -31,9 +74,14 @@ impl PixelStats {
         self.mean += delta * weight;
         self.m2 += other.m2 + delta * delta * (self.n as f64 * weight);
         self.n = n;
+        let odd_n = self.odd_n + other.odd_n;
+        if odd_n > 0 {
+            self.odd_mean += (other.odd_mean - self.odd_mean) * (other.odd_n as f64 / odd_n as f64);
+        }
+        self.odd_n = odd_n;
     }
 
-    /// Unbiased sample variance of one sample.
+    /// Unbiased sample variance of one sample (of independent samples).
     pub fn variance(&self) -> DVec3 {
         if self.n < 2 {
             DVec3::ZERO
@@ -42,7 +90,8 @@ impl PixelStats {
         }
     }
 
-    /// Variance of the pixel's mean: the square of its standard error.
+    /// Variance of the pixel's mean, the square of its standard error, for independent
+    /// samples (see [`Film::variance_of_mean`] for any sampler).
     pub fn variance_of_mean(&self) -> DVec3 {
         if self.n == 0 {
             DVec3::ZERO
@@ -60,15 +109,18 @@ pub struct Film {
     pub pixels: Vec<PixelStats>,
     /// Samples that came out NaN or infinite and were counted as zero.
     pub invalid_samples: u64,
+    /// Whether the samples were stratified (not independent): noise is then measured by the
+    /// spread of the replicas.
+    pub stratified: bool,
 }
 
 /// Longest image side.
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
-/// Most pixels one image may have (the film keeps 56 bytes of statistics per pixel).
+/// Most pixels one image may have (the film keeps 88 bytes of statistics per pixel).
 pub const MAX_PIXELS: u64 = 1 << 26;
-/// Host memory a render needs per pixel: the film (56 bytes), its mean image (12), the encoded
+/// Host memory a render needs per pixel: the film (88 bytes), its mean image (12), the encoded
 /// output (up to 12) and slack for GPU readback and the CPU's rows.
-pub const RENDER_BYTES_PER_PIXEL: u64 = 96;
+pub const RENDER_BYTES_PER_PIXEL: u64 = 128;
 
 /// The one check of an image size, wherever it comes from (`--size`, a scene file, a test).
 pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
@@ -116,6 +168,20 @@ impl Film {
             height,
             pixels: vec![PixelStats::default(); width as usize * height as usize],
             invalid_samples: 0,
+            stratified: false,
+        }
+    }
+
+    /// The variance of `pixel`'s mean: from its replicas when the samples were stratified
+    /// (falling back to the sample variance, an overestimate, while a replica is empty), else
+    /// from its samples.
+    pub fn variance_of_mean(&self, pixel: &PixelStats) -> DVec3 {
+        if self.stratified {
+            pixel
+                .replica_variance_of_mean()
+                .unwrap_or_else(|| pixel.variance_of_mean())
+        } else {
+            pixel.variance_of_mean()
         }
     }
 
@@ -139,7 +205,7 @@ impl Film {
 
     /// Standard error of [`Film::image_mean`], from the per-pixel variances.
     pub fn image_mean_std_error(&self) -> DVec3 {
-        let sum: DVec3 = self.pixels.iter().map(|p| p.variance_of_mean()).sum();
+        let sum: DVec3 = self.pixels.iter().map(|p| self.variance_of_mean(p)).sum();
         let n = self.pixels.len().max(1) as f64;
         (sum / (n * n)).map(f64::sqrt)
     }
@@ -147,6 +213,7 @@ impl Film {
     /// Adds another film's samples of the same pixels.
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
+        self.stratified |= other.stratified;
         for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
             a.merge(b);
         }

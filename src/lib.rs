@@ -16,4 +16,5 @@ pub mod output;
 pub mod plot;
 pub mod render;
 pub mod rng;
+pub mod sampler;
 pub mod scene;

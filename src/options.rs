@@ -13,13 +13,15 @@ pub struct RenderOptions {
     /// The number of path segments.
     pub max_depth: u32,
     pub integrator: Integrator,
+    pub sampler: SamplerKind,
     /// Russian roulette from this many segments on (0: off). Unbiased: a path survives with the
     /// probability of its largest throughput component (at most 0.95) and is reweighted.
     pub roulette_depth: u32,
 }
 
 impl RenderOptions {
-    /// `width` x `height` at `spp` samples, seed 0, the default integrator, no roulette.
+    /// `width` x `height` at `spp` samples, seed 0, the default integrator, independent
+    /// samples (whose per-sample variance the statistical tests rely on), no roulette.
     pub fn new(width: u32, height: u32, spp: u32, max_depth: u32) -> Self {
         RenderOptions {
             width,
@@ -29,6 +31,7 @@ impl RenderOptions {
             seed: 0,
             max_depth,
             integrator: Integrator::default(),
+            sampler: SamplerKind::Independent,
             roulette_depth: 0,
         }
     }
@@ -50,6 +53,26 @@ impl Integrator {
         match self {
             Integrator::Naive => "naive",
             Integrator::Nee => "nee",
+        }
+    }
+}
+
+/// Where a sample's random numbers come from (see `crate::sampler`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Independent uniform numbers: plain Monte Carlo, error falling as 1/sqrt(spp).
+    Independent,
+    /// Owen-scrambled Sobol points (Burley 2020): stratified in every 2D projection a path
+    /// uses, so edges and soft shadows converge faster.
+    #[default]
+    Sobol,
+}
+
+impl SamplerKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Sobol => "sobol",
         }
     }
 }

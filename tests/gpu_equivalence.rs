@@ -9,7 +9,7 @@ use glam::Vec3;
 use rt_gpu::cpu::camera::generate_ray;
 use rt_gpu::cpu::shapes::intersect;
 use rt_gpu::gpu::{GpuError, Tuning};
-use rt_gpu::rng::Rng;
+use rt_gpu::sampler::Sampler;
 use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
@@ -36,7 +36,7 @@ fn first_bounces_match_the_cpu() {
                 for x in 0..opts.width {
                     let pixel = y * opts.width + x;
                     let g = bounces[pixel as usize];
-                    let mut rng = Rng::for_sample(pixel, sample, opts.seed);
+                    let mut rng = Sampler::independent(pixel, sample, opts.seed);
                     let ray = generate_ray(&flat.camera, &opts, x, y, &mut rng);
                     let hit = intersect(&flat, &ray);
                     let same = match hit {

@@ -5,7 +5,7 @@ use glam::Vec3;
 use rt_gpu::cpu::shapes::Hit;
 use rt_gpu::material::dielectric::{fresnel, refract_cos};
 use rt_gpu::material::reflect;
-use rt_gpu::rng::Rng;
+use rt_gpu::sampler::Sampler;
 use rt_gpu::scene::Material;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
@@ -45,7 +45,7 @@ fn total_internal_reflection_beyond_the_critical_angle() {
     let angle = critical + 0.2;
     let dir_in = Vec3::new(angle.sin(), -angle.cos(), 0.0);
     for seed in 0..64 {
-        let mut rng = Rng::for_sample(0, 0, seed);
+        let mut rng = Sampler::independent(0, 0, seed);
         let (att, out) = (Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }))
             .scatter(dir_in, &hit_with_normal(n, false), &mut rng)
             .expect("scatters");
@@ -62,7 +62,7 @@ fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
         albedo: Vec3::new(0.8, 0.6, 0.2),
         fuzz: 0.0,
     });
-    let mut rng = Rng::for_sample(1, 2, 3);
+    let mut rng = Sampler::independent(1, 2, 3);
     let (att, out) = mirror
         .scatter(dir_in, &hit_with_normal(n, true), &mut rng)
         .expect("reflects");
@@ -78,7 +78,7 @@ fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
     });
     let mut absorbed = 0;
     for i in 0..1000 {
-        let mut rng = Rng::for_sample(i, 0, 9);
+        let mut rng = Sampler::independent(i, 0, 9);
         match fuzzy.scatter(grazing, &hit_with_normal(n, true), &mut rng) {
             Some((_, out)) => assert!(out.dot(n) > 0.0),
             None => absorbed += 1,
@@ -124,7 +124,7 @@ fn lambertian_scattering_is_cosine_distributed() {
     let lambertian = Material::lambertian(Vec3::ONE);
     let hit = hit_with_normal(normal, true);
     let p = chi_square_p_value(normal, |i| {
-        let mut rng = Rng::for_sample(i, 0, 42);
+        let mut rng = Sampler::independent(i, 0, 42);
         lambertian
             .scatter(-normal, &hit, &mut rng)
             .expect("scatters")
@@ -133,7 +133,7 @@ fn lambertian_scattering_is_cosine_distributed() {
     assert!(p > 0.01, "cosine sampling rejected: p = {p}");
 
     let p_uniform = chi_square_p_value(normal, |i| {
-        let mut rng = Rng::for_sample(i, 0, 42);
+        let mut rng = Sampler::independent(i, 0, 42);
         let d = rt_gpu::cpu::sampling::unit_vector(rng.next_f32(), rng.next_f32());
         if d.dot(normal) < 0.0 { -d } else { d }
     });

@@ -361,7 +361,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
     let samples = 1_000_000u32;
     let mut observed = vec![0.0f64; n_theta * n_phi];
     for k in 0..samples {
-        let mut rng = rt_gpu::rng::Rng::for_sample(k, 0, 77);
+        let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 77);
         let dir = sample(rng.next_f32(), rng.next_f32());
         let a = (1.0 - axis.dot(dir) as f64).max(0.0); // rounding at the axis
         let phi = (dir.dot(b) as f64).atan2(dir.dot(t) as f64);

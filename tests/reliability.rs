@@ -98,7 +98,7 @@ fn the_loop_budget_message_names_both_limits() {
     }));
     let opts = rt_gpu::render::RenderOptions::new(4, 4, 1, 100);
     let flat = FlatScene::new(&scene, 4, 4).expect("valid");
-    let features = Features::of(&flat).with_integrator(&flat, opts.integrator);
+    let features = Features::of(&flat).for_render(&flat, &opts);
     let kernel = gpu.kernel(&flat, features, "render").expect("compiles");
     let err = match gpu.render(&kernel, &flat, &opts, &Tuning::default(), &|_| {}) {
         Ok(_) => panic!("rendered past the loop budget"),

@@ -487,7 +487,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                     primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
                 };
                 for k in 0..200 {
-                    let mut rng = rt_gpu::rng::Rng::for_sample(k, 0, 5);
+                    let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 5);
                     if let Some((attenuation, dir)) = m.scatter(dir_in, &hit, &mut rng) {
                         assert!(
                             attenuation.is_finite()
@@ -518,7 +518,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     };
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
-        let mut rng = rt_gpu::rng::Rng::for_sample(k, 0, 6);
+        let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 6);
         let (_, dir) = (Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }))
             .scatter(dir_in, &hit, &mut rng)
             .expect("glass always scatters");

@@ -1,10 +1,10 @@
 // Smooth glass (twin: src/material/dielectric.rs): exact unpolarised Fresnel, refraction by
 // Snell's law, total internal reflection. Random numbers per scatter: 1. Packed: param: ior.
 
-fn dielectric_scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+fn dielectric_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
     let eta = select(m.param, 1.0 / m.param, hit.front_face);
     let cos_i = clamp(dot(-dir_in, hit.normal), 0.0, 1.0);
-    let u = rng_next(rng);
+    let u = sampler_next(sampler);
     var dir = reflect_dir(dir_in, hit.normal);
     let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
     if sin2_t < 1.0 {

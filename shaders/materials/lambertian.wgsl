@@ -14,10 +14,10 @@ fn lambertian_bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {
     return Bsdf(vec3f(0.0), 0.0);
 }
 
-fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
     // normal + a uniform unit vector is cosine-distributed about the normal.
-    let u1 = rng_next(rng);
-    let u2 = rng_next(rng);
+    let u1 = sampler_next(sampler);
+    let u2 = sampler_next(sampler);
     let d = hit.normal + unit_vector(u1, u2);
     let len2 = dot(d, d);
     return Scattered(m.albedo, true, select(hit.normal, d / sqrt(len2), len2 > 1e-12));

@@ -8,6 +8,6 @@ fn light_emitted(m: Material, front_face: bool) -> vec3f {
     return vec3f(0.0);
 }
 
-fn light_scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+fn light_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
     return Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));
 }

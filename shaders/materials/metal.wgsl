@@ -1,10 +1,10 @@
 // Mirror reflection perturbed by fuzz (twin: src/material/metal.rs); rays fuzzed below the
 // surface are absorbed. Random numbers per scatter: 2. Packed: albedo; param: fuzz.
 
-fn metal_scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {
+fn metal_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
     var out = Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));
-    let u1 = rng_next(rng);
-    let u2 = rng_next(rng);
+    let u1 = sampler_next(sampler);
+    let u2 = sampler_next(sampler);
     let fuzzed = reflect_dir(dir_in, hit.normal) + m.param * unit_vector(u1, u2);
     let len2 = dot(fuzzed, fuzzed);
     if len2 > 1e-12 {

@@ -12,7 +12,7 @@ use super::background::background;
 use super::lights;
 use super::shapes::{Hit, Ray, intersect, leave, spawn};
 use crate::options::{Integrator, RenderOptions};
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::Material;
 use crate::scene::flat::FlatScene;
 use glam::Vec3;
@@ -26,7 +26,12 @@ pub fn uses_nee(scene: &FlatScene, opts: &RenderOptions) -> bool {
     opts.integrator == Integrator::Nee && !scene.lights.is_empty()
 }
 
-pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut Rng) -> Vec3 {
+pub fn radiance(
+    scene: &FlatScene,
+    mut ray: Ray,
+    opts: &RenderOptions,
+    sampler: &mut Sampler,
+) -> Vec3 {
     let nee = uses_nee(scene, opts);
     let mut total = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
@@ -54,12 +59,14 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
         bsdf_pdf = 0.0;
         let light_sampled = nee && material.samples_lights();
         if light_sampled {
-            let (u0, u1, u2) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+            sampler.begin();
+            let (u0, u1, u2) = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
             if let Some((weight, light)) = direct_light(scene, material, &hit, u0, u1, u2) {
                 total += throughput * weight * light;
             }
         }
-        let Some((attenuation, dir)) = material.scatter(ray.dir, &hit, rng) else {
+        sampler.begin();
+        let Some((attenuation, dir)) = material.scatter(ray.dir, &hit, sampler) else {
             break;
         };
         throughput *= attenuation;
@@ -70,7 +77,8 @@ pub fn radiance(scene: &FlatScene, mut ray: Ray, opts: &RenderOptions, rng: &mut
         ray = spawn(&hit, dir);
         if opts.roulette_depth > 0 && segment + 1 >= opts.roulette_depth {
             let survival = throughput.max_element().min(MAX_SURVIVAL);
-            if !(rng.next_f32() < survival) {
+            sampler.begin();
+            if !(sampler.next_f32() < survival) {
                 break;
             }
             throughput /= survival;

@@ -12,7 +12,7 @@ pub mod shapes;
 use crate::backend::{RenderBackend, Rendered};
 use crate::film::{Film, PixelStats};
 use crate::options::{Integrator, RenderOptions};
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::flat::FlatScene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -76,6 +76,7 @@ pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync
         })
         .sum();
     film.invalid_samples = invalid;
+    film.stratified = opts.sampler == crate::options::SamplerKind::Sobol;
     film
 }
 
@@ -90,14 +91,14 @@ fn render_pixel(
     let pixel = y * opts.width + x;
     let mut invalid = 0;
     for sample in opts.first_sample..opts.first_sample + opts.spp {
-        let mut rng = Rng::for_sample(pixel, sample, opts.seed);
-        let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut rng);
-        let mut radiance = integrator::radiance(scene, ray, opts, &mut rng);
+        let mut sampler = Sampler::for_sample(opts.sampler, pixel, sample, opts.seed);
+        let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut sampler);
+        let mut radiance = integrator::radiance(scene, ray, opts, &mut sampler);
         if !radiance.is_finite() {
             invalid += 1;
             radiance = glam::Vec3::ZERO;
         }
-        stats.add(radiance);
+        stats.add_indexed(radiance, sample);
     }
     invalid
 }

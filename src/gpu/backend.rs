@@ -1,32 +1,52 @@
-//! The WGSL kernel as a [`RenderBackend`]: a device opened and a kernel compiled once.
+//! The WGSL kernel as a [`RenderBackend`]: a device opened once, and a kernel compiled for each
+//! sampler the renders ask for (the first one's up front).
 
 use super::{Features, GpuContext, GpuRenderer, Kernel, Tuning};
 use crate::backend::{RenderBackend, Rendered};
-use crate::options::{Integrator, RenderOptions};
+use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
+use std::sync::{Arc, Mutex};
 
 pub struct GpuBackend {
     renderer: GpuRenderer,
-    kernel: Kernel,
+    /// The scene's features for this backend's integrator, before the sampler is chosen.
+    features: Features,
+    kernels: Mutex<Vec<Arc<Kernel>>>,
     integrator: Integrator,
 }
 
 impl GpuBackend {
     /// Opens the adapter whose name contains `adapter` (or the best one) and compiles the
-    /// kernel with `features` for `scene`.
+    /// kernel with `features` for `scene` and the default sampler.
     pub fn new(
         adapter: Option<&str>,
         scene: &FlatScene,
         features: Features,
         integrator: Integrator,
     ) -> anyhow::Result<Self> {
-        let renderer = GpuRenderer::new(GpuContext::new(adapter)?);
-        let kernel = renderer.kernel(scene, features, "render")?;
-        Ok(GpuBackend {
-            renderer,
-            kernel,
+        let backend = GpuBackend {
+            renderer: GpuRenderer::new(GpuContext::new(adapter)?),
+            features,
+            kernels: Mutex::new(Vec::new()),
             integrator,
-        })
+        };
+        backend.kernel(scene, SamplerKind::default())?;
+        Ok(backend)
+    }
+
+    /// The kernel for `sampler`, compiled the first time it is asked for.
+    fn kernel(&self, scene: &FlatScene, sampler: SamplerKind) -> anyhow::Result<Arc<Kernel>> {
+        let features = Features {
+            sobol: sampler == SamplerKind::Sobol,
+            ..self.features
+        };
+        let mut kernels = self.kernels.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(k) = kernels.iter().find(|k| k.features == features) {
+            return Ok(k.clone());
+        }
+        let kernel = Arc::new(self.renderer.kernel(scene, features, "render")?);
+        kernels.push(kernel.clone());
+        Ok(kernel)
     }
 }
 
@@ -45,9 +65,10 @@ impl RenderBackend for GpuBackend {
         opts: &RenderOptions,
         on_progress: &(dyn Fn(f64) + Sync),
     ) -> anyhow::Result<Rendered> {
+        let kernel = self.kernel(scene, opts.sampler)?;
         let (film, timings) =
             self.renderer
-                .render(&self.kernel, scene, opts, &Tuning::default(), on_progress)?;
+                .render(&kernel, scene, opts, &Tuning::default(), on_progress)?;
         Ok(Rendered {
             film,
             gpu_seconds: timings.gpu_seconds,

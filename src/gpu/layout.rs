@@ -223,8 +223,9 @@ gpu_struct! {
     }
 }
 
-/// The per-pixel accumulator: mean (w: non-finite sample count as bits), Kahan compensation, M2.
-pub const ACCUM_BYTES_PER_PIXEL: u64 = 3 * 16;
+/// The per-pixel accumulator: mean (w: non-finite sample count as bits), Kahan compensation, M2,
+/// and the mean of the odd-index samples (replica 1).
+pub const ACCUM_BYTES_PER_PIXEL: u64 = 4 * 16;
 
 /// Invocations per workgroup along x and along y.
 pub const WORKGROUP_SIZE: u32 = 8;
@@ -268,6 +269,11 @@ fn wgsl_constants() -> String {
         ("OFFSET_FLOAT_SCALE", OFFSET_FLOAT_SCALE.literal()),
         ("OFFSET_INT_SCALE", OFFSET_INT_SCALE.literal()),
         ("SKY_ZENITH", crate::cpu::background::SKY_ZENITH.literal()),
+        ("REPLICAS", crate::sampler::REPLICAS.literal()),
+        (
+            "GROUP_DIMENSIONS",
+            crate::sampler::GROUP_DIMENSIONS.literal(),
+        ),
     ]
     .map(|(name, value)| (name.to_string(), value));
     let mut out = String::new();

@@ -8,7 +8,7 @@ use super::layout::{
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
-use crate::options::RenderOptions;
+use crate::options::{RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
 use glam::DVec3;
 use std::io::Write;
@@ -19,8 +19,11 @@ use wgpu::util::DeviceExt;
 /// one pass over each primitive list (none when the scene is inlined as straight-line code),
 /// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
-/// With NEE, a segment also scans the light list and traces a shadow ray.
-fn loop_cost(scene: &FlatScene, features: &Features, max_depth: u32) -> LoopCost {
+/// With NEE, a segment also scans the light list and traces a shadow ray. The Sobol sampler
+/// loops over the bits of the point index once per group of numbers: the camera's, and per
+/// segment at most the light sample's, the BSDF's and roulette's.
+fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> LoopCost {
+    let max_depth = opts.max_depth;
     let primitives = if features.inline_scene {
         0
     } else {
@@ -31,8 +34,16 @@ fn loop_cost(scene: &FlatScene, features: &Features, max_depth: u32) -> LoopCost
     } else {
         3 + primitives
     };
+    let sampler = match opts.sampler {
+        SamplerKind::Independent => 0,
+        SamplerKind::Sobol => {
+            let last_index = opts.first_sample.saturating_add(opts.spp) / crate::sampler::REPLICAS;
+            let per_group = (u32::BITS - last_index.leading_zeros()) as u64 + 1;
+            per_group * (1 + 3 * (max_depth as u64 + 1))
+        }
+    };
     LoopCost {
-        per_sample: 2 + (max_depth as u64 + 1) * per_segment,
+        per_sample: 2 + (max_depth as u64 + 1) * per_segment + sampler,
     }
 }
 
@@ -276,10 +287,11 @@ impl GpuRenderer {
         tuning: &Tuning,
         on_progress: &dyn Fn(f64),
     ) -> Result<(Film, Timings), GpuError> {
-        if kernel.features.with_integrator(scene, opts.integrator) != kernel.features {
+        if kernel.features.for_render(scene, opts) != kernel.features {
             return Err(GpuError::Runtime(format!(
-                "this kernel was not built for the {} integrator",
-                opts.integrator.name()
+                "this kernel was not built for the {} integrator and the {} sampler",
+                opts.integrator.name(),
+                opts.sampler.name()
             )));
         }
         let (width, height) = (opts.width, opts.height);
@@ -289,7 +301,7 @@ impl GpuRenderer {
                 "a {width}-pixel row does not fit one GPU storage binding ({max_tile_pixels} pixels)"
             )));
         }
-        let cost = loop_cost(scene, &kernel.features, opts.max_depth);
+        let cost = loop_cost(scene, &kernel.features, opts);
         let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
         let max_slice = match cost.max_samples_per_dispatch() {
             Some(slice) => slice,
@@ -356,6 +368,7 @@ impl GpuRenderer {
 
         let trace = std::env::var_os("RT_GPU_TRACE").is_some();
         let mut film = Film::new(width, height);
+        film.stratified = opts.sampler == SamplerKind::Sobol;
         let mut timings = Timings::default();
         let mut gpu_seconds = 0.0;
         // Tiles and slices are sized by `sizer` from each dispatch's measured time.
@@ -431,8 +444,10 @@ impl GpuRenderer {
             }
             let bytes = self.read_back(&accum, tile_bytes)?;
             let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            for (i, px) in values.chunks_exact(3).enumerate() {
-                let [mean, compensation, m2] = [px[0], px[1], px[2]];
+            let first_odd = opts.first_sample % 2 == 1;
+            let odd_n = (opts.spp as u64 + first_odd as u64) / 2;
+            for (i, px) in values.chunks_exact(4).enumerate() {
+                let [mean, compensation, m2, odd_mean] = [px[0], px[1], px[2], px[3]];
                 let taken = compensation[3].to_bits();
                 if taken != opts.spp {
                     return Err(GpuError::Runtime(format!(
@@ -449,6 +464,12 @@ impl GpuRenderer {
                         mean[2] as f64 - compensation[2] as f64,
                     ),
                     m2: DVec3::new(m2[0] as f64, m2[1] as f64, m2[2] as f64).max(DVec3::ZERO),
+                    odd_n,
+                    odd_mean: DVec3::new(
+                        odd_mean[0] as f64,
+                        odd_mean[1] as f64,
+                        odd_mean[2] as f64,
+                    ),
                 };
                 film.invalid_samples += mean[3].to_bits() as u64;
             }
@@ -489,6 +510,21 @@ impl GpuRenderer {
         self.run_debug(scene, &opts, "trace_rays", slots)
     }
 
+    /// The first twelve numbers of sample `opts.first_sample` of every pixel, as bits (see
+    /// `draw_samples` in `shaders/kernel.wgsl`), under `opts.sampler` and `opts.seed`.
+    pub fn draw_samples(
+        &self,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+    ) -> Result<Vec<[u32; 12]>, GpuError> {
+        let slots = vec![GpuFirstBounce::default(); (opts.width * opts.height) as usize];
+        let out = self.run_debug(scene, opts, "draw_samples", slots)?;
+        Ok(out
+            .iter()
+            .map(|b| bytemuck::cast::<GpuFirstBounce, [u32; 12]>(*b))
+            .collect())
+    }
+
     /// Runs debug entry point `entry` once over an `opts.width` x `opts.height` grid whose
     /// slots start as `slots` and are read back.
     fn run_debug(
@@ -500,6 +536,7 @@ impl GpuRenderer {
     ) -> Result<Vec<GpuFirstBounce>, GpuError> {
         let features = Features {
             debug: true,
+            sobol: opts.sampler == SamplerKind::Sobol,
             ..Features::of(scene)
         };
         let kernel = self.kernel(scene, features, entry)?;

@@ -5,7 +5,7 @@
 
 use crate::gpu::layout::{SceneBuffers, WgslStruct, float_literal};
 use crate::material::{self, KINDS, MaterialKind};
-use crate::options::Integrator;
+use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
 use crate::scene::flat::FlatScene;
 
@@ -13,6 +13,7 @@ use crate::scene::flat::FlatScene;
 const MODULES: &[(&str, &str)] = &[
     ("common.wgsl", include_str!("../../shaders/common.wgsl")),
     ("rng.wgsl", include_str!("../../shaders/rng.wgsl")),
+    ("sampler.wgsl", include_str!("../../shaders/sampler.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     (
@@ -46,6 +47,8 @@ pub struct Features {
     pub materials: u32,
     /// A camera with an aperture.
     pub lens: bool,
+    /// The Sobol sampler (else independent numbers).
+    pub sobol: bool,
     pub sky: bool,
     /// The `first_bounce` entry point, for tests.
     pub debug: bool,
@@ -98,6 +101,7 @@ impl Features {
             quads: !scene.quads.is_empty(),
             materials,
             lens: scene.camera.lens_radius > 0.0,
+            sobol: false,
             sky: scene.background == Background::Sky,
             debug: false,
             nee: false,
@@ -137,6 +141,14 @@ impl Features {
         }
     }
 
+    /// These features for a render with `opts`: its integrator and its sampler.
+    pub fn for_render(self, scene: &FlatScene, opts: &RenderOptions) -> Self {
+        Features {
+            sobol: opts.sampler == SamplerKind::Sobol,
+            ..self.with_integrator(scene, opts.integrator)
+        }
+    }
+
     /// The material kinds whose code the kernel holds.
     pub fn kinds(&self) -> impl Iterator<Item = &'static MaterialKind> + '_ {
         KINDS
@@ -154,6 +166,7 @@ impl Features {
         );
         flags.extend([
             ("LENS", self.lens),
+            ("SOBOL", self.sobol),
             ("SKY", self.sky),
             ("DEBUG", self.debug),
             ("NEE", self.nee),
@@ -169,6 +182,7 @@ impl Features {
             "SPHERES" => &mut self.spheres,
             "QUADS" => &mut self.quads,
             "LENS" => &mut self.lens,
+            "SOBOL" => &mut self.sobol,
             "SKY" => &mut self.sky,
             "DEBUG" => &mut self.debug,
             "NEE" => &mut self.nee,
@@ -287,10 +301,10 @@ fn material_dispatch(features: &Features) -> String {
         out.push_str("    return Bsdf(vec3f(0.0), 0.0);\n}\n\n");
     }
     out.push_str(
-        "fn scatter(m: Material, dir_in: vec3f, hit: Hit, rng: ptr<function, u32>) -> Scattered {\n",
+        "fn scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {\n",
     );
     for kind in features.kinds() {
-        out.push_str(&case(kind, "scatter(m, dir_in, hit, rng)"));
+        out.push_str(&case(kind, "scatter(m, dir_in, hit, sampler)"));
     }
     out.push_str("    return Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));\n}\n");
     out

@@ -4,7 +4,7 @@
 use super::{MaterialModel, reflect};
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -27,14 +27,14 @@ impl MaterialModel for Dielectric {
         Ok(())
     }
 
-    fn scatter(&self, dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
+    fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         let eta = if hit.front_face {
             1.0 / self.ior
         } else {
             self.ior
         };
         let cos_i = (-dir_in).dot(hit.normal).clamp(0.0, 1.0);
-        let u = rng.next_f32();
+        let u = sampler.next_f32();
         let dir = match refract_cos(cos_i, eta) {
             Some(cos_t) if u >= fresnel(cos_i, cos_t, eta) => {
                 eta * dir_in + (eta * cos_i - cos_t) * hit.normal

@@ -5,7 +5,7 @@ use super::MaterialModel;
 use crate::cpu::sampling::unit_vector;
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -50,9 +50,9 @@ impl MaterialModel for Lambertian {
         (cos > 0.0).then_some((self.albedo, cos * std::f32::consts::FRAC_1_PI))
     }
 
-    fn scatter(&self, _dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
+    fn scatter(&self, _dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         // normal + a uniform unit vector is cosine-distributed about the normal.
-        let d = hit.normal + unit_vector(rng.next_f32(), rng.next_f32());
+        let d = hit.normal + unit_vector(sampler.next_f32(), sampler.next_f32());
         let len2 = d.length_squared();
         let dir = if len2 > 1e-12 {
             d / len2.sqrt()

@@ -4,7 +4,7 @@
 use super::MaterialModel;
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -35,7 +35,7 @@ impl MaterialModel for Light {
         (self.radiance != Vec3::ZERO).then_some((self.radiance, self.two_sided))
     }
 
-    fn scatter(&self, _dir_in: Vec3, _hit: &Hit, _rng: &mut Rng) -> Option<(Vec3, Vec3)> {
+    fn scatter(&self, _dir_in: Vec3, _hit: &Hit, _sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         None
     }
 

@@ -5,7 +5,7 @@ use super::{MaterialModel, reflect};
 use crate::cpu::sampling::unit_vector;
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -30,9 +30,9 @@ impl MaterialModel for Metal {
         Ok(())
     }
 
-    fn scatter(&self, dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
+    fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         let fuzzed =
-            reflect(dir_in, hit.normal) + self.fuzz * unit_vector(rng.next_f32(), rng.next_f32());
+            reflect(dir_in, hit.normal) + self.fuzz * unit_vector(sampler.next_f32(), sampler.next_f32());
         let len2 = fuzzed.length_squared();
         if !(len2 > 1e-12) {
             return None;

@@ -9,7 +9,7 @@
 
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use glam::Vec3;
 
 /// What each material provides. The CPU methods are the reference twins of the WGSL functions
@@ -52,7 +52,7 @@ pub trait MaterialModel {
     }
     /// The throughput factor and direction of the continued path (the BSDF sampled), or `None`
     /// if the path ends here.
-    fn scatter(&self, dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)>;
+    fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)>;
     /// Its GPU form; `kind` is filled in from the registry.
     fn gpu(&self) -> GpuMaterial;
 }
@@ -126,8 +126,8 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.bsdf(hit, dir),)+ }
             }
             #[inline]
-            pub fn scatter(&self, dir_in: Vec3, hit: &Hit, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
-                match self { $(Material::$ty(m) => m.scatter(dir_in, hit, rng),)+ }
+            pub fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
+                match self { $(Material::$ty(m) => m.scatter(dir_in, hit, sampler),)+ }
             }
             pub fn gpu(&self) -> GpuMaterial {
                 let packed = match self { $(Material::$ty(m) => m.gpu(),)+ };

@@ -33,7 +33,7 @@ pub fn render_gpu_with(
     features: fn(&FlatScene) -> Features,
 ) -> Film {
     let flat = FlatScene::new(scene, opts.width, opts.height).expect("valid scene");
-    let features = features(&flat).with_integrator(&flat, opts.integrator);
+    let features = features(&flat).for_render(&flat, opts);
     let kernel = r
         .kernel(&flat, features, "render")
         .expect("kernel compiles");

@@ -45,7 +45,7 @@ fn cell(film: &Film, x0: u32, y0: u32, x1: u32, y1: u32) -> [(f64, f64); 3] {
     for y in y0..y1 {
         for x in x0..x1 {
             let p = film.pixel(x, y);
-            let v = p.variance_of_mean();
+            let v = film.variance_of_mean(p);
             for c in 0..3 {
                 out[c].0 += p.mean[c] / k;
                 out[c].1 += v[c] / (k * k);
