@@ -10,31 +10,36 @@ struct Sampler {
     index: u32,         // sobol: the point's index in its replica's sequence
     group: u32,
     group_seed: u32,
-    point: vec4u,       // the current group's Sobol point (its index scrambled for the group)
+    point: vec4u,       // the current group's Sobol point, each dimension bit-reversed
     dim: u32,           // the next dimension in the group
 }
 
 //#if SOBOL
-// Dimensions 0..3 of Sobol point index, as 32-bit fractions, the direction numbers made on
-// the fly by their recurrences (see sobol4 in src/sampler.rs).
-fn sobol4(index_in: u32) -> vec4u {
-    var index = index_in;
-    var x = vec4u(reverseBits(index_in), 0u, 0u, 0u);
-    var d1 = 0x80000000u;
-    var d2 = vec2u(0x80000000u, 0xc0000000u);
-    var d3 = vec3u(0x80000000u, 0xc0000000u, 0x20000000u);
-    while index != 0u {
-        if (index & 1u) == 1u {
-            x.y ^= d1;
-            x.z ^= d2.x;
-            x.w ^= d3.x;
+// Dimensions 0..3 of Sobol point rev(y), each bit-reversed, from y (see sobol4_reversed in
+// src/sampler.rs): the recurrences of the direction numbers, reversed.
+fn sobol4_reversed(y: u32) -> vec4u {
+    var x = vec4u(reverseBits(y), 0u, 0u, 0u);
+    var r1 = 1u;
+    var r2 = vec2u(1u, 3u);
+    var r3 = vec3u(1u, 3u, 4u);
+    var t = y;
+    while t != 0u {
+        if (t & 0x80000000u) != 0u {
+            x.y ^= r1;
+            x.z ^= r2.x;
+            x.w ^= r3.x;
         }
-        d1 ^= d1 >> 1u;
-        d2 = vec2u(d2.y, d2.x ^ (d2.x >> 2u) ^ d2.y);
-        d3 = vec3u(d3.y, d3.z, d3.x ^ (d3.x >> 3u) ^ d3.y);
-        index >>= 1u;
+        r1 ^= r1 << 1u;
+        r2 = vec2u(r2.y, r2.x ^ (r2.x << 2u) ^ r2.y);
+        r3 = vec3u(r3.y, r3.z, r3.x ^ (r3.x << 3u) ^ r3.y);
+        t <<= 1u;
     }
     return x;
+}
+
+fn dimension_seed(group_seed: u32, dim: u32) -> u32 {
+    let h = (group_seed ^ (dim * 0x9e3779b9u)) * 0x85ebca6bu;
+    return h ^ (h >> 15u);
 }
 
 fn laine_karras_permutation(x_in: u32, seed: u32) -> u32 {
@@ -46,13 +51,12 @@ fn laine_karras_permutation(x_in: u32, seed: u32) -> u32 {
     return x;
 }
 
-fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    return reverseBits(laine_karras_permutation(reverseBits(x), seed));
-}
-
 fn sampler_start_group(s: ptr<function, Sampler>) {
-    (*s).group_seed = pcg_hash((*s).pixel_seed + pcg_hash((*s).group));
-    (*s).point = sobol4(nested_uniform_scramble((*s).index, (*s).group_seed));
+    (*s).group_seed = pcg_hash((*s).pixel_seed ^ ((*s).group * 0x9e3779b9u));
+    // rev(shuffle(index)) without its reversals (see start_group in src/sampler.rs).
+    let y = laine_karras_permutation(reverseBits((*s).index), (*s).group_seed)
+        ^ laine_karras_permutation(0u, (*s).group_seed);
+    (*s).point = sobol4_reversed(y);
     (*s).dim = 0u;
 }
 
@@ -82,8 +86,9 @@ fn sampler_next(s: ptr<function, Sampler>) -> f32 {
     if (*s).dim == GROUP_DIMENSIONS {
         sampler_begin(s);
     }
-    let bits = (*s).point[(*s).dim];
-    let scrambled = nested_uniform_scramble(bits, pcg_hash((*s).group_seed + (*s).dim));
+    // Owen scrambling, rev(LK(rev(v))), of a point kept bit-reversed.
+    let seed = dimension_seed((*s).group_seed, (*s).dim);
+    let scrambled = reverseBits(laine_karras_permutation((*s).point[(*s).dim], seed));
     (*s).dim += 1u;
     return f32(scrambled >> 8u) * (1.0 / 16777216.0);
 //#else

@@ -107,6 +107,39 @@ pub fn sobol4(index: u32) -> [u32; 4] {
     x
 }
 
+/// [`sobol4`] of `rev(y)` with every dimension bit-reversed, computed from `y` without
+/// reversing: index bit k is bit 31 - k of `y`, and reversed direction numbers follow the
+/// recurrences with left shifts. Scrambling works on reversed values, so the kernel saves two
+/// bit reversals per number this way.
+#[inline]
+pub fn sobol4_reversed(y: u32) -> [u32; 4] {
+    let mut x = [y.reverse_bits(), 0, 0, 0];
+    let mut r1 = 1u32;
+    let mut r2 = [1u32, 3];
+    let mut r3 = [1u32, 3, 4];
+    let mut t = y;
+    while t != 0 {
+        if t & 0x8000_0000 != 0 {
+            x[1] ^= r1;
+            x[2] ^= r2[0];
+            x[3] ^= r3[0];
+        }
+        r1 ^= r1 << 1;
+        r2 = [r2[1], r2[0] ^ (r2[0] << 2) ^ r2[1]];
+        r3 = [r3[1], r3[2], r3[0] ^ (r3[0] << 3) ^ r3[1]];
+        t <<= 1;
+    }
+    x
+}
+
+/// The Owen-scrambling seed of dimension `dim` of a group: a cheap integer mix (a
+/// multiply-xorshift round) of the group's seed, which is itself a full hash.
+#[inline]
+pub fn dimension_seed(group_seed: u32, dim: u32) -> u32 {
+    let h = (group_seed ^ dim.wrapping_mul(0x9e37_79b9)).wrapping_mul(0x85eb_ca6b);
+    h ^ (h >> 15)
+}
+
 /// Burley's Laine-Karras-style hash: each output bit depends only on the input bits below it,
 /// so applied to bit-reversed values it permutes like a nested uniform (Owen) scramble.
 #[inline]
@@ -126,6 +159,17 @@ pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
     laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
 }
 
+/// The index a group draws its Sobol point at: Burley's nested uniform scramble of the index,
+/// XORed with the scramble of 0. Scrambling keeps every aligned block [0, 2^k) together, moving
+/// it by a constant in the bits above k, which the XOR removes: the result stays below 2^k
+/// (so the Sobol loop runs over the index's own bits, not 32), and the point moves by a
+/// constant digital shift, which the Owen scrambling that follows absorbs (a shift is one of
+/// the scrambles it picks uniformly among).
+#[inline]
+pub fn shuffle(index: u32, seed: u32) -> u32 {
+    nested_uniform_scramble(index, seed) ^ nested_uniform_scramble(0, seed)
+}
+
 /// Uniform in [0, 1) from the top 24 bits, as `Rng::next_f32`.
 #[inline]
 fn to_unit(bits: u32) -> f32 {
@@ -139,8 +183,8 @@ pub struct Sampler {
     /// Independent: the PCG stream.
     rng: Rng,
     /// Sobol: this pixel's and replica's seed, the point's index in the replica's sequence,
-    /// the current group, its seed and Sobol point (at the index scrambled for the group), and
-    /// the next dimension in it.
+    /// the current group, its seed and Sobol point (at the index shuffled for the group, each
+    /// dimension bit-reversed), and the next dimension in it.
     pixel_seed: u32,
     index: u32,
     group: u32,
@@ -179,8 +223,11 @@ impl Sampler {
     }
 
     fn start_group(&mut self) {
-        self.group_seed = pcg_hash(self.pixel_seed.wrapping_add(pcg_hash(self.group)));
-        self.point = sobol4(nested_uniform_scramble(self.index, self.group_seed));
+        self.group_seed = pcg_hash(self.pixel_seed ^ self.group.wrapping_mul(0x9e37_79b9));
+        // rev(shuffle(index)), without its two reversals (see `shuffle`).
+        let y = laine_karras_permutation(self.index.reverse_bits(), self.group_seed)
+            ^ laine_karras_permutation(0, self.group_seed);
+        self.point = sobol4_reversed(y);
         self.dim = 0;
     }
 
@@ -202,9 +249,10 @@ impl Sampler {
                 if self.dim == GROUP_DIMENSIONS {
                     self.begin();
                 }
-                let bits = self.point[self.dim as usize];
+                // Owen scrambling, rev(LK(rev(v))), of a point kept bit-reversed.
+                let seed = dimension_seed(self.group_seed, self.dim);
                 let scrambled =
-                    nested_uniform_scramble(bits, pcg_hash(self.group_seed.wrapping_add(self.dim)));
+                    laine_karras_permutation(self.point[self.dim as usize], seed).reverse_bits();
                 self.dim += 1;
                 to_unit(scrambled)
             }
@@ -261,6 +309,29 @@ mod tests {
         for index in (0..5000).chain([u32::MAX, 0x8000_0000, 0x1234_5678]) {
             let expected = [0, 1, 2, 3].map(|d| sobol(index, d));
             assert_eq!(sobol4(index), expected, "index {index}");
+        }
+    }
+
+    #[test]
+    fn reversed_sobol_matches_sobol_reversed() {
+        for n in (0..5000u32).chain([u32::MAX, 0x8000_0000, 0x1234_5678]) {
+            let expected = sobol4(n).map(u32::reverse_bits);
+            assert_eq!(sobol4_reversed(n.reverse_bits()), expected, "index {n}");
+        }
+    }
+
+    #[test]
+    fn shuffling_permutes_every_aligned_block_and_stays_inside_it() {
+        for seed in [0, 1, 0xdead_beef] {
+            for k in [0, 1, 5, 10] {
+                let mut seen = vec![false; 1 << k];
+                for i in 0..1u32 << k {
+                    let j = shuffle(i, seed);
+                    assert!(j < 1 << k, "seed {seed}: {i} -> {j} leaves [0, 2^{k})");
+                    seen[j as usize] = true;
+                }
+                assert!(seen.iter().all(|&s| s));
+            }
         }
     }
 
