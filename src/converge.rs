@@ -2,6 +2,7 @@
 //! integrator), each compared with a reference image, with log-log fits of RMSE against seconds.
 
 use crate::film::Film;
+use crate::options::SamplerKind;
 use crate::output::{read_pfm, write_atomically, write_image};
 use crate::render::{Backend, GpuChoice, Integrator, RenderOptions, Session};
 use crate::scene::flat::FlatScene;
@@ -73,12 +74,26 @@ pub struct Fit {
     pub exponent: f64,
     pub intercept: f64,
     pub points: usize,
+    /// Fitted to renders with stratified samples, whose error may fall faster than Monte
+    /// Carlo's.
+    pub stratified: bool,
 }
 
 impl Fit {
-    /// Monte Carlo error falls as time^-0.5; outside [-0.6, -0.4] points to bias or correlation.
+    /// The exponents a sound estimator's error can have: Monte Carlo's time^-0.5 (within
+    /// [-0.6, -0.4]); with stratified samples anything from that down to -1.6 (randomised
+    /// QMC reaches -1.5 on smooth integrands). Outside points to bias, correlation, or error
+    /// that stopped falling.
+    pub fn plausible_range(&self) -> std::ops::RangeInclusive<f64> {
+        if self.stratified {
+            -1.6..=-0.4
+        } else {
+            -0.6..=-0.4
+        }
+    }
+
     pub fn suspicious(&self) -> bool {
-        !(-0.6..=-0.4).contains(&self.exponent)
+        !self.plausible_range().contains(&self.exponent)
     }
 
     /// Seconds at which the fitted line reaches `rmse`.
@@ -109,6 +124,7 @@ pub fn fit_loglog(points: &[(f64, f64)]) -> Option<Fit> {
         exponent,
         intercept: my - exponent * mx,
         points: pts.len(),
+        stratified: false,
     })
 }
 
@@ -137,6 +153,7 @@ pub struct ConvergeOptions {
     pub max_depth: u32,
     pub backends: Vec<Backend>,
     pub integrators: Vec<Integrator>,
+    pub samplers: Vec<SamplerKind>,
     /// Russian roulette from this many segments on (0: off).
     pub roulette_depth: u32,
     /// Seconds each series may spend.
@@ -155,7 +172,13 @@ pub struct Report {
     pub fits: Vec<(String, Option<Fit>)>,
 }
 
-fn options(o: &ConvergeOptions, spp: u32, seed: u32, integrator: Integrator) -> RenderOptions {
+fn options(
+    o: &ConvergeOptions,
+    spp: u32,
+    seed: u32,
+    integrator: Integrator,
+    sampler: SamplerKind,
+) -> RenderOptions {
     RenderOptions {
         width: o.width,
         height: o.height,
@@ -164,7 +187,7 @@ fn options(o: &ConvergeOptions, spp: u32, seed: u32, integrator: Integrator) -> 
         seed,
         max_depth: o.max_depth,
         integrator,
-        sampler: crate::options::SamplerKind::Independent,
+        sampler,
         roulette_depth: o.roulette_depth,
     }
 }
@@ -229,6 +252,7 @@ fn check_radiance(rgb: &[[f32; 3]]) -> anyhow::Result<()> {
 fn reference(
     o: &ConvergeOptions,
     sessions: &[(Backend, Session)],
+    series: &[(usize, SamplerKind)],
     rate: &[f64],
 ) -> anyhow::Result<Reference> {
     if let Some(path) = &o.reference {
@@ -253,30 +277,38 @@ fn reference(
             description: format!("{} (cached, {spp} spp)", mean_path.display()),
         });
     }
-    let prefers_nee = |i: usize| sessions[i].1.integrator() == Integrator::Nee;
-    let fastest = (0..sessions.len())
+    // The fastest series, preferring nee and stratified samples: they converge faster.
+    let preferred = |i: usize| {
+        let (session, sampler) = series[i];
+        (
+            sessions[session].1.integrator() == Integrator::Nee,
+            sampler == SamplerKind::Sobol,
+        )
+    };
+    let fastest = (0..series.len())
         .max_by(|&a, &b| {
-            (prefers_nee(a), rate[a])
-                .partial_cmp(&(prefers_nee(b), rate[b]))
+            (preferred(a), rate[a])
+                .partial_cmp(&(preferred(b), rate[b]))
                 .unwrap_or(std::cmp::Ordering::Equal)
         })
         .context("no backend to render a reference with")?;
+    let (session_index, sampler) = series[fastest];
     let pixels = o.width as f64 * o.height as f64;
     let spp = o.reference_spp.unwrap_or_else(|| {
         let reachable = rate[fastest] * o.budget / pixels;
         (8.0 * reachable).clamp(64.0, 1_048_576.0) as u32
     });
-    let (backend, session) = &sessions[fastest];
+    let (backend, session) = &sessions[session_index];
     let integrator = session.integrator();
     let bar = progress_bar(&format!(
-        "reference: {spp} spp on {}-{}",
+        "reference: {spp} spp on {}-{}-{}",
         backend.name(),
-        integrator.name()
+        integrator.name(),
+        sampler.name()
     ));
+    let opts = options(o, spp, 0x5EED_0000, integrator, sampler);
     let film = session
-        .render(&o.scene, &options(o, spp, 0x5EED_0000, integrator), &|f| {
-            bar.set_position((f * 1000.0) as u64)
-        })?
+        .render(&o.scene, &opts, &|f| bar.set_position((f * 1000.0) as u64))?
         .film;
     bar.finish_and_clear();
     let noise = estimated_rmse(&film);
@@ -286,10 +318,11 @@ fn reference(
         rgb: film.mean_rgb(),
         noise_rmse: Some(noise),
         description: format!(
-            "{} ({spp} spp on {}-{})",
+            "{} ({spp} spp on {}-{}-{})",
             mean_path.display(),
             backend.name(),
-            integrator.name()
+            integrator.name(),
+            sampler.name()
         ),
     })
 }
@@ -335,6 +368,11 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
             bail!("--integrators lists {} twice", integrator.name());
         }
     }
+    for (i, sampler) in o.samplers.iter().enumerate() {
+        if o.samplers[..i].contains(sampler) {
+            bail!("--samplers lists {} twice", sampler.name());
+        }
+    }
     std::fs::create_dir_all(&o.out_dir)
         .with_context(|| format!("cannot create {}", o.out_dir.display()))?;
     let mut sessions = Vec::new();
@@ -346,28 +384,40 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
             ));
         }
     }
-    // A 1-spp probe per series: warms it up and measures its rate for the reference.
+    // A series per session and sampler (the GPU compiles a kernel per sampler).
+    let series: Vec<(usize, SamplerKind)> = (0..sessions.len())
+        .flat_map(|i| o.samplers.iter().map(move |&s| (i, s)))
+        .collect();
+    // A 1-spp probe per series: warms it up (compiling its kernel) and measures its rate for
+    // the reference.
     let mut rate = Vec::new();
-    for (_, session) in &sessions {
+    for &(i, sampler) in &series {
+        let session = &sessions[i].1;
         let start = Instant::now();
-        let opts = options(o, 1, 0x0B0E, session.integrator());
+        let opts = options(o, 1, 0x0B0E, session.integrator(), sampler);
         session.render(&o.scene, &opts, &|_| {})?;
         rate.push(o.width as f64 * o.height as f64 / start.elapsed().as_secs_f64());
     }
-    let reference = reference(o, &sessions, &rate)?;
+    let reference = reference(o, &sessions, &series, &rate)?;
 
     let mut rungs = Vec::new();
     let mut fits = Vec::new();
-    for (backend, session) in &sessions {
+    for &(i, sampler) in &series {
+        let (backend, session) = &sessions[i];
         let integrator = session.integrator();
-        let series = format!("{}-{}", backend.name(), integrator.name());
+        let series = format!(
+            "{}-{}-{}",
+            backend.name(),
+            integrator.name(),
+            sampler.name()
+        );
         let bar = progress_bar(&series);
         let (mut spent, mut spp, mut last) = (0.0, 1u32, 0.0);
         // Stop before a rung that would overrun the budget (each rung doubles the last).
         while spent + 2.0 * last <= o.budget && spp <= 1 << 24 {
             let seed = 1000 + spp.trailing_zeros();
             let start = Instant::now();
-            let opts = options(o, spp, seed, integrator);
+            let opts = options(o, spp, seed, integrator, sampler);
             let rendered = session.render(&o.scene, &opts, &|_| {})?;
             let seconds = start.elapsed().as_secs_f64();
             let film = &rendered.film;
@@ -387,7 +437,11 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
         }
         bar.finish_and_clear();
         let own: Vec<&Rung> = rungs.iter().filter(|r| r.series == series).collect();
-        fits.push((series, fit_series(&own, reference.noise_rmse)));
+        let fit = fit_series(&own, reference.noise_rmse).map(|f| Fit {
+            stratified: sampler == SamplerKind::Sobol,
+            ..f
+        });
+        fits.push((series, fit));
     }
     Ok(Report {
         reference,
@@ -439,10 +493,11 @@ impl Report {
     pub fn nee_speedups(&self) -> Vec<NeeSpeedup> {
         let mut out = Vec::new();
         for (series, _) in &self.fits {
-            let Some(backend) = series.strip_suffix("-naive") else {
+            // "{backend}-naive-{sampler}" against "{backend}-nee-{sampler}".
+            let Some((backend, sampler)) = series.split_once("-naive-") else {
                 continue;
             };
-            let nee = format!("{backend}-nee");
+            let nee = format!("{backend}-nee-{sampler}");
             let Some(naive_last) = self.rungs.iter().rev().find(|r| &r.series == series) else {
                 continue;
             };
@@ -458,7 +513,7 @@ impl Report {
                 .collect();
             out.push(NeeSpeedup {
                 nee_interpolated_seconds: interpolate_seconds(&nee_series, target),
-                backend: backend.to_string(),
+                backend: format!("{backend} ({sampler})"),
                 target_rmse: target,
                 naive_seconds: naive_last.seconds,
                 nee_fitted_seconds: nee_fit.map(|f| f.seconds_to(target)),
@@ -491,13 +546,13 @@ impl Report {
         out
     }
 
-    /// The error the time-to-error comparison aims at: the cpu-naive series' error at its
+    /// The error the time-to-error comparison aims at: the first cpu-naive series' error at its
     /// largest spp (else the first CPU series', else the first series'), unless given.
     pub fn target_rmse(&self, given: Option<f64>) -> Option<f64> {
         given.or_else(|| {
             let names = || self.fits.iter().map(|(s, _)| s);
             let series = names()
-                .find(|s| *s == "cpu-naive")
+                .find(|s| s.starts_with("cpu-naive"))
                 .or_else(|| names().find(|s| s.starts_with("cpu")))
                 .or_else(|| names().next())?;
             self.rungs
@@ -518,13 +573,13 @@ impl Report {
             None => out.push_str("reference noise: unknown\n"),
         }
         out.push_str(&format!(
-            "{:<12} {:>8} {:>9} {:>9} {:>10} {:>11} {:>11} {:>11} {:>12}\n",
+            "{:<22} {:>8} {:>9} {:>9} {:>10} {:>11} {:>11} {:>11} {:>12}\n",
             "series", "spp", "seconds", "gpu s", "Msamples/s", "rmse", "relmse", "mae", "est. rmse"
         ));
         for r in &self.rungs {
             let near_floor = floor.is_some_and(|f| r.errors.rmse <= 2.0 * f);
             out.push_str(&format!(
-                "{:<12} {:>8} {:>9.3} {:>9} {:>10.3} {:>10.4e}{} {:>11.4e} {:>11.4e} {:>12.4e}\n",
+                "{:<22} {:>8} {:>9.3} {:>9} {:>10.3} {:>10.4e}{} {:>11.4e} {:>11.4e} {:>12.4e}\n",
                 r.series,
                 r.spp,
                 r.seconds,
@@ -539,21 +594,27 @@ impl Report {
                 r.estimated_rmse
             ));
         }
-        out.push_str("fitted RMSE ~ seconds^exponent (Monte Carlo: -0.5):\n");
+        out.push_str(
+            "fitted RMSE ~ seconds^exponent (Monte Carlo: -0.5; stratified samples may fall faster):\n",
+        );
         for (series, fit) in &self.fits {
             match fit {
                 Some(f) => out.push_str(&format!(
-                    "  {series:<12} exponent {:+.3} over {} renders{}\n",
+                    "  {series:<22} exponent {:+.3} over {} renders{}\n",
                     f.exponent,
                     f.points,
                     if f.suspicious() {
-                        "  <- outside [-0.6, -0.4]: bias or correlated samples?"
+                        format!(
+                            "  <- outside [{}, {}]: bias, correlated samples, or a floor?",
+                            f.plausible_range().start(),
+                            f.plausible_range().end()
+                        )
                     } else {
-                        ""
+                        String::new()
                     }
                 )),
                 None => out.push_str(&format!(
-                    "  {series:<12} too few renders above the reference's noise to fit\n"
+                    "  {series:<22} too few renders above the reference's noise to fit\n"
                 )),
             }
         }
@@ -590,7 +651,7 @@ impl Report {
             // renderer), else a CPU series, else the first.
             let (base_name, base) = times
                 .iter()
-                .find(|(s, t)| *s == "cpu-naive" && t.is_some())
+                .find(|(s, t)| s.starts_with("cpu-naive") && t.is_some())
                 .or_else(|| {
                     times
                         .iter()
@@ -602,10 +663,10 @@ impl Report {
             for (series, t) in &times {
                 match (t, base) {
                     (Some(t), Some(b)) => out.push_str(&format!(
-                        "  {series:<12} {t:9.3} s   {:.2}x the speed of {base_name}\n",
+                        "  {series:<22} {t:9.3} s   {:.2}x the speed of {base_name}\n",
                         b / t
                     )),
-                    _ => out.push_str(&format!("  {series:<12} no fit\n")),
+                    _ => out.push_str(&format!("  {series:<22} no fit\n")),
                 }
             }
         }

@@ -152,6 +152,9 @@ struct ConvergeArgs {
     /// Integrators to compare, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "naive,nee")]
     integrators: Vec<IntegratorArg>,
+    /// Samplers to compare, comma-separated: a series per backend, integrator and sampler.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "sobol")]
+    samplers: Vec<SamplerArg>,
     /// Russian roulette from this many path segments on (0: off).
     #[arg(long, value_name = "N", default_value_t = 0)]
     roulette_depth: u32,
@@ -390,6 +393,7 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
         backends: args.backends.iter().map(|&b| b.into()).collect(),
         integrators: args.integrators.iter().map(|&i| i.into()).collect(),
+        samplers: args.samplers.iter().map(|&s| s.into()).collect(),
         roulette_depth: args.roulette_depth,
         budget: args.budget,
         reference: args.reference.clone(),
@@ -615,7 +619,9 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         everything: args.unspecialised,
     };
     if args.print_shader {
-        let features = gpu.features(&flat, opts.integrator).for_render(&flat, &opts);
+        let features = gpu
+            .features(&flat, opts.integrator)
+            .for_render(&flat, &opts);
         let source = rt_gpu::gpu::shader::compose(&features, &flat).map_err(anyhow::Error::msg)?;
         std::io::stdout().lock().write_all(source.as_bytes())?;
         return Ok(());

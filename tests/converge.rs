@@ -47,6 +47,17 @@ fn loglog_fit_recovers_a_power_law() {
         fit_loglog(&biased).expect("fits").suspicious(),
         "an error floor must be flagged"
     );
+    // Stratified samples may converge faster than Monte Carlo, but not implausibly fast.
+    let with_exponent = |e: f64, stratified| {
+        let pts: Vec<(f64, f64)> = (0..8)
+            .map(|i| (2f64.powi(i), 2f64.powi(i).powf(e)))
+            .collect();
+        let fit = fit_loglog(&pts).expect("fits");
+        rt_gpu::converge::Fit { stratified, ..fit }.suspicious()
+    };
+    assert!(with_exponent(-1.0, false) && !with_exponent(-1.0, true));
+    assert!(!with_exponent(-0.5, true) && with_exponent(-0.3, true));
+    assert!(with_exponent(-2.0, true), "faster than -1.6 is implausible");
 }
 
 /// On the furnace scene, the render's own error estimate (from its variance buffer) matches its
@@ -108,6 +119,7 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
         max_depth: 6,
         backends: vec![Backend::Cpu],
         integrators: vec![Integrator::Naive],
+        samplers: vec![rt_gpu::options::SamplerKind::Independent],
         roulette_depth: 0,
         budget: 3.0,
         reference: None,
