@@ -9,6 +9,7 @@ fn generate_ray(x: u32, y: u32, sampler: ptr<function, Sampler>) -> Ray {
     var to_target = params.to_upper_left + s * params.horizontal - t * params.vertical;
     var origin = params.origin;
 //#if LENS
+    sampler_begin(sampler);
     let u1 = sampler_next(sampler);
     let u2 = sampler_next(sampler);
     let d = unit_disk(u1, u2);

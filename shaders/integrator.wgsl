@@ -74,8 +74,10 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
         bsdf_pdf = 0.0;
         let light_sampled = samples_lights(m);
         if light_sampled {
+            // Purposes: the light pick (1D), the point on the light (2D).
             sampler_begin(sampler);
             let u0 = sampler_next(sampler);
+            sampler_begin(sampler);
             let u1 = sampler_next(sampler);
             let u2 = sampler_next(sampler);
             let d = direct_light(m, hit, u0, u1, u2);

@@ -643,16 +643,18 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         _ => String::new(),
     };
     note!(
-        "{}: {width}x{height}, {} spp, {} [{}], {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}) -> {}",
+        "{}: {width}x{height}, {} spp, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",
         scene.name,
         opts.spp,
         backend.name(),
         rendered.device,
         opts.integrator.name(),
+        opts.sampler.name(),
         samples / seconds / 1e6,
         mean.x,
         mean.y,
         mean.z,
+        rt_gpu::converge::estimated_rmse(film),
         output.display()
     );
     if film.invalid_samples > 0 {

@@ -3,15 +3,15 @@
 //!
 //! - `independent`: one PCG stream per (pixel, sample index, seed) — plain Monte Carlo.
 //! - `sobol` (the default): Owen-scrambled Sobol points with padding by shuffling, as in Burley,
-//!   "Practical Hash-based Owen Scrambling" (JCGT 2020). A sample's numbers come in *groups* of
-//!   up to four dimensions, one group per purpose (the integrator calls [`Sampler::begin`]: camera
-//!   = pixel 2D + lens 2D; per bounce: light pick + light point, then the BSDF, then roulette).
-//!   Within a group the numbers are dimensions 0..3 of the Sobol sequence, whose 2D projections
-//!   are well stratified, each Owen-scrambled by a hash (nested uniform scrambling, which keeps
-//!   the stratification and makes every point uniformly distributed). Across groups the
-//!   sequence index is itself scrambled with a per-group seed, which decorrelates the groups
-//!   (padding). Any sample index can be drawn on its own, so renders can be sliced, continued and
-//!   merged exactly as with independent numbers.
+//!   "Practical Hash-based Owen Scrambling" (JCGT 2020), in pbrt-v4's padded layout: a sample's
+//!   numbers come in *2D groups*, one per purpose (the integrator calls [`Sampler::begin`]:
+//!   pixel 2D, lens 2D; per bounce: light pick 1D, light point 2D, BSDF 2D, roulette 1D). A
+//!   group's numbers are dimensions 0 and 1 of the Sobol sequence (a (0, 2)-sequence: every
+//!   elementary interval holds its share of points), each Owen-scrambled by a hash (nested
+//!   uniform scrambling, which keeps the stratification and makes every point uniformly
+//!   distributed). Across groups the sequence index is itself scrambled with a per-group seed,
+//!   which decorrelates the groups (padding). Any sample index can be drawn on its own, so
+//!   renders can be sliced, continued and merged exactly as with independent numbers.
 //!
 //! Honest error estimates need independent randomisations: sample index `i` belongs to replica
 //! `i % REPLICAS` and is point `i / REPLICAS` of that replica's own scrambled sequence, so each
@@ -23,8 +23,8 @@ use crate::rng::{Rng, pcg_hash};
 
 /// Independently scrambled sequences a pixel's samples are dealt into, in turn.
 pub const REPLICAS: u32 = 2;
-/// Dimensions per group: Sobol's first four, whose projections are good.
-pub const GROUP_DIMENSIONS: u32 = 4;
+/// Dimensions per group: Sobol's first two, a (0, 2)-sequence, computed without a loop.
+pub const GROUP_DIMENSIONS: u32 = 2;
 
 /// Sobol generator matrices of dimensions 0..3 as 32 direction numbers each (column k is the
 /// contribution of index bit k), from Joe & Kuo's primitive polynomials and initial numbers
@@ -69,7 +69,7 @@ const fn sobol_directions() -> [u32; 128] {
 }
 
 /// Dimension `dim` (0..3) of Sobol point `index`, as 32 bits of a fraction, from the tables:
-/// the definition [`sobol4`] is tested against.
+/// the definition [`sobol2_reversed`] is tested against.
 pub fn sobol(mut index: u32, dim: u32) -> u32 {
     let mut x = 0;
     let mut k = 32 * dim as usize;
@@ -83,60 +83,27 @@ pub fn sobol(mut index: u32, dim: u32) -> u32 {
     x
 }
 
-/// Dimensions 0..3 of Sobol point `index` at once, the direction numbers of dimensions 1..3
-/// made on the fly by their recurrences, v(k+s) = v(k) ^ v(k) >> s ^ (taps of the polynomial),
-/// so the kernel needs no table (a table indexed at run time is slow on lavapipe).
+/// Dimensions 0 and 1 of Sobol point `n`, each bit-reversed, without a loop. Dimension 0 is
+/// the radical inverse, so reversed it is `n` itself. Dimension 1's direction numbers are the rows
+/// of Pascal's triangle mod 2, which are palindromes, so reversed, bit j of the result is the
+/// parity of the index bits k with C(k, j) odd, that is (Lucas) with j a bitwise subset of k: a
+/// superset-sum transform over the five bits of a bit position, five shift-xor steps.
 #[inline]
-pub fn sobol4(index: u32) -> [u32; 4] {
-    let mut x = [index.reverse_bits(), 0, 0, 0];
-    let mut d1 = 0x8000_0000u32;
-    let mut d2 = [0x8000_0000u32, 0xc000_0000];
-    let mut d3 = [0x8000_0000u32, 0xc000_0000, 0x2000_0000];
-    let mut i = index;
-    while i != 0 {
-        if i & 1 == 1 {
-            x[1] ^= d1;
-            x[2] ^= d2[0];
-            x[3] ^= d3[0];
-        }
-        d1 ^= d1 >> 1;
-        d2 = [d2[1], d2[0] ^ (d2[0] >> 2) ^ d2[1]];
-        d3 = [d3[1], d3[2], d3[0] ^ (d3[0] >> 3) ^ d3[1]];
-        i >>= 1;
-    }
-    x
+pub fn sobol2_reversed(n: u32) -> [u32; 2] {
+    let mut x = n;
+    x ^= (x >> 1) & 0x5555_5555;
+    x ^= (x >> 2) & 0x3333_3333;
+    x ^= (x >> 4) & 0x0f0f_0f0f;
+    x ^= (x >> 8) & 0x00ff_00ff;
+    x ^= (x >> 16) & 0x0000_ffff;
+    [n, x]
 }
 
-/// [`sobol4`] of `rev(y)` with every dimension bit-reversed, computed from `y` without
-/// reversing: index bit k is bit 31 - k of `y`, and reversed direction numbers follow the
-/// recurrences with left shifts. Scrambling works on reversed values, so the kernel saves two
-/// bit reversals per number this way.
+/// A seed derived from `seed` (itself a full hash) for its `k`-th group or dimension: a cheap
+/// multiply-xorshift round, enough to decorrelate the Laine-Karras hashes it seeds.
 #[inline]
-pub fn sobol4_reversed(y: u32) -> [u32; 4] {
-    let mut x = [y.reverse_bits(), 0, 0, 0];
-    let mut r1 = 1u32;
-    let mut r2 = [1u32, 3];
-    let mut r3 = [1u32, 3, 4];
-    let mut t = y;
-    while t != 0 {
-        if t & 0x8000_0000 != 0 {
-            x[1] ^= r1;
-            x[2] ^= r2[0];
-            x[3] ^= r3[0];
-        }
-        r1 ^= r1 << 1;
-        r2 = [r2[1], r2[0] ^ (r2[0] << 2) ^ r2[1]];
-        r3 = [r3[1], r3[2], r3[0] ^ (r3[0] << 3) ^ r3[1]];
-        t <<= 1;
-    }
-    x
-}
-
-/// The Owen-scrambling seed of dimension `dim` of a group: a cheap integer mix (a
-/// multiply-xorshift round) of the group's seed, which is itself a full hash.
-#[inline]
-pub fn dimension_seed(group_seed: u32, dim: u32) -> u32 {
-    let h = (group_seed ^ dim.wrapping_mul(0x9e37_79b9)).wrapping_mul(0x85eb_ca6b);
+pub fn mix(seed: u32, k: u32) -> u32 {
+    let h = (seed ^ k.wrapping_mul(0x9e37_79b9)).wrapping_mul(0x85eb_ca6b);
     h ^ (h >> 15)
 }
 
@@ -159,17 +126,6 @@ pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
     laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
 }
 
-/// The index a group draws its Sobol point at: Burley's nested uniform scramble of the index,
-/// XORed with the scramble of 0. Scrambling keeps every aligned block [0, 2^k) together, moving
-/// it by a constant in the bits above k, which the XOR removes: the result stays below 2^k
-/// (so the Sobol loop runs over the index's own bits, not 32), and the point moves by a
-/// constant digital shift, which the Owen scrambling that follows absorbs (a shift is one of
-/// the scrambles it picks uniformly among).
-#[inline]
-pub fn shuffle(index: u32, seed: u32) -> u32 {
-    nested_uniform_scramble(index, seed) ^ nested_uniform_scramble(0, seed)
-}
-
 /// Uniform in [0, 1) from the top 24 bits, as `Rng::next_f32`.
 #[inline]
 fn to_unit(bits: u32) -> f32 {
@@ -183,13 +139,13 @@ pub struct Sampler {
     /// Independent: the PCG stream.
     rng: Rng,
     /// Sobol: this pixel's and replica's seed, the point's index in the replica's sequence,
-    /// the current group, its seed and Sobol point (at the index shuffled for the group, each
-    /// dimension bit-reversed), and the next dimension in it.
+    /// the current group, its seed and Sobol point (at the index shuffled for the group by a
+    /// nested uniform scramble, each dimension bit-reversed), and the next dimension in it.
     pixel_seed: u32,
     index: u32,
     group: u32,
     group_seed: u32,
-    point: [u32; 4],
+    point: [u32; 2],
     dim: u32,
 }
 
@@ -204,7 +160,7 @@ impl Sampler {
             index: sample / REPLICAS,
             group: 0,
             group_seed: 0,
-            point: [0; 4],
+            point: [0; 2],
             dim: 0,
         };
         if kind == SamplerKind::Sobol {
@@ -223,11 +179,8 @@ impl Sampler {
     }
 
     fn start_group(&mut self) {
-        self.group_seed = pcg_hash(self.pixel_seed ^ self.group.wrapping_mul(0x9e37_79b9));
-        // rev(shuffle(index)), without its two reversals (see `shuffle`).
-        let y = laine_karras_permutation(self.index.reverse_bits(), self.group_seed)
-            ^ laine_karras_permutation(0, self.group_seed);
-        self.point = sobol4_reversed(y);
+        self.group_seed = mix(self.pixel_seed, self.group);
+        self.point = sobol2_reversed(nested_uniform_scramble(self.index, self.group_seed));
         self.dim = 0;
     }
 
@@ -250,7 +203,7 @@ impl Sampler {
                     self.begin();
                 }
                 // Owen scrambling, rev(LK(rev(v))), of a point kept bit-reversed.
-                let seed = dimension_seed(self.group_seed, self.dim);
+                let seed = mix(self.group_seed, self.dim);
                 let scrambled =
                     laine_karras_permutation(self.point[self.dim as usize], seed).reverse_bits();
                 self.dim += 1;
@@ -305,30 +258,26 @@ mod tests {
     }
 
     #[test]
-    fn sobol4_recurrences_match_the_generator_matrices() {
-        for index in (0..5000).chain([u32::MAX, 0x8000_0000, 0x1234_5678]) {
-            let expected = [0, 1, 2, 3].map(|d| sobol(index, d));
-            assert_eq!(sobol4(index), expected, "index {index}");
+    fn loop_free_sobol_matches_the_generator_matrices() {
+        for n in (0..5000u32).chain([u32::MAX, 0x8000_0000, 0x1234_5678, 0xdead_beef]) {
+            let expected = [sobol(n, 0), sobol(n, 1)].map(u32::reverse_bits);
+            assert_eq!(sobol2_reversed(n), expected, "index {n}");
         }
     }
 
     #[test]
-    fn reversed_sobol_matches_sobol_reversed() {
-        for n in (0..5000u32).chain([u32::MAX, 0x8000_0000, 0x1234_5678]) {
-            let expected = sobol4(n).map(u32::reverse_bits);
-            assert_eq!(sobol4_reversed(n.reverse_bits()), expected, "index {n}");
-        }
-    }
-
-    #[test]
-    fn shuffling_permutes_every_aligned_block_and_stays_inside_it() {
+    fn shuffling_permutes_every_aligned_block() {
+        // Nested uniform scrambling of an index keeps each aligned block of 2^k indices
+        // together (moved as a whole by the same high bits): a padding that does not break the
+        // stratification of any power-of-two prefix.
         for seed in [0, 1, 0xdead_beef] {
-            for k in [0, 1, 5, 10] {
+            for k in [1, 5, 10] {
+                let high = nested_uniform_scramble(0, seed) >> k;
                 let mut seen = vec![false; 1 << k];
                 for i in 0..1u32 << k {
-                    let j = shuffle(i, seed);
-                    assert!(j < 1 << k, "seed {seed}: {i} -> {j} leaves [0, 2^{k})");
-                    seen[j as usize] = true;
+                    let j = nested_uniform_scramble(i, seed);
+                    assert_eq!(j >> k, high, "seed {seed}: {i} -> {j} leaves its block");
+                    seen[(j & ((1 << k) - 1)) as usize] = true;
                 }
                 assert!(seen.iter().all(|&s| s));
             }

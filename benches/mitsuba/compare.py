@@ -3,18 +3,21 @@
 
 Builds the scene of an rt-gpu scene file (quads, boxes rotated about y, spheres; lambertian,
 dielectric and light materials) for Mitsuba 3 (variant llvm_ad_rgb, `path` integrator with NEE and
-MIS, box pixel filter, independent sampler, the same max depth), renders it there at SPP samples
-per pixel, and finds how long rt-gpu needs to reach the same error.
+MIS, box pixel filter, the same max depth, sampler `--mitsuba-sampler`, default multijitter, its
+best here), renders it there at SPP samples per pixel, and finds how long rt-gpu, with its default
+settings, needs to reach the same error.
 
-Error is estimated the same way for both renderers, without a reference: two renders of n/2 spp
-with different seeds, A and B, give the n-spp image (A + B) / 2 and its RMSE as
-sqrt(mean((A - B)^2)) / 2 (the difference of independent unbiased estimates has twice their
-variance, and averaging halves it twice). rt-gpu then climbs a ladder of spp on its backend until
-its error is at or below Mitsuba's; its time there (interpolated in log-log between rungs) is
-compared with Mitsuba's.
+Errors: both renderers' images are compared with one high-spp reference (`--reference`, or one
+rt-gpu renders with `--reference-spp` and caches), RMSE and relMSE (mean of d^2 / (ref^2 + 0.01)).
+The reference's own noise (rt-gpu's estimate from its independent randomisations) is removed in
+quadrature, and must be at most a third of every error compared. (Splitting a render into two
+halves and differencing them, as this script did before, penalises stratified samplers: a half
+has more than twice the variance of the whole.)
 
-Also printed, as a check that the scenes agree: the mean radiance of both images, and the RMSE of
-their difference against what noise alone would give.
+Timing: Mitsuba in a process of its own, warm (its kernels compiled by a first 1-spp render),
+one render of SPP; rt-gpu as whole processes (device start and kernel compilation included), one
+per rung of a ladder of spp, until its error is at or below Mitsuba's; the time to Mitsuba's error
+is interpolated in log-log between the last two rungs.
 
 Usage (from the repository root, after `cargo build --release`):
     python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba numpy
@@ -28,6 +31,7 @@ DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1.
 import argparse
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -58,7 +62,7 @@ def box_faces(lo, hi):
     ]
 
 
-def mitsuba_scene(path, width, height, max_depth):
+def mitsuba_scene(path, width, height, max_depth, sampler):
     import mitsuba as mi
 
     scene = tomllib.load(open(path, "rb"))
@@ -143,7 +147,7 @@ def mitsuba_scene(path, width, height, max_depth):
             "to_world": mi.ScalarTransform4f().look_at(
                 origin=cam["look_from"], target=cam["look_at"], up=cam.get("up", [0, 1, 0])
             ),
-            "sampler": {"type": "independent", "sample_count": 1},
+            "sampler": {"type": sampler, "sample_count": 1},
             "film": {
                 "type": "hdrfilm",
                 "width": width,
@@ -165,40 +169,62 @@ def read_pfm(path):
     return np.flipud(data.reshape(h, w, 3)).astype(np.float64)
 
 
-def split_rmse(a, b):
-    return math.sqrt(np.mean((a - b) ** 2)) / 2
+def errors(image, reference, noise):
+    """(RMSE, relMSE) of image against reference, the reference's noise (its RMSE) removed in
+    quadrature: for RMSE exactly; for relMSE with the noise spread as the pixels' weights."""
+    d2 = (image - reference) ** 2
+    weight = 1.0 / (reference**2 + 0.01)
+    rmse = math.sqrt(max(np.mean(d2) - noise**2, 0.0))
+    relmse = max(np.mean(d2 * weight) - noise**2 * np.mean(weight), 0.0)
+    return rmse, relmse
 
 
-def rt_gpu_pair(binary, scene, spp, args, out):
-    """Two renders of spp/2 with seeds 1 and 2; (seconds for both, image, rmse)."""
-    images, seconds = [], 0.0
-    for seed in (1, 2):
-        path = os.path.join(out, f"rt-{spp}-{seed}.pfm")
-        cmd = [binary, scene, "--spp", str(spp // 2), "--seed", str(seed), "--backend", args.backend,
-               "--size", f"{args.width}x{args.height}", "--max-depth", str(args.max_depth), "-o", path]
-        start = time.perf_counter()
-        subprocess.run(cmd, check=True, stderr=subprocess.DEVNULL)
-        seconds += time.perf_counter() - start
-        images.append(read_pfm(path))
-    return seconds, (images[0] + images[1]) / 2, split_rmse(*images)
+SUMMARY = re.compile(r"estimated RMSE ([0-9.e+-]+)")
+
+
+def rt_gpu(binary, scene, spp, args, path, extra=()):
+    """One render as a whole process: (seconds, image, its own RMSE estimate)."""
+    cmd = [binary, scene, "--spp", str(spp), "--seed", "1", "--backend", args.backend,
+           "--size", f"{args.width}x{args.height}", "--max-depth", str(args.max_depth), "-o", path, *extra]
+    start = time.perf_counter()
+    done = subprocess.run(cmd, check=True, stderr=subprocess.PIPE, text=True)
+    seconds = time.perf_counter() - start
+    estimate = SUMMARY.search(done.stderr)
+    return seconds, read_pfm(path), float(estimate.group(1)) if estimate else None
+
+
+def reference(args, cache):
+    """The reference image and its noise (RMSE)."""
+    if args.reference:
+        if args.reference_noise is None:
+            sys.exit("--reference needs --reference-noise (its RMSE)")
+        return read_pfm(args.reference), args.reference_noise
+    key = f"{os.path.basename(args.scene)}-{args.width}x{args.height}-d{args.max_depth}-{args.reference_spp}"
+    path = os.path.join(cache, f"reference-{key}.pfm")
+    noise_path = path + ".noise"
+    if os.path.exists(path) and os.path.exists(noise_path):
+        return read_pfm(path), float(open(noise_path).read())
+    print(f"rendering the reference: {args.reference_spp} spp with rt-gpu's defaults", flush=True)
+    _, image, noise = rt_gpu(args.binary, args.scene, args.reference_spp, args, path, ["--seed", "77"])
+    with open(noise_path, "w") as f:
+        f.write(f"{noise}\n")
+    return image, noise
 
 
 def render_mitsuba(args):
-    """Two renders of spp/2 with seeds 1 and 2, timed, saved to args.mitsuba_only."""
+    """One render of args.spp, timed warm, saved to args.mitsuba_only."""
     import mitsuba as mi
 
     mi.set_variant("llvm_ad_rgb")
-    desc, width, height, max_depth = mitsuba_scene(args.scene, args.width, args.height, args.max_depth)
+    desc, width, height, max_depth = mitsuba_scene(args.scene, args.width, args.height, args.max_depth,
+                                                   args.mitsuba_sampler)
     scene = mi.load_dict(desc)
     # Warm-up: Mitsuba compiles its kernels on the first render.
     np.array(mi.render(scene, spp=1, seed=99))
-    halves, seconds = [], 0.0
-    for seed in (1, 2):
-        start = time.perf_counter()
-        img = mi.render(scene, spp=args.spp // 2, seed=seed)
-        halves.append(np.array(img, dtype=np.float64))  # forces evaluation
-        seconds += time.perf_counter() - start
-    np.savez(args.mitsuba_only, a=halves[0], b=halves[1], seconds=seconds, width=width, height=height,
+    start = time.perf_counter()
+    img = np.array(mi.render(scene, spp=args.spp, seed=1), dtype=np.float64)  # forces evaluation
+    seconds = time.perf_counter() - start
+    np.savez(args.mitsuba_only, image=img, seconds=seconds, width=width, height=height,
              max_depth=max_depth, version=mi.__version__)
 
 
@@ -209,57 +235,80 @@ def main():
     parser.add_argument("--width", type=int)
     parser.add_argument("--height", type=int)
     parser.add_argument("--max-depth", type=int)
+    parser.add_argument("--mitsuba-sampler", default="multijitter",
+                        help="independent, stratified, multijitter, ldsampler, orthogonal")
     parser.add_argument("--backend", default="gpu", help="rt-gpu backend")
     parser.add_argument("--binary", default="target/release/rt-gpu")
+    parser.add_argument("--reference", metavar="PFM", help="reference image [default: render one]")
+    parser.add_argument("--reference-noise", type=float, metavar="RMSE", help="the reference's own RMSE")
+    parser.add_argument("--reference-spp", type=int, default=8192)
+    parser.add_argument("--cache", default="converge", help="where a rendered reference is kept")
     parser.add_argument("--mitsuba-only", metavar="NPZ", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.mitsuba_only:
         render_mitsuba(args)
         return
 
+    os.makedirs(args.cache, exist_ok=True)
     with tempfile.TemporaryDirectory() as out:
         # Mitsuba renders in a process of its own, which has exited before rt-gpu starts: Dr.Jit's
         # worker threads would otherwise compete with rt-gpu's for the same cores.
-        halves_path = os.path.join(out, "mitsuba.npz")
-        subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only", halves_path]
+        mi_path = os.path.join(out, "mitsuba.npz")
+        subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only", mi_path,
+                        "--mitsuba-sampler", args.mitsuba_sampler]
                        + (["--width", str(args.width)] if args.width else [])
                        + (["--height", str(args.height)] if args.height else [])
                        + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
-        data = np.load(halves_path)
-        halves, mi_seconds = [data["a"], data["b"]], float(data["seconds"])
+        data = np.load(mi_path)
+        mi_image, mi_seconds = data["image"], float(data["seconds"])
         args.width, args.height, args.max_depth = int(data["width"]), int(data["height"]), int(data["max_depth"])
         pixels = args.width * args.height
-        mi_image = (halves[0] + halves[1]) / 2
-        mi_rmse = split_rmse(*halves)
-        print(f"mitsuba {str(data['version'])} llvm_ad_rgb: {args.spp} spp in {mi_seconds:.2f} s "
-              f"({pixels * args.spp / mi_seconds / 1e6:.2f} Msamples/s), RMSE {mi_rmse:.4e}", flush=True)
+        ref, ref_noise = reference(args, args.cache)
+        mi_rmse, mi_relmse = errors(mi_image, ref, ref_noise)
+        print(f"reference noise (RMSE) {ref_noise:.3e}")
+        print(f"mitsuba {str(data['version'])} llvm_ad_rgb {args.mitsuba_sampler}: {args.spp} spp in "
+              f"{mi_seconds:.2f} s ({pixels * args.spp / mi_seconds / 1e6:.2f} Msamples/s), "
+              f"RMSE {mi_rmse:.4e}, relMSE {mi_relmse:.4e}", flush=True)
         # Warm-up of rt-gpu's device and page cache.
-        rt_gpu_pair(args.binary, args.scene, 2, args, out)
+        rt_gpu(args.binary, args.scene, 1, args, os.path.join(out, "warm.pfm"))
         rungs = []
-        spp = 2
+        spp = 16
         while True:
-            seconds, image, rmse = rt_gpu_pair(args.binary, args.scene, spp, args, out)
-            rungs.append((spp, seconds, rmse, image))
+            seconds, image, _ = rt_gpu(args.binary, args.scene, spp, args, os.path.join(out, f"rt-{spp}.pfm"))
+            rmse, relmse = errors(image, ref, ref_noise)
+            rungs.append((spp, seconds, rmse, relmse))
             print(f"rt-gpu {args.backend}: {spp:6d} spp in {seconds:8.2f} s "
-                  f"({pixels * spp / seconds / 1e6:.2f} Msamples/s), RMSE {rmse:.4e}")
-            if rmse <= mi_rmse or spp >= 1 << 20:
+                  f"({pixels * spp / seconds / 1e6:.2f} Msamples/s), RMSE {rmse:.4e}, relMSE {relmse:.4e}",
+                  flush=True)
+            if (rmse <= mi_rmse and relmse <= mi_relmse) or spp >= 1 << 20:
                 break
             spp *= 2
-    (s0, t0, e0, _), (s1, t1, e1, rt_image) = rungs[-2] if len(rungs) > 1 else rungs[-1], rungs[-1]
-    # RMSE ~ t^-1/2 between the last two rungs: interpolate the time to Mitsuba's error in log-log.
-    if len(rungs) > 1 and e1 < e0:
-        k = math.log(e1 / e0) / math.log(t1 / t0)
-        t_match = t0 * (mi_rmse / e0) ** (1 / k)
-    else:
-        t_match = t1
-    print(f"time to Mitsuba's error at {args.spp} spp: rt-gpu {t_match:.2f} s, mitsuba {mi_seconds:.2f} s: "
-          f"rt-gpu is {mi_seconds / t_match:.2f}x {'faster' if t_match < mi_seconds else 'as fast'}")
+        last = image
+    for name, index, target in (("RMSE", 2, mi_rmse), ("relMSE", 3, mi_relmse)):
+        t_match = time_to(rungs, index, target)
+        print(f"time to Mitsuba's {name} at {args.spp} spp: rt-gpu {t_match:.2f} s, mitsuba {mi_seconds:.2f} s: "
+              f"rt-gpu takes {t_match / mi_seconds:.2f}x Mitsuba's time")
+    compared = [mi_rmse] + [r[2] for r in rungs[-2:]]
+    if ref_noise > min(compared) / 3:
+        print(f"warning: the reference's noise {ref_noise:.3e} is more than a third of an error compared "
+              f"({min(compared):.3e}): use a higher --reference-spp")
 
     # Do the two renderers compute the same image?
-    diff = math.sqrt(np.mean((mi_image - rt_image) ** 2))
-    noise = math.sqrt(mi_rmse**2 + e1**2)
-    print(f"mean radiance: mitsuba {mi_image.mean(axis=(0, 1)).round(5)}, rt-gpu {rt_image.mean(axis=(0, 1)).round(5)}; "
-          f"RMSE between the images {diff:.4e} against {noise:.4e} from noise alone")
+    print(f"mean radiance: mitsuba {mi_image.mean(axis=(0, 1)).round(5)}, rt-gpu {last.mean(axis=(0, 1)).round(5)}, "
+          f"reference {ref.mean(axis=(0, 1)).round(5)}")
+
+
+def time_to(rungs, index, target):
+    """Seconds at which the rungs' error `index` reaches target: log-log between the first rung
+    at or below it and the one before."""
+    below = next((i for i, r in enumerate(rungs) if r[index] <= target), len(rungs) - 1)
+    if below == 0:
+        return rungs[0][1]
+    (t0, e0), (t1, e1) = (rungs[below - 1][1], rungs[below - 1][index]), (rungs[below][1], rungs[below][index])
+    if not (e1 < e0 and e1 > 0):
+        return t1
+    k = math.log(e1 / e0) / math.log(t1 / t0)
+    return t0 * (target / e0) ** (1 / k)
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ pub fn generate_ray(
     let mut to_target = cam.to_upper_left + s * cam.horizontal - t * cam.vertical;
     let mut origin = cam.origin;
     if cam.lens_radius > 0.0 {
+        sampler.begin();
         let (dx, dy) = unit_disk(sampler.next_f32(), sampler.next_f32());
         let on_lens = cam.lens_radius * (dx * cam.right + dy * cam.up);
         origin += on_lens;

@@ -59,8 +59,11 @@ pub fn radiance(
         bsdf_pdf = 0.0;
         let light_sampled = nee && material.samples_lights();
         if light_sampled {
+            // Purposes: the light pick (1D), the point on the light (2D).
             sampler.begin();
-            let (u0, u1, u2) = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
+            let u0 = sampler.next_f32();
+            sampler.begin();
+            let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
             if let Some((weight, light)) = direct_light(scene, material, &hit, u0, u1, u2) {
                 total += throughput * weight * light;
             }

@@ -19,9 +19,8 @@ use wgpu::util::DeviceExt;
 /// one pass over each primitive list (none when the scene is inlined as straight-line code),
 /// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
-/// With NEE, a segment also scans the light list and traces a shadow ray. The Sobol sampler
-/// loops over the bits of the point index once per group of numbers: the camera's, and per
-/// segment at most the light sample's, the BSDF's and roulette's.
+/// With NEE, a segment also scans the light list and traces a shadow ray. (The samplers have
+/// no loops.)
 fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> LoopCost {
     let max_depth = opts.max_depth;
     let primitives = if features.inline_scene {
@@ -34,16 +33,8 @@ fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> Lo
     } else {
         3 + primitives
     };
-    let sampler = match opts.sampler {
-        SamplerKind::Independent => 0,
-        SamplerKind::Sobol => {
-            let last_index = opts.first_sample.saturating_add(opts.spp) / crate::sampler::REPLICAS;
-            let per_group = (u32::BITS - last_index.leading_zeros()) as u64 + 1;
-            per_group * (1 + 3 * (max_depth as u64 + 1))
-        }
-    };
     LoopCost {
-        per_sample: 2 + (max_depth as u64 + 1) * per_segment + sampler,
+        per_sample: 2 + (max_depth as u64 + 1) * per_segment,
     }
 }
 
