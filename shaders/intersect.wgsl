@@ -124,17 +124,12 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     let n = normalize(c.outward);
     let front = dot(ray.dir, n) < 0.0;
     let along_ray = ray.origin + c.t * ray.dir;
-    var surface: Surface;
-    switch primitive_kind(c.primitive) {
+    var surface = quad_surface(c, along_ray, n);
 //#if SPHERES
-        case KIND_SPHERE: {
-            surface = sphere_surface(c, along_ray);
-        }
-//#endif
-        default: {
-            surface = quad_surface(c, along_ray, n);
-        }
+    if primitive_kind(c.primitive) == KIND_SPHERE {
+        surface = sphere_surface(c, along_ray);
     }
+//#endif
     (*hit).t = c.t;
     (*hit).point = surface.point;
     (*hit).error = surface.error;

@@ -57,10 +57,13 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
         compensation = (next - mean) - step;
         mean = next;
         m2 += delta * (l - mean);
+//#if SOBOL
+        // Only stratified renders need their replicas' statistics.
         if (index & 1u) == 1u {
             odd_n += 1u;
             odd_mean += (l - odd_mean) / f32(odd_n);
         }
+//#endif
         count += 1u;
     }
     accum[slot] = vec4f(mean, bitcast<f32>(invalid));

@@ -9,6 +9,7 @@ use glam::Vec3;
 use rt_gpu::cpu::camera::generate_ray;
 use rt_gpu::cpu::shapes::intersect;
 use rt_gpu::gpu::{GpuError, Tuning};
+use rt_gpu::options::SamplerKind;
 use rt_gpu::sampler::Sampler;
 use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
@@ -164,16 +165,30 @@ fn equivalence_test_detects_small_real_differences() {
 }
 
 /// The same seed gives the same image, bit for bit, whether a render is cut into 1-sample or
-/// 64-sample dispatches, sized automatically, or split into tiles.
+/// 64-sample dispatches, sized automatically, or split into tiles, with either sampler (the
+/// replicas' statistics included).
 #[test]
 fn images_do_not_depend_on_dispatch_slicing_or_tiling() {
     let Some(gpu) = renderer() else { return };
     let scene = builtin("cornell").expect("built-in");
-    let opts = common::opts(24, 20, 64, 10, 9);
+    for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
+        slicing_leaves_the_image_unchanged(&gpu, &scene, sampler);
+    }
+}
+
+fn slicing_leaves_the_image_unchanged(
+    gpu: &rt_gpu::gpu::GpuRenderer,
+    scene: &rt_gpu::scene::Scene,
+    sampler: SamplerKind,
+) {
+    let opts = rt_gpu::render::RenderOptions {
+        sampler,
+        ..common::opts(24, 20, 64, 10, 9)
+    };
     let sliced = |samples_per_dispatch, max_tile_pixels| {
         render_gpu(
-            &gpu,
-            &scene,
+            gpu,
+            scene,
             &opts,
             &Tuning {
                 samples_per_dispatch,

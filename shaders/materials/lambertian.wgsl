@@ -8,10 +8,8 @@ fn lambertian_emitted(m: Material, front_face: bool) -> vec3f {
 fn lambertian_bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {
     // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
     let cos = dot(hit.normal, dir);
-    if cos > 0.0 {
-        return Bsdf(m.albedo, cos / PI);
-    }
-    return Bsdf(vec3f(0.0), 0.0);
+    let above = cos > 0.0;
+    return Bsdf(select(vec3f(0.0), m.albedo, above), select(0.0, cos / PI, above));
 }
 
 fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {

@@ -2,10 +2,7 @@
 // two-sided, reflects nothing. Packed: emission: radiance; param: 1 if two-sided.
 
 fn light_emitted(m: Material, front_face: bool) -> vec3f {
-    if front_face || m.param > 0.5 {
-        return m.emission;
-    }
-    return vec3f(0.0);
+    return select(vec3f(0.0), m.emission, front_face || m.param > 0.5);
 }
 
 fn light_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {

@@ -435,8 +435,12 @@ impl GpuRenderer {
             }
             let bytes = self.read_back(&accum, tile_bytes)?;
             let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            let first_odd = opts.first_sample % 2 == 1;
-            let odd_n = (opts.spp as u64 + first_odd as u64) / 2;
+            // The kernel keeps the odd samples' mean only for stratified renders.
+            let odd_n = if kernel.features.sobol {
+                (opts.first_sample as u64 + opts.spp as u64) / 2 - opts.first_sample as u64 / 2
+            } else {
+                0
+            };
             for (i, px) in values.chunks_exact(4).enumerate() {
                 let [mean, compensation, m2, odd_mean] = [px[0], px[1], px[2], px[3]];
                 let taken = compensation[3].to_bits();
