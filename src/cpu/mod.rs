@@ -11,7 +11,7 @@ pub mod shapes;
 
 use crate::backend::{RenderBackend, Rendered};
 use crate::film::{Film, PixelStats};
-use crate::options::{Integrator, RenderOptions};
+use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::sampler::Sampler;
 use crate::scene::flat::FlatScene;
 use rayon::prelude::*;
@@ -76,7 +76,7 @@ pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync
         })
         .sum();
     film.invalid_samples = invalid;
-    film.stratified = opts.sampler == crate::options::SamplerKind::Sobol;
+    film.stratified = opts.sampler == SamplerKind::Sobol;
     film
 }
 
@@ -98,7 +98,12 @@ fn render_pixel(
             invalid += 1;
             radiance = glam::Vec3::ZERO;
         }
-        stats.add_indexed(radiance, sample);
+        // Only stratified renders need their replicas' statistics (see film.rs).
+        if opts.sampler == SamplerKind::Sobol {
+            stats.add_indexed(radiance, sample);
+        } else {
+            stats.add(radiance);
+        }
     }
     invalid
 }
