@@ -26,64 +26,8 @@ pub const REPLICAS: u32 = 2;
 /// Dimensions per group: Sobol's first two, a (0, 2)-sequence, computed without a loop.
 pub const GROUP_DIMENSIONS: u32 = 2;
 
-/// Sobol generator matrices of dimensions 0..3 as 32 direction numbers each (column k is the
-/// contribution of index bit k), from Joe & Kuo's primitive polynomials and initial numbers
-/// (new-joe-kuo-6.21201: dimension 2: s 1, a 0, m 1; dimension 3: s 2, a 1, m 1 3;
-/// dimension 4: s 3, a 1, m 1 3 1). Dimension 0 is van der Corput's radical inverse.
-pub const SOBOL_DIRECTIONS: [u32; 128] = sobol_directions();
-
-const fn sobol_directions() -> [u32; 128] {
-    let mut out = [0u32; 128];
-    let mut k = 0;
-    while k < 32 {
-        out[k] = 1 << (31 - k);
-        k += 1;
-    }
-    // (degree s, coefficients a, initial m values) of dimensions 1, 2, 3.
-    let params: [(usize, u32, [u32; 3]); 3] =
-        [(1, 0, [1, 0, 0]), (2, 1, [1, 3, 0]), (3, 1, [1, 3, 1])];
-    let mut d = 0;
-    while d < 3 {
-        let (s, a, m) = params[d];
-        let mut v = [0u32; 32];
-        let mut k = 0;
-        while k < 32 {
-            if k < s {
-                v[k] = m[k] << (31 - k);
-            } else {
-                v[k] = v[k - s] ^ (v[k - s] >> s);
-                let mut i = 1;
-                while i < s {
-                    if (a >> (s - 1 - i)) & 1 == 1 {
-                        v[k] ^= v[k - i];
-                    }
-                    i += 1;
-                }
-            }
-            out[32 * (d + 1) + k] = v[k];
-            k += 1;
-        }
-        d += 1;
-    }
-    out
-}
-
-/// Dimension `dim` (0..3) of Sobol point `index`, as 32 bits of a fraction, from the tables:
-/// the definition [`sobol2_reversed`] is tested against.
-pub fn sobol(mut index: u32, dim: u32) -> u32 {
-    let mut x = 0;
-    let mut k = 32 * dim as usize;
-    while index != 0 {
-        if index & 1 == 1 {
-            x ^= SOBOL_DIRECTIONS[k];
-        }
-        index >>= 1;
-        k += 1;
-    }
-    x
-}
-
-/// Dimensions 0 and 1 of Sobol point `n`, each bit-reversed, without a loop. Dimension 0 is
+/// Dimensions 0 and 1 of Sobol point `n`, each bit-reversed, without a loop (tested against
+/// the generator matrices of Joe & Kuo's direction numbers). Dimension 0 is
 /// the radical inverse, so reversed it is `n` itself. Dimension 1's direction numbers are the rows
 /// of Pascal's triangle mod 2, which are palindromes, so reversed, bit j of the result is the
 /// parity of the index bits k with C(k, j) odd, that is (Lucas) with j a bitwise subset of k: a
@@ -216,6 +160,63 @@ impl Sampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sobol generator matrices of dimensions 0..3 as 32 direction numbers each (column k is the
+    /// contribution of index bit k), from Joe & Kuo's primitive polynomials and initial numbers
+    /// (new-joe-kuo-6.21201: dimension 2: s 1, a 0, m 1; dimension 3: s 2, a 1, m 1 3;
+    /// dimension 4: s 3, a 1, m 1 3 1). Dimension 0 is van der Corput's radical inverse.
+    const SOBOL_DIRECTIONS: [u32; 128] = sobol_directions();
+
+    const fn sobol_directions() -> [u32; 128] {
+        let mut out = [0u32; 128];
+        let mut k = 0;
+        while k < 32 {
+            out[k] = 1 << (31 - k);
+            k += 1;
+        }
+        // (degree s, coefficients a, initial m values) of dimensions 1, 2, 3.
+        let params: [(usize, u32, [u32; 3]); 3] =
+            [(1, 0, [1, 0, 0]), (2, 1, [1, 3, 0]), (3, 1, [1, 3, 1])];
+        let mut d = 0;
+        while d < 3 {
+            let (s, a, m) = params[d];
+            let mut v = [0u32; 32];
+            let mut k = 0;
+            while k < 32 {
+                if k < s {
+                    v[k] = m[k] << (31 - k);
+                } else {
+                    v[k] = v[k - s] ^ (v[k - s] >> s);
+                    let mut i = 1;
+                    while i < s {
+                        if (a >> (s - 1 - i)) & 1 == 1 {
+                            v[k] ^= v[k - i];
+                        }
+                        i += 1;
+                    }
+                }
+                out[32 * (d + 1) + k] = v[k];
+                k += 1;
+            }
+            d += 1;
+        }
+        out
+    }
+
+    /// Dimension `dim` (0..3) of Sobol point `index`, as 32 bits of a fraction, from the tables:
+    /// the definition `sobol2_reversed` is tested against.
+    fn sobol(mut index: u32, dim: u32) -> u32 {
+        let mut x = 0;
+        let mut k = 32 * dim as usize;
+        while index != 0 {
+            if index & 1 == 1 {
+                x ^= SOBOL_DIRECTIONS[k];
+            }
+            index >>= 1;
+            k += 1;
+        }
+        x
+    }
 
     /// Points 0..2^m of dimensions `a` and `b` (after `map`) in a 2^m x 2^m grid's elementary
     /// intervals of every shape 2^i x 2^(m-i): the largest count in one.
