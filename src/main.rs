@@ -7,7 +7,7 @@ use rt_gpu::film::{check_image_size, check_memory};
 use rt_gpu::gpu::list_adapters;
 use rt_gpu::options::SamplerKind;
 use rt_gpu::output::{ImageFormat, PendingOutput, Transfer};
-use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
+use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, Session, render};
 
 /// Where to render (the CLI's names for [`Backend`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -203,9 +203,14 @@ struct BenchArgs {
 struct RenderArgs {
     /// A built-in scene name (see `rt-gpu scenes`) or a scene file (.toml).
     scene: Option<String>,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
-    spp: u32,
+    /// Samples per pixel [default: 64, or unlimited with --time].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: Option<u32>,
+    /// Render until this many seconds are spent, in whole passes over the image, then write the
+    /// image; with --spp too, whichever comes first. The summary says how many samples per pixel
+    /// were reached.
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f64>,
     /// Image size WIDTHxHEIGHT [default: the scene's].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     size: Option<(u32, u32)>,
@@ -358,6 +363,73 @@ fn timed_render(
     let seconds = start.elapsed().as_secs_f64();
     progress.finish_and_clear();
     Ok((result?, seconds))
+}
+
+/// Renders passes of samples, each continuing the last (`first_sample`) and merged into one film,
+/// until `budget` seconds are spent or `opts.spp` samples per pixel are done. Each pass is sized
+/// from the measured rate to fit the time left (at most 2 s, so the progress bar moves), and at
+/// least one sample: the budget may be overrun by one sample's pass.
+fn budgeted_render(
+    backend: Backend,
+    gpu: &GpuChoice,
+    flat: &FlatScene,
+    opts: &RenderOptions,
+    budget: f64,
+) -> anyhow::Result<(Rendered, f64)> {
+    let progress = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let start = Instant::now();
+    let session = Session::new(backend, gpu, flat, opts.integrator)?;
+    let mut done = 0u32;
+    let mut total: Option<Rendered> = None;
+    let mut seconds_per_spp: Option<f64> = None;
+    while done < opts.spp {
+        let left = budget - start.elapsed().as_secs_f64();
+        if left <= 0.0 {
+            break;
+        }
+        let pass = seconds_per_spp.map_or(1, |s| (left.min(2.0) / s).floor().max(1.0) as u32);
+        let pass = pass.min(opts.spp - done);
+        let pass_start = Instant::now();
+        let rendered = session.render(
+            flat,
+            &RenderOptions {
+                first_sample: done,
+                spp: pass,
+                ..*opts
+            },
+            &|_| {},
+        )?;
+        seconds_per_spp = Some(pass_start.elapsed().as_secs_f64() / pass as f64);
+        done += pass;
+        total = Some(match total {
+            None => rendered,
+            Some(mut t) => {
+                t.film.merge(&rendered.film);
+                t.gpu_seconds = t.gpu_seconds.zip(rendered.gpu_seconds).map(|(a, b)| a + b);
+                t.longest_dispatch_seconds = match (
+                    t.longest_dispatch_seconds,
+                    rendered.longest_dispatch_seconds,
+                ) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                };
+                t
+            }
+        });
+        let elapsed = start.elapsed().as_secs_f64();
+        progress.set_position(((elapsed / budget).min(1.0) * 1000.0) as u64);
+        progress.set_message(format!(
+            "{done} spp, {:.0} s left",
+            (budget - elapsed).max(0.0)
+        ));
+    }
+    progress.finish_and_clear();
+    let rendered = total.context("the time budget ended before the first sample")?;
+    Ok((rendered, start.elapsed().as_secs_f64()))
 }
 
 /// A stable 64-bit FNV-1a digest, for cache keys that must not change between builds.
@@ -602,10 +674,20 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let (width, height) = args
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));
+    if let Some(t) = args.time
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--time must be a positive number of seconds, got {t}");
+    }
+    let max_spp = match (args.spp, args.time) {
+        (Some(spp), _) => spp,
+        (None, Some(_)) => u32::MAX,
+        (None, None) => 64,
+    };
     let opts = RenderOptions {
         width,
         height,
-        spp: args.spp,
+        spp: max_spp,
         first_sample: 0,
         seed: args.seed,
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
@@ -631,9 +713,17 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = scene_file.iter().map(|p| p.as_path()).collect();
     let pending = PendingOutput::claim(&output, &inputs)?;
 
-    let (rendered, seconds) = timed_render(backend, &gpu, &flat, &opts)?;
+    let (rendered, seconds) = match args.time {
+        Some(budget) => budgeted_render(backend, &gpu, &flat, &opts, budget)?,
+        None => timed_render(backend, &gpu, &flat, &opts)?,
+    };
     let film = &rendered.film;
     pending.commit_image(film, args.gamma)?;
+    // Samples per pixel reached (a budgeted render stops before its maximum).
+    let opts = RenderOptions {
+        spp: film.pixels.first().map_or(0, |p| p.n) as u32,
+        ..opts
+    };
 
     let samples = width as f64 * height as f64 * opts.spp as f64;
     let mean = film.image_mean();

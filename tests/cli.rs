@@ -600,3 +600,47 @@ fn a_signal_leaves_no_temporary_file() {
     );
     assert_no_temporary_files(dir.path());
 }
+
+/// `--time` renders passes until the budget is spent and says how many samples per pixel it
+/// reached; with `--spp` too, whichever comes first; a budget that is not a positive number is one
+/// line.
+#[test]
+fn time_budgets_stop_the_render_and_report_the_spp_reached() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let spp_reached = |out: &Output| -> u32 {
+        let line = stderr(out);
+        let before = line.split(" spp,").next().expect("a summary line");
+        before
+            .rsplit(' ')
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no spp in {line}"))
+    };
+    let base = [
+        "cornell",
+        "--backend",
+        "cpu",
+        "--size",
+        "8x8",
+        "-o",
+        "t.pfm",
+    ];
+    let start = std::time::Instant::now();
+    let out = rt_gpu(&[&base[..], &["--time", "0.5"]].concat(), dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    // Samples take microseconds here: the budget, not a sample count, ended the render.
+    assert!(spp_reached(&out) > 64, "{}", stderr(&out));
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+    let out = rt_gpu(
+        &[&base[..], &["--time", "100", "--spp", "3"]].concat(),
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(spp_reached(&out), 3);
+    for bad in ["--time=0", "--time=-1", "--time=nan", "--time=inf"] {
+        let out = rt_gpu(&[&base[..], &[bad]].concat(), dir.path());
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
