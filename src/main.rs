@@ -368,7 +368,7 @@ fn timed_render(
 /// Renders passes of samples, each continuing the last (`first_sample`) and merged into one film,
 /// until `budget` seconds are spent or `opts.spp` samples per pixel are done. Each pass is sized
 /// from the measured rate to fit the time left (at most 2 s, so the progress bar moves), and at
-/// least one sample: the budget may be overrun by one sample's pass.
+/// least one sample: the budget may be overrun by one sample's pass (and by the first pass).
 fn budgeted_render(
     backend: Backend,
     gpu: &GpuChoice,
@@ -388,7 +388,8 @@ fn budgeted_render(
     let mut seconds_per_spp: Option<f64> = None;
     while done < opts.spp {
         let left = budget - start.elapsed().as_secs_f64();
-        if left <= 0.0 {
+        // At least one pass: a budget shorter than starting the device still gives an image.
+        if left <= 0.0 && done > 0 {
             break;
         }
         let pass = seconds_per_spp.map_or(1, |s| (left.min(2.0) / s).floor().max(1.0) as u32);
@@ -428,7 +429,7 @@ fn budgeted_render(
         ));
     }
     progress.finish_and_clear();
-    let rendered = total.context("the time budget ended before the first sample")?;
+    let rendered = total.context("no samples were rendered")?;
     Ok((rendered, start.elapsed().as_secs_f64()))
 }
 
