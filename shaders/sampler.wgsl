@@ -52,11 +52,14 @@ fn sampler_start_group(s: ptr<function, Sampler>) {
 //#endif
 
 fn sampler_for_sample(pixel: u32, sample: u32, seed: u32) -> Sampler {
-    var s = Sampler(rng_for_sample(pixel, sample, seed), 0u, sample / REPLICAS, 0u, 0u, vec2u(0u), 0u);
+    var s = Sampler(0u, 0u, sample / REPLICAS, 0u, 0u, vec2u(0u), 0u);
 //#if SOBOL
+    // Sobol samples draw no PCG numbers: their stream is left unset, as on the CPU.
     let replica = sample % REPLICAS;
     s.pixel_seed = pcg_hash(seed + pcg_hash(replica + pcg_hash(pixel ^ 0x5b0b5eedu)));
     sampler_start_group(&s);
+//#else
+    s.rng = rng_for_sample(pixel, sample, seed);
 //#endif
     return s;
 }

@@ -15,7 +15,8 @@ pub fn pcg_hash(input: u32) -> u32 {
 }
 
 /// A PCG32 stream with 32 bits of state: ample for the few dozen numbers one path uses.
-#[derive(Clone, Copy, Debug)]
+/// `Default` is an unused stream (state 0), for samplers that draw no PCG numbers.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Rng {
     state: u32,
 }

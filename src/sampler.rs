@@ -99,7 +99,11 @@ impl Sampler {
     pub fn for_sample(kind: SamplerKind, pixel: u32, sample: u32, seed: u32) -> Self {
         let mut out = Sampler {
             kind,
-            rng: Rng::for_sample(pixel, sample, seed),
+            // Only independent samples draw from the PCG stream: Sobol ones skip its hashes.
+            rng: match kind {
+                SamplerKind::Independent => Rng::for_sample(pixel, sample, seed),
+                SamplerKind::Sobol => Rng::default(),
+            },
             pixel_seed: 0,
             index: sample / REPLICAS,
             group: 0,

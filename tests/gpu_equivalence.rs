@@ -126,13 +126,7 @@ fn equivalence_test_detects_small_real_differences() {
     let scene = builtin("cornell").expect("built-in");
     let cpu = common::render_cpu(&scene, &cornell_opts(1));
 
-    let mut brighter = scene.clone();
-    let white = brighter
-        .material_names
-        .iter()
-        .position(|n| n == "white")
-        .expect("white");
-    brighter.materials[white] = Material::lambertian(Vec3::splat(0.73 * 1.02));
+    let brighter = common::cornell_white_2_percent_brighter();
     let verdict = compare(
         &cpu,
         &render_gpu(&gpu, &brighter, &cornell_opts(2), &Tuning::default()),

@@ -4,12 +4,10 @@ mod common;
 
 use common::gpu::renderer;
 use common::stats::{ALPHA, compare};
-use glam::Vec3;
 use rt_gpu::film::Film;
 use rt_gpu::options::SamplerKind;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::sampler::Sampler;
-use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
 
@@ -94,13 +92,7 @@ fn sobol_is_unbiased() {
         "sobol differs (alpha {ALPHA}): {verdict:?}"
     );
 
-    let mut brighter = scene.clone();
-    let white = brighter
-        .material_names
-        .iter()
-        .position(|n| n == "white")
-        .expect("cornell has white");
-    brighter.materials[white] = Material::lambertian(Vec3::splat(0.73 * 1.02));
+    let brighter = common::cornell_white_2_percent_brighter();
     let changed = common::render_cpu(&brighter, &independent);
     let control = compare(&estimates, &changed);
     assert!(

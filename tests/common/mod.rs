@@ -106,3 +106,16 @@ pub fn furnace_scene() -> Scene {
         ],
     )
 }
+
+/// The built-in Cornell box with its white albedo 2% higher: the negative control the image
+/// comparisons must detect.
+pub fn cornell_white_2_percent_brighter() -> Scene {
+    let mut scene = rt_gpu::scene::builtin::builtin("cornell").expect("built-in");
+    let white = scene
+        .material_names
+        .iter()
+        .position(|n| n == "white")
+        .expect("cornell has white");
+    scene.materials[white] = Material::lambertian(Vec3::splat(0.73 * 1.02));
+    scene
+}
