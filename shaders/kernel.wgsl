@@ -1,16 +1,31 @@
 // Entry points: one invocation per pixel of the current tile.
 
-// Per pixel of the tile, four vec4s: the running mean (w: count of non-finite samples, as
-// bits), the Kahan compensation of the mean (w: samples accumulated, as bits, so the host can
-// prove no loop was cut short), Welford's M2, and the running mean of the odd-index samples
-// (replica 1 of a stratified sampler; see src/film.rs). Updated sample by sample in sample order, so
-// the result does not depend on how a render is sliced into dispatches.
-@group(0) @binding(4) var<storage, read_write> accum: array<vec4f>;
+// Per pixel of the tile, ACCUM_WORDS u32s: a running f32 mean (only for Welford's M2) and the
+// count of samples taken (so the host can prove no loop was cut short), M2 and the count of
+// invalid samples, then the exact fixed-point sums (film.wgsl) of all samples and of the
+// odd-index ones (replica 1 of a stratified sampler; see src/film.rs). Updated sample by sample
+// in sample order, so the result does not depend on how a render is sliced into dispatches.
+@group(0) @binding(4) var<storage, read_write> accum: array<u32>;
 
-// WGSL lets implementations assume floats are finite, so test the exponent bits instead.
-fn all_finite(v: vec3f) -> bool {
-    let exponent = bitcast<vec3u>(v) & vec3u(0x7f800000u);
-    return all(exponent != vec3u(0x7f800000u));
+fn load3(at: u32) -> vec3u {
+    return vec3u(accum[at], accum[at + 1u], accum[at + 2u]);
+}
+
+fn store3(at: u32, v: vec3u) {
+    accum[at] = v.x;
+    accum[at + 1u] = v.y;
+    accum[at + 2u] = v.z;
+}
+
+fn load_fixed(at: u32) -> Fixed {
+    return Fixed(load3(at), load3(at + 3u), load3(at + 6u), load3(at + 9u));
+}
+
+fn store_fixed(at: u32, f: Fixed) {
+    store3(at, f.w0);
+    store3(at + 3u, f.w1);
+    store3(at + 6u, f.w2);
+    store3(at + 9u, f.w3);
 }
 
 // Workgroups overhang the tile's edges; those invocations do nothing.
@@ -26,50 +41,45 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     let x = dispatch.tile_origin.x + gid.x;
     let y = dispatch.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
-    let slot = 4u * (gid.y * dispatch.tile_size.x + gid.x);
-    let first = accum[slot];
-    var mean = first.xyz;
-    var invalid = bitcast<u32>(first.w);
-    let second = accum[slot + 1u];
-    var compensation = second.xyz;
-    var count = bitcast<u32>(second.w);
-    var m2 = accum[slot + 2u].xyz;
-    var odd_mean = accum[slot + 3u].xyz;
-    // Odd sample indices so far: those in [first of the render, first of this dispatch).
-    let render_first = dispatch.first_sample - dispatch.samples_before;
-    var odd_n = dispatch.first_sample / 2u - render_first / 2u;
+    let slot = ACCUM_WORDS * (gid.y * dispatch.tile_size.x + gid.x);
+    var mean = bitcast<vec3f>(load3(slot));
+    var count = accum[slot + 3u];
+    var m2 = bitcast<vec3f>(load3(slot + 4u));
+    var invalid = accum[slot + 7u];
+    var sum = load_fixed(slot + ACCUM_SUM);
+//#if SOBOL
+    var odd_sum = load_fixed(slot + ACCUM_ODD_SUM);
+//#endif
     for (var s = 0u; s < dispatch.sample_count; s++) {
         let index = dispatch.first_sample + s;
         var sampler = sampler_for_sample(pixel, index, dispatch.seed);
         let ray = generate_ray(x, y, &sampler);
         var l = radiance(ray, &sampler);
-        if !all_finite(l) {
+        if !valid_sample(l) {
             l = vec3f(0.0);
             invalid += 1u;
         }
-        let n = f32(dispatch.samples_before + s + 1u);
+        let fixed = to_fixed(l);
+        sum = fixed_add(sum, fixed);
         let delta = l - mean;
-        // Kahan-compensated mean += delta / n. Drivers may compile with fast-math, under which
-        // (mean + step - mean) - step folds to 0; passing `next` through a select on a value
-        // the compiler cannot know (the image width is never 0) keeps the rounding error real.
-        let step = delta / n - compensation;
-        let next = select(vec3f(0.0), mean + step, params.width != 0u);
-        compensation = (next - mean) - step;
-        mean = next;
+        mean += delta / f32(dispatch.samples_before + s + 1u);
         m2 += delta * (l - mean);
 //#if SOBOL
         // Only stratified renders need their replicas' statistics.
         if (index & 1u) == 1u {
-            odd_n += 1u;
-            odd_mean += (l - odd_mean) / f32(odd_n);
+            odd_sum = fixed_add(odd_sum, fixed);
         }
 //#endif
         count += 1u;
     }
-    accum[slot] = vec4f(mean, bitcast<f32>(invalid));
-    accum[slot + 1u] = vec4f(compensation, bitcast<f32>(count));
-    accum[slot + 2u] = vec4f(m2, 0.0);
-    accum[slot + 3u] = vec4f(odd_mean, 0.0);
+    store3(slot, bitcast<vec3u>(mean));
+    accum[slot + 3u] = count;
+    store3(slot + 4u, bitcast<vec3u>(m2));
+    accum[slot + 7u] = invalid;
+    store_fixed(slot + ACCUM_SUM, sum);
+//#if SOBOL
+    store_fixed(slot + ACCUM_ODD_SUM, odd_sum);
+//#endif
 }
 
 //#if DEBUG

@@ -1,33 +1,80 @@
-//! The film: every pixel's running mean and variance in f64, so each render knows its own noise.
+//! The film: every pixel's samples summed exactly, so each render knows its own noise and any
+//! split of a render's samples (dispatches, passes, checkpoints, shards) adds up to the same bits.
+//!
+//! A sample is rounded to a multiple of 2^-32 and added as an integer: integer addition is
+//! associative, so the mean of samples 0..N is bit-identical however they were grouped. The
+//! spread of the samples (Welford's M2, for the noise of independent samples) is kept in floating
+//! point and merged with Chan's update: it agrees to about 1e-12 across splits, not bit for bit.
 //!
 //! With independent samples the variance of a pixel's mean is its sample variance over n. With
 //! a stratified sampler it is far lower, and the sample variance says nothing about it; there
 //! the estimate comes from two independent randomisations, the replicas the sampler deals even
 //! and odd sample indices into (`crate::sampler::REPLICAS`): the film keeps the odd samples'
-//! mean beside the overall one.
+//! sum beside the overall one.
 
 use glam::{DVec3, Vec3};
 
-/// Welford's running mean and sum of squared deviations of one pixel's samples, and the mean of
-/// its odd-index samples (replica 1).
+/// Bits below the unit in the fixed-point sums: samples are rounded to multiples of 2^-32
+/// (~2.3e-10), far below an f32's precision for any visible radiance.
+pub const FIXED_FRACTION_BITS: u32 = 32;
+const FIXED_ONE: f64 = (1u64 << FIXED_FRACTION_BITS) as f64;
+
+/// The f32 bits of 2^64: radiance at or above it (or negative, or not finite) cannot be summed
+/// exactly and counts as an invalid sample. Mirrored by `valid_sample` in shaders/film.wgsl.
+const TOO_LARGE_BITS: u32 = 0x5f80_0000;
+
+/// Whether a sample can enter the film: every channel finite, non-negative (or -0) and below
+/// 2^64 (~1.8e19). Others are counted as invalid and added as zero.
+#[inline]
+pub fn is_valid_sample(sample: Vec3) -> bool {
+    sample
+        .to_array()
+        .iter()
+        .all(|c| c.to_bits() < TOO_LARGE_BITS || c.to_bits() == 0x8000_0000)
+}
+
+/// `value` (valid, see [`is_valid_sample`]) in fixed point, rounded to nearest (ties to even),
+/// exactly as shaders/film.wgsl computes it.
+#[inline]
+pub fn to_fixed(value: f32) -> u128 {
+    // Exact: an f32 times a power of two is an f64 without rounding.
+    (value as f64 * FIXED_ONE).round_ties_even() as u128
+}
+
+/// A fixed-point sum as a float.
+#[inline]
+pub fn from_fixed(sum: u128) -> f64 {
+    sum as f64 / FIXED_ONE
+}
+
+fn fixed_rgb(sum: &[u128; 3]) -> DVec3 {
+    DVec3::new(from_fixed(sum[0]), from_fixed(sum[1]), from_fixed(sum[2]))
+}
+
+/// One pixel's samples: their count and exact sum, Welford's sum of squared deviations, and the
+/// count and exact sum of its odd-index samples (replica 1).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelStats {
     pub n: u64,
-    pub mean: DVec3,
+    /// Per channel, the samples' sum in fixed point (see [`to_fixed`]).
+    pub sum: [u128; 3],
     pub m2: DVec3,
     pub odd_n: u64,
-    pub odd_mean: DVec3,
+    pub odd_sum: [u128; 3],
 }
 
 impl PixelStats {
-    /// Adds a sample whose index is unknown (replica statistics stay empty).
+    /// Adds a sample whose index is unknown (replica statistics stay empty). The sample must be
+    /// valid ([`is_valid_sample`]).
     #[inline]
     pub fn add(&mut self, sample: Vec3) {
         let x = sample.as_dvec3();
+        let before = self.mean();
         self.n += 1;
-        let delta = x - self.mean;
-        self.mean += delta / self.n as f64;
-        self.m2 += delta * (x - self.mean);
+        for (s, c) in self.sum.iter_mut().zip(sample.to_array()) {
+            *s += to_fixed(c);
+        }
+        self.m2 += (x - before) * (x - self.mean());
     }
 
     /// Adds sample number `index` of the pixel.
@@ -36,14 +83,35 @@ impl PixelStats {
         self.add(sample);
         if index % 2 == 1 {
             self.odd_n += 1;
-            self.odd_mean += (sample.as_dvec3() - self.odd_mean) / self.odd_n as f64;
+            for (s, c) in self.odd_sum.iter_mut().zip(sample.to_array()) {
+                *s += to_fixed(c);
+            }
+        }
+    }
+
+    /// The mean of the samples (zero without any).
+    pub fn mean(&self) -> DVec3 {
+        if self.n == 0 {
+            DVec3::ZERO
+        } else {
+            fixed_rgb(&self.sum) / self.n as f64
+        }
+    }
+
+    /// The mean of the odd-index samples (zero without any).
+    pub fn odd_mean(&self) -> DVec3 {
+        if self.odd_n == 0 {
+            DVec3::ZERO
+        } else {
+            fixed_rgb(&self.odd_sum) / self.odd_n as f64
         }
     }
 
     /// The mean of the even-index samples (replica 0), if there are any.
     pub fn even_mean(&self) -> Option<DVec3> {
         let even_n = self.n.checked_sub(self.odd_n).filter(|&n| n > 0)?;
-        Some((self.mean * self.n as f64 - self.odd_mean * self.odd_n as f64) / even_n as f64)
+        let even: [u128; 3] = std::array::from_fn(|c| self.sum[c] - self.odd_sum[c]);
+        Some(fixed_rgb(&even) / even_n as f64)
     }
 
     /// Variance of the pixel's mean from the spread of its two replicas' means, independent
@@ -53,7 +121,7 @@ impl PixelStats {
     pub fn replica_variance_of_mean(&self) -> Option<DVec3> {
         let even = self.even_mean()?;
         (self.odd_n > 0).then(|| {
-            let d = even - self.odd_mean;
+            let d = even - self.odd_mean();
             let (n0, n1, n) = (
                 (self.n - self.odd_n) as f64,
                 self.odd_n as f64,
@@ -63,22 +131,24 @@ impl PixelStats {
         })
     }
 
-    /// Combines two disjoint sets of samples (Chan et al.'s parallel update).
+    /// Combines two disjoint sets of samples: the sums exactly, M2 by Chan et al.'s update.
     pub fn merge(&mut self, other: &PixelStats) {
         if other.n == 0 {
             return;
         }
-        let n = self.n + other.n;
-        let delta = other.mean - self.mean;
-        let weight = other.n as f64 / n as f64;
-        self.mean += delta * weight;
-        self.m2 += other.m2 + delta * delta * (self.n as f64 * weight);
-        self.n = n;
-        let odd_n = self.odd_n + other.odd_n;
-        if odd_n > 0 {
-            self.odd_mean += (other.odd_mean - self.odd_mean) * (other.odd_n as f64 / odd_n as f64);
+        if self.n == 0 {
+            *self = *other;
+            return;
         }
-        self.odd_n = odd_n;
+        let n = self.n + other.n;
+        let delta = other.mean() - self.mean();
+        self.m2 += other.m2 + delta * delta * (self.n as f64 * other.n as f64 / n as f64);
+        self.n = n;
+        for c in 0..3 {
+            self.sum[c] = self.sum[c].saturating_add(other.sum[c]);
+            self.odd_sum[c] = self.odd_sum[c].saturating_add(other.odd_sum[c]);
+        }
+        self.odd_n += other.odd_n;
     }
 
     /// Unbiased sample variance of one sample (of independent samples).
@@ -107,7 +177,8 @@ pub struct Film {
     pub height: u32,
     /// Row-major, row 0 at the top.
     pub pixels: Vec<PixelStats>,
-    /// Samples that came out NaN or infinite and were counted as zero.
+    /// Samples that came out invalid (NaN, infinite, negative or above 2^64) and were counted
+    /// as zero.
     pub invalid_samples: u64,
     /// Whether the samples were stratified (not independent): noise is then measured by the
     /// spread of the replicas.
@@ -116,11 +187,11 @@ pub struct Film {
 
 /// Longest image side.
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
-/// Most pixels one image may have (the film keeps 88 bytes of statistics per pixel).
+/// Most pixels one image may have (the film keeps 144 bytes of statistics per pixel).
 pub const MAX_PIXELS: u64 = 1 << 26;
-/// Host memory a render needs per pixel: the film (88 bytes), its mean image (12), the encoded
-/// output (up to 12) and slack for GPU readback and the CPU's rows.
-pub const RENDER_BYTES_PER_PIXEL: u64 = 128;
+/// Host memory a render needs per pixel: the film (144 bytes), a pass's film merged into it
+/// (144), GPU readback (128), its mean image (12) and the encoded output (up to 12).
+pub const RENDER_BYTES_PER_PIXEL: u64 = 448;
 
 /// The one check of an image size, wherever it comes from (`--size`, a scene file, a test).
 pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
@@ -193,13 +264,13 @@ impl Film {
     pub fn mean_rgb(&self) -> Vec<[f32; 3]> {
         self.pixels
             .iter()
-            .map(|p| p.mean.as_vec3().to_array())
+            .map(|p| p.mean().as_vec3().to_array())
             .collect()
     }
 
     /// The mean linear radiance of the whole image, per channel.
     pub fn image_mean(&self) -> DVec3 {
-        let sum: DVec3 = self.pixels.iter().map(|p| p.mean).sum();
+        let sum: DVec3 = self.pixels.iter().map(|p| p.mean()).sum();
         sum / self.pixels.len().max(1) as f64
     }
 
@@ -226,12 +297,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn welford_matches_two_pass_and_merge_matches_sequential() {
+    fn welford_matches_two_pass_and_merges_add_up_to_the_same_sums() {
         let samples: Vec<Vec3> = (0..101)
-            .map(|i| Vec3::new(i as f32, (i * i % 17) as f32, 1e4 + (i % 3) as f32))
+            .map(|i| Vec3::new(i as f32 * 0.37, (i * i % 17) as f32, 1e4 + (i % 3) as f32))
             .collect();
         let mut all = PixelStats::default();
-        samples.iter().for_each(|&s| all.add(s));
+        samples
+            .iter()
+            .enumerate()
+            .for_each(|(i, &s)| all.add_indexed(s, i as u32));
         let n = samples.len() as f64;
         let mean: DVec3 = samples.iter().map(|s| s.as_dvec3()).sum::<DVec3>() / n;
         let var: DVec3 = samples
@@ -239,15 +313,41 @@ mod tests {
             .map(|s| (s.as_dvec3() - mean) * (s.as_dvec3() - mean))
             .sum::<DVec3>()
             / (n - 1.0);
-        assert!((all.mean - mean).abs().max_element() < 1e-9);
+        assert!((all.mean() - mean).abs().max_element() < 1e-9);
         assert!((all.variance() - var).abs().max_element() < 1e-7);
 
-        let (mut a, mut b) = (PixelStats::default(), PixelStats::default());
-        samples[..40].iter().for_each(|&s| a.add(s));
-        samples[40..].iter().for_each(|&s| b.add(s));
-        a.merge(&b);
-        assert_eq!(a.n, all.n);
-        assert!((a.mean - all.mean).abs().max_element() < 1e-9);
-        assert!((a.m2 - all.m2).abs().max_element() < 1e-6);
+        // Any split, merged in any order: the same sums, bit for bit.
+        for cut in [1, 40, 100] {
+            let (mut a, mut b) = (PixelStats::default(), PixelStats::default());
+            for (i, &s) in samples.iter().enumerate() {
+                let part = if i < cut { &mut a } else { &mut b };
+                part.add_indexed(s, i as u32);
+            }
+            let mut ab = a;
+            ab.merge(&b);
+            b.merge(&a);
+            for merged in [ab, b] {
+                assert_eq!((merged.n, merged.sum), (all.n, all.sum));
+                assert_eq!((merged.odd_n, merged.odd_sum), (all.odd_n, all.odd_sum));
+                assert_eq!(merged.mean(), all.mean());
+                assert!((merged.m2 - all.m2).abs().max_element() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_point_rounds_to_nearest_and_the_valid_range_is_what_it_says() {
+        assert_eq!(to_fixed(1.0), 1 << 32);
+        assert_eq!(to_fixed(0.5), 1 << 31);
+        // 2^-33 is a tie: to even (0); 3 * 2^-33 rounds up to 2 * 2^-32.
+        assert_eq!(to_fixed(2f32.powi(-33)), 0);
+        assert_eq!(to_fixed(3.0 * 2f32.powi(-33)), 2);
+        let largest = f32::from_bits(TOO_LARGE_BITS - 1);
+        assert!(is_valid_sample(Vec3::splat(largest)));
+        assert_eq!(from_fixed(to_fixed(largest)), largest as f64);
+        assert!(is_valid_sample(Vec3::new(0.0, -0.0, 1e-30)));
+        for bad in [2f32.powi(64), -1e-30, f32::INFINITY, f32::NAN] {
+            assert!(!is_valid_sample(Vec3::new(1.0, bad, 1.0)), "{bad}");
+        }
     }
 }

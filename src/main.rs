@@ -750,7 +750,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     );
     if film.invalid_samples > 0 {
         note!(
-            "warning: {} samples were NaN or infinite and were counted as black",
+            "warning: {} samples were NaN, infinite, negative or above 2^64 and were counted as black",
             film.invalid_samples
         );
     }

@@ -29,7 +29,7 @@ fn same_seed_same_image_with_one_and_two_threads() {
     first.merge(&common::render_cpu(&scene, &rest_opts));
     for (a, b) in first.pixels.iter().zip(&one.pixels) {
         assert_eq!(a.n, b.n);
-        assert!((a.mean - b.mean).abs().max_element() < 1e-9);
+        assert!((a.mean() - b.mean()).abs().max_element() < 1e-9);
     }
 }
 
@@ -48,7 +48,7 @@ fn sobol_renders_continue_and_merge_exactly() {
     first.merge(&common::render_cpu(&scene, &sobol(5, 3)));
     for (a, b) in first.pixels.iter().zip(&whole.pixels) {
         assert_eq!((a.n, a.odd_n), (b.n, b.odd_n));
-        assert!((a.mean - b.mean).abs().max_element() < 1e-9);
-        assert!((a.odd_mean - b.odd_mean).abs().max_element() < 1e-9);
+        assert!((a.mean() - b.mean()).abs().max_element() < 1e-9);
+        assert!((a.odd_mean() - b.odd_mean()).abs().max_element() < 1e-9);
     }
 }

@@ -14,11 +14,11 @@ use rt_gpu::scene::{Background, Material, Shape};
 
 fn assert_close(stats: &PixelStats, expected: DVec3, what: &str) {
     let tolerance = 5.0 * stats.variance_of_mean().map(f64::sqrt) + 1e-5 * expected.abs();
-    let error = (stats.mean - expected).abs();
+    let error = (stats.mean() - expected).abs();
     assert!(
         error.cmple(tolerance).all(),
         "{what}: mean {:?}, expected {expected:?}, tolerance {tolerance:?}",
-        stats.mean
+        stats.mean()
     );
 }
 

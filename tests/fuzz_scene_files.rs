@@ -211,7 +211,7 @@ fn check(text: &str) -> Result<(), String> {
         .map_err(|e| format!("no kernel source: {e}"))?;
     if flat.spheres.len() + flat.quads.len() <= 400 {
         let film = rt_gpu::cpu::render(&flat, &RenderOptions::new(3, 2, 1, 4), &|| {});
-        if !film.pixels.iter().all(|p| p.mean.is_finite()) {
+        if !film.pixels.iter().all(|p| p.mean().is_finite()) {
             return Err("a pixel is not finite".into());
         }
     }

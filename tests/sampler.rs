@@ -65,7 +65,7 @@ fn mean_of_seeds(scene: &rt_gpu::scene::Scene, opts: &RenderOptions, seeds: u32)
             },
         );
         for (acc, p) in out.pixels.iter_mut().zip(&film.pixels) {
-            acc.add(p.mean.as_vec3());
+            acc.add(p.mean().as_vec3());
         }
     }
     out
@@ -123,7 +123,7 @@ fn mean_squared_difference(a: &Film, b: &Film) -> f64 {
         .pixels
         .iter()
         .zip(&b.pixels)
-        .map(|(p, q)| (p.mean - q.mean).length_squared())
+        .map(|(p, q)| (p.mean() - q.mean()).length_squared())
         .sum();
     sum / (a.pixels.len() * 3) as f64
 }

@@ -10,7 +10,7 @@ pub mod sampling;
 pub mod shapes;
 
 use crate::backend::{RenderBackend, Rendered};
-use crate::film::{Film, PixelStats};
+use crate::film::{Film, PixelStats, is_valid_sample};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::sampler::Sampler;
 use crate::scene::flat::FlatScene;
@@ -80,7 +80,8 @@ pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync
     film
 }
 
-/// Accumulates one pixel's samples; returns how many were non-finite (and counted as zero).
+/// Accumulates one pixel's samples; returns how many were invalid (non-finite, negative or
+/// above 2^64) and counted as zero.
 fn render_pixel(
     scene: &FlatScene,
     opts: &RenderOptions,
@@ -94,7 +95,7 @@ fn render_pixel(
         let mut sampler = Sampler::for_sample(opts.sampler, pixel, sample, opts.seed);
         let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut sampler);
         let mut radiance = integrator::radiance(scene, ray, opts, &mut sampler);
-        if !radiance.is_finite() {
+        if !is_valid_sample(radiance) {
             invalid += 1;
             radiance = glam::Vec3::ZERO;
         }

@@ -223,9 +223,14 @@ gpu_struct! {
     }
 }
 
-/// The per-pixel accumulator: mean (w: non-finite sample count as bits), Kahan compensation, M2,
-/// and the mean of the odd-index samples (replica 1).
-pub const ACCUM_BYTES_PER_PIXEL: u64 = 4 * 16;
+/// The per-pixel accumulator, in u32 words (see shaders/kernel.wgsl): a running f32 mean and the
+/// samples taken, M2 and the invalid samples, the exact sums of all samples and of the odd-index
+/// ones (four words per channel each).
+pub const ACCUM_WORDS: u32 = 32;
+/// Where a pixel's exact sums start among its words.
+pub const ACCUM_SUM: u32 = 8;
+pub const ACCUM_ODD_SUM: u32 = 20;
+pub const ACCUM_BYTES_PER_PIXEL: u64 = ACCUM_WORDS as u64 * 4;
 
 /// Invocations per workgroup along x and along y.
 pub const WORKGROUP_SIZE: u32 = 8;
@@ -253,6 +258,9 @@ fn wgsl_constants() -> String {
         .map(|k| (format!("MAT_{}", k.feature), k.kind.literal()));
     let constants = [
         ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
+        ("ACCUM_WORDS", ACCUM_WORDS.literal()),
+        ("ACCUM_SUM", ACCUM_SUM.literal()),
+        ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
         ("KIND_SPHERE", KIND_SPHERE.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),

@@ -3,8 +3,8 @@
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
-    ACCUM_BYTES_PER_PIXEL, GpuDispatch, GpuFirstBounce, SceneBuffers, WORKGROUP_SIZE, base_params,
-    whole_image_dispatch,
+    ACCUM_BYTES_PER_PIXEL, ACCUM_ODD_SUM, ACCUM_SUM, ACCUM_WORDS, GpuDispatch, GpuFirstBounce,
+    SceneBuffers, WORKGROUP_SIZE, base_params, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -434,39 +434,31 @@ impl GpuRenderer {
                 slice = sizer.record(count, tile_pixels, seconds);
             }
             let bytes = self.read_back(&accum, tile_bytes)?;
-            let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            // The kernel keeps the odd samples' mean only for stratified renders.
+            let words: &[u32] = bytemuck::cast_slice(&bytes);
+            // The kernel keeps the odd samples' sum only for stratified renders.
             let odd_n = if kernel.features.sobol {
                 (opts.first_sample as u64 + opts.spp as u64) / 2 - opts.first_sample as u64 / 2
             } else {
                 0
             };
-            for (i, px) in values.chunks_exact(4).enumerate() {
-                let [mean, compensation, m2, odd_mean] = [px[0], px[1], px[2], px[3]];
-                let taken = compensation[3].to_bits();
+            for (i, px) in words.chunks_exact(ACCUM_WORDS as usize).enumerate() {
+                let taken = px[3];
                 if taken != opts.spp {
                     return Err(GpuError::Runtime(format!(
                         "the device ended the kernel early: a pixel got {taken} of {} samples",
                         opts.spp
                     )));
                 }
+                let f = |w: u32| f32::from_bits(w) as f64;
                 let stats = &mut film.pixels[y0 as usize * width as usize + i];
                 *stats = PixelStats {
                     n: opts.spp as u64,
-                    mean: DVec3::new(
-                        mean[0] as f64 - compensation[0] as f64,
-                        mean[1] as f64 - compensation[1] as f64,
-                        mean[2] as f64 - compensation[2] as f64,
-                    ),
-                    m2: DVec3::new(m2[0] as f64, m2[1] as f64, m2[2] as f64).max(DVec3::ZERO),
+                    sum: fixed_sums(&px[ACCUM_SUM as usize..]),
+                    m2: DVec3::new(f(px[4]), f(px[5]), f(px[6])).max(DVec3::ZERO),
                     odd_n,
-                    odd_mean: DVec3::new(
-                        odd_mean[0] as f64,
-                        odd_mean[1] as f64,
-                        odd_mean[2] as f64,
-                    ),
+                    odd_sum: fixed_sums(&px[ACCUM_ODD_SUM as usize..]),
                 };
-                film.invalid_samples += mean[3].to_bits() as u64;
+                film.invalid_samples += px[7] as u64;
             }
             y0 += rows;
         }
@@ -623,4 +615,11 @@ impl DispatchTimer {
         let stamps: &[u64] = bytemuck::cast_slice(&bytes);
         Ok(stamps[1].saturating_sub(stamps[0]) as f64 * self.period_ns * 1e-9)
     }
+}
+
+/// Per channel, a fixed-point sum from its four words (word-major: all channels' w0, then w1...).
+fn fixed_sums(words: &[u32]) -> [u128; 3] {
+    std::array::from_fn(|c| {
+        (0..4).fold(0u128, |sum, w| sum | (words[3 * w + c] as u128) << (32 * w))
+    })
 }

@@ -34,6 +34,7 @@ const MODULES: &[(&str, &str)] = &[
         "integrator.wgsl",
         include_str!("../../shaders/integrator.wgsl"),
     ),
+    ("film.wgsl", include_str!("../../shaders/film.wgsl")),
     ("kernel.wgsl", include_str!("../../shaders/kernel.wgsl")),
 ];
 

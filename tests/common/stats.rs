@@ -47,7 +47,7 @@ fn cell(film: &Film, x0: u32, y0: u32, x1: u32, y1: u32) -> [(f64, f64); 3] {
             let p = film.pixel(x, y);
             let v = film.variance_of_mean(p);
             for c in 0..3 {
-                out[c].0 += p.mean[c] / k;
+                out[c].0 += p.mean()[c] / k;
                 out[c].1 += v[c] / (k * k);
             }
         }
