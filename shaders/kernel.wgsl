@@ -2,9 +2,10 @@
 
 // Per pixel of the tile, ACCUM_WORDS u32s: a running f32 mean (only for Welford's M2) and the
 // count of samples taken (so the host can prove no loop was cut short), M2 and the count of
-// invalid samples, then the exact fixed-point sums (film.wgsl) of all samples and of the
-// odd-index ones (replica 1 of a stratified sampler; see src/film.rs). Updated sample by sample
-// in sample order, so the result does not depend on how a render is sliced into dispatches.
+// invalid samples, then the exact fixed-point sums (film.wgsl) of the even-index and of the
+// odd-index samples (the replicas of a stratified sampler, see src/film.rs; renders without
+// them put every sample in the first). Updated sample by sample in sample order, so the result
+// does not depend on how a render is sliced into dispatches.
 @group(0) @binding(4) var<storage, read_write> accum: array<u32>;
 
 fn load3(at: u32) -> vec3u {
@@ -18,14 +19,13 @@ fn store3(at: u32, v: vec3u) {
 }
 
 fn load_fixed(at: u32) -> Fixed {
-    return Fixed(load3(at), load3(at + 3u), load3(at + 6u), load3(at + 9u));
+    return Fixed(load3(at), load3(at + 3u), load3(at + 6u));
 }
 
 fn store_fixed(at: u32, f: Fixed) {
     store3(at, f.w0);
     store3(at + 3u, f.w1);
     store3(at + 6u, f.w2);
-    store3(at + 9u, f.w3);
 }
 
 // Workgroups overhang the tile's edges; those invocations do nothing.
@@ -46,7 +46,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var count = accum[slot + 3u];
     var m2 = bitcast<vec3f>(load3(slot + 4u));
     var invalid = accum[slot + 7u];
-    var sum = load_fixed(slot + ACCUM_SUM);
+    var even_sum = load_fixed(slot + ACCUM_EVEN_SUM);
 //#if SOBOL
     var odd_sum = load_fixed(slot + ACCUM_ODD_SUM);
 //#endif
@@ -59,16 +59,20 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
             l = vec3f(0.0);
             invalid += 1u;
         }
-        let fixed = to_fixed(l);
-        sum = fixed_add(sum, fixed);
         let delta = l - mean;
         mean += delta / f32(dispatch.samples_before + s + 1u);
         m2 += delta * (l - mean);
+        let fixed = to_fixed(l);
 //#if SOBOL
-        // Only stratified renders need their replicas' statistics.
+        // Only stratified renders need their replicas' statistics. The same index for every
+        // invocation: a uniform branch.
         if (index & 1u) == 1u {
             odd_sum = fixed_add(odd_sum, fixed);
+        } else {
+            even_sum = fixed_add(even_sum, fixed);
         }
+//#else
+        even_sum = fixed_add(even_sum, fixed);
 //#endif
         count += 1u;
     }
@@ -76,7 +80,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     accum[slot + 3u] = count;
     store3(slot + 4u, bitcast<vec3u>(m2));
     accum[slot + 7u] = invalid;
-    store_fixed(slot + ACCUM_SUM, sum);
+    store_fixed(slot + ACCUM_EVEN_SUM, even_sum);
 //#if SOBOL
     store_fixed(slot + ACCUM_ODD_SUM, odd_sum);
 //#endif

@@ -19,12 +19,13 @@ use glam::{DVec3, Vec3};
 pub const FIXED_FRACTION_BITS: u32 = 32;
 const FIXED_ONE: f64 = (1u64 << FIXED_FRACTION_BITS) as f64;
 
-/// The f32 bits of 2^64: radiance at or above it (or negative, or not finite) cannot be summed
-/// exactly and counts as an invalid sample. Mirrored by `valid_sample` in shaders/film.wgsl.
-const TOO_LARGE_BITS: u32 = 0x5f80_0000;
+/// The f32 bits of 2^32: radiance at or above it (or negative, or not finite) cannot be summed
+/// exactly and counts as an invalid sample. Shared with `valid_sample` in shaders/film.wgsl.
+/// With fewer than 2^32 samples of a pixel, its sums stay below 2^64 (three 32-bit words).
+pub const TOO_LARGE_BITS: u32 = 0x4f80_0000;
 
 /// Whether a sample can enter the film: every channel finite, non-negative (or -0) and below
-/// 2^64 (~1.8e19). Others are counted as invalid and added as zero.
+/// 2^32 (~4.3e9). Others are counted as invalid and added as zero.
 #[inline]
 pub fn is_valid_sample(sample: Vec3) -> bool {
     sample
@@ -177,7 +178,7 @@ pub struct Film {
     pub height: u32,
     /// Row-major, row 0 at the top.
     pub pixels: Vec<PixelStats>,
-    /// Samples that came out invalid (NaN, infinite, negative or above 2^64) and were counted
+    /// Samples that came out invalid (NaN, infinite, negative or above 2^32) and were counted
     /// as zero.
     pub invalid_samples: u64,
     /// Whether the samples were stratified (not independent): noise is then measured by the
@@ -346,7 +347,7 @@ mod tests {
         assert!(is_valid_sample(Vec3::splat(largest)));
         assert_eq!(from_fixed(to_fixed(largest)), largest as f64);
         assert!(is_valid_sample(Vec3::new(0.0, -0.0, 1e-30)));
-        for bad in [2f32.powi(64), -1e-30, f32::INFINITY, f32::NAN] {
+        for bad in [2f32.powi(32), -1e-30, f32::INFINITY, f32::NAN] {
             assert!(!is_valid_sample(Vec3::new(1.0, bad, 1.0)), "{bad}");
         }
     }

@@ -8,12 +8,14 @@ pub mod backend;
 pub mod converge;
 pub mod cpu;
 pub mod film;
+pub mod film_file;
 pub mod gpu;
 pub mod material;
 pub mod options;
 pub mod output;
 #[cfg(feature = "plot")]
 pub mod plot;
+pub mod progressive;
 pub mod render;
 pub mod rng;
 pub mod sampler;

@@ -64,6 +64,9 @@ impl From<IntegratorArg> for Integrator {
         }
     }
 }
+use rt_gpu::film::Film;
+use rt_gpu::film_file::{self, FilmMeta};
+use rt_gpu::progressive::{Job, Outcome};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
 use rt_gpu::scene::file::MAX_DEPTH_LIMIT;
 use rt_gpu::scene::flat::FlatScene;
@@ -71,6 +74,7 @@ use rt_gpu::scene::{Scene, file};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::time::Instant;
 
 /// Prints a line to stdout. A closed pipe or a full device is an error to return with `?`,
@@ -85,7 +89,7 @@ macro_rules! note {
 }
 
 /// The subcommands, for a hint when one is given where a scene was expected.
-const SUBCOMMANDS: &[&str] = &["scenes", "devices", "bench", "converge"];
+const SUBCOMMANDS: &[&str] = &["scenes", "devices", "bench", "converge", "merge"];
 
 const EXAMPLES: &str = "\
 Examples:
@@ -96,7 +100,11 @@ Examples:
   rt-gpu scenes                          list the built-in scenes
   rt-gpu devices                         list GPU adapters
   rt-gpu bench                           compare backends' speed on the Cornell box
-  rt-gpu converge cornell --budget 20    error against time for each backend";
+  rt-gpu converge cornell --budget 20    error against time for each backend
+  rt-gpu cornell --spp 100000 --checkpoint c.exr     a long render, saved every minute
+  rt-gpu cornell --spp 100000 --resume c.exr         ... continued after a stop
+  rt-gpu cornell --spp 4096 --shard 0/4 -o s0.exr    a quarter of the samples (one job of four)
+  rt-gpu merge s0.exr s1.exr s2.exr s3.exr -o c.png  the four quarters as one image";
 
 /// A physically based path tracer: a WGSL compute kernel via wgpu, and a CPU reference
 /// renderer that computes the same estimator.
@@ -130,9 +138,27 @@ enum Command {
     Devices,
     /// Measure million samples per second of each backend, side by side in one run.
     Bench(BenchArgs),
+    /// Combine film files (from --shard, --samples or --checkpoint) of one scene and options into
+    /// one image, or one film file with -o FILE.exr: bit-identical to rendering all their samples
+    /// at once.
+    Merge(MergeArgs),
     /// Error against run time: ladders of renders at 1, 2, 4, ... spp per backend, compared with
     /// a reference; writes a table, DIR/converge.csv and a log-log plot (DIR/converge.svg, .png).
     Converge(ConvergeArgs),
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// Film files to combine: disjoint sample ranges of the same render.
+    #[arg(required = true, value_name = "FILM")]
+    films: Vec<PathBuf>,
+    /// Output image or film file (.exr); the extension picks the format, as for a render.
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    /// How .png and .ppm encode light: `srgb`, or a gamma such as 2 [default: srgb for .png, 2
+    /// for .ppm].
+    #[arg(long, value_name = "srgb|G", value_parser = Transfer::parse)]
+    gamma: Option<Transfer>,
 }
 
 #[derive(Args)]
@@ -211,6 +237,32 @@ struct RenderArgs {
     /// were reached.
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
+    /// Write the render's state to FILE (a film file, .exr) every --checkpoint-every seconds, at
+    /// the end, and when interrupted (Ctrl-C or SIGTERM finish the pass in flight, write it and
+    /// the image so far, and exit non-zero); --resume FILE continues it.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 60.0,
+        requires = "checkpoint"
+    )]
+    checkpoint_every: f64,
+    /// Continue the render saved in FILE by --checkpoint (same scene and options; --spp or
+    /// --time may grow), checkpointing to FILE again [default: where --checkpoint says]. The
+    /// image is bit-identical to one uninterrupted render.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Render only sample indices FIRST..END of every pixel (END exclusive) and write a film
+    /// file (-o FILE.exr) for `rt-gpu merge`.
+    #[arg(long, value_name = "FIRST..END", value_parser = film_file::parse_range, conflicts_with_all = ["shard", "spp", "time"])]
+    samples: Option<std::ops::Range<u32>>,
+    /// Render the K-th of N equal parts of --spp's samples (K from 0, as Slurm's
+    /// $SLURM_ARRAY_TASK_ID) and write a film file for `rt-gpu merge`.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "spp", conflicts_with = "time")]
+    shard: Option<(u32, u32)>,
     /// Image size WIDTHxHEIGHT [default: the scene's].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     size: Option<(u32, u32)>,
@@ -254,6 +306,21 @@ struct RenderArgs {
     gamma: Option<Transfer>,
 }
 
+fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected K/N such as 0/4 (the first of 4 shards), got '{s}'");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if n == 0 || k >= n {
+        return Err(format!(
+            "shard {k}/{n} does not exist: K counts from 0 to N-1"
+        ));
+    }
+    Ok((k, n))
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let bad = || format!("expected WIDTHxHEIGHT such as 512x512, got '{s}'");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
@@ -285,6 +352,7 @@ fn main() -> ExitCode {
         Some(Command::Devices) => list_devices(),
         Some(Command::Bench(args)) => bench(&args),
         Some(Command::Converge(args)) => converge(&args),
+        Some(Command::Merge(args)) => merge(&args),
         None => run_render(&cli.render),
     };
     match result {
@@ -322,8 +390,15 @@ fn one_line(message: &str) -> String {
     format!("{head} [... {} characters ...] {tail}", count - 2 * keep)
 }
 
-/// On SIGINT, SIGTERM or SIGHUP: remove temporary output files (a killed process runs no
-/// destructors, and they can be as large as the image), then exit with 128 + the signal.
+/// Set while a render can stop gracefully (it checkpoints): a first signal then asks it to stop.
+static GRACEFUL: AtomicBool = AtomicBool::new(false);
+/// The signal that asked a graceful render to stop (0: none).
+static STOP_SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+/// On SIGINT, SIGTERM or SIGHUP: during a checkpointing render, the first asks it to finish the
+/// pass in flight, write the checkpoint and the image so far, and exit with 128 + the signal.
+/// Otherwise (or at a second signal) remove temporary output files (a killed process runs no
+/// destructors, and they can be as large as the image) and exit with 128 + the signal.
 #[cfg(unix)]
 fn install_signal_handler() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
@@ -331,9 +406,23 @@ fn install_signal_handler() {
         return;
     };
     std::thread::spawn(move || {
-        if let Some(signal) = signals.forever().next() {
+        for signal in signals.forever() {
+            if GRACEFUL.load(Ordering::SeqCst)
+                && STOP_SIGNAL
+                    .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
+                    .is_ok()
+            {
+                note!(
+                    "\nstopping: finishing this pass, then writing the checkpoint and the image (signal again to quit at once)"
+                );
+                continue;
+            }
             rt_gpu::output::remove_pending_files();
-            note!("\ninterrupted: nothing was written");
+            if GRACEFUL.load(Ordering::SeqCst) {
+                note!("\ninterrupted: the last checkpoint is kept");
+            } else {
+                note!("\ninterrupted: nothing was written");
+            }
             std::process::exit(128 + signal);
         }
     });
@@ -363,74 +452,6 @@ fn timed_render(
     let seconds = start.elapsed().as_secs_f64();
     progress.finish_and_clear();
     Ok((result?, seconds))
-}
-
-/// Renders passes of samples, each continuing the last (`first_sample`) and merged into one film,
-/// until `budget` seconds are spent or `opts.spp` samples per pixel are done. Each pass is sized
-/// from the measured rate to fit the time left (at most 2 s, so the progress bar moves), and at
-/// least one sample: the budget may be overrun by one sample's pass (and by the first pass).
-fn budgeted_render(
-    backend: Backend,
-    gpu: &GpuChoice,
-    flat: &FlatScene,
-    opts: &RenderOptions,
-    budget: f64,
-) -> anyhow::Result<(Rendered, f64)> {
-    let progress = ProgressBar::new(1000).with_style(
-        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    let start = Instant::now();
-    let session = Session::new(backend, gpu, flat, opts.integrator)?;
-    let mut done = 0u32;
-    let mut total: Option<Rendered> = None;
-    let mut seconds_per_spp: Option<f64> = None;
-    while done < opts.spp {
-        let left = budget - start.elapsed().as_secs_f64();
-        // At least one pass: a budget shorter than starting the device still gives an image.
-        if left <= 0.0 && done > 0 {
-            break;
-        }
-        let pass = seconds_per_spp.map_or(1, |s| (left.min(2.0) / s).floor().max(1.0) as u32);
-        let pass = pass.min(opts.spp - done);
-        let pass_start = Instant::now();
-        let rendered = session.render(
-            flat,
-            &RenderOptions {
-                first_sample: done,
-                spp: pass,
-                ..*opts
-            },
-            &|_| {},
-        )?;
-        seconds_per_spp = Some(pass_start.elapsed().as_secs_f64() / pass as f64);
-        done += pass;
-        total = Some(match total {
-            None => rendered,
-            Some(mut t) => {
-                t.film.merge(&rendered.film);
-                t.gpu_seconds = t.gpu_seconds.zip(rendered.gpu_seconds).map(|(a, b)| a + b);
-                t.longest_dispatch_seconds = match (
-                    t.longest_dispatch_seconds,
-                    rendered.longest_dispatch_seconds,
-                ) {
-                    (Some(a), Some(b)) => Some(a.max(b)),
-                    (a, b) => a.or(b),
-                };
-                t
-            }
-        });
-        let elapsed = start.elapsed().as_secs_f64();
-        progress.set_position(((elapsed / budget).min(1.0) * 1000.0) as u64);
-        progress.set_message(format!(
-            "{done} spp, {:.0} s left",
-            (budget - elapsed).max(0.0)
-        ));
-    }
-    progress.finish_and_clear();
-    let rendered = total.context("no samples were rendered")?;
-    Ok((rendered, start.elapsed().as_secs_f64()))
 }
 
 /// A stable 64-bit FNV-1a digest, for cache keys that must not change between builds.
@@ -658,6 +679,30 @@ fn resolve_scene(arg: &str) -> anyhow::Result<(Scene, Option<PathBuf>)> {
     Ok((scene, None))
 }
 
+/// The sample indices a render covers: FIRST..END, or 0..spp.
+fn sample_range(args: &RenderArgs) -> anyhow::Result<std::ops::Range<u32>> {
+    if let Some(range) = &args.samples {
+        return Ok(range.clone());
+    }
+    let spp = match (args.spp, args.time) {
+        (Some(spp), _) => spp,
+        // Unlimited: the budget ends it.
+        (None, Some(_)) => u32::MAX,
+        (None, None) => 64,
+    };
+    Ok(match args.shard {
+        Some((k, n)) => {
+            let bound = |i: u32| (spp as u64 * i as u64 / n as u64) as u32;
+            let range = bound(k)..bound(k + 1);
+            if range.is_empty() {
+                bail!("shard {k}/{n} of {spp} spp has no samples: use fewer shards");
+            }
+            range
+        }
+        None => 0..spp,
+    })
+}
+
 fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let Some(scene_arg) = &args.scene else {
         bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
@@ -667,11 +712,40 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
     }
     let (scene, scene_file) = resolve_scene(scene_arg)?;
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
-    ImageFormat::from_path(&output)?;
+    let range = sample_range(args)?;
+    let partial = args.samples.is_some() || args.shard.is_some();
+    let output = args.output.clone().unwrap_or_else(|| {
+        PathBuf::from(if partial {
+            format!("{}-samples-{}-{}.exr", scene.name, range.start, range.end)
+        } else {
+            format!("{}.png", scene.name)
+        })
+    });
+    let format = ImageFormat::from_path(&output)?;
+    if partial && format != ImageFormat::Exr {
+        bail!(
+            "--shard and --samples write a film file for `rt-gpu merge`: name an .exr output, not {}",
+            output.display()
+        );
+    }
+    let checkpoint = args.checkpoint.clone().or_else(|| args.resume.clone());
+    if let Some(c) = &checkpoint
+        && ImageFormat::from_path(c).ok() != Some(ImageFormat::Exr)
+    {
+        bail!(
+            "a checkpoint is a film file: name it .exr, not {}",
+            c.display()
+        );
+    }
+    if checkpoint.as_deref() == Some(output.as_path()) {
+        bail!("the checkpoint and the output are the same file: name them apart");
+    }
+    if !(args.checkpoint_every > 0.0 && args.checkpoint_every.is_finite()) {
+        bail!(
+            "--checkpoint-every must be a positive number of seconds, got {}",
+            args.checkpoint_every
+        );
+    }
     let (width, height) = args
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));
@@ -680,16 +754,11 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     {
         bail!("--time must be a positive number of seconds, got {t}");
     }
-    let max_spp = match (args.spp, args.time) {
-        (Some(spp), _) => spp,
-        (None, Some(_)) => u32::MAX,
-        (None, None) => 64,
-    };
     let opts = RenderOptions {
         width,
         height,
-        spp: max_spp,
-        first_sample: 0,
+        spp: range.end - range.start,
+        first_sample: range.start,
         seed: args.seed,
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
         integrator: args.integrator.into(),
@@ -710,33 +779,117 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     check_memory(width, height).map_err(anyhow::Error::msg)?;
+    let identity = film_file::identity(
+        digest(&file::to_toml(&scene)),
+        backend,
+        &opts,
+        args.unspecialised,
+    );
+    let resume = match &args.resume {
+        Some(path) => Some(resume_from(path, &identity, &range)?),
+        None => None,
+    };
     // Claimed now, so an unwritable destination fails before a long render, not after it.
     let inputs: Vec<&Path> = scene_file.iter().map(|p| p.as_path()).collect();
     let pending = PendingOutput::claim(&output, &inputs)?;
+    if let Some(c) = &checkpoint {
+        // Fail now, not at the first checkpoint a minute in.
+        drop(PendingOutput::claim(c, &inputs)?);
+    }
 
-    let (rendered, seconds) = match args.time {
-        Some(budget) => budgeted_render(backend, &gpu, &flat, &opts, budget)?,
-        None => timed_render(backend, &gpu, &flat, &opts)?,
+    let resumed_at = resume.as_ref().map_or(range.start, |(_, done)| *done);
+    let session = Session::new(backend, &gpu, &flat, opts.integrator)?;
+    let device = session.device();
+    let meta = |done: u32| FilmMeta {
+        identity: identity.clone(),
+        samples: std::iter::once(range.start..done).collect(),
+        device: device.clone(),
     };
+    let progress = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let job = Job {
+        session: &session,
+        scene: &flat,
+        opts,
+        budget: args.time,
+        // Short passes only where something happens between them.
+        pass_seconds: if checkpoint.is_some() || args.time.is_some() {
+            1.0
+        } else {
+            f64::INFINITY
+        },
+    };
+    let mut last_checkpoint = Instant::now();
+    let write_checkpoint = |film: &Film, done: u32| -> anyhow::Result<()> {
+        if let Some(path) = &checkpoint {
+            PendingOutput::claim(path, &[])?.commit_film(film, &meta(done))?;
+        }
+        Ok(())
+    };
+    GRACEFUL.store(checkpoint.is_some(), Ordering::SeqCst);
+    let start = Instant::now();
+    let (rendered, outcome) = job.run(
+        resume,
+        &mut |film, done| {
+            if last_checkpoint.elapsed().as_secs_f64() >= args.checkpoint_every {
+                write_checkpoint(film, done)?;
+                last_checkpoint = Instant::now();
+            }
+            Ok(())
+        },
+        &|p| {
+            let fraction = match (args.time, p.total_spp) {
+                (Some(budget), u32::MAX) => p.elapsed / budget,
+                _ => p.spp / p.total_spp as f64,
+            };
+            progress.set_position((fraction.min(1.0) * 1000.0) as u64);
+            let total = if p.total_spp == u32::MAX {
+                String::new()
+            } else {
+                format!(" of {}", p.total_spp)
+            };
+            let eta = p
+                .eta
+                .map(|s| format!(", {s:.0} s left"))
+                .unwrap_or_default();
+            progress.set_message(format!("{:.0}{total} spp{eta}", p.spp.floor()));
+        },
+        &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0,
+    )?;
+    let seconds = start.elapsed().as_secs_f64();
+    progress.finish_and_clear();
     let film = &rendered.film;
-    pending.commit_image(film, args.gamma)?;
-    // Samples per pixel reached (a budgeted render stops before its maximum).
-    let opts = RenderOptions {
-        spp: film.pixels.first().map_or(0, |p| p.n) as u32,
-        ..opts
-    };
+    let spp = film.pixels.first().map_or(0, |p| p.n) as u32;
+    let done = range.start + spp;
+    write_checkpoint(film, done)?;
+    if format == ImageFormat::Exr {
+        pending.commit_film(film, &meta(done))?;
+    } else {
+        pending.commit_image(film, args.gamma)?;
+    }
 
-    let samples = width as f64 * height as f64 * opts.spp as f64;
+    // This run's samples: a resumed render's earlier ones took no time here.
+    let samples = width as f64 * height as f64 * (done - resumed_at) as f64;
     let mean = film.image_mean();
     let gpu_time = match (rendered.gpu_seconds, rendered.longest_dispatch_seconds) {
         (Some(s), Some(d)) => format!(" ({s:.2} s on the GPU, longest dispatch {:.0} ms)", d * 1e3),
         (None, Some(d)) => format!(" (longest dispatch {:.0} ms)", d * 1e3),
         _ => String::new(),
     };
+    let mut shown_samples = if range.start > 0 || partial {
+        format!("samples {}..{done}", range.start)
+    } else {
+        format!("{spp} spp")
+    };
+    if resumed_at > range.start {
+        shown_samples += &format!(" (resumed at {resumed_at})");
+    }
     note!(
-        "{}: {width}x{height}, {} spp, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",
+        "{}: {width}x{height}, {shown_samples}, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",
         scene.name,
-        opts.spp,
         backend.name(),
         rendered.device,
         opts.integrator.name(),
@@ -750,9 +903,158 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     );
     if film.invalid_samples > 0 {
         note!(
-            "warning: {} samples were NaN, infinite, negative or above 2^64 and were counted as black",
+            "warning: {} samples were NaN, infinite, negative or above 2^32 (4.3e9) and were counted as black",
             film.invalid_samples
         );
     }
+    if outcome == Outcome::Stopped {
+        let signal = STOP_SIGNAL.load(Ordering::SeqCst);
+        if let Some(c) = &checkpoint {
+            note!(
+                "stopped at sample {done}: continue with the same command and --resume {}",
+                c.display()
+            );
+        }
+        std::process::exit(128 + signal);
+    }
+    Ok(())
+}
+
+/// The film saved in `path` by a checkpoint of this render, and the sample it reached.
+fn resume_from(
+    path: &Path,
+    identity: &str,
+    range: &std::ops::Range<u32>,
+) -> anyhow::Result<(Film, u32)> {
+    let (film, meta) = film_file::read(path)?;
+    if let Some(why) = film_file::identity_difference(identity, &meta.identity) {
+        bail!(
+            "{} is a checkpoint of another render ({why}): resume it with the options it was made with",
+            path.display()
+        );
+    }
+    let done = match meta.samples.as_slice() {
+        [r] if r.start == range.start => r.end,
+        _ => bail!(
+            "{} holds samples {}, not a start of this render's {}..{}",
+            path.display(),
+            film_file::format_ranges(&meta.samples),
+            range.start,
+            range.end
+        ),
+    };
+    if done > range.end {
+        bail!(
+            "{} already holds samples {}..{done}, more than this render's {}..{}: ask for at least {} spp",
+            path.display(),
+            range.start,
+            range.start,
+            range.end,
+            done - range.start
+        );
+    }
+    Ok((film, done))
+}
+
+/// Combines film files of disjoint sample ranges of one render.
+fn merge(args: &MergeArgs) -> anyhow::Result<()> {
+    ImageFormat::from_path(&args.output)?;
+    let inputs: Vec<&Path> = args.films.iter().map(|p| p.as_path()).collect();
+    let pending = PendingOutput::claim(&args.output, &inputs)?;
+    let mut films = Vec::new();
+    for path in &args.films {
+        let (film, meta) = film_file::read(path)?;
+        films.push((path, film, meta));
+    }
+    let (first_path, _, first_meta) = &films[0];
+    for (path, _, meta) in &films[1..] {
+        if let Some(why) = film_file::identity_difference(&first_meta.identity, &meta.identity) {
+            bail!(
+                "{} and {} are films of different renders ({why}): only samples of one render merge",
+                first_path.display(),
+                path.display()
+            );
+        }
+    }
+    // Chan's update of M2 depends on order: merge in sample order, whatever the command line's.
+    films.sort_by_key(|(_, _, meta)| meta.samples.first().map_or(0, |r| r.start));
+    let mut ranges: Vec<(std::ops::Range<u32>, &Path)> = films
+        .iter()
+        .flat_map(|(path, _, meta)| meta.samples.iter().map(|r| (r.clone(), path.as_path())))
+        .collect();
+    ranges.sort_by_key(|(r, _)| r.start);
+    for pair in ranges.windows(2) {
+        let ((a, a_path), (b, b_path)) = (&pair[0], &pair[1]);
+        if b.start < a.end {
+            bail!(
+                "{} (samples {}..{}) and {} (samples {}..{}) overlap: each sample may be merged once",
+                a_path.display(),
+                a.start,
+                a.end,
+                b_path.display(),
+                b.start,
+                b.end
+            );
+        }
+    }
+    // The union, with adjacent ranges joined.
+    let mut union: Vec<std::ops::Range<u32>> = Vec::new();
+    for (r, _) in &ranges {
+        match union.last_mut() {
+            Some(last) if last.end == r.start => last.end = r.end,
+            _ => union.push(r.clone()),
+        }
+    }
+    let mut gaps = Vec::new();
+    let mut next = 0;
+    for r in &union {
+        if r.start > next {
+            gaps.push(next..r.start);
+        }
+        next = r.end;
+    }
+    if !gaps.is_empty() {
+        note!(
+            "warning: samples {} are missing: the image holds the others' {} spp (merge the missing films too for the full render)",
+            film_file::format_ranges(&gaps),
+            union.iter().map(|r| r.end - r.start).sum::<u32>()
+        );
+    }
+    let mut devices: Vec<String> = Vec::new();
+    let mut iter = films.into_iter();
+    let (_, mut merged, first_meta) = iter.next().context("no films to merge")?;
+    devices.push(first_meta.device.clone());
+    for (path, film, meta) in iter {
+        if (film.width, film.height) != (merged.width, merged.height) {
+            bail!("{} has another image size", path.display());
+        }
+        merged.merge(&film);
+        if !devices.contains(&meta.device) {
+            devices.push(meta.device);
+        }
+    }
+    let meta = FilmMeta {
+        identity: first_meta.identity,
+        samples: union,
+        device: devices.join(" + "),
+    };
+    if ImageFormat::from_path(&args.output)? == ImageFormat::Exr {
+        pending.commit_film(&merged, &meta)?;
+    } else {
+        pending.commit_image(&merged, args.gamma)?;
+    }
+    let mean = merged.image_mean();
+    note!(
+        "merged {} films: samples {}, {}x{}, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",
+        args.films.len(),
+        film_file::format_ranges(&meta.samples),
+        merged.width,
+        merged.height,
+        mean.x,
+        mean.y,
+        mean.z,
+        rt_gpu::converge::estimated_rmse(&merged),
+        args.output.display()
+    );
     Ok(())
 }

@@ -131,11 +131,8 @@ pub fn encode_image(
             }
             text.flush()?;
         }
-        ImageFormat::Exr => {
-            let floats: Vec<f32> = rgb.iter().flatten().copied().collect();
-            let img = image::Rgb32FImage::from_raw(w, h, floats).context("image buffer size")?;
-            img.write_to(&mut out, image::ImageFormat::OpenExr)?;
-        }
+        // The film's whole state, without what would let rt-gpu continue or merge it.
+        ImageFormat::Exr => return crate::film_file::encode(film, None),
         ImageFormat::Pfm => {
             let mut bytes = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
             // PFM stores rows bottom to top; -1.0 marks little-endian.
@@ -328,6 +325,13 @@ impl PendingOutput {
         let format = ImageFormat::from_path(&self.shown)?;
         let transfer = transfer.unwrap_or(Transfer::default_for(format));
         let bytes = encode_image(format, film, transfer)
+            .with_context(|| format!("cannot encode {}", self.shown.display()))?;
+        self.commit(&bytes)
+    }
+
+    /// Writes `film` as a film file (an EXR image that rt-gpu can continue or merge).
+    pub fn commit_film(self, film: &Film, meta: &crate::film_file::FilmMeta) -> anyhow::Result<()> {
+        let bytes = crate::film_file::encode(film, Some(meta))
             .with_context(|| format!("cannot encode {}", self.shown.display()))?;
         self.commit(&bytes)
     }

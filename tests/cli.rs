@@ -1,23 +1,14 @@
 //! The command line: renders in every format, and every bad input exits non-zero with one clear
 //! line, leaving an existing output file untouched.
 
+mod common;
+
+use common::cli::{rt_gpu, stderr};
 use std::path::Path;
 use std::process::{Command, Output};
 
 /// A render that takes milliseconds (add `-o FILE`).
 const TINY_CPU_RENDER: &[&str] = &["cornell", "--backend", "cpu", "--spp", "1", "--size", "4x4"];
-
-fn rt_gpu(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 #[test]
 fn renders_each_format_with_a_summary_line() {
@@ -629,8 +620,18 @@ fn time_budgets_stop_the_render_and_report_the_spp_reached() {
     let out = rt_gpu(&[&base[..], &["--time", "0.5"]].concat(), dir.path());
     assert!(out.status.success(), "{}", stderr(&out));
     // Samples take microseconds here: the budget, not a sample count, ended the render.
-    assert!(spp_reached(&out) > 64, "{}", stderr(&out));
+    let reached = spp_reached(&out);
+    assert!(reached > 64, "{}", stderr(&out));
     assert!(start.elapsed().as_secs_f64() < 30.0);
+    // Its passes add up to the same image as one render of that many samples.
+    let budgeted = std::fs::read(dir.path().join("t.pfm")).expect("written");
+    let spp = reached.to_string();
+    let out = rt_gpu(&[&base[..], &["--spp", &spp]].concat(), dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        std::fs::read(dir.path().join("t.pfm")).expect("written"),
+        budgeted
+    );
     let out = rt_gpu(
         &[&base[..], &["--time", "100", "--spp", "3"]].concat(),
         dir.path(),

@@ -81,7 +81,7 @@ pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync
 }
 
 /// Accumulates one pixel's samples; returns how many were invalid (non-finite, negative or
-/// above 2^64) and counted as zero.
+/// above 2^32) and counted as zero.
 fn render_pixel(
     scene: &FlatScene,
     opts: &RenderOptions,

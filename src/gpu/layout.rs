@@ -224,12 +224,12 @@ gpu_struct! {
 }
 
 /// The per-pixel accumulator, in u32 words (see shaders/kernel.wgsl): a running f32 mean and the
-/// samples taken, M2 and the invalid samples, the exact sums of all samples and of the odd-index
-/// ones (four words per channel each).
-pub const ACCUM_WORDS: u32 = 32;
+/// samples taken, M2 and the invalid samples, the exact sums of the even-index and of the
+/// odd-index samples (three words per channel each).
+pub const ACCUM_WORDS: u32 = 26;
 /// Where a pixel's exact sums start among its words.
-pub const ACCUM_SUM: u32 = 8;
-pub const ACCUM_ODD_SUM: u32 = 20;
+pub const ACCUM_EVEN_SUM: u32 = 8;
+pub const ACCUM_ODD_SUM: u32 = 17;
 pub const ACCUM_BYTES_PER_PIXEL: u64 = ACCUM_WORDS as u64 * 4;
 
 /// Invocations per workgroup along x and along y.
@@ -259,7 +259,8 @@ fn wgsl_constants() -> String {
     let constants = [
         ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
         ("ACCUM_WORDS", ACCUM_WORDS.literal()),
-        ("ACCUM_SUM", ACCUM_SUM.literal()),
+        ("TOO_LARGE_BITS", crate::film::TOO_LARGE_BITS.literal()),
+        ("ACCUM_EVEN_SUM", ACCUM_EVEN_SUM.literal()),
         ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
         ("KIND_SPHERE", KIND_SPHERE.literal()),

@@ -3,7 +3,7 @@
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
-    ACCUM_BYTES_PER_PIXEL, ACCUM_ODD_SUM, ACCUM_SUM, ACCUM_WORDS, GpuDispatch, GpuFirstBounce,
+    ACCUM_BYTES_PER_PIXEL, ACCUM_EVEN_SUM, ACCUM_ODD_SUM, ACCUM_WORDS, GpuDispatch, GpuFirstBounce,
     SceneBuffers, WORKGROUP_SIZE, base_params, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
@@ -451,12 +451,14 @@ impl GpuRenderer {
                 }
                 let f = |w: u32| f32::from_bits(w) as f64;
                 let stats = &mut film.pixels[y0 as usize * width as usize + i];
+                let even_sum = fixed_sums(&px[ACCUM_EVEN_SUM as usize..]);
+                let odd_sum = fixed_sums(&px[ACCUM_ODD_SUM as usize..]);
                 *stats = PixelStats {
                     n: opts.spp as u64,
-                    sum: fixed_sums(&px[ACCUM_SUM as usize..]),
+                    sum: std::array::from_fn(|c| even_sum[c] + odd_sum[c]),
                     m2: DVec3::new(f(px[4]), f(px[5]), f(px[6])).max(DVec3::ZERO),
                     odd_n,
-                    odd_sum: fixed_sums(&px[ACCUM_ODD_SUM as usize..]),
+                    odd_sum,
                 };
                 film.invalid_samples += px[7] as u64;
             }
@@ -617,9 +619,9 @@ impl DispatchTimer {
     }
 }
 
-/// Per channel, a fixed-point sum from its four words (word-major: all channels' w0, then w1...).
+/// Per channel, a fixed-point sum from its three words (word-major: all channels' w0, then w1...).
 fn fixed_sums(words: &[u32]) -> [u128; 3] {
     std::array::from_fn(|c| {
-        (0..4).fold(0u128, |sum, w| sum | (words[3 * w + c] as u128) << (32 * w))
+        (0..3).fold(0u128, |sum, w| sum | (words[3 * w + c] as u128) << (32 * w))
     })
 }

@@ -1,0 +1,146 @@
+//! Progressive rendering: a range of sample indices rendered in passes over the whole image,
+//! each continuing the last and added to one film. The film's sums are exact (see `film.rs`),
+//! so however the range is cut into passes, and wherever a render stops and resumes, the image
+//! is bit-identical to one pass over the whole range. Between passes the caller may write a
+//! checkpoint, and a time budget or a stop request ends the render.
+
+use crate::backend::Rendered;
+use crate::film::Film;
+use crate::render::{RenderOptions, Session};
+use crate::scene::flat::FlatScene;
+use std::time::Instant;
+
+/// How a progressive render ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// Every sample of the range was rendered.
+    Complete,
+    /// The time budget was spent first.
+    BudgetSpent,
+    /// A stop was requested (a signal): the last pass was finished first.
+    Stopped,
+}
+
+/// Where a progressive render stands, for progress bars.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Samples per pixel done, counting the pass in flight's finished part.
+    pub spp: f64,
+    /// Samples per pixel of the whole range (it may be `u32::MAX` with a budget).
+    pub total_spp: u32,
+    /// Seconds since the render started, and the estimated seconds left.
+    pub elapsed: f64,
+    pub eta: Option<f64>,
+}
+
+/// A progressive render of samples `opts.first_sample .. opts.first_sample + opts.spp`.
+pub struct Job<'a> {
+    pub session: &'a Session,
+    pub scene: &'a FlatScene,
+    pub opts: RenderOptions,
+    /// Seconds the render may take (checked between passes).
+    pub budget: Option<f64>,
+    /// Seconds a pass should take: how often a stop is noticed and a checkpoint can be written.
+    pub pass_seconds: f64,
+}
+
+impl Job<'_> {
+    /// Renders the range, continuing `resume` (a film of samples `opts.first_sample ..
+    /// done`), calling `after_pass(film, done)` after each pass and `on_progress` during them.
+    /// `stop` is polled between passes.
+    pub fn run(
+        &self,
+        resume: Option<(Film, u32)>,
+        after_pass: &mut dyn FnMut(&Film, u32) -> anyhow::Result<()>,
+        on_progress: &(dyn Fn(Progress) + Sync),
+        stop: &dyn Fn() -> bool,
+    ) -> anyhow::Result<(Rendered, Outcome)> {
+        let start = Instant::now();
+        let opts = &self.opts;
+        let end = opts.first_sample as u64 + opts.spp as u64;
+        let end = end.min(u32::MAX as u64) as u32;
+        let (mut film, mut done) = match resume {
+            Some((film, done)) => (Some(film), done),
+            None => (None, opts.first_sample),
+        };
+        let mut total = Rendered {
+            film: Film::new(opts.width, opts.height),
+            gpu_seconds: None,
+            longest_dispatch_seconds: None,
+            device: self.session.device(),
+        };
+        let mut seconds_per_spp: Option<f64> = None;
+        let outcome = loop {
+            if done >= end {
+                break Outcome::Complete;
+            }
+            let elapsed = start.elapsed().as_secs_f64();
+            let left = self.budget.map_or(f64::INFINITY, |b| b - elapsed);
+            // At least one pass: a budget shorter than starting the device still gives an image.
+            if left <= 0.0 && film.is_some() {
+                break Outcome::BudgetSpent;
+            }
+            if stop() {
+                break Outcome::Stopped;
+            }
+            // The first pass is one sample: it measures the rate the others are sized from.
+            let pass = seconds_per_spp.map_or(1.0, |s| (left.min(self.pass_seconds) / s).floor());
+            let pass = (pass.max(1.0).min((end - done) as f64)) as u32;
+            let pass_start = Instant::now();
+            let spp_before = (done - opts.first_sample) as f64;
+            let (total_spp, budget) = (end - opts.first_sample, self.budget);
+            let rendered = self.session.render(
+                self.scene,
+                &RenderOptions {
+                    first_sample: done,
+                    spp: pass,
+                    ..*opts
+                },
+                &|f| {
+                    let spp = spp_before + f * pass as f64;
+                    let elapsed = start.elapsed().as_secs_f64();
+                    on_progress(Progress {
+                        spp,
+                        total_spp,
+                        elapsed,
+                        eta: eta(spp, total_spp, elapsed, budget),
+                    })
+                },
+            )?;
+            seconds_per_spp = Some(pass_start.elapsed().as_secs_f64() / pass as f64);
+            done += pass;
+            match &mut film {
+                Some(f) => f.merge(&rendered.film),
+                None => film = Some(rendered.film),
+            }
+            total.gpu_seconds = match (total.gpu_seconds, rendered.gpu_seconds) {
+                (Some(a), Some(b)) => Some(a + b),
+                (a, b) => a.or(b),
+            };
+            total.longest_dispatch_seconds = match (
+                total.longest_dispatch_seconds,
+                rendered.longest_dispatch_seconds,
+            ) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            };
+            if let Some(f) = &film {
+                after_pass(f, done)?;
+            }
+        };
+        total.film = film.unwrap_or_else(|| Film::new(opts.width, opts.height));
+        Ok((total, outcome))
+    }
+}
+
+/// Seconds left: from the rate so far to the end of the range, or to the end of the budget if
+/// that comes first.
+fn eta(spp: f64, total_spp: u32, elapsed: f64, budget: Option<f64>) -> Option<f64> {
+    let by_spp = (spp > 0.0 && total_spp < u32::MAX)
+        .then(|| elapsed / spp * (total_spp as f64 - spp).max(0.0));
+    let by_budget = budget.map(|b| (b - elapsed).max(0.0));
+    match (by_spp, by_budget) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
