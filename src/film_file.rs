@@ -133,7 +133,7 @@ pub fn encode(film: &Film, meta: Option<&FilmMeta>) -> anyhow::Result<Vec<u8>> {
     let layer = Layer::new(
         (film.width as usize, film.height as usize),
         attributes,
-        Encoding::SMALL_LOSSLESS,
+        Encoding::FAST_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
     let mut out = std::io::Cursor::new(Vec::new());

@@ -242,14 +242,9 @@ struct RenderArgs {
     /// the image so far, and exit non-zero); --resume FILE continues it.
     #[arg(long, value_name = "FILE")]
     checkpoint: Option<PathBuf>,
-    /// Seconds between checkpoints.
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        default_value_t = 60.0,
-        requires = "checkpoint"
-    )]
-    checkpoint_every: f64,
+    /// Seconds between checkpoints [default: 60].
+    #[arg(long, value_name = "SECONDS")]
+    checkpoint_every: Option<f64>,
     /// Continue the render saved in FILE by --checkpoint (same scene and options; --spp or
     /// --time may grow), checkpointing to FILE again [default: where --checkpoint says]. The
     /// image is bit-identical to one uninterrupted render.
@@ -413,7 +408,7 @@ fn install_signal_handler() {
                     .is_ok()
             {
                 note!(
-                    "\nstopping: finishing this pass, then writing the checkpoint and the image (signal again to quit at once)"
+                    "\nstopping: finishing this pass (at most 10 s), then writing the checkpoint and the image (signal again to quit at once)"
                 );
                 continue;
             }
@@ -740,11 +735,12 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     if checkpoint.as_deref() == Some(output.as_path()) {
         bail!("the checkpoint and the output are the same file: name them apart");
     }
-    if !(args.checkpoint_every > 0.0 && args.checkpoint_every.is_finite()) {
-        bail!(
-            "--checkpoint-every must be a positive number of seconds, got {}",
-            args.checkpoint_every
-        );
+    let checkpoint_every = args.checkpoint_every.unwrap_or(60.0);
+    if !(checkpoint_every > 0.0 && checkpoint_every.is_finite()) {
+        bail!("--checkpoint-every must be a positive number of seconds, got {checkpoint_every}");
+    }
+    if args.checkpoint_every.is_some() && checkpoint.is_none() {
+        bail!("--checkpoint-every needs --checkpoint FILE (or --resume FILE)");
     }
     let (width, height) = args
         .size
@@ -815,12 +811,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         scene: &flat,
         opts,
         budget: args.time,
-        // Short passes only where something happens between them.
-        pass_seconds: if checkpoint.is_some() || args.time.is_some() {
-            1.0
-        } else {
-            f64::INFINITY
-        },
+        pass_seconds: pass_seconds(checkpoint.is_some().then_some(checkpoint_every), args.time),
     };
     let mut last_checkpoint = Instant::now();
     let write_checkpoint = |film: &Film, done: u32| -> anyhow::Result<()> {
@@ -834,7 +825,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let (rendered, outcome) = job.run(
         resume,
         &mut |film, done| {
-            if last_checkpoint.elapsed().as_secs_f64() >= args.checkpoint_every {
+            if last_checkpoint.elapsed().as_secs_f64() >= checkpoint_every {
                 write_checkpoint(film, done)?;
                 last_checkpoint = Instant::now();
             }
@@ -918,6 +909,18 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         std::process::exit(128 + signal);
     }
     Ok(())
+}
+
+/// How long a pass should take. Each pass costs the host about 0.1 s on lavapipe (setting up,
+/// reading back and merging its film), so passes are as long as what happens between them
+/// allows: a quarter of the checkpoint interval (a stop waits for the pass in flight, so at most
+/// 10 s) or a twentieth of the time budget, at least a second; one pass when nothing happens.
+fn pass_seconds(checkpoint_every: Option<f64>, budget: Option<f64>) -> f64 {
+    let limits = [checkpoint_every.map(|c| c / 4.0), budget.map(|b| b / 20.0)];
+    match limits.into_iter().flatten().reduce(f64::min) {
+        Some(limit) => limit.clamp(1.0, 10.0),
+        None => f64::INFINITY,
+    }
 }
 
 /// The film saved in `path` by a checkpoint of this render, and the sample it reached.

@@ -135,6 +135,13 @@ fn shards_merge_bit_identically_into_one_render() {
     assert!(err.contains(".exr"), "{err}");
     let err = one_line_error(&rt_gpu(&["cornell", "--spp", "8", "--shard", "2/2"], d));
     assert!(err.contains("K counts from 0"), "{err}");
+    let err = one_line_error(&rt_gpu(&["cornell", "--checkpoint-every", "5"], d));
+    assert!(err.contains("needs --checkpoint"), "{err}");
+    let err = one_line_error(&rt_gpu(
+        &["cornell", "--checkpoint", "c.png", "-o", "x.png"],
+        d,
+    ));
+    assert!(err.contains("name it .exr"), "{err}");
     assert!(!d.join("x.pfm").exists() && !d.join("x.png").exists());
 }
 
@@ -204,7 +211,15 @@ fn interrupted_renders_resume_bit_identically() {
             assert_eq!(status.code(), Some(expected), "{backend}: {status:?}");
             assert!(d.join("part.pfm").exists(), "{backend}: no image so far");
             stops += 1;
-            resumed = with(&["--resume", "ck.exr", "-o", "part.pfm"]);
+            // Short intervals make short passes, so that the next stop lands mid-render.
+            resumed = with(&[
+                "--resume",
+                "ck.exr",
+                "--checkpoint-every",
+                "0.01",
+                "-o",
+                "part.pfm",
+            ]);
         }
         assert!(
             stops >= 2,
