@@ -3,9 +3,9 @@
 
 mod common;
 
-use common::cli::{rt_gpu, stderr};
+use common::cli::{rt_gpu, spp_reached, stderr};
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 /// A render that takes milliseconds (add `-o FILE`).
 const TINY_CPU_RENDER: &[&str] = &["cornell", "--backend", "cpu", "--spp", "1", "--size", "4x4"];
@@ -598,15 +598,6 @@ fn a_signal_leaves_no_temporary_file() {
 #[test]
 fn time_budgets_stop_the_render_and_report_the_spp_reached() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let spp_reached = |out: &Output| -> u32 {
-        let line = stderr(out);
-        let before = line.split(" spp,").next().expect("a summary line");
-        before
-            .rsplit(' ')
-            .next()
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("no spp in {line}"))
-    };
     let base = [
         "cornell",
         "--backend",

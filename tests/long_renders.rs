@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::cli::{rt_gpu, stderr};
+use common::cli::{rt_gpu, spp_reached, stderr};
 use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -177,19 +177,20 @@ fn interrupted_renders_resume_bit_identically() {
     let d = dir.path();
     for backend in ["cpu", "gpu"] {
         let _ = std::fs::remove_file(d.join("ck.exr"));
-        // Several seconds of work, so that the stops land mid-render.
-        let spp = if backend == "cpu" { "12000" } else { "40000" };
-        let base = [
+        let scene = [
             "cornell",
             "--backend",
             backend,
             "--size",
             "32x32",
-            "--spp",
-            spp,
             "--max-depth",
             "4",
         ];
+        // About five seconds of work on this device (lavapipe or a real GPU), so that the stops
+        // land mid-render: what one second reaches, five times.
+        let out = ok(rt_gpu(&args(&scene, &["--time", "1", "-o", "t.pfm"]), d));
+        let spp = (5 * spp_reached(&out)).max(100).to_string();
+        let base = args(&scene, &["--spp", &spp]);
         let with = |extra: &[&'static str]| args(&base, extra);
         ok(rt_gpu(&with(&["-o", "whole.pfm"]), d));
         let checkpointing = with(&[

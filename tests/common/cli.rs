@@ -15,3 +15,14 @@ pub fn rt_gpu(args: &[&str], dir: &Path) -> Output {
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
+
+/// The samples per pixel a render's summary line reports ("..., 687 spp, ...").
+pub fn spp_reached(out: &Output) -> u32 {
+    let line = stderr(out);
+    let before = line.split(" spp,").next().unwrap_or_default();
+    before
+        .rsplit(' ')
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no spp in {line}"))
+}
