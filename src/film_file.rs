@@ -290,3 +290,137 @@ pub fn identity_difference(ours: &str, theirs: &str) -> Option<String> {
     }
     Some("its settings differ".to_string())
 }
+
+/// A film read from somewhere a message can name.
+pub struct NamedFilm {
+    pub name: String,
+    pub film: Film,
+    pub meta: FilmMeta,
+}
+
+/// Films of disjoint samples of one render, added up.
+pub struct Combined {
+    pub film: Film,
+    pub meta: FilmMeta,
+    /// Sample indices below the last one that no film held.
+    pub missing: Vec<Range<u32>>,
+}
+
+/// Adds up films of one render (equal identities and sizes) whose samples do not overlap: the
+/// exact sums in any order give the same image; M2 is merged in sample order, so that the result
+/// does not depend on the order `films` come in either.
+pub fn combine(mut films: Vec<NamedFilm>) -> anyhow::Result<Combined> {
+    let Some(first) = films.first() else {
+        bail!("no films to merge");
+    };
+    for other in &films[1..] {
+        if let Some(why) = identity_difference(&first.meta.identity, &other.meta.identity) {
+            bail!(
+                "{} and {} are films of different renders ({why}): only samples of one render merge",
+                first.name,
+                other.name
+            );
+        }
+        if (other.film.width, other.film.height) != (first.film.width, first.film.height) {
+            bail!("{} and {} differ in size", first.name, other.name);
+        }
+    }
+    films.sort_by_key(|f| f.meta.samples.first().map_or(0, |r| r.start));
+    let mut ranges: Vec<(Range<u32>, &str)> = films
+        .iter()
+        .flat_map(|f| f.meta.samples.iter().map(|r| (r.clone(), f.name.as_str())))
+        .collect();
+    ranges.sort_by_key(|(r, _)| r.start);
+    for pair in ranges.windows(2) {
+        let ((a, a_name), (b, b_name)) = (&pair[0], &pair[1]);
+        if b.start < a.end {
+            bail!(
+                "{a_name} (samples {}..{}) and {b_name} (samples {}..{}) overlap: each sample may be merged once",
+                a.start,
+                a.end,
+                b.start,
+                b.end
+            );
+        }
+    }
+    // The union, with adjacent ranges joined, and what it lacks below its end.
+    let mut samples: Vec<Range<u32>> = Vec::new();
+    for (r, _) in &ranges {
+        match samples.last_mut() {
+            Some(last) if last.end == r.start => last.end = r.end,
+            _ => samples.push(r.clone()),
+        }
+    }
+    let mut missing = Vec::new();
+    let mut next = 0;
+    for r in &samples {
+        if r.start > next {
+            missing.push(next..r.start);
+        }
+        next = r.end;
+    }
+    let mut films = films.into_iter();
+    let first = films.next().context("no films to merge")?;
+    let (mut film, identity) = (first.film, first.meta.identity);
+    let mut devices = vec![first.meta.device];
+    for other in films {
+        film.merge(&other.film);
+        if !devices.contains(&other.meta.device) {
+            devices.push(other.meta.device);
+        }
+    }
+    let meta = FilmMeta {
+        identity,
+        samples,
+        device: devices.join(" + "),
+    };
+    Ok(Combined {
+        film,
+        meta,
+        missing,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn a_film_file_reads_back_exactly_and_an_image_without_metadata_is_refused() {
+        let mut film = Film::new(3, 2);
+        film.stratified = true;
+        film.invalid_samples = 7;
+        for (i, p) in film.pixels.iter_mut().enumerate() {
+            for s in 0..5u32 {
+                let v = 1e-3 * (i as f32 + 1.0) * (s as f32 + 0.5);
+                p.add_indexed(Vec3::new(v, 3.0e9, 0.0), s);
+            }
+        }
+        let meta = FilmMeta {
+            identity: "scene=0123 seed=4".to_string(),
+            samples: vec![0..2, 7..10],
+            device: "test".to_string(),
+        };
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("film.exr");
+        std::fs::write(&path, encode(&film, Some(&meta)).expect("encodes")).expect("writes");
+        let (read_film, read_meta) = read(&path).expect("reads");
+        assert_eq!(read_film, film);
+        assert_eq!(read_meta, meta);
+
+        std::fs::write(&path, encode(&film, None).expect("encodes")).expect("writes");
+        let err = read(&path).expect_err("no metadata").to_string();
+        assert!(err.contains("not an rt-gpu film file"), "{err}");
+    }
+
+    #[test]
+    fn identities_name_what_differs() {
+        let ours = "scene=00ff seed=0 sampler=sobol";
+        assert_eq!(identity_difference(ours, ours), None);
+        let why = identity_difference(ours, "scene=00ff seed=3 sampler=sobol");
+        assert_eq!(why.as_deref(), Some("seed is 0 here, 3 there"));
+        let why = identity_difference(ours, "scene=11ff seed=0 sampler=sobol");
+        assert_eq!(why.as_deref(), Some("the scene differs"));
+    }
+}

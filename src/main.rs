@@ -824,7 +824,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         resume,
         &mut |film, done| {
             if last_checkpoint.elapsed().as_secs_f64() >= checkpoint_every {
-                checkpoints.write(film.clone(), meta(done), true)?;
+                checkpoints.write(film, meta(done), true)?;
                 last_checkpoint = Instant::now();
             }
             Ok(())
@@ -853,7 +853,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let film = &rendered.film;
     let spp = film.pixels.first().map_or(0, |p| p.n) as u32;
     let done = range.start + spp;
-    checkpoints.write(film.clone(), meta(done), false)?;
+    checkpoints.write(film, meta(done), false)?;
     if format == ImageFormat::Exr {
         pending.commit_film(film, &meta(done))?;
     } else {
@@ -918,7 +918,7 @@ struct CheckpointWriter {
 
 impl CheckpointWriter {
     /// Writes `film` (in the background if asked) where checkpoints go, if anywhere.
-    fn write(&mut self, film: Film, meta: FilmMeta, background: bool) -> anyhow::Result<()> {
+    fn write(&mut self, film: &Film, meta: FilmMeta, background: bool) -> anyhow::Result<()> {
         let Some(path) = &self.path else {
             return Ok(());
         };
@@ -928,12 +928,14 @@ impl CheckpointWriter {
                 .map_err(|_| anyhow::anyhow!("writing a checkpoint failed unexpectedly"))??;
         }
         let pending = PendingOutput::claim(path, &[])?;
-        let work = move || pending.commit_film(&film, &meta);
         if background {
-            self.writing = Some(std::thread::spawn(work));
+            let film = film.clone();
+            self.writing = Some(std::thread::spawn(move || {
+                pending.commit_film(&film, &meta)
+            }));
             Ok(())
         } else {
-            work()
+            pending.commit_film(film, &meta)
         }
     }
 }
@@ -994,80 +996,21 @@ fn merge(args: &MergeArgs) -> anyhow::Result<()> {
     let mut films = Vec::new();
     for path in &args.films {
         let (film, meta) = film_file::read(path)?;
-        films.push((path, film, meta));
+        films.push(film_file::NamedFilm {
+            name: path.display().to_string(),
+            film,
+            meta,
+        });
     }
-    let (first_path, _, first_meta) = &films[0];
-    for (path, _, meta) in &films[1..] {
-        if let Some(why) = film_file::identity_difference(&first_meta.identity, &meta.identity) {
-            bail!(
-                "{} and {} are films of different renders ({why}): only samples of one render merge",
-                first_path.display(),
-                path.display()
-            );
-        }
-    }
-    // Chan's update of M2 depends on order: merge in sample order, whatever the command line's.
-    films.sort_by_key(|(_, _, meta)| meta.samples.first().map_or(0, |r| r.start));
-    let mut ranges: Vec<(std::ops::Range<u32>, &Path)> = films
-        .iter()
-        .flat_map(|(path, _, meta)| meta.samples.iter().map(|r| (r.clone(), path.as_path())))
-        .collect();
-    ranges.sort_by_key(|(r, _)| r.start);
-    for pair in ranges.windows(2) {
-        let ((a, a_path), (b, b_path)) = (&pair[0], &pair[1]);
-        if b.start < a.end {
-            bail!(
-                "{} (samples {}..{}) and {} (samples {}..{}) overlap: each sample may be merged once",
-                a_path.display(),
-                a.start,
-                a.end,
-                b_path.display(),
-                b.start,
-                b.end
-            );
-        }
-    }
-    // The union, with adjacent ranges joined.
-    let mut union: Vec<std::ops::Range<u32>> = Vec::new();
-    for (r, _) in &ranges {
-        match union.last_mut() {
-            Some(last) if last.end == r.start => last.end = r.end,
-            _ => union.push(r.clone()),
-        }
-    }
-    let mut gaps = Vec::new();
-    let mut next = 0;
-    for r in &union {
-        if r.start > next {
-            gaps.push(next..r.start);
-        }
-        next = r.end;
-    }
-    if !gaps.is_empty() {
+    let combined = film_file::combine(films)?;
+    let (merged, meta) = (combined.film, combined.meta);
+    if !combined.missing.is_empty() {
         note!(
             "warning: samples {} are missing: the image holds the others' {} spp (merge the missing films too for the full render)",
-            film_file::format_ranges(&gaps),
-            union.iter().map(|r| r.end - r.start).sum::<u32>()
+            film_file::format_ranges(&combined.missing),
+            meta.spp()
         );
     }
-    let mut devices: Vec<String> = Vec::new();
-    let mut iter = films.into_iter();
-    let (_, mut merged, first_meta) = iter.next().context("no films to merge")?;
-    devices.push(first_meta.device.clone());
-    for (path, film, meta) in iter {
-        if (film.width, film.height) != (merged.width, merged.height) {
-            bail!("{} has another image size", path.display());
-        }
-        merged.merge(&film);
-        if !devices.contains(&meta.device) {
-            devices.push(meta.device);
-        }
-    }
-    let meta = FilmMeta {
-        identity: first_meta.identity,
-        samples: union,
-        device: devices.join(" + "),
-    };
     if ImageFormat::from_path(&args.output)? == ImageFormat::Exr {
         pending.commit_film(&merged, &meta)?;
     } else {

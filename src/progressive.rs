@@ -63,12 +63,8 @@ impl Job<'_> {
             Some((film, done)) => (Some(film), done),
             None => (None, opts.first_sample),
         };
-        let mut total = Rendered {
-            film: Film::new(opts.width, opts.height),
-            gpu_seconds: None,
-            longest_dispatch_seconds: None,
-            device: self.session.device(),
-        };
+        let (mut gpu_seconds, mut longest_dispatch_seconds): (Option<f64>, Option<f64>) =
+            (None, None);
         let mut seconds_per_spp: Option<f64> = None;
         let outcome = loop {
             if done >= end {
@@ -83,8 +79,14 @@ impl Job<'_> {
             if stop() {
                 break Outcome::Stopped;
             }
-            // The first pass is one sample: it measures the rate the others are sized from.
-            let pass = seconds_per_spp.map_or(1.0, |s| (left.min(self.pass_seconds) / s).floor());
+            // Unbounded, one pass does it all. Otherwise the first pass is one sample: it measures
+            // the rate the others are sized from.
+            let seconds = left.min(self.pass_seconds);
+            let pass = match seconds_per_spp {
+                _ if seconds.is_infinite() => (end - done) as f64,
+                Some(s) => (seconds / s).floor(),
+                None => 1.0,
+            };
             let pass = (pass.max(1.0).min((end - done) as f64)) as u32;
             let pass_start = Instant::now();
             let spp_before = (done - opts.first_sample) as f64;
@@ -113,23 +115,26 @@ impl Job<'_> {
                 Some(f) => f.merge(&rendered.film),
                 None => film = Some(rendered.film),
             }
-            total.gpu_seconds = match (total.gpu_seconds, rendered.gpu_seconds) {
+            gpu_seconds = match (gpu_seconds, rendered.gpu_seconds) {
                 (Some(a), Some(b)) => Some(a + b),
                 (a, b) => a.or(b),
             };
-            total.longest_dispatch_seconds = match (
-                total.longest_dispatch_seconds,
-                rendered.longest_dispatch_seconds,
-            ) {
-                (Some(a), Some(b)) => Some(a.max(b)),
-                (a, b) => a.or(b),
-            };
+            longest_dispatch_seconds =
+                match (longest_dispatch_seconds, rendered.longest_dispatch_seconds) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                };
             if let Some(f) = &film {
                 after_pass(f, done)?;
             }
         };
-        total.film = film.unwrap_or_else(|| Film::new(opts.width, opts.height));
-        Ok((total, outcome))
+        let rendered = Rendered {
+            film: film.unwrap_or_else(|| Film::new(opts.width, opts.height)),
+            gpu_seconds,
+            longest_dispatch_seconds,
+            device: self.session.device(),
+        };
+        Ok((rendered, outcome))
     }
 }
 
