@@ -854,11 +854,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let spp = film.pixels.first().map_or(0, |p| p.n) as u32;
     let done = range.start + spp;
     checkpoints.write(film, meta(done), false)?;
-    if format == ImageFormat::Exr {
-        pending.commit_film(film, &meta(done))?;
-    } else {
-        pending.commit_image(film, args.gamma)?;
-    }
+    pending.commit_render(film, &meta(done), args.gamma)?;
 
     // This run's samples: a resumed render's earlier ones took no time here.
     let samples = width as f64 * height as f64 * (done - resumed_at) as f64;
@@ -1011,11 +1007,7 @@ fn merge(args: &MergeArgs) -> anyhow::Result<()> {
             meta.spp()
         );
     }
-    if ImageFormat::from_path(&args.output)? == ImageFormat::Exr {
-        pending.commit_film(&merged, &meta)?;
-    } else {
-        pending.commit_image(&merged, args.gamma)?;
-    }
+    pending.commit_render(&merged, &meta, args.gamma)?;
     let mean = merged.image_mean();
     note!(
         "merged {} films: samples {}, {}x{}, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",

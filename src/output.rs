@@ -329,6 +329,21 @@ impl PendingOutput {
         self.commit(&bytes)
     }
 
+    /// Writes a render's `film`: as a film file with `meta` when the destination is .exr (an
+    /// image that rt-gpu can continue or merge), else as an image encoded with `transfer`.
+    pub fn commit_render(
+        self,
+        film: &Film,
+        meta: &crate::film_file::FilmMeta,
+        transfer: Option<Transfer>,
+    ) -> anyhow::Result<()> {
+        if ImageFormat::from_path(&self.shown)? == ImageFormat::Exr {
+            self.commit_film(film, meta)
+        } else {
+            self.commit_image(film, transfer)
+        }
+    }
+
     /// Writes `film` as a film file (an EXR image that rt-gpu can continue or merge).
     pub fn commit_film(self, film: &Film, meta: &crate::film_file::FilmMeta) -> anyhow::Result<()> {
         let bytes = crate::film_file::encode(film, Some(meta))
