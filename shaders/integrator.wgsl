@@ -1,9 +1,101 @@
 // The path loop (twin: src/cpu/integrator.rs): segment k adds the emission it hits, or the
 // background it escapes to, for k <= max_depth. With NEE, each hit on a material that samples
-// lights also samples a light (a path of one more segment, so only while that stays within
-// max_depth), and light found both ways is weighted by the power heuristic.
+// lights, and each scattering event in a medium, also samples a light (a path of one more
+// segment, so only while that stays within max_depth), and light found both ways is weighted
+// by the power heuristic. Media: the ray knows the medium it is in (1 + the index of the
+// material filled with it; 0: none) and samples a free path in it; invisible boundaries are
+// stepped through without ending a segment.
+
+//#if MEDIA
+// The medium on the far side of hit's surface, for a surface filled with one.
+fn entered(hit: Hit) -> u32 {
+    return select(0u, hit.material + 1u, hit.front_face);
+}
+
+const EVENT_ESCAPED: u32 = 0u;
+const EVENT_SURFACE: u32 = 1u;
+const EVENT_IN_MEDIUM: u32 = 2u;
+// More invisible boundaries than the scene can have (a degenerate ray): the path ends.
+const EVENT_LOST: u32 = 3u;
+
+struct Event {
+    kind: u32,
+    point: vec3f,       // EVENT_IN_MEDIUM: where it scatters
+}
+
+// Follows the ray to the end of its segment, through invisible medium boundaries (updating ray
+// and medium), sampling a free path in each medium on the way; EVENT_SURFACE leaves the hit in
+// `hit`. Random numbers: 1 per stretch travelled in a medium.
+fn next_event(ray: ptr<function, Ray>, medium: ptr<function, u32>, hit: ptr<function, Hit>, sampler: ptr<function, Sampler>) -> Event {
+    for (var i = 0u; i <= MEDIUM_CROSSINGS; i++) {
+        let found = intersect(*ray, hit);
+        if *medium != 0u {
+            sampler_begin(sampler);
+            let distance = free_flight(material_at(*medium - 1u).medium_density, sampler_next(sampler));
+            if distance < select(F32_MAX, (*hit).t, found) {
+                return Event(EVENT_IN_MEDIUM, (*ray).origin + distance * (*ray).dir);
+            }
+        }
+        if !found {
+            return Event(EVENT_ESCAPED, vec3f(0.0));
+        }
+        if material_at((*hit).material).kind != MAT_MEDIUM {
+            return Event(EVENT_SURFACE, vec3f(0.0));
+        }
+        *medium = entered(*hit);
+        *ray = spawn(*hit, (*ray).dir);
+    }
+    return Event(EVENT_LOST, vec3f(0.0));
+}
+//#endif
 
 //#if NEE
+//#if MEDIA
+// The radiance light `index` sends from `aim` to `start`, where the shadow ray starts in
+// `medium_in`: its emission times the media's transmittance on the way, through invisible
+// boundaries; zero when anything else is hit first.
+fn light_arriving(start: vec3f, aim: vec3f, index: u32, medium_in: u32) -> vec3f {
+    let to_light = aim - start;
+    if !(dot(to_light, to_light) > 0.0) {
+        return vec3f(0.0);
+    }
+    var ray = Ray(start, normalize(to_light));
+    var medium = medium_in;
+    var transmitted = 1.0;
+    for (var i = 0u; i <= MEDIUM_CROSSINGS; i++) {
+        var hit: Hit;
+        if !intersect(ray, &hit) {
+            return vec3f(0.0);
+        }
+        if medium != 0u {
+            transmitted *= transmittance(material_at(medium - 1u).medium_density, hit.t);
+        }
+        let m = material_at(hit.material);
+        if light_of(hit.primitive) == index + 1u {
+            return emitted(m, hit.front_face) * transmitted;
+        }
+        if m.kind != MAT_MEDIUM {
+            return vec3f(0.0);
+        }
+        medium = entered(hit);
+        ray = spawn(hit, ray.dir);
+    }
+    return vec3f(0.0);
+}
+
+// One light sample at a scattering event at `point` for a ray that travelled along `dir`: the
+// light arriving times the MIS weight and the phase function over the light pdf.
+fn medium_direct_light(point: vec3f, dir: vec3f, g: f32, medium: u32, u0: f32, u1: f32, u2: f32) -> vec3f {
+    let index = pick_light(u0);
+    let s = sample_light(light_at(index), point, u1, u2);
+    if !(s.pdf > 0.0) {
+        return vec3f(0.0);
+    }
+    let phase_pdf = hg_pdf(g, dot(dir, s.dir));
+    return light_arriving(point, s.point, index, medium) * light_sample_factor(s.pdf, phase_pdf);
+}
+//#endif
+
 // One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
 // arriving times the MIS weight and the BSDF pdf over the light pdf; their product is the
 // sample's contribution (zero if the light is below the surface or occluded).
@@ -12,7 +104,7 @@ struct DirectLight {
     light: vec3f,
 }
 
-fn direct_light(m: Material, hit: Hit, u0: f32, u1: f32, u2: f32) -> DirectLight {
+fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -> DirectLight {
     let none = DirectLight(vec3f(0.0), vec3f(0.0));
     let index = pick_light(u0);
     let s = sample_light(light_at(index), hit.point, u1, u2);
@@ -26,6 +118,9 @@ fn direct_light(m: Material, hit: Hit, u0: f32, u1: f32, u2: f32) -> DirectLight
     // The shadow ray leaves the offset origin aimed at the sampled point itself (a tiny light
     // is not missed by the width of the offset); whatever it hits first must be that light.
     let origin = leave(hit, hit.normal);
+//#if MEDIA
+    let le = light_arriving(origin, s.point, index, medium);
+//#else
     let to_light = s.point - origin;
     if !(dot(to_light, to_light) > 0.0) {
         return none;
@@ -35,26 +130,86 @@ fn direct_light(m: Material, hit: Hit, u0: f32, u1: f32, u2: f32) -> DirectLight
         return none;
     }
     let le = emitted(material_at(shadow.material), shadow.front_face);
+//#endif
     return DirectLight(b.weight, le * light_sample_factor(s.pdf, b.pdf));
 }
 //#endif
+
+// Russian roulette after `segment`: whether the path goes on, its throughput divided by the
+// chance that it would. Random numbers: 1 when it plays.
+fn survives_roulette(segment: u32, throughput: ptr<function, vec3f>, sampler: ptr<function, Sampler>) -> bool {
+    if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
+        let t = *throughput;
+        let survival = min(max(t.x, max(t.y, t.z)), MAX_SURVIVAL);
+        sampler_begin(sampler);
+        if !(sampler_next(sampler) < survival) {
+            return false;
+        }
+        *throughput = t / survival;
+    }
+    return true;
+}
 
 fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
     var ray = primary;
     var total = vec3f(0.0);
     var throughput = vec3f(1.0);
+    var medium = 0u;
 //#if NEE
-    // The pdf with which the BSDF chose `ray` from `origin`; 0 when light sampling could not
-    // have chosen it (camera rays, delta BSDFs), so light it finds counts in full.
+    // The pdf with which the BSDF (or phase function) chose `ray` from `origin`; 0 when light
+    // sampling could not have chosen it (camera rays, delta BSDFs), so light it finds counts
+    // in full.
     var bsdf_pdf = 0.0;
     var origin = ray.origin;
 //#endif
     for (var segment = 0u; segment < params.max_depth; segment++) {
         var hit: Hit;
+//#if MEDIA
+        let event = next_event(&ray, &medium, &hit, sampler);
+        if event.kind == EVENT_IN_MEDIUM {
+            // Nothing is emitted here; this vertex can only extend the path.
+            if segment + 1u == params.max_depth {
+                break;
+            }
+            let interior = material_at(medium - 1u);
+            throughput *= interior.medium_albedo;
+//#if NEE
+            bsdf_pdf = 0.0;
+            {
+                sampler_begin(sampler);
+                let u0 = sampler_next(sampler);
+                sampler_begin(sampler);
+                let u1 = sampler_next(sampler);
+                let u2 = sampler_next(sampler);
+                total += throughput * medium_direct_light(event.point, ray.dir, interior.medium_g, medium, u0, u1, u2);
+            }
+//#endif
+            sampler_begin(sampler);
+            let u1 = sampler_next(sampler);
+            let u2 = sampler_next(sampler);
+            let dir = sample_hg(interior.medium_g, ray.dir, u1, u2);
+//#if NEE
+            bsdf_pdf = hg_pdf(interior.medium_g, dot(ray.dir, dir));
+            origin = event.point;
+//#endif
+            ray = Ray(event.point, dir);
+            if !survives_roulette(segment, &throughput, sampler) {
+                break;
+            }
+            continue;
+        }
+        if event.kind != EVENT_SURFACE {
+            if event.kind == EVENT_ESCAPED {
+                total += throughput * background(ray.dir);
+            }
+            break;
+        }
+//#else
         if !intersect(ray, &hit) {
             total += throughput * background(ray.dir);
             break;
         }
+//#endif
         let m = material_at(hit.material);
         var weight = 1.0;
 //#if NEE
@@ -80,7 +235,7 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
             sampler_begin(sampler);
             let u1 = sampler_next(sampler);
             let u2 = sampler_next(sampler);
-            let d = direct_light(m, hit, u0, u1, u2);
+            let d = direct_light(m, hit, medium, u0, u1, u2);
             total += throughput * d.weight * d.light;
         }
 //#endif
@@ -96,14 +251,14 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
         }
         origin = hit.point;
 //#endif
+//#if MEDIA
+        if m.medium_density > 0.0 && dot(s.dir, hit.normal) < 0.0 {
+            medium = entered(hit); // refracted through a surface filled with a medium
+        }
+//#endif
         ray = spawn(hit, s.dir);
-        if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
-            let survival = min(max(throughput.x, max(throughput.y, throughput.z)), MAX_SURVIVAL);
-            sampler_begin(sampler);
-            if !(sampler_next(sampler) < survival) {
-                break;
-            }
-            throughput /= survival;
+        if !survives_roulette(segment, &throughput, sampler) {
+            break;
         }
     }
     return total;

@@ -39,22 +39,6 @@ fn light_at(i: u32) -> Light {
 }
 //#endif
 
-// Two unit vectors completing unit n to an orthonormal basis (Duff et al. 2017).
-struct Basis {
-    t: vec3f,
-    b: vec3f,
-}
-
-fn basis(n: vec3f) -> Basis {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    return Basis(
-        vec3f(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        vec3f(b, sign + n.y * n.y * a, -n.y),
-    );
-}
-
 // The cone a sphere subtends from x: unit axis and 1 - cos(half angle); w = 0 when x is
 // inside the sphere or the cone is too thin to represent.
 fn sphere_cone(center: vec3f, radius: f32, x: vec3f) -> vec4f {

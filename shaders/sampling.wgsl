@@ -10,6 +10,22 @@ fn unit_vector(u1: f32, u2: f32) -> vec3f {
     return vec3f(r * cos(phi), r * sin(phi), z);
 }
 
+// Two unit vectors completing unit n to an orthonormal basis (Duff et al. 2017).
+struct Basis {
+    t: vec3f,
+    b: vec3f,
+}
+
+fn basis(n: vec3f) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(
+        vec3f(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3f(b, sign + n.y * n.y * a, -n.y),
+    );
+}
+
 //#if LENS
 fn unit_disk(u1: f32, u2: f32) -> vec2f {
     let r = sqrt(u1);

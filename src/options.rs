@@ -19,6 +19,14 @@ pub struct RenderOptions {
     pub roulette_depth: u32,
 }
 
+/// Where Russian roulette starts when the user does not say: in scenes with media, random walks
+/// are long (`cornell-sss` scatters a dozen times inside its jade), so paths face roulette from
+/// their fifth segment, as in Mitsuba 3 and pbrt-v4; elsewhere it stays off, so images of
+/// surface-only scenes keep the exact per-sample variance the comparisons rely on.
+pub fn default_roulette_depth(scene_has_media: bool) -> u32 {
+    if scene_has_media { 5 } else { 0 }
+}
+
 impl RenderOptions {
     /// `width` x `height` at `spp` samples, seed 0, the default integrator, independent
     /// samples (whose per-sample variance the statistical tests rely on), no roulette.

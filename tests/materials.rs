@@ -46,7 +46,7 @@ fn total_internal_reflection_beyond_the_critical_angle() {
     let dir_in = Vec3::new(angle.sin(), -angle.cos(), 0.0);
     for seed in 0..64 {
         let mut rng = Sampler::independent(0, 0, seed);
-        let (att, out) = (Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }))
+        let (att, out) = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
             .scatter(dir_in, &hit_with_normal(n, false), &mut rng)
             .expect("scatters");
         assert_eq!(att, Vec3::ONE);

@@ -18,7 +18,6 @@ use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::{Light, LightShape, Quad, Sphere};
 use rt_gpu::scene::{Material, Scene, Shape};
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 fn add_material(scene: &mut Scene, name: &str, material: Material) -> u32 {
     scene.materials.push(material);
@@ -373,22 +372,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
         let j = (((phi + PI) / (2.0 * PI) * n_phi as f64).floor() as usize).min(n_phi - 1);
         observed[i as usize * n_phi + j] += 1.0;
     }
-    let (mut chi2, mut cells, mut pooled_e, mut pooled_o) = (0.0, 0usize, 0.0, 0.0);
-    for (e, o) in expected.iter().zip(&observed) {
-        let e = e * samples as f64;
-        if e < 5.0 {
-            pooled_e += e;
-            pooled_o += o;
-        } else {
-            chi2 += (o - e).powi(2) / e;
-            cells += 1;
-        }
-    }
-    if pooled_e > 0.0 {
-        chi2 += (pooled_o - pooled_e).powi(2) / pooled_e.max(5.0);
-        cells += 1;
-    }
-    let p = ChiSquared::new((cells - 1) as f64).expect("dof").sf(chi2);
+    let (chi2, cells, p) = common::stats::chi_square(&expected, &observed, samples as f64);
     eprintln!("{name}: chi2 {chi2:.1} over {cells} cells, p = {p:.3e}");
     p
 }

@@ -335,5 +335,5 @@ fn the_documented_example_parses() {
     let scene =
         parse(&doc[start..end], "scenes/README.md", "example").unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.objects.len(), 3);
-    assert_eq!(scene.materials.len(), 6);
+    assert_eq!(scene.materials.len(), 8);
 }

@@ -349,7 +349,7 @@ fn with_glass_ior(scene: &Scene, ior: f32) -> Scene {
     let mut out = scene.clone();
     for m in &mut out.materials {
         if let Material::Dielectric(_) = m {
-            *m = Material::Dielectric(rt_gpu::material::Dielectric { ior });
+            *m = Material::Dielectric(rt_gpu::material::Dielectric::clear(ior));
         }
     }
     out
@@ -410,7 +410,7 @@ fn extreme_glass_is_finite_and_agrees() {
         );
     }
     let materials = vec![
-        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }),
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)),
         Material::lambertian(Vec3::new(0.8, 0.3, 0.2)),
     ];
     let sphere = |center: Vec3, radius: f32, material: u32| {
@@ -463,11 +463,11 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
             albedo: Vec3::ONE,
             fuzz: 1.0,
         }),
-        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.0 }),
-        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.0001 }),
-        Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }),
-        Material::Dielectric(rt_gpu::material::Dielectric { ior: 2.42 }),
-        Material::Dielectric(rt_gpu::material::Dielectric { ior: 10.0 }),
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(1.0)),
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(1.0001)),
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)),
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(2.42)),
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(10.0)),
     ];
     let normal = Vec3::new(0.3, 0.8, -0.52).normalize();
     let (t, _) = rt_gpu::cpu::lights::basis(normal);
@@ -519,7 +519,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
         let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 6);
-        let (_, dir) = (Material::Dielectric(rt_gpu::material::Dielectric { ior: 1.5 }))
+        let (_, dir) = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
             .scatter(dir_in, &hit, &mut rng)
             .expect("glass always scatters");
         assert!(

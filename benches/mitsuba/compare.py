@@ -2,10 +2,13 @@
 """rt-gpu against Mitsuba 3 on the same scene, measured in one run.
 
 Builds the scene of an rt-gpu scene file (quads, boxes rotated about y, spheres; lambertian,
-dielectric and light materials) for Mitsuba 3 (variant llvm_ad_rgb, `path` integrator with NEE and
-MIS, box pixel filter, the same max depth, sampler `--mitsuba-sampler`, default multijitter, its
-best here), renders it there at SPP samples per pixel, and finds how long rt-gpu, with its default
-settings, needs to reach the same error.
+dielectric and light materials; homogeneous media: a `medium` material becomes a `null` BSDF
+with a `homogeneous` interior medium and an `hg` phase function, a dielectric's `medium` its
+interior) for Mitsuba 3 (variant llvm_ad_rgb, `path` integrator with NEE and MIS, or `volpath`
+for scenes with media, with Russian roulette from depth 5 as rt-gpu's default there; box pixel
+filter, the same max depth, sampler `--mitsuba-sampler`, default multijitter, its best here),
+renders it there at SPP samples per pixel, and finds how long rt-gpu, with its default settings,
+needs to reach the same error.
 
 Errors: both renderers' images are compared with one high-spp reference (`--reference`, or one
 rt-gpu renders with `--reference-spp` and caches), RMSE and relMSE (mean of d^2 / (ref^2 + 0.01)).
@@ -77,7 +80,16 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
     if cam.get("aperture", 0) != 0:
         sys.exit("only pinhole cameras are translated")
 
-    bsdfs, emitters = {}, {}
+    bsdfs, emitters, interiors = {}, {}, {}
+
+    def homogeneous(medium):
+        return {
+            "type": "homogeneous",
+            "sigma_t": medium["density"],
+            "albedo": {"type": "rgb", "value": medium["albedo"]},
+            "phase": {"type": "hg", "g": medium.get("g", 0.0)},
+        }
+
     for name, m in scene["materials"].items():
         kind = m["type"]
         if kind == "lambertian":
@@ -90,6 +102,11 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             }
         elif kind == "dielectric":
             bsdfs[name] = {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}
+            if "medium" in m:
+                interiors[name] = homogeneous(m["medium"])
+        elif kind == "medium":
+            bsdfs[name] = {"type": "null"}
+            interiors[name] = homogeneous(m)
         elif kind == "light":
             if m.get("two_sided", False):
                 sys.exit("two-sided lights are not translated")
@@ -110,6 +127,8 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
         shape = {"type": "rectangle", "to_world": mi.ScalarTransform4f(m.tolist()), "bsdf": bsdfs[material]}
         if material in emitters:
             shape["emitter"] = emitters[material]
+        if material in interiors:
+            shape["interior"] = interiors[material]
         shapes[f"shape{len(shapes)}"] = shape
 
     for obj in scene["object"]:
@@ -135,11 +154,17 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             }
             if material in emitters:
                 shape["emitter"] = emitters[material]
+            if material in interiors:
+                shape["interior"] = interiors[material]
             shapes[f"shape{len(shapes)}"] = shape
 
+    # Media: volpath, roulette from depth 5 as rt-gpu's default for such scenes (Mitsuba's own
+    # default too); Mitsuba's max_depth counts segments as rt-gpu's does.
+    integrator = {"type": "volpath", "max_depth": max_depth, "rr_depth": 5} if interiors else {
+        "type": "path", "max_depth": max_depth}
     return {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": max_depth},
+        "integrator": integrator,
         "sensor": {
             "type": "perspective",
             "fov": cam["vfov"],

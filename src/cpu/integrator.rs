@@ -3,13 +3,21 @@
 //! it escapes to, for k <= max_depth.
 //!
 //! With next-event estimation (`Integrator::Nee`), each hit on a material that samples lights (a
-//! non-delta BSDF: lambertian) also samples a light directly with a shadow ray, and light found
-//! both ways is weighted by the power heuristic.
-//! A light sample taken at the k-th hit forms a path of k + 1 segments, so it is taken only when
-//! k + 1 <= max_depth: both integrators sum over exactly the same paths.
+//! non-delta BSDF: lambertian) and each scattering event in a medium also samples a light
+//! directly with a shadow ray, and light found both ways is weighted by the power heuristic.
+//! A light sample taken at the k-th vertex forms a path of k + 1 segments, so it is taken only
+//! when k + 1 <= max_depth: both integrators sum over exactly the same paths.
+//!
+//! Media: the ray knows the medium it travels in (none at the camera) and changes it where it
+//! crosses the surface of an object filled with one. In a medium, a free path is sampled: if it
+//! ends before the next surface, the path scatters there (a segment ends at a scattering event
+//! as at a surface; the phase function takes the BSDF's place); if not, the surface is reached
+//! with unchanged weight (the transmittance over its probability is 1). Invisible medium
+//! boundaries are stepped through without ending a segment.
 
 use super::background::background;
 use super::lights;
+use super::medium::{free_flight, hg_pdf, sample_hg, transmittance};
 use super::shapes::{Hit, Ray, intersect, leave, spawn};
 use crate::options::{Integrator, RenderOptions};
 use crate::sampler::Sampler;
@@ -26,6 +34,51 @@ pub fn uses_nee(scene: &FlatScene, opts: &RenderOptions) -> bool {
     opts.integrator == Integrator::Nee && !scene.lights.is_empty()
 }
 
+/// Where a ray's segment ends.
+enum Event {
+    /// Nothing ahead.
+    Escaped,
+    /// A visible surface.
+    Surface(Hit),
+    /// A scattering event in the medium the ray travels in, at this point.
+    InMedium(Vec3),
+    /// More invisible boundaries than the scene can have (a degenerate ray): the path ends.
+    Lost,
+}
+
+/// Follows `ray` to the end of its segment, through invisible medium boundaries (updating
+/// `ray` and `medium`), sampling a free path in each medium on the way. Random numbers: 1 per
+/// stretch travelled in a medium.
+#[inline]
+fn next_event(scene: &FlatScene, ray: &mut Ray, medium: &mut u32, sampler: &mut Sampler) -> Event {
+    for _ in 0..=scene.medium_crossings {
+        let hit = intersect(scene, ray);
+        if let Some(interior) = scene.medium(*medium) {
+            sampler.begin();
+            let distance = free_flight(interior.density, sampler.next_f32());
+            if distance < hit.map_or(f32::MAX, |h| h.t) {
+                return Event::InMedium(ray.at(distance));
+            }
+        }
+        let Some(hit) = hit else {
+            return Event::Escaped;
+        };
+        if !scene.materials[hit.material as usize].is_invisible() {
+            return Event::Surface(hit);
+        }
+        *medium = entered(&hit);
+        *ray = spawn(&hit, ray.dir);
+    }
+    Event::Lost
+}
+
+/// The medium on the far side of `hit`'s surface, for a surface filled with one: its own
+/// entering through the front face, none leaving through the back (media do not overlap).
+#[inline]
+fn entered(hit: &Hit) -> u32 {
+    if hit.front_face { hit.material + 1 } else { 0 }
+}
+
 pub fn radiance(
     scene: &FlatScene,
     mut ray: Ray,
@@ -35,14 +88,55 @@ pub fn radiance(
     let nee = uses_nee(scene, opts);
     let mut total = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
-    // The pdf with which the BSDF chose `ray`, from `origin`; 0 when light sampling could not
-    // have chosen it (camera rays, delta BSDFs), so light it finds counts in full.
+    // The pdf with which the BSDF (or phase function) chose `ray`, from `origin`; 0 when light
+    // sampling could not have chosen it (camera rays, delta BSDFs), so light it finds counts
+    // in full.
     let mut bsdf_pdf = 0.0;
     let mut origin = ray.origin;
+    // 1 + the index of the material whose medium the ray travels in; 0: none.
+    let mut medium = 0;
     for segment in 0..opts.max_depth {
-        let Some(hit) = intersect(scene, &ray) else {
-            total += throughput * background(&scene.background, ray.dir);
-            break;
+        let hit = match next_event(scene, &mut ray, &mut medium, sampler) {
+            Event::Escaped => {
+                total += throughput * background(&scene.background, ray.dir);
+                break;
+            }
+            Event::Lost => break,
+            Event::InMedium(point) => {
+                // Nothing is emitted here; this vertex can only extend the path.
+                if segment + 1 == opts.max_depth {
+                    break;
+                }
+                let Some(interior) = scene.medium(medium) else {
+                    break;
+                };
+                throughput *= interior.albedo;
+                bsdf_pdf = 0.0;
+                if nee {
+                    sampler.begin();
+                    let u0 = sampler.next_f32();
+                    sampler.begin();
+                    let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+                    if let Some(light) =
+                        medium_direct_light(scene, point, ray.dir, interior.g, medium, u0, u1, u2)
+                    {
+                        total += throughput * light;
+                    }
+                }
+                sampler.begin();
+                let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+                let dir = sample_hg(interior.g, ray.dir, u1, u2);
+                if nee {
+                    bsdf_pdf = hg_pdf(interior.g, ray.dir.dot(dir));
+                }
+                origin = point;
+                ray = Ray { origin: point, dir };
+                if !survives_roulette(opts, segment, &mut throughput, sampler) {
+                    break;
+                }
+                continue;
+            }
+            Event::Surface(hit) => hit,
         };
         let material = &scene.materials[hit.material as usize];
         let light = scene.light_of(hit.primitive);
@@ -64,7 +158,7 @@ pub fn radiance(
             let u0 = sampler.next_f32();
             sampler.begin();
             let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
-            if let Some((weight, light)) = direct_light(scene, material, &hit, u0, u1, u2) {
+            if let Some((weight, light)) = direct_light(scene, material, &hit, medium, u0, u1, u2) {
                 total += throughput * weight * light;
             }
         }
@@ -76,18 +170,36 @@ pub fn radiance(
         if light_sampled {
             bsdf_pdf = material.bsdf(&hit, dir).map_or(0.0, |(_, pdf)| pdf);
         }
+        if material.interior().is_some() && dir.dot(hit.normal) < 0.0 {
+            medium = entered(&hit); // refracted through a surface filled with a medium
+        }
         origin = hit.point;
         ray = spawn(&hit, dir);
-        if opts.roulette_depth > 0 && segment + 1 >= opts.roulette_depth {
-            let survival = throughput.max_element().min(MAX_SURVIVAL);
-            sampler.begin();
-            if !(sampler.next_f32() < survival) {
-                break;
-            }
-            throughput /= survival;
+        if !survives_roulette(opts, segment, &mut throughput, sampler) {
+            break;
         }
     }
     total
+}
+
+/// Russian roulette after `segment` (from `opts.roulette_depth` on): whether the path goes on,
+/// its throughput divided by the chance that it would. Random numbers: 1 when it plays.
+#[inline]
+fn survives_roulette(
+    opts: &RenderOptions,
+    segment: u32,
+    throughput: &mut Vec3,
+    sampler: &mut Sampler,
+) -> bool {
+    if opts.roulette_depth > 0 && segment + 1 >= opts.roulette_depth {
+        let survival = throughput.max_element().min(MAX_SURVIVAL);
+        sampler.begin();
+        if !(sampler.next_f32() < survival) {
+            return false;
+        }
+        *throughput /= survival;
+    }
+    true
 }
 
 /// One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
@@ -98,6 +210,7 @@ fn direct_light(
     scene: &FlatScene,
     material: &Material,
     hit: &Hit,
+    medium: u32,
     u0: f32,
     u1: f32,
     u2: f32,
@@ -106,23 +219,70 @@ fn direct_light(
     let sample = lights::sample(&scene.lights[index], hit.point, u1, u2)?;
     let (weight, bsdf_pdf) = material.bsdf(hit, sample.dir)?;
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
-    // light is not missed by the width of the offset. Whatever it hits first must be that light.
-    let origin = leave(hit, hit.normal);
-    let to_light = sample.point - origin;
-    if !(to_light.length_squared() > 0.0) {
-        return None;
-    }
-    let shadow_ray = Ray {
-        origin,
-        dir: to_light.normalize(),
-    };
-    let shadow = intersect(scene, &shadow_ray)?;
-    if scene.light_of(shadow.primitive) != index as u32 + 1 {
-        return None;
-    }
-    let le = scene.materials[shadow.material as usize].emitted(&shadow);
+    // light is not missed by the width of the offset.
+    let le = light_arriving(scene, leave(hit, hit.normal), sample.point, index, medium)?;
     Some((
         weight,
         le * lights::light_sample_factor(sample.pdf, bsdf_pdf),
     ))
+}
+
+/// One light sample at a scattering event at `point` in `medium`, for a ray that travelled
+/// along `dir`: the light arriving times the MIS weight and the phase function over the light
+/// pdf (the phase function is its own pdf, so its weight is 1).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn medium_direct_light(
+    scene: &FlatScene,
+    point: Vec3,
+    dir: Vec3,
+    g: f32,
+    medium: u32,
+    u0: f32,
+    u1: f32,
+    u2: f32,
+) -> Option<Vec3> {
+    let index = lights::pick_light(scene, u0);
+    let sample = lights::sample(&scene.lights[index], point, u1, u2)?;
+    let phase_pdf = hg_pdf(g, dir.dot(sample.dir));
+    let le = light_arriving(scene, point, sample.point, index, medium)?;
+    Some(le * lights::light_sample_factor(sample.pdf, phase_pdf))
+}
+
+/// The radiance light `index` sends from `target` to `from`, where the shadow ray starts in
+/// `medium`: what it emits there times the transmittance of the media on the way, stepping
+/// through invisible medium boundaries. `None` when anything else is hit first.
+#[inline]
+pub fn light_arriving(
+    scene: &FlatScene,
+    from: Vec3,
+    target: Vec3,
+    index: usize,
+    mut medium: u32,
+) -> Option<Vec3> {
+    let to_light = target - from;
+    if !(to_light.length_squared() > 0.0) {
+        return None;
+    }
+    let mut ray = Ray {
+        origin: from,
+        dir: to_light.normalize(),
+    };
+    let mut transmitted = 1.0;
+    for _ in 0..=scene.medium_crossings {
+        let hit = intersect(scene, &ray)?;
+        if let Some(interior) = scene.medium(medium) {
+            transmitted *= transmittance(interior.density, hit.t);
+        }
+        if scene.light_of(hit.primitive) == index as u32 + 1 {
+            let le = scene.materials[hit.material as usize].emitted(&hit);
+            return Some(le * transmitted);
+        }
+        if !scene.materials[hit.material as usize].is_invisible() {
+            return None;
+        }
+        medium = entered(&hit);
+        ray = spawn(&hit, ray.dir);
+    }
+    None
 }

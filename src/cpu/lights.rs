@@ -2,6 +2,7 @@
 //! proportion to its power, then a direction toward it, and the solid-angle pdf of both, which
 //! multiple importance sampling also needs for directions BSDF sampling found.
 
+pub use super::sampling::basis;
 use super::shapes::{Ray, hit_sphere};
 use crate::scene::flat::{FlatScene, Light, LightShape, Sphere};
 use glam::Vec3;
@@ -19,19 +20,6 @@ pub fn pick_light(scene: &FlatScene, u: f32) -> usize {
         .iter()
         .position(|l| u < l.cdf)
         .unwrap_or(last)
-}
-
-/// Two unit vectors completing unit `n` to an orthonormal basis (Duff et al., "Building an
-/// Orthonormal Basis, Revisited", 2017): no branch on a threshold, stable at every direction.
-#[inline]
-pub fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
 }
 
 /// The cone a sphere subtends from `x`: its unit axis and 1 - cos(half angle), or `None`

@@ -6,6 +6,7 @@ pub mod background;
 pub mod camera;
 pub mod integrator;
 pub mod lights;
+pub mod medium;
 pub mod sampling;
 pub mod shapes;
 

@@ -40,6 +40,13 @@ impl WgslType for [f32; 3] {
     }
 }
 
+impl WgslType for [u32; 3] {
+    const WGSL: &'static str = "vec3u";
+    fn literal(&self) -> String {
+        format!("vec3u({}u, {}u, {}u)", self[0], self[1], self[2])
+    }
+}
+
 impl WgslType for [u32; 2] {
     const WGSL: &'static str = "vec2u";
     fn literal(&self) -> String {
@@ -177,6 +184,11 @@ gpu_struct! {
         kind: u32,
         emission: [f32; 3],
         param: f32,
+        /// The medium inside the object (see `material::Medium`); density 0: none.
+        medium_albedo: [f32; 3],
+        medium_density: f32,
+        medium_g: f32,
+        _pad: [u32; 3],
     }
 }
 

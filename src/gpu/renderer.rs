@@ -19,8 +19,9 @@ use wgpu::util::DeviceExt;
 /// one pass over each primitive list (none when the scene is inlined as straight-line code),
 /// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
-/// With NEE, a segment also scans the light list and traces a shadow ray. (The samplers have
-/// no loops.)
+/// With NEE, a segment also scans the light list and traces a shadow ray. With media, a segment
+/// and a shadow ray each trace up to 1 + `medium_crossings` rays (through invisible
+/// boundaries). (The samplers have no loops.)
 fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> LoopCost {
     let max_depth = opts.max_depth;
     let primitives = if features.inline_scene {
@@ -28,10 +29,16 @@ fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> Lo
     } else {
         scene.spheres.len() as u64 + scene.quads.len() as u64
     };
-    let per_segment = if features.nee {
-        6 + 2 * primitives + scene.lights.len() as u64
+    let rays_per_trace = if features.has("MEDIA") {
+        2 + scene.medium_crossings as u64
     } else {
-        3 + primitives
+        1
+    };
+    let trace = rays_per_trace * (1 + primitives);
+    let per_segment = if features.nee {
+        5 + 2 * trace + scene.lights.len() as u64
+    } else {
+        2 + trace
     };
     LoopCost {
         per_sample: 2 + (max_depth as u64 + 1) * per_segment,

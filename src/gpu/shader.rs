@@ -15,6 +15,7 @@ const MODULES: &[(&str, &str)] = &[
     ("rng.wgsl", include_str!("../../shaders/rng.wgsl")),
     ("sampler.wgsl", include_str!("../../shaders/sampler.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
+    ("medium.wgsl", include_str!("../../shaders/medium.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     (
         "intersect.wgsl",
@@ -132,10 +133,10 @@ impl Features {
     }
 
     /// These features for rendering `scene` with `integrator`. Without lights, or without
-    /// surfaces to take light samples at, nee computes exactly what naive does, so the kernel
-    /// leaves it out.
+    /// surfaces or media to take light samples at, nee computes exactly what naive does, so
+    /// the kernel leaves it out.
     pub fn with_integrator(self, scene: &FlatScene, integrator: Integrator) -> Self {
-        let samples_lights = self.kinds().any(|k| k.samples_lights);
+        let samples_lights = self.kinds().any(|k| k.samples_lights) || self.has("MEDIA");
         Features {
             nee: integrator == Integrator::Nee && !scene.lights.is_empty() && samples_lights,
             ..self
@@ -206,6 +207,11 @@ impl Features {
         Ok(())
     }
 
+    /// Whether switch `name` is on (false for a name that is not one).
+    pub fn has(&self, name: &str) -> bool {
+        self.enabled(name) == Ok(true)
+    }
+
     fn enabled(&self, name: &str) -> Result<bool, String> {
         self.flags()
             .iter()
@@ -236,6 +242,11 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         on.join(" ")
     );
     out.push_str(&crate::gpu::layout::wgsl_shared());
+    out.push_str(&format!(
+        "const MEDIUM_CROSSINGS: u32 = {}u;\nconst F32_MAX: f32 = {};\n",
+        scene.medium_crossings,
+        float_literal(f32::MAX)
+    ));
     if features.uniform_scene {
         out.push_str(&format!(
             "const SCENE_CAPACITY: u32 = {}u;\n",

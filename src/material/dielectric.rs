@@ -1,7 +1,8 @@
 //! Smooth glass (twin: `shaders/materials/dielectric.wgsl`): exact unpolarised Fresnel,
-//! refraction by Snell's law, total internal reflection. Random numbers per scatter: 1.
+//! refraction by Snell's law, total internal reflection. Random numbers per scatter: 1. With a
+//! `medium`, the glass is filled with it: subsurface scattering by a volumetric random walk.
 
-use super::{MaterialModel, reflect};
+use super::{MaterialModel, Medium, reflect};
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
 use crate::sampler::Sampler;
@@ -9,22 +10,46 @@ use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-/// `{ type = "dielectric", ior = 1.5 }`: the index of refraction inside, relative to outside.
+/// `{ type = "dielectric", ior = 1.5 }`: the index of refraction inside, relative to outside;
+/// optionally `medium = { density = 0.05, albedo = [0.9, 0.6, 0.3], g = 0.5 }` inside.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Dielectric {
     #[serde(with = "checked::number")]
     pub ior: f32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub medium: Option<Medium>,
+}
+
+impl Dielectric {
+    /// Clear glass.
+    pub fn clear(ior: f32) -> Self {
+        Dielectric { ior, medium: None }
+    }
 }
 
 impl MaterialModel for Dielectric {
     const FEATURE: &'static str = "DIELECTRIC";
+    /// Glass filled with a medium.
+    const EXTRA_FEATURES: &'static [&'static str] = &["MEDIA"];
 
     fn validate(&self) -> Result<(), String> {
         if !(self.ior > 0.0) {
             return Err(format!("ior must be > 0, got {}", self.ior));
         }
-        Ok(())
+        self.medium.as_ref().map_or(Ok(()), Medium::check)
+    }
+
+    fn extra_features(&self) -> &'static [&'static str] {
+        if self.medium.is_some() {
+            Self::EXTRA_FEATURES
+        } else {
+            &[]
+        }
+    }
+
+    fn interior(&self) -> Option<&Medium> {
+        self.medium.as_ref()
     }
 
     fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
@@ -44,13 +69,14 @@ impl MaterialModel for Dielectric {
         Some((Vec3::ONE, dir.normalize()))
     }
 
-    /// param: ior.
+    /// param: ior; medium_*: the medium inside, if any.
     fn gpu(&self) -> GpuMaterial {
-        GpuMaterial {
+        let glass = GpuMaterial {
             albedo: [1.0; 3],
             param: self.ior,
             ..Default::default()
-        }
+        };
+        Medium::pack(self.medium.as_ref(), glass)
     }
 }
 

@@ -26,6 +26,9 @@ pub trait MaterialModel {
     /// Whether next-event estimation samples lights at it: its BSDF is neither a delta (a light
     /// sample never picks a mirror's direction) nor absent. Its twin then has `<name>_bsdf`.
     const SAMPLES_LIGHTS: bool = false;
+    /// Whether its surface is invisible: rays pass it unchanged (it only bounds a medium), and
+    /// neither a path segment nor a shadow ray ends there.
+    const INVISIBLE: bool = false;
 
     /// Its parameter ranges; the message names the parameter.
     fn validate(&self) -> Result<(), String> {
@@ -34,6 +37,10 @@ pub trait MaterialModel {
     /// The [`Self::EXTRA_FEATURES`] this instance needs.
     fn extra_features(&self) -> &'static [&'static str] {
         &[]
+    }
+    /// The medium filling the object it is the surface of, if any.
+    fn interior(&self) -> Option<&Medium> {
+        None
     }
     /// Radiance leaving the surface toward the ray.
     fn emitted(&self, _hit: &Hit) -> Vec3 {
@@ -68,6 +75,7 @@ pub struct MaterialKind {
     pub extra_features: &'static [&'static str],
     pub emits_under: Option<&'static str>,
     pub samples_lights: bool,
+    pub invisible: bool,
     /// The WGSL twin.
     pub wgsl: &'static str,
 }
@@ -96,6 +104,7 @@ macro_rules! registry {
             extra_features: <$ty as MaterialModel>::EXTRA_FEATURES,
             emits_under: <$ty as MaterialModel>::EMITS_UNDER,
             samples_lights: <$ty as MaterialModel>::SAMPLES_LIGHTS,
+            invisible: <$ty as MaterialModel>::INVISIBLE,
             wgsl: include_str!(concat!("../../shaders/materials/", stringify!($module), ".wgsl")),
         },)+];
 
@@ -107,6 +116,15 @@ macro_rules! registry {
             }
             pub fn samples_lights(&self) -> bool {
                 self.kind().samples_lights
+            }
+            /// Whether rays pass its surface unchanged (see [`MaterialModel::INVISIBLE`]).
+            #[inline]
+            pub fn is_invisible(&self) -> bool {
+                self.kind().invisible
+            }
+            #[inline]
+            pub fn interior(&self) -> Option<&Medium> {
+                match self { $(Material::$ty(m) => m.interior(),)+ }
             }
             pub fn validate(&self) -> Result<(), String> {
                 match self { $(Material::$ty(m) => m.validate(),)+ }
@@ -142,6 +160,7 @@ registry! {
     metal::Metal,
     dielectric::Dielectric,
     light::Light,
+    medium::Medium,
 }
 
 impl Material {

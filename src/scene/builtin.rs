@@ -15,6 +15,14 @@ pub const BUILTINS: &[(&str, &str)] = &[
         "the Cornell box and its light with nothing inside",
     ),
     (
+        "cornell-smoke",
+        "the Cornell box with its boxes made of smoke: one absorbing, one scattering",
+    ),
+    (
+        "cornell-sss",
+        "the Cornell box with a jade sphere: glass filled with a scattering medium",
+    ),
+    (
         "spheres",
         "three spheres (diffuse, glass, metal) on a large ground sphere under a sky",
     ),
@@ -29,6 +37,8 @@ pub fn source(name: &str) -> Option<&'static str> {
     match name {
         "cornell" => Some(include_str!("../../scenes/cornell.toml")),
         "cornell-empty" => Some(include_str!("../../scenes/cornell-empty.toml")),
+        "cornell-smoke" => Some(include_str!("../../scenes/cornell-smoke.toml")),
+        "cornell-sss" => Some(include_str!("../../scenes/cornell-sss.toml")),
         "spheres" => Some(include_str!("../../scenes/spheres.toml")),
         "showcase" => Some(include_str!("../../scenes/showcase.toml")),
         _ => None,

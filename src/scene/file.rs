@@ -516,8 +516,10 @@ impl SceneDoc {
         }
 
         let mut objects = Vec::new();
+        let mut object_spans = Vec::new();
         for spanned in self.objects {
             let span = Some(spanned.span());
+            object_spans.push(span.clone());
             let o = spanned.into_inner();
             let mut shapes = Vec::new();
             if let Some(s) = o.sphere {
@@ -602,6 +604,8 @@ impl SceneDoc {
             objects,
             defaults,
         };
+        // Media problems point at the object they are found at.
+        super::media::check(&scene).map_err(|(i, e)| (object_spans[i].clone(), e))?;
         scene
             .validate()
             .map_err(|e: SceneError| (None, e.to_string()))?;

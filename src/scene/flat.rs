@@ -136,6 +136,12 @@ pub struct FlatScene {
     pub quads: Vec<Quad>,
     /// Every emitting sphere and quad, for next-event estimation (see [`Light`]).
     pub lights: Vec<Light>,
+    /// Most invisible medium boundaries a ray steps through between two events: a straight
+    /// line crosses a convex surface at most twice, so twice the invisible spheres plus the
+    /// invisible quads (six per box, of which a line crosses two) plus 2 for rays grazing a
+    /// box's edge, where both faces may count; 0 without them. A path or shadow ray that would
+    /// need more ends (only a numerically degenerate one can). It bounds the kernel's loops.
+    pub medium_crossings: u32,
 }
 
 /// An emitting primitive as light sampling sees it, picked in proportion to its power.
@@ -223,8 +229,10 @@ impl FlatScene {
             spheres,
             quads,
             lights: Vec::new(),
+            medium_crossings: 0,
         };
         flat.collect_lights();
+        flat.medium_crossings = flat.count_medium_crossings();
         Ok(flat)
     }
 
@@ -233,6 +241,35 @@ impl FlatScene {
         (0..self.spheres.len() as u32)
             .map(PrimitiveRef::Sphere)
             .chain((0..self.quads.len() as u32).map(PrimitiveRef::Quad))
+    }
+
+    fn count_medium_crossings(&self) -> u32 {
+        let invisible = |m: u32| self.materials[m as usize].is_invisible() as u32;
+        let bounds = 2 * self
+            .spheres
+            .iter()
+            .map(|s| invisible(s.material))
+            .sum::<u32>()
+            + self
+                .quads
+                .iter()
+                .map(|q| invisible(q.material))
+                .sum::<u32>();
+        if bounds == 0 { 0 } else { bounds + 2 }
+    }
+
+    /// Whether some primitive's material holds a medium.
+    pub fn has_media(&self) -> bool {
+        self.materials.iter().any(|m| m.interior().is_some())
+    }
+
+    /// The medium inside material `medium` - 1 (as the path loops track it; 0: none).
+    #[inline]
+    pub fn medium(&self, medium: u32) -> Option<&crate::material::Medium> {
+        match medium {
+            0 => None,
+            m => self.materials[m as usize - 1].interior(),
+        }
     }
 
     /// 1 + the index in `lights` of primitive `p`, or 0 when it does not emit.

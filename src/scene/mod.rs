@@ -6,6 +6,7 @@
 pub mod builtin;
 pub mod file;
 pub mod flat;
+pub mod media;
 
 use glam::Vec3;
 
@@ -187,7 +188,7 @@ impl Scene {
                 )));
             }
         }
-        Ok(())
+        media::check(self).map_err(|(i, e)| SceneError::Invalid(format!("object {i}: {e}")))
     }
 }
 

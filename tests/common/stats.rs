@@ -114,3 +114,26 @@ pub fn compare(a: &Film, b: &Film) -> Verdict {
     }
     verdict
 }
+
+/// Pearson's chi-square of `observed` counts against `expected` probabilities over
+/// `samples` draws, cells expected below 5 pooled into one: (chi2, cells, p-value).
+pub fn chi_square(expected: &[f64], observed: &[f64], samples: f64) -> (f64, usize, f64) {
+    use statrs::distribution::ChiSquared;
+    let (mut chi2, mut cells, mut pooled_e, mut pooled_o) = (0.0, 0usize, 0.0, 0.0);
+    for (e, o) in expected.iter().zip(observed) {
+        let e = e * samples;
+        if e < 5.0 {
+            pooled_e += e;
+            pooled_o += o;
+        } else {
+            chi2 += (o - e).powi(2) / e;
+            cells += 1;
+        }
+    }
+    if pooled_e > 0.0 {
+        chi2 += (pooled_o - pooled_e).powi(2) / pooled_e.max(5.0);
+        cells += 1;
+    }
+    let p = ChiSquared::new((cells - 1) as f64).expect("dof").sf(chi2);
+    (chi2, cells, p)
+}
