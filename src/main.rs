@@ -32,8 +32,9 @@ impl From<BackendArg> for Backend {
 enum IntegratorArg {
     /// Paths find light only by hitting it (the original project's estimator).
     Naive,
-    /// Next-event estimation: each diffuse hit also samples a light with a shadow ray, combined
-    /// with BSDF sampling by multiple importance sampling (power heuristic).
+    /// Next-event estimation: each diffuse hit and each scattering event in a medium also
+    /// samples a light with a shadow ray, combined with BSDF (or phase function) sampling by
+    /// multiple importance sampling (power heuristic).
     Nee,
 }
 

@@ -50,8 +50,9 @@ impl RenderOptions {
 pub enum Integrator {
     /// Paths find light only by hitting it (the original project's estimator).
     Naive,
-    /// Next-event estimation: each diffuse hit also samples a light with a shadow ray, combined
-    /// with BSDF sampling by multiple importance sampling (power heuristic).
+    /// Next-event estimation: each diffuse hit and each scattering event in a medium also
+    /// samples a light with a shadow ray, combined with BSDF (or phase function) sampling by
+    /// multiple importance sampling (power heuristic).
     #[default]
     Nee,
 }

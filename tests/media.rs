@@ -495,3 +495,56 @@ fn media_scene_checks() {
         );
     }
 }
+
+/// The kernel leaves media out of scenes without them; scenes with media get them, and with
+/// nee a medium alone (no diffuse surface) is reason enough to sample lights.
+#[test]
+fn only_scenes_with_media_get_media_code() {
+    use rt_gpu::gpu::Features;
+    use rt_gpu::gpu::shader::compose;
+    let smoke_in_the_dark = common::scene(
+        Vec3::new(0.0, 0.0, -5.0),
+        Vec3::ZERO,
+        40.0,
+        Background::Constant(Vec3::ZERO),
+        vec![
+            Material::Medium(medium(1.0, 0.8, 0.0)),
+            Material::Light(rt_gpu::material::Light {
+                radiance: Vec3::ONE,
+                two_sided: true,
+            }),
+        ],
+        vec![
+            slab(Vec3::splat(-1.0), Vec3::splat(1.0), 0),
+            common::object(
+                Shape::Sphere {
+                    center: Vec3::new(0.0, 3.0, 0.0),
+                    radius: 0.5,
+                },
+                1,
+            ),
+        ],
+    );
+    for (name, scene, media) in [
+        ("cornell", builtin("cornell").expect("built-in"), false),
+        (
+            "cornell-smoke",
+            builtin("cornell-smoke").expect("built-in"),
+            true,
+        ),
+        (
+            "cornell-sss",
+            builtin("cornell-sss").expect("built-in"),
+            true,
+        ),
+        ("smoke in the dark", smoke_in_the_dark, true),
+    ] {
+        let opts = common::nee_opts(8, 8, 1, 10, 1);
+        let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+        let features = Features::of(&flat).for_render(&flat, &opts);
+        let source = compose(&features, &flat).expect("composes");
+        assert_eq!(features.has("MEDIA"), media, "{name}");
+        assert_eq!(source.contains("fn next_event("), media, "{name}");
+        assert!(features.nee, "{name}: nee left out");
+    }
+}
