@@ -559,16 +559,18 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth,
         integrator: args.integrator.into(),
         sampler: args.sampler.into(),
-        roulette_depth: 0,
+        // As a render of this scene would have it.
+        roulette_depth: rt_gpu::options::default_roulette_depth(flat.has_media()),
     };
     let samples = width as f64 * height as f64 * args.spp as f64;
     say!(
-        "{}: {width}x{height}, {} spp, max depth {}, {} integrator, {} sampler",
+        "{}: {width}x{height}, {} spp, max depth {}, {} integrator, {} sampler, roulette depth {}",
         scene.name,
         args.spp,
         args.max_depth,
         Integrator::from(args.integrator).name(),
-        SamplerKind::from(args.sampler).name()
+        SamplerKind::from(args.sampler).name(),
+        opts.roulette_depth
     )?;
     let mut rates = Vec::new();
     let mut failed = Vec::new();

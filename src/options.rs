@@ -20,7 +20,7 @@ pub struct RenderOptions {
 }
 
 /// Where Russian roulette starts when the user does not say: in scenes with media, random walks
-/// are long (`cornell-sss` scatters a dozen times inside its jade), so paths face roulette from
+/// are long (`cornell-sss`'s jade sphere is 9 free paths across), so paths face roulette from
 /// their fifth segment, as in Mitsuba 3 and pbrt-v4; elsewhere it stays off, so images of
 /// surface-only scenes keep the exact per-sample variance the comparisons rely on.
 pub fn default_roulette_depth(scene_has_media: bool) -> u32 {

@@ -318,9 +318,15 @@ def main():
         print(f"warning: the reference's noise {ref_noise:.3e} is more than a third of an error compared "
               f"({min(compared):.3e}): use a higher --reference-spp")
 
-    # Do the two renderers compute the same image?
-    print(f"mean radiance: mitsuba {mi_image.mean(axis=(0, 1)).round(5)}, rt-gpu {last.mean(axis=(0, 1)).round(5)}, "
-          f"reference {ref.mean(axis=(0, 1)).round(5)}")
+    # Do the two renderers compute the same image? The image means' difference against the
+    # noise of the means (each pixel's error spread over the pixels, as if independent).
+    mi_mean, ref_mean = mi_image.mean(axis=(0, 1)), ref.mean(axis=(0, 1))
+    print(f"mean radiance: mitsuba {mi_mean.round(5)}, rt-gpu {last.mean(axis=(0, 1)).round(5)}, "
+          f"reference {ref_mean.round(5)}")
+    noise = math.sqrt((mi_rmse**2 + ref_noise**2) / pixels)
+    z = np.abs(mi_mean - ref_mean) / noise
+    print(f"mitsuba vs reference, mean radiance per channel: z = {z.round(2)} (noise of a mean {noise:.2e}; "
+          f"|z| < 3 is agreement within noise)")
 
 
 def time_to(rungs, index, target):
