@@ -42,10 +42,10 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     let y = dispatch.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
     let slot = ACCUM_WORDS * (gid.y * dispatch.tile_size.x + gid.x);
-    var mean = bitcast<vec3f>(load3(slot));
-    var count = accum[slot + 3u];
-    var m2 = bitcast<vec3f>(load3(slot + 4u));
-    var invalid = accum[slot + 7u];
+    var mean = bitcast<vec3f>(load3(slot + ACCUM_MEAN));
+    var count = accum[slot + ACCUM_COUNT];
+    var m2 = bitcast<vec3f>(load3(slot + ACCUM_M2));
+    var invalid = accum[slot + ACCUM_INVALID];
     var even_sum = load_fixed(slot + ACCUM_EVEN_SUM);
 //#if SOBOL
     var odd_sum = load_fixed(slot + ACCUM_ODD_SUM);
@@ -76,10 +76,10 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
 //#endif
         count += 1u;
     }
-    store3(slot, bitcast<vec3u>(mean));
-    accum[slot + 3u] = count;
-    store3(slot + 4u, bitcast<vec3u>(m2));
-    accum[slot + 7u] = invalid;
+    store3(slot + ACCUM_MEAN, bitcast<vec3u>(mean));
+    accum[slot + ACCUM_COUNT] = count;
+    store3(slot + ACCUM_M2, bitcast<vec3u>(m2));
+    accum[slot + ACCUM_INVALID] = invalid;
     store_fixed(slot + ACCUM_EVEN_SUM, even_sum);
 //#if SOBOL
     store_fixed(slot + ACCUM_ODD_SUM, odd_sum);

@@ -838,7 +838,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         resume,
         &mut |film, done| {
             if last_checkpoint.elapsed().as_secs_f64() >= checkpoint_every {
-                checkpoints.write(film, meta(done), true)?;
+                checkpoints.write(film, meta(done))?;
                 last_checkpoint = Instant::now();
             }
             Ok(())
@@ -867,8 +867,19 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let film = &rendered.film;
     let spp = film.pixels.first().map_or(0, |p| p.n) as u32;
     let done = range.start + spp;
-    checkpoints.write(film, meta(done), false)?;
-    pending.commit_render(film, &meta(done), args.gamma)?;
+    // The last checkpoint and an .exr output hold the same film file: encoded once (a 512x512
+    // film takes about 0.3 s), written twice.
+    let output_is_film = ImageFormat::from_path(&output)? == ImageFormat::Exr;
+    let encoded = if checkpoints.path.is_some() || output_is_film {
+        Some(film_file::encode(film, Some(&meta(done)))?)
+    } else {
+        None
+    };
+    checkpoints.finish(encoded.as_deref())?;
+    match &encoded {
+        Some(bytes) if output_is_film => pending.commit(bytes)?,
+        _ => pending.commit_render(film, &meta(done), args.gamma)?,
+    }
 
     // This run's samples: a resumed render's earlier ones took no time here.
     let samples = width as f64 * height as f64 * (done - resumed_at) as f64;
@@ -927,25 +938,38 @@ struct CheckpointWriter {
 }
 
 impl CheckpointWriter {
-    /// Writes `film` (in the background if asked) where checkpoints go, if anywhere.
-    fn write(&mut self, film: &Film, meta: FilmMeta, background: bool) -> anyhow::Result<()> {
-        let Some(path) = &self.path else {
+    /// Starts writing `film` where checkpoints go, if anywhere, on a thread of its own (after
+    /// the one before it).
+    fn write(&mut self, film: &Film, meta: FilmMeta) -> anyhow::Result<()> {
+        let Some(path) = self.path.clone() else {
             return Ok(());
         };
-        if let Some(writing) = self.writing.take() {
-            writing
+        self.wait()?;
+        let pending = PendingOutput::claim(&path, &[])?;
+        let film = film.clone();
+        self.writing = Some(std::thread::spawn(move || {
+            pending.commit_film(&film, &meta)
+        }));
+        Ok(())
+    }
+
+    /// Waits for the checkpoint in flight, if any, and reports how its writing went.
+    fn wait(&mut self) -> anyhow::Result<()> {
+        match self.writing.take() {
+            Some(writing) => writing
                 .join()
-                .map_err(|_| anyhow::anyhow!("writing a checkpoint failed unexpectedly"))??;
+                .map_err(|_| anyhow::anyhow!("writing a checkpoint failed unexpectedly"))?,
+            None => Ok(()),
         }
-        let pending = PendingOutput::claim(path, &[])?;
-        if background {
-            let film = film.clone();
-            self.writing = Some(std::thread::spawn(move || {
-                pending.commit_film(&film, &meta)
-            }));
-            Ok(())
-        } else {
-            pending.commit_film(film, &meta)
+    }
+
+    /// Waits for the checkpoint in flight, then writes the last one, `encoded` (a film file's
+    /// bytes; `None` only when there are no checkpoints).
+    fn finish(&mut self, encoded: Option<&[u8]>) -> anyhow::Result<()> {
+        self.wait()?;
+        match (&self.path, encoded) {
+            (Some(path), Some(bytes)) => PendingOutput::claim(path, &[])?.commit(bytes),
+            _ => Ok(()),
         }
     }
 }

@@ -239,7 +239,12 @@ gpu_struct! {
 /// samples taken, M2 and the invalid samples, the exact sums of the even-index and of the
 /// odd-index samples (three words per channel each).
 pub const ACCUM_WORDS: u32 = 26;
-/// Where a pixel's exact sums start among its words.
+/// Where each of a pixel's values starts among its words: the running mean (3 words, f32 bits),
+/// the samples taken, M2 (3 words, f32 bits), the invalid samples, and the exact sums.
+pub const ACCUM_MEAN: u32 = 0;
+pub const ACCUM_COUNT: u32 = 3;
+pub const ACCUM_M2: u32 = 4;
+pub const ACCUM_INVALID: u32 = 7;
 pub const ACCUM_EVEN_SUM: u32 = 8;
 pub const ACCUM_ODD_SUM: u32 = 17;
 pub const ACCUM_BYTES_PER_PIXEL: u64 = ACCUM_WORDS as u64 * 4;
@@ -272,6 +277,10 @@ fn wgsl_constants() -> String {
         ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
         ("ACCUM_WORDS", ACCUM_WORDS.literal()),
         ("TOO_LARGE_BITS", crate::film::TOO_LARGE_BITS.literal()),
+        ("ACCUM_MEAN", ACCUM_MEAN.literal()),
+        ("ACCUM_COUNT", ACCUM_COUNT.literal()),
+        ("ACCUM_M2", ACCUM_M2.literal()),
+        ("ACCUM_INVALID", ACCUM_INVALID.literal()),
         ("ACCUM_EVEN_SUM", ACCUM_EVEN_SUM.literal()),
         ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),

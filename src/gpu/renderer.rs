@@ -3,8 +3,9 @@
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
-    ACCUM_BYTES_PER_PIXEL, ACCUM_EVEN_SUM, ACCUM_ODD_SUM, ACCUM_WORDS, GpuDispatch, GpuFirstBounce,
-    SceneBuffers, WORKGROUP_SIZE, base_params, whole_image_dispatch,
+    ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
+    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, SceneBuffers, WORKGROUP_SIZE, base_params,
+    whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -449,7 +450,7 @@ impl GpuRenderer {
                 0
             };
             for (i, px) in words.chunks_exact(ACCUM_WORDS as usize).enumerate() {
-                let taken = px[3];
+                let taken = px[ACCUM_COUNT as usize];
                 if taken != opts.spp {
                     return Err(GpuError::Runtime(format!(
                         "the device ended the kernel early: a pixel got {taken} of {} samples",
@@ -463,11 +464,12 @@ impl GpuRenderer {
                 *stats = PixelStats {
                     n: opts.spp as u64,
                     sum: std::array::from_fn(|c| even_sum[c] + odd_sum[c]),
-                    m2: DVec3::new(f(px[4]), f(px[5]), f(px[6])).max(DVec3::ZERO),
+                    m2: DVec3::from_array(std::array::from_fn(|c| f(px[ACCUM_M2 as usize + c])))
+                        .max(DVec3::ZERO),
                     odd_n,
                     odd_sum,
                 };
-                film.invalid_samples += px[7] as u64;
+                film.invalid_samples += px[ACCUM_INVALID as usize] as u64;
             }
             y0 += rows;
         }
