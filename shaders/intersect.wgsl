@@ -8,6 +8,7 @@ struct Hit {
     material: u32,
     front_face: bool,   // the ray hit the outward (u x v) side
     primitive: u32,     // packed: kind << PRIMITIVE_INDEX_BITS | index among that kind
+    uv: vec2f,          // surface coordinates, for UV textures (zero without them)
 }
 
 fn primitive_kind(primitive: u32) -> u32 {
@@ -51,6 +52,7 @@ struct Closest {
     primitive: u32,     // packed, as in Hit
     material: u32,
     found: bool,
+    uv: vec2f,          // quad: (a, b), for UV textures
 }
 
 // Where a hit lies: the point put back onto the surface, and a bound on its error.
@@ -96,13 +98,17 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
         (*c).material = q.material;
         (*c).outward = q.normal;
         (*c).plane_offset = q.d;
+//#if UV_CHECKER
+        let along_corner = ray.origin + t * ray.dir - q.q;
+        (*c).uv = vec2f(dot(along_corner, q.alpha_axis), dot(along_corner, q.beta_axis));
+//#endif
     }
 }
 //#endif
 
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false);
+    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0));
 //#if INLINE_SCENE
     // The scene's primitives are constants in this kernel (see inline_scene below).
     inline_scene(ray, &c);
@@ -137,6 +143,14 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
+//#if UV_CHECKER
+    (*hit).uv = c.uv;
+//#if SPHERES
+    if primitive_kind(c.primitive) == KIND_SPHERE {
+        (*hit).uv = sphere_uv((surface.point - c.center) / abs(c.radius));
+    }
+//#endif
+//#endif
     return true;
 }
 

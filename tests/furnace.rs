@@ -97,7 +97,7 @@ fn closed_emitting_sphere_gives_the_geometric_series() {
         70.0,
         Background::Constant(Vec3::splat(100.0)),
         vec![Material::Lambertian(rt_gpu::material::Lambertian {
-            albedo,
+            albedo: albedo.into(),
             emission,
         })],
         vec![common::object(

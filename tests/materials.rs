@@ -18,6 +18,7 @@ fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
         front_face,
         material: 0,
         primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
+        uv: glam::Vec2::ZERO,
     }
 }
 
@@ -59,7 +60,7 @@ fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
     let n = Vec3::Y;
     let dir_in = Vec3::new(1.0, -1.0, 0.0).normalize();
     let mirror = Material::Metal(rt_gpu::material::Metal {
-        albedo: Vec3::new(0.8, 0.6, 0.2),
+        albedo: Vec3::new(0.8, 0.6, 0.2).into(),
         fuzz: 0.0,
     });
     let mut rng = Sampler::independent(1, 2, 3);
@@ -73,7 +74,7 @@ fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
     // the rest leave above it.
     let grazing = Vec3::new(1.0, -0.01, 0.0).normalize();
     let fuzzy = Material::Metal(rt_gpu::material::Metal {
-        albedo: Vec3::ONE,
+        albedo: Vec3::ONE.into(),
         fuzz: 1.0,
     });
     let mut absorbed = 0;

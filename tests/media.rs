@@ -161,7 +161,7 @@ fn an_absorbing_medium_shows_beer_lambert() {
 fn an_albedo_one_medium_in_an_emitting_furnace_is_invisible() {
     let emission = Vec3::new(0.5, 1.0, 2.0);
     let walls = Material::Lambertian(rt_gpu::material::Lambertian {
-        albedo: Vec3::ZERO,
+        albedo: Vec3::ZERO.into(),
         emission,
     });
     for (name, filled) in [
@@ -556,7 +556,7 @@ fn only_scenes_with_media_get_media_code() {
 #[test]
 fn smoke_resting_on_a_floor_leaks_nothing() {
     let walls = Material::Lambertian(rt_gpu::material::Lambertian {
-        albedo: Vec3::ZERO,
+        albedo: Vec3::ZERO.into(),
         emission: Vec3::ONE,
     });
     let mut scene = common::scene(

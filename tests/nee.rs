@@ -64,7 +64,7 @@ fn spheres_with_lights() -> Scene {
         &mut scene,
         "ember",
         Material::Lambertian(rt_gpu::material::Lambertian {
-            albedo: Vec3::splat(0.5),
+            albedo: Vec3::splat(0.5).into(),
             emission: Vec3::new(8.0, 2.0, 1.0),
         }),
     );

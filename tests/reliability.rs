@@ -21,7 +21,7 @@ fn with_unused_materials(name: &str, extra: usize) -> rt_gpu::scene::Scene {
     let mut scene = builtin(name).expect("built-in");
     let unused = (0..extra).map(|i| {
         Material::Metal(rt_gpu::material::Metal {
-            albedo: Vec3::splat((i % 7) as f32 / 7.0),
+            albedo: Vec3::splat((i % 7) as f32 / 7.0).into(),
             fuzz: 0.5,
         })
     });

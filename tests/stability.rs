@@ -452,15 +452,15 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     let materials = [
         Material::lambertian(Vec3::ONE),
         Material::Metal(rt_gpu::material::Metal {
-            albedo: Vec3::ONE,
+            albedo: Vec3::ONE.into(),
             fuzz: 0.0,
         }),
         Material::Metal(rt_gpu::material::Metal {
-            albedo: Vec3::ONE,
+            albedo: Vec3::ONE.into(),
             fuzz: 0.5,
         }),
         Material::Metal(rt_gpu::material::Metal {
-            albedo: Vec3::ONE,
+            albedo: Vec3::ONE.into(),
             fuzz: 1.0,
         }),
         Material::Dielectric(rt_gpu::material::Dielectric::clear(1.0)),
@@ -485,6 +485,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                     front_face,
                     material: 0,
                     primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
+                    uv: glam::Vec2::ZERO,
                 };
                 for k in 0..200 {
                     let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 5);
@@ -515,6 +516,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
         front_face: false,
         material: 0,
         primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
+        uv: glam::Vec2::ZERO,
     };
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
@@ -539,7 +541,7 @@ fn closed_furnaces_never_gain_energy() {
     let e = 0.25;
     let depth = 6;
     let white_glow = Material::Lambertian(rt_gpu::material::Lambertian {
-        albedo: Vec3::ONE,
+        albedo: Vec3::ONE.into(),
         emission: Vec3::splat(e),
     });
     let sphere = |center: Vec3, radius: f32, material: u32| {
@@ -561,7 +563,7 @@ fn closed_furnaces_never_gain_energy() {
         vec![
             white_glow,
             Material::Metal(rt_gpu::material::Metal {
-                albedo: Vec3::ONE,
+                albedo: Vec3::ONE.into(),
                 fuzz: 0.3,
             }),
         ],

@@ -9,7 +9,7 @@ fn lambertian_bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {
     // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
     let cos = dot(hit.normal, dir);
     let above = cos > 0.0;
-    return Bsdf(select(vec3f(0.0), m.albedo, above), select(0.0, cos / PI, above));
+    return Bsdf(select(vec3f(0.0), albedo_at(m, hit), above), select(0.0, cos / PI, above));
 }
 
 fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
@@ -18,5 +18,5 @@ fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<functio
     let u2 = sampler_next(sampler);
     let d = hit.normal + unit_vector(u1, u2);
     let len2 = dot(d, d);
-    return Scattered(m.albedo, true, select(hit.normal, d / sqrt(len2), len2 > 1e-12));
+    return Scattered(albedo_at(m, hit), true, select(hit.normal, d / sqrt(len2), len2 > 1e-12));
 }

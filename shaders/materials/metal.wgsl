@@ -9,7 +9,7 @@ fn metal_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sa
     let len2 = dot(fuzzed, fuzzed);
     if len2 > 1e-12 {
         out.dir = fuzzed / sqrt(len2);
-        out.attenuation = m.albedo;
+        out.attenuation = albedo_at(m, hit);
         // Fuzzed below the surface: absorbed.
         out.ok = dot(out.dir, hit.normal) > 0.0;
     }

@@ -9,6 +9,7 @@ pub mod lights;
 pub mod medium;
 pub mod sampling;
 pub mod shapes;
+pub mod texture;
 
 use crate::backend::{RenderBackend, Rendered};
 use crate::film::{Film, PixelStats, is_valid_sample};

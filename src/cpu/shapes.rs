@@ -1,7 +1,7 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
 use crate::scene::flat::{FlatScene, PrimitiveRef, Quad, Sphere};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
@@ -29,6 +29,9 @@ pub struct Hit {
     pub material: u32,
     /// Which primitive was hit.
     pub primitive: PrimitiveRef,
+    /// Surface coordinates, for textures (zero unless the scene's textures need them): a
+    /// sphere's longitude and latitude (`texture::sphere_uv`), a quad's (a, b).
+    pub uv: Vec2,
 }
 
 /// Distance along the ray to `sphere` within (t_min, t_max), if any.
@@ -111,6 +114,21 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         }
     };
     let front_face = ray.dir.dot(outward) < 0.0;
+    let uv = if scene.uv_textures {
+        match primitive {
+            PrimitiveRef::Sphere(i) => {
+                let s = &scene.spheres[i as usize];
+                super::texture::sphere_uv((point - s.center) / s.radius.abs())
+            }
+            PrimitiveRef::Quad(i) => {
+                let q = &scene.quads[i as usize];
+                let d = along_ray - q.q;
+                Vec2::new(d.dot(q.alpha_axis), d.dot(q.beta_axis))
+            }
+        }
+    } else {
+        Vec2::ZERO
+    };
     Some(Hit {
         t: closest,
         point,
@@ -119,6 +137,7 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         front_face,
         material,
         primitive,
+        uv,
     })
 }
 

@@ -188,7 +188,45 @@ gpu_struct! {
         medium_albedo: [f32; 3],
         medium_density: f32,
         medium_g: f32,
-        _pad: [u32; 3],
+        /// The albedo's texture: `TEXTURE_NONE`, `TEXTURE_CHECKER` or `TEXTURE_UV_CHECKER`;
+        /// then `albedo` is its even colour.
+        texture: u32,
+        texture_scale: f32,
+        _pad: u32,
+        texture_odd: [f32; 3],
+        _pad1: u32,
+        /// See `scene::texture::Checker::shift`.
+        texture_shift: [f32; 3],
+        _pad2: u32,
+    }
+}
+
+pub const TEXTURE_NONE: u32 = 0;
+pub const TEXTURE_CHECKER: u32 = 1;
+pub const TEXTURE_UV_CHECKER: u32 = 2;
+
+impl GpuMaterial {
+    /// A material whose albedo is `texture`.
+    pub fn with_albedo(texture: &crate::scene::texture::Texture) -> Self {
+        use crate::scene::texture::Texture;
+        let (texture, checker) = match texture {
+            Texture::Colour(c) => {
+                return GpuMaterial {
+                    albedo: c.to_array(),
+                    ..Default::default()
+                };
+            }
+            Texture::Checker(c) => (TEXTURE_CHECKER, c),
+            Texture::UvChecker(c) => (TEXTURE_UV_CHECKER, c),
+        };
+        GpuMaterial {
+            albedo: checker.even.to_array(),
+            texture,
+            texture_scale: checker.scale,
+            texture_odd: checker.odd.to_array(),
+            texture_shift: checker.shift.to_array(),
+            ..Default::default()
+        }
     }
 }
 
@@ -285,6 +323,8 @@ fn wgsl_constants() -> String {
         ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
         ("KIND_SPHERE", KIND_SPHERE.literal()),
+        ("TEXTURE_CHECKER", TEXTURE_CHECKER.literal()),
+        ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),
         (
             "MAX_SURVIVAL",

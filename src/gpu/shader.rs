@@ -21,6 +21,7 @@ const MODULES: &[(&str, &str)] = &[
         "intersect.wgsl",
         include_str!("../../shaders/intersect.wgsl"),
     ),
+    ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     (
         "materials.wgsl",
         include_str!("../../shaders/materials.wgsl"),
@@ -70,8 +71,8 @@ pub const MAX_INLINE_PRIMITIVES: usize = 64;
 
 /// The largest uniform binding every WebGPU device offers.
 pub const MAX_UNIFORM_BYTES: u64 = 64 * 1024;
-/// The largest scene-array element: a quad.
-pub const LARGEST_ELEMENT_BYTES: u64 = 64;
+/// The largest scene-array element: a material.
+pub const LARGEST_ELEMENT_BYTES: u64 = 96;
 
 impl Features {
     pub fn of(scene: &FlatScene) -> Self {

@@ -40,11 +40,11 @@ impl MaterialModel for Dielectric {
         self.medium.as_ref().map_or(Ok(()), Medium::check)
     }
 
-    fn extra_features(&self) -> &'static [&'static str] {
+    fn extra_features(&self) -> Vec<&'static str> {
         if self.medium.is_some() {
-            Self::EXTRA_FEATURES
+            Self::EXTRA_FEATURES.to_vec()
         } else {
-            &[]
+            Vec::new()
         }
     }
 

@@ -4,6 +4,8 @@
 use super::MaterialModel;
 use crate::cpu::sampling::unit_vector;
 use crate::cpu::shapes::Hit;
+use crate::cpu::texture;
+use crate::scene::texture::Texture;
 use crate::gpu::layout::GpuMaterial;
 use crate::sampler::Sampler;
 use crate::scene::file::checked;
@@ -11,29 +13,36 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 /// `{ type = "lambertian", albedo = [r, g, b], emission = [r, g, b] }`. `emission` (optional,
-/// both faces) makes it glow, as the furnace tests need.
+/// both faces) makes it glow, as the furnace tests need; `albedo` may be a texture.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lambertian {
-    #[serde(with = "checked::albedo")]
-    pub albedo: Vec3,
+    pub albedo: Texture,
     #[serde(default, skip_serializing_if = "checked::is_black", with = "checked::colour")]
     pub emission: Vec3,
 }
 
 impl MaterialModel for Lambertian {
     const FEATURE: &'static str = "LAMBERTIAN";
-    /// Lambertian surfaces with emission.
-    const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE"];
+    /// Lambertian surfaces with emission; textured albedos.
+    const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE", "CHECKER", "UV_CHECKER"];
+
+    fn validate(&self) -> Result<(), String> {
+        self.albedo.validate()
+    }
+
+    fn relocated(self, origin: glam::DVec3) -> Self {
+        Lambertian {
+            albedo: self.albedo.relocated(origin),
+            ..self
+        }
+    }
     const EMITS_UNDER: Option<&'static str> = Some("EMISSIVE");
     const SAMPLES_LIGHTS: bool = true;
 
-    fn extra_features(&self) -> &'static [&'static str] {
-        if self.emission != Vec3::ZERO {
-            Self::EXTRA_FEATURES
-        } else {
-            &[]
-        }
+    fn extra_features(&self) -> Vec<&'static str> {
+        let emissive = (self.emission != Vec3::ZERO).then_some("EMISSIVE");
+        emissive.into_iter().chain(self.albedo.feature()).collect()
     }
 
     fn emitted(&self, _hit: &Hit) -> Vec3 {
@@ -47,7 +56,12 @@ impl MaterialModel for Lambertian {
     fn bsdf(&self, hit: &Hit, dir: Vec3) -> Option<(Vec3, f32)> {
         // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
         let cos = hit.normal.dot(dir);
-        (cos > 0.0).then_some((self.albedo, cos * std::f32::consts::FRAC_1_PI))
+        (cos > 0.0).then(|| {
+            (
+                texture::value(&self.albedo, hit),
+                cos * std::f32::consts::FRAC_1_PI,
+            )
+        })
     }
 
     fn scatter(&self, _dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
@@ -59,15 +73,14 @@ impl MaterialModel for Lambertian {
         } else {
             hit.normal
         };
-        Some((self.albedo, dir))
+        Some((texture::value(&self.albedo, hit), dir))
     }
 
-    /// albedo, emission.
+    /// albedo (and texture_*), emission.
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            albedo: self.albedo.to_array(),
             emission: self.emission.to_array(),
-            ..Default::default()
+            ..GpuMaterial::with_albedo(&self.albedo)
         }
     }
 }

@@ -69,8 +69,8 @@ impl MaterialModel for Medium {
         self.check()
     }
 
-    fn extra_features(&self) -> &'static [&'static str] {
-        Self::EXTRA_FEATURES
+    fn extra_features(&self) -> Vec<&'static str> {
+        Self::EXTRA_FEATURES.to_vec()
     }
 
     fn interior(&self) -> Option<&Medium> {

@@ -4,30 +4,45 @@
 use super::{MaterialModel, reflect};
 use crate::cpu::sampling::unit_vector;
 use crate::cpu::shapes::Hit;
+use crate::cpu::texture;
+use crate::scene::texture::Texture;
 use crate::gpu::layout::GpuMaterial;
 use crate::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-/// `{ type = "metal", albedo = [r, g, b], fuzz = 0.1 }`; `fuzz` in [0, 1], default 0.
+/// `{ type = "metal", albedo = [r, g, b], fuzz = 0.1 }`; `fuzz` in [0, 1], default 0; `albedo`
+/// may be a texture.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Metal {
-    #[serde(with = "checked::albedo")]
-    pub albedo: Vec3,
+    pub albedo: Texture,
     #[serde(default, with = "checked::number")]
     pub fuzz: f32,
 }
 
 impl MaterialModel for Metal {
     const FEATURE: &'static str = "METAL";
+    /// Textured albedos.
+    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER"];
 
     fn validate(&self) -> Result<(), String> {
         if !(0.0..=1.0).contains(&self.fuzz) {
             return Err(format!("fuzz must be in [0, 1], got {}", self.fuzz));
         }
-        Ok(())
+        self.albedo.validate()
+    }
+
+    fn extra_features(&self) -> Vec<&'static str> {
+        self.albedo.feature().into_iter().collect()
+    }
+
+    fn relocated(self, origin: glam::DVec3) -> Self {
+        Metal {
+            albedo: self.albedo.relocated(origin),
+            ..self
+        }
     }
 
     fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
@@ -39,15 +54,14 @@ impl MaterialModel for Metal {
         }
         let dir = fuzzed / len2.sqrt();
         // Fuzzed below the surface: absorbed.
-        (dir.dot(hit.normal) > 0.0).then_some((self.albedo, dir))
+        (dir.dot(hit.normal) > 0.0).then(|| (texture::value(&self.albedo, hit), dir))
     }
 
-    /// albedo; param: fuzz.
+    /// albedo (and texture_*); param: fuzz.
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            albedo: self.albedo.to_array(),
             param: self.fuzz,
-            ..Default::default()
+            ..GpuMaterial::with_albedo(&self.albedo)
         }
     }
 }

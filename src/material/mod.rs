@@ -35,8 +35,16 @@ pub trait MaterialModel {
         Ok(())
     }
     /// The [`Self::EXTRA_FEATURES`] this instance needs.
-    fn extra_features(&self) -> &'static [&'static str] {
-        &[]
+    fn extra_features(&self) -> Vec<&'static str> {
+        Vec::new()
+    }
+    /// This material in a flat scene whose coordinates are relative to `origin` (solid
+    /// textures keep their place in the world).
+    fn relocated(self, _origin: glam::DVec3) -> Self
+    where
+        Self: Sized,
+    {
+        self
     }
     /// The medium filling the object it is the surface of, if any.
     fn interior(&self) -> Option<&Medium> {
@@ -129,8 +137,11 @@ macro_rules! registry {
             pub fn validate(&self) -> Result<(), String> {
                 match self { $(Material::$ty(m) => m.validate(),)+ }
             }
-            pub fn extra_features(&self) -> &'static [&'static str] {
+            pub fn extra_features(&self) -> Vec<&'static str> {
                 match self { $(Material::$ty(m) => m.extra_features(),)+ }
+            }
+            pub fn relocated(self, origin: glam::DVec3) -> Self {
+                match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }
             }
             #[inline]
             pub fn emitted(&self, hit: &Hit) -> Vec3 {
@@ -167,7 +178,7 @@ impl Material {
     /// A diffuse reflector that does not glow.
     pub fn lambertian(albedo: Vec3) -> Self {
         Material::Lambertian(Lambertian {
-            albedo,
+            albedo: albedo.into(),
             emission: Vec3::ZERO,
         })
     }

@@ -142,6 +142,8 @@ pub struct FlatScene {
     /// box's edge, where both faces may count; 0 without them. A path or shadow ray that would
     /// need more ends (only a numerically degenerate one can). It bounds the kernel's loops.
     pub medium_crossings: u32,
+    /// Whether some material's texture needs surface (UV) coordinates: hits compute them.
+    pub uv_textures: bool,
 }
 
 /// An emitting primitive as light sampling sees it, picked in proportion to its power.
@@ -188,7 +190,7 @@ impl FlatScene {
             let slot = &mut renumbered[object.material as usize];
             if *slot == u32::MAX {
                 *slot = materials.len() as u32;
-                materials.push(scene.materials[object.material as usize]);
+                materials.push(scene.materials[object.material as usize].relocated(origin));
             }
             let material = *slot;
             match object.shape {
@@ -230,7 +232,12 @@ impl FlatScene {
             quads,
             lights: Vec::new(),
             medium_crossings: 0,
+            uv_textures: false,
         };
+        flat.uv_textures = flat
+            .materials
+            .iter()
+            .any(|m| m.extra_features().contains(&"UV_CHECKER"));
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
         Ok(flat)

@@ -7,6 +7,7 @@ pub mod builtin;
 pub mod file;
 pub mod flat;
 pub mod media;
+pub mod texture;
 
 use glam::Vec3;
 

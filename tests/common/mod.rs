@@ -85,7 +85,7 @@ pub fn furnace_scene() -> Scene {
         vec![
             Material::lambertian(Vec3::new(0.6, 0.5, 0.4)),
             Material::Metal(rt_gpu::material::Metal {
-                albedo: Vec3::splat(0.9),
+                albedo: Vec3::splat(0.9).into(),
                 fuzz: 0.3,
             }),
         ],

@@ -1,0 +1,155 @@
+//! Textures: what a material's albedo may be besides one colour (evaluated by
+//! `src/cpu/texture.rs`, twin `shaders/texture.wgsl`). Plain data, and with serde its
+//! scene-file syntax: `[r, g, b]`, `{ checker = { scale, even, odd } }` (a solid checker in
+//! space, as in Ray Tracing: The Next Week) or `{ uv_checker = { scale, even, odd } }` (a
+//! checker in the surface's UV coordinates).
+
+use crate::scene::file::checked;
+use glam::{DVec3, Vec3};
+use serde::de::{self, MapAccess, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// An albedo: every value in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Texture {
+    Colour(Vec3),
+    /// Cubes of edge `scale` (scene units) alternating between `even` and `odd` through space.
+    Checker(Checker),
+    /// Squares alternating in UV: `scale` of them across u in [0, 1] and as many across v.
+    UvChecker(Checker),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Checker {
+    #[serde(with = "checked::number")]
+    pub scale: f32,
+    #[serde(with = "checked::albedo")]
+    pub even: Vec3,
+    #[serde(with = "checked::albedo")]
+    pub odd: Vec3,
+    /// Added to (camera-relative) hit points before the solid pattern is looked up: the flat
+    /// scene's origin modulo two cells, so the pattern stays where the world puts it (exact in
+    /// f64, and small enough for f32 whatever the origin). Not part of the syntax.
+    #[serde(skip)]
+    pub shift: Vec3,
+}
+
+impl From<Vec3> for Texture {
+    fn from(c: Vec3) -> Self {
+        Texture::Colour(c)
+    }
+}
+
+/// Largest checker scale accepted (the scene's extent).
+pub const MAX_SCALE: f32 = crate::scene::MAX_EXTENT;
+
+impl Texture {
+    /// Its parameter ranges (the colours are checked as they are read).
+    pub fn validate(&self) -> Result<(), String> {
+        match self {
+            Texture::Colour(_) => Ok(()),
+            Texture::Checker(c) | Texture::UvChecker(c) => {
+                if !(c.scale > 0.0 && c.scale <= MAX_SCALE) {
+                    return Err(format!(
+                        "checker scale must be in (0, {MAX_SCALE:e}], got {}",
+                        c.scale
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The colour where the texture does not vary (else its even colour).
+    pub fn base(&self) -> Vec3 {
+        match self {
+            Texture::Colour(c) => *c,
+            Texture::Checker(c) | Texture::UvChecker(c) => c.even,
+        }
+    }
+
+    /// The kernel feature its evaluation needs, if any.
+    pub fn feature(&self) -> Option<&'static str> {
+        match self {
+            Texture::Colour(_) => None,
+            Texture::Checker(_) => Some("CHECKER"),
+            Texture::UvChecker(_) => Some("UV_CHECKER"),
+        }
+    }
+
+    /// This texture for a flat scene whose coordinates are relative to `origin`.
+    pub fn relocated(self, origin: DVec3) -> Self {
+        match self {
+            Texture::Checker(c) => {
+                let period = 2.0 * c.scale as f64;
+                let shift = DVec3::new(
+                    origin.x.rem_euclid(period),
+                    origin.y.rem_euclid(period),
+                    origin.z.rem_euclid(period),
+                );
+                Texture::Checker(Checker {
+                    shift: shift.as_vec3(),
+                    ..c
+                })
+            }
+            other => other,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Texture {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct TextureVisitor;
+        impl<'de> Visitor<'de> for TextureVisitor {
+            type Value = Texture;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a colour [r, g, b], { checker = { scale, even, odd } } or { uv_checker = { scale, even, odd } }",
+                )
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Texture, A::Error> {
+                checked::albedo::deserialize(de::value::SeqAccessDeserializer::new(seq))
+                    .map(Texture::Colour)
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Texture, A::Error> {
+                let key: String = map.next_key()?.ok_or_else(|| {
+                    de::Error::custom("empty texture: expected checker or uv_checker")
+                })?;
+                let texture = match key.as_str() {
+                    "checker" => Texture::Checker(map.next_value()?),
+                    "uv_checker" => Texture::UvChecker(map.next_value()?),
+                    other => {
+                        return Err(de::Error::unknown_field(other, &["checker", "uv_checker"]));
+                    }
+                };
+                if let Some(extra) = map.next_key::<String>()? {
+                    return Err(de::Error::custom(format!(
+                        "a texture is one of checker or uv_checker, found `{extra}` too"
+                    )));
+                }
+                Ok(texture)
+            }
+        }
+        d.deserialize_any(TextureVisitor)
+    }
+}
+
+impl Serialize for Texture {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        match self {
+            Texture::Colour(c) => checked::albedo::serialize(c, s),
+            Texture::Checker(c) | Texture::UvChecker(c) => {
+                let key = if matches!(self, Texture::Checker(_)) {
+                    "checker"
+                } else {
+                    "uv_checker"
+                };
+                let mut map = s.serialize_map(Some(1))?;
+                map.serialize_entry(key, c)?;
+                map.end()
+            }
+        }
+    }
+}

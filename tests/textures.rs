@@ -1,0 +1,174 @@
+//! Textured albedos: the scene-file syntax and its errors, CPU and GPU images of a textured
+//! scene (Welch z + Sidak, tests/common/stats.rs, family-wise 0.01) with a negative control,
+//! and kernels that leave texture code out of scenes without textures.
+
+mod common;
+
+use common::gpu::{render_gpu, renderer};
+use common::stats::compare;
+use glam::Vec3;
+use rt_gpu::gpu::Tuning;
+use rt_gpu::scene::Scene;
+use rt_gpu::scene::file::{parse, to_toml};
+use rt_gpu::scene::flat::FlatScene;
+
+const TEXTURED: &str = r#"
+[render]
+background = [0.9, 0.9, 1.0]
+
+[camera]
+look_from = [0, 1.5, 4]
+look_at = [0, 0.4, 0]
+vfov = 45
+
+[materials]
+floor = { type = "lambertian", albedo = { uv_checker = { scale = 8, even = [0.9, 0.9, 0.9], odd = [0.2, 0.3, 0.1] } } }
+solid = { type = "lambertian", albedo = { checker = { scale = 0.25, even = [0.8, 0.1, 0.1], odd = [0.9, 0.9, 0.2] } } }
+globe = { type = "lambertian", albedo = { uv_checker = { scale = 6, even = [0.1, 0.2, 0.8], odd = [0.9, 0.9, 0.9] } } }
+brass = { type = "metal", albedo = { checker = { scale = 0.3, even = [0.8, 0.6, 0.2], odd = [0.5, 0.5, 0.5] } }, fuzz = 0.3 }
+
+[[object]]
+quad = { q = [-3, 0, 3], u = [6, 0, 0], v = [0, 0, -6] }
+material = "floor"
+
+[[object]]
+sphere = { center = [-1.1, 0.5, 0], radius = 0.5 }
+material = "solid"
+
+[[object]]
+sphere = { center = [0, 0.5, 0], radius = 0.5 }
+material = "globe"
+
+[[object]]
+box = { min = [0.7, 0, -0.4], max = [1.5, 0.8, 0.4] }
+rotate_y = 20
+material = "brass"
+"#;
+
+fn textured() -> Scene {
+    parse(TEXTURED, "textured.toml", "textured").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The syntax reads and writes back to the same scene; bad textures are one-line errors.
+#[test]
+fn texture_syntax_round_trips_and_errors_are_one_line() {
+    let scene = textured();
+    let again = parse(&to_toml(&scene), "again.toml", "textured").expect("exported scene parses");
+    assert_eq!(scene.materials, again.materials);
+    for (albedo, words) in [
+        (
+            "{ checker = { scale = 0, even = [1, 1, 1], odd = [0, 0, 0] } }",
+            "checker scale must be in (0",
+        ),
+        (
+            "{ checker = { scale = 1, even = [1, 2, 1], odd = [0, 0, 0] } }",
+            "[0, 1]",
+        ),
+        (
+            "{ checker = { scale = 1, even = [1, 1, 1] } }",
+            "missing field `odd`",
+        ),
+        ("{ marble = { scale = 1 } }", "unknown field `marble`"),
+        (
+            "{ checker = { scale = 1, even = [1, 1, 1], odd = [0, 0, 0], size = 2 } }",
+            "unknown field `size`",
+        ),
+        ("\"red\"", "a colour [r, g, b]"),
+    ] {
+        let text = format!(
+            "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\n\n[materials]\nm = {{ type = \"lambertian\", albedo = {albedo} }}\n\n[[object]]\nsphere = {{ center = [0, 0, 0], radius = 1 }}\nmaterial = \"m\"\n"
+        );
+        let error = parse(&text, "m.toml", "m")
+            .map(|_| ())
+            .expect_err(albedo)
+            .to_string();
+        assert!(
+            error.starts_with("m.toml:") && error.contains(words) && !error.contains('\n'),
+            "{albedo}: {error}"
+        );
+    }
+}
+
+/// CPU and GPU render the textured scene alike (solid and UV checkers on spheres, a quad and a
+/// box, lambertian and metal); the same test catches the GPU with one checker colour 3%
+/// brighter.
+#[test]
+fn gpu_textures_match_cpu_textures() {
+    let Some(gpu) = renderer() else { return };
+    let scene = textured();
+    let opts = |seed| common::opts(32, 24, 2000, 6, seed);
+    let cpu = common::render_cpu(&scene, &opts(1));
+    let gpu_film = render_gpu(&gpu, &scene, &opts(2), &Tuning::default());
+    let verdict = compare(&cpu, &gpu_film);
+    eprintln!("cpu vs gpu: {verdict:?}");
+    assert!(verdict.passed(), "CPU and GPU textures differ: {verdict:?}");
+    let brighter = parse(
+        &TEXTURED.replace("odd = [0.2, 0.3, 0.1]", "odd = [0.206, 0.309, 0.103]"),
+        "brighter.toml",
+        "textured",
+    )
+    .expect("parses");
+    let verdict = compare(
+        &cpu,
+        &render_gpu(&gpu, &brighter, &opts(2), &Tuning::default()),
+    );
+    eprintln!("floor's odd squares 3% brighter: {verdict:?}");
+    assert!(!verdict.passed(), "a 3% brighter checker went undetected");
+}
+
+/// Only scenes with textures get texture code, and only the kind they use.
+#[test]
+fn only_textured_scenes_get_texture_code() {
+    use rt_gpu::gpu::Features;
+    use rt_gpu::gpu::shader::compose;
+    let solid_only = TEXTURED.replace("uv_checker", "checker");
+    for (name, scene, solid, uv) in [
+        (
+            "cornell",
+            rt_gpu::scene::builtin::builtin("cornell").expect("built-in"),
+            false,
+            false,
+        ),
+        ("textured", textured(), true, true),
+        (
+            "solid only",
+            parse(&solid_only, "s.toml", "s").expect("parses"),
+            true,
+            false,
+        ),
+    ] {
+        let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+        let features = Features::of(&flat);
+        let source = compose(&features, &flat).expect("composes");
+        assert_eq!(features.has("CHECKER"), solid, "{name}");
+        assert_eq!(features.has("UV_CHECKER"), uv, "{name}");
+        assert_eq!(source.contains("fn parity("), solid || uv, "{name}");
+        assert_eq!(source.contains("fn sphere_uv("), uv, "{name}");
+        assert_eq!(flat.uv_textures, uv, "{name}");
+    }
+}
+
+/// Solid checkers stay put in the world when the flat scene is re-centred on the camera:
+/// moved by a whole number of checker periods (3072 = 6144 x 0.5 = 5120 x 0.6), to where the
+/// flat scene's origin is (3072, 0, -2048), not a multiple of the brass's 0.6-unit period, the
+/// image is the same.
+#[test]
+fn solid_checkers_stay_put_in_the_world() {
+    let near = textured();
+    let mut far = near.clone();
+    let shift = Vec3::new(3072.0, 0.0, -3072.0);
+    far.camera.look_from += shift;
+    far.camera.look_at += shift;
+    for object in &mut far.objects {
+        object.transform.translate += shift;
+    }
+    let opts = common::opts(32, 24, 256, 6, 1);
+    let moved = FlatScene::new(&far, 8, 8).expect("valid").origin;
+    assert_eq!(moved, glam::DVec3::new(3072.0, 0.0, -2048.0));
+    let verdict = compare(
+        &common::render_cpu(&near, &opts),
+        &common::render_cpu(&far, &common::opts(32, 24, 256, 6, 2)),
+    );
+    eprintln!("near vs moved: {verdict:?}");
+    assert!(verdict.passed(), "the pattern moved: {verdict:?}");
+}
