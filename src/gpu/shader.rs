@@ -76,18 +76,20 @@ pub const LARGEST_ELEMENT_BYTES: u64 = 96;
 
 impl Features {
     pub fn of(scene: &FlatScene) -> Self {
-        // Only materials some primitive uses: a scene may define more than it places.
-        let mut materials = 0;
+        // Only materials some primitive uses: a scene may define more than it places. Each
+        // used material once (its features are worked out, not looked up).
+        let mut used = vec![false; scene.materials.len()];
         for m in scene
             .spheres
             .iter()
             .map(|s| s.material)
             .chain(scene.quads.iter().map(|q| q.material))
-            .map(|m| &scene.materials[m as usize])
         {
-            for feature in
-                std::iter::once(m.kind().feature).chain(m.extra_features().iter().copied())
-            {
+            used[m as usize] = true;
+        }
+        let mut materials = 0;
+        for (m, _) in scene.materials.iter().zip(&used).filter(|(_, used)| **used) {
+            for feature in std::iter::once(m.kind().feature).chain(m.extra_features()) {
                 materials |= material_bit(feature);
             }
         }
