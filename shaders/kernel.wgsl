@@ -147,6 +147,22 @@ fn draw_samples(@builtin(global_invocation_id) gid: vec3u) {
     );
 }
 
+// Albedo lookups, for comparing textures with the CPU: each slot holds a point (`point`), a
+// material index (`primitive`) and UV coordinates (`normal.xy`) on input, and that material's
+// albedo there (`dir`) on output.
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
+fn look_up_albedo(@builtin(global_invocation_id) gid: vec3u) {
+    if !in_tile(gid) {
+        return;
+    }
+    let slot = gid.y * dispatch.tile_size.x + gid.x;
+    let s = bounces[slot];
+    var hit: Hit;
+    hit.point = s.point;
+    hit.uv = s.normal.xy;
+    bounces[slot].dir = albedo_at(material_at(s.primitive), hit);
+}
+
 // Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:
 // origin, dir: direction) and its hit on output (dir is kept).
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)

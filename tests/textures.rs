@@ -172,3 +172,90 @@ fn solid_checkers_stay_put_in_the_world() {
     eprintln!("near vs moved: {verdict:?}");
     assert!(verdict.passed(), "the pattern moved: {verdict:?}");
 }
+
+/// The kernel's texture lookups equal the CPU's at known points and UVs (solid and UV
+/// checkers, lambertian and metal): 20 000 random lookups, of which at most 0.1% may differ
+/// (a point within rounding of a cell boundary: GPU division may round differently), and every
+/// GPU value is one of the checker's two colours; against checkers 2% larger, more differ
+/// (negative control).
+#[test]
+fn gpu_texture_lookups_match_the_cpu() {
+    let Some(gpu) = renderer() else { return };
+    let scene = textured();
+    let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+    let textures: Vec<(u32, rt_gpu::scene::texture::Texture)> = flat
+        .materials
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| match m {
+            rt_gpu::scene::Material::Lambertian(l) => Some((i as u32, l.albedo)),
+            rt_gpu::scene::Material::Metal(m) => Some((i as u32, m.albedo)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(textures.len(), 4);
+    let mut rng = rt_gpu::rng::Rng::for_sample(0, 0, 5);
+    let lookups: Vec<(u32, Vec3, glam::Vec2)> = (0..20_000)
+        .map(|k| {
+            let (material, _) = textures[k % textures.len()];
+            let point = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 6.0 - 3.0;
+            (
+                material,
+                point,
+                glam::Vec2::new(rng.next_f32(), rng.next_f32()),
+            )
+        })
+        .collect();
+    let gpu_values = gpu.look_up_albedo(&flat, &lookups).expect("lookups run");
+    let (mut differ, mut differ_from_larger) = (0, 0);
+    for ((material, point, uv), gpu_value) in lookups.iter().zip(gpu_values) {
+        let (_, texture) = textures.iter().find(|(m, _)| m == material).expect("known");
+        let hit = rt_gpu::cpu::shapes::Hit {
+            t: 1.0,
+            point: *point,
+            error: 0.0,
+            normal: Vec3::Y,
+            front_face: true,
+            material: *material,
+            primitive: rt_gpu::scene::flat::PrimitiveRef::Quad(0),
+            uv: *uv,
+        };
+        let cpu_value = rt_gpu::cpu::texture::value(texture, &hit);
+        // Negative control: the same comparison against checkers 2% larger must disagree.
+        let larger = match *texture {
+            rt_gpu::scene::texture::Texture::Checker(c) => {
+                rt_gpu::scene::texture::Texture::Checker(rt_gpu::scene::texture::Checker {
+                    scale: c.scale * 1.02,
+                    ..c
+                })
+            }
+            rt_gpu::scene::texture::Texture::UvChecker(c) => {
+                rt_gpu::scene::texture::Texture::UvChecker(rt_gpu::scene::texture::Checker {
+                    scale: c.scale * 1.02,
+                    ..c
+                })
+            }
+            other => other,
+        };
+        differ_from_larger += (gpu_value != rt_gpu::cpu::texture::value(&larger, &hit)) as usize;
+        let (even, odd) = match texture {
+            rt_gpu::scene::texture::Texture::Checker(c)
+            | rt_gpu::scene::texture::Texture::UvChecker(c) => (c.even, c.odd),
+            rt_gpu::scene::texture::Texture::Colour(c) => (*c, *c),
+        };
+        assert!(
+            gpu_value == even || gpu_value == odd,
+            "{gpu_value} at {point} {uv}"
+        );
+        differ += (gpu_value != cpu_value) as usize;
+    }
+    eprintln!(
+        "{differ} of {} lookups differ ({differ_from_larger} from checkers 2% larger)",
+        lookups.len()
+    );
+    assert!(differ <= lookups.len() / 1000, "{differ} lookups differ");
+    assert!(
+        differ_from_larger > lookups.len() / 1000,
+        "checkers 2% larger went undetected"
+    );
+}

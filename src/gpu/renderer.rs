@@ -508,6 +508,28 @@ impl GpuRenderer {
         self.run_debug(scene, &opts, "trace_rays", slots)
     }
 
+    /// The albedo of material `material` (an index into `scene.materials`) at each
+    /// `(material, point, uv)`, by the kernel's texture lookup (`look_up_albedo` in
+    /// `shaders/kernel.wgsl`).
+    pub fn look_up_albedo(
+        &self,
+        scene: &FlatScene,
+        lookups: &[(u32, glam::Vec3, glam::Vec2)],
+    ) -> Result<Vec<glam::Vec3>, GpuError> {
+        let slots: Vec<GpuFirstBounce> = lookups
+            .iter()
+            .map(|(material, point, uv)| GpuFirstBounce {
+                point: point.to_array(),
+                primitive: *material,
+                normal: [uv.x, uv.y, 0.0],
+                ..Default::default()
+            })
+            .collect();
+        let opts = RenderOptions::new(lookups.len().max(1) as u32, 1, 1, 1);
+        let out = self.run_debug(scene, &opts, "look_up_albedo", slots)?;
+        Ok(out.iter().map(|b| glam::Vec3::from(b.dir)).collect())
+    }
+
     /// The first twelve numbers of sample `opts.first_sample` of every pixel, as bits (see
     /// `draw_samples` in `shaders/kernel.wgsl`), under `opts.sampler` and `opts.seed`.
     pub fn draw_samples(
