@@ -758,6 +758,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     {
         bail!("--time must be a positive number of seconds, got {t}");
     }
+    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
     let opts = RenderOptions {
         width,
         height,
@@ -767,14 +768,9 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
         integrator: args.integrator.into(),
         sampler: args.sampler.into(),
-        roulette_depth: 0,
-    };
-    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
-    let opts = RenderOptions {
         roulette_depth: args
             .roulette_depth
             .unwrap_or(rt_gpu::options::default_roulette_depth(flat.has_media())),
-        ..opts
     };
     let gpu = GpuChoice {
         adapter: args.adapter.clone(),
@@ -869,7 +865,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let done = range.start + spp;
     // The last checkpoint and an .exr output hold the same film file: encoded once (a 512x512
     // film takes about 0.3 s), written twice.
-    let output_is_film = ImageFormat::from_path(&output)? == ImageFormat::Exr;
+    let output_is_film = format == ImageFormat::Exr;
     let encoded = if checkpoints.path.is_some() || output_is_film {
         Some(film_file::encode(film, Some(&meta(done)))?)
     } else {
@@ -878,7 +874,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     checkpoints.finish(encoded.as_deref())?;
     match &encoded {
         Some(bytes) if output_is_film => pending.commit(bytes)?,
-        _ => pending.commit_render(film, &meta(done), args.gamma)?,
+        _ => pending.commit_image(film, args.gamma)?,
     }
 
     // This run's samples: a resumed render's earlier ones took no time here.

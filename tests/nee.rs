@@ -319,7 +319,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
         LightShape::Quad { corner, u, v, .. } => corner + 0.5 * (u + v),
     };
     let axis = (centre - X).normalize();
-    let (t, b) = lights::basis(axis);
+    let (t, b) = rt_gpu::cpu::sampling::basis(axis);
     let c_max = 1.2
         * match light.shape {
             LightShape::Sphere { center, radius } => {

@@ -470,7 +470,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
         Material::Dielectric(rt_gpu::material::Dielectric::clear(10.0)),
     ];
     let normal = Vec3::new(0.3, 0.8, -0.52).normalize();
-    let (t, _) = rt_gpu::cpu::lights::basis(normal);
+    let (t, _) = rt_gpu::cpu::sampling::basis(normal);
     let mut checked = 0;
     for m in &materials {
         for front_face in [true, false] {

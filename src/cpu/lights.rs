@@ -2,7 +2,7 @@
 //! proportion to its power, then a direction toward it, and the solid-angle pdf of both, which
 //! multiple importance sampling also needs for directions BSDF sampling found.
 
-pub use super::sampling::basis;
+use super::sampling::basis;
 use super::shapes::{Ray, hit_sphere};
 use crate::scene::flat::{FlatScene, Light, LightShape, Sphere};
 use glam::Vec3;

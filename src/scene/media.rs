@@ -209,32 +209,25 @@ mod tests {
         assert!(!a.overlaps(&block([2.5, 0.0, 0.0], [1.0, 1.0, 1.0], 45.0), 1e-9));
         // Apart in y.
         assert!(!a.overlaps(&block([0.0, 2.5, 0.0], [1.0, 1.0, 1.0], 30.0), 1e-9));
-        // The Cornell box's two boxes: their bounding boxes overlap, they do not.
-        let tall = block([265.0, 165.0, 295.0], [82.5, 165.0, 82.5], 15.0);
-        let short = block([130.0, 82.5, 65.0], [82.5, 82.5, 82.5], -18.0);
-        let tall = match tall {
-            Region::Block { half, angle, .. } => Region::Block {
-                center: DVec3::new(265.0, 0.0, 295.0)
-                    + rotate(angle, DVec3::new(82.5, 165.0, 82.5)),
-                half,
-                angle,
-            },
-            r => r,
+        // The Cornell box's two boxes, placed as the scene file places them: their bounding
+        // boxes overlap, they do not.
+        let placed = |max: [f32; 3], degrees: f32, translate: [f32; 3]| {
+            Region::of(&Object {
+                shape: Shape::Cuboid {
+                    min: glam::Vec3::ZERO,
+                    max: glam::Vec3::from(max),
+                },
+                material: 0,
+                transform: crate::scene::Transform {
+                    rotate_y_degrees: degrees,
+                    translate: glam::Vec3::from(translate),
+                },
+            })
+            .expect("a box is closed")
         };
-        let short = match short {
-            Region::Block { half, angle, .. } => Region::Block {
-                center: DVec3::new(130.0, 0.0, 65.0) + rotate(angle, DVec3::splat(82.5)),
-                half,
-                angle,
-            },
-            r => r,
-        };
+        let tall = placed([165.0, 330.0, 165.0], 15.0, [265.0, 0.0, 295.0]);
+        let short = placed([165.0, 165.0, 165.0], -18.0, [130.0, 0.0, 65.0]);
         assert!(!tall.overlaps(&short, 1e-6));
-    }
-
-    fn rotate(angle: f64, v: DVec3) -> DVec3 {
-        let (sin, cos) = angle.sin_cos();
-        DVec3::new(cos * v.x + sin * v.z, v.y, -sin * v.x + cos * v.z)
     }
 
     #[test]
