@@ -5,6 +5,10 @@ fn background(dir: vec3f) -> vec3f {
     let t = 0.5 * (dir.y + 1.0);
     return (1.0 - t) * vec3f(1.0) + t * SKY_ZENITH;
 //#else
+//#if ENVIRONMENT
+    return environment_radiance(dir);
+//#else
     return params.background;
+//#endif
 //#endif
 }

@@ -12,6 +12,11 @@ struct Ray {
 // Per dispatch: storage, since lavapipe compiles (and keeps) a kernel variant for every new
 // uniform value it folds (see GpuDispatch in src/gpu/layout.rs).
 @group(0) @binding(7) var<storage, read> dispatch: Dispatch;
+// Every image the scene reads, and the environment's sampling tables (ImageArray in
+// src/gpu/layout.rs).
+//#if IMAGE_TEXTURE || ENVIRONMENT
+@group(0) @binding(8) var<storage, read> images: array<f32>;
+//#endif
 // Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
 //#if UNIFORM_SCENE

@@ -51,20 +51,35 @@ fn next_event(ray: ptr<function, Ray>, medium: ptr<function, u32>, hit: ptr<func
 
 //#if NEE
 //#if MEDIA
-// The radiance light `index` sends from `aim` to `start`, where the shadow ray starts in
-// `medium_in`: its emission times the media's transmittance on the way, through invisible
-// boundaries; zero when anything else is hit first.
-fn light_arriving(start: vec3f, aim: vec3f, index: u32, medium_in: u32) -> vec3f {
-    let to_light = aim - start;
-    if !(dot(to_light, to_light) > 0.0) {
-        return vec3f(0.0);
+// The radiance light `index` sends to `start` along sample `s` (toward its point; the
+// environment along its direction), where the shadow ray starts in `medium_in`: its emission
+// times the media's transmittance on the way, through invisible boundaries; zero when anything
+// else is hit first.
+fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> vec3f {
+    var dir = s.dir;
+//#if ENVIRONMENT
+    let environment = index + 1u == params.light_count;
+//#else
+    let environment = false;
+//#endif
+    if !environment {
+        let to_light = s.point - start;
+        if !(dot(to_light, to_light) > 0.0) {
+            return vec3f(0.0);
+        }
+        dir = normalize(to_light);
     }
-    var ray = Ray(start, normalize(to_light));
+    var ray = Ray(start, dir);
     var medium = medium_in;
     var transmitted = 1.0;
     for (var i = 0u; i <= MEDIUM_CROSSINGS; i++) {
         var hit: Hit;
         if !intersect(ray, &hit) {
+//#if ENVIRONMENT
+            if environment {
+                return environment_radiance(dir) * transmitted;
+            }
+//#endif
             return vec3f(0.0);
         }
         if medium != 0u {
@@ -92,7 +107,7 @@ fn medium_direct_light(point: vec3f, dir: vec3f, g: f32, medium: u32, u0: f32, u
         return vec3f(0.0);
     }
     let phase_pdf = hg_pdf(g, dot(dir, s.dir));
-    return light_arriving(point, s.point, index, medium) * light_sample_factor(s.pdf, phase_pdf);
+    return light_arriving(point, s, index, medium) * light_sample_factor(s.pdf, phase_pdf);
 }
 //#endif
 
@@ -119,8 +134,17 @@ fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -
     // is not missed by the width of the offset); whatever it hits first must be that light.
     let origin = leave(hit, hit.normal);
 //#if MEDIA
-    let le = light_arriving(origin, s.point, index, medium);
+    let le = light_arriving(origin, s, index, medium);
 //#else
+//#if ENVIRONMENT
+    if index + 1u == params.light_count {
+        var blocker: Hit;
+        if intersect(Ray(origin, s.dir), &blocker) {
+            return none;
+        }
+        return DirectLight(b.weight, environment_radiance(s.dir) * light_sample_factor(s.pdf, b.pdf));
+    }
+//#endif
     let to_light = s.point - origin;
     if !(dot(to_light, to_light) > 0.0) {
         return none;
@@ -135,16 +159,29 @@ fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -
 }
 //#endif
 
+// The MIS weight of the background a ray escapes to along dir, chosen by the BSDF with pdf
+// bsdf_pdf (0: not by one that light sampling could match): the environment is the last light.
+fn escaped_weight(bsdf_pdf: f32, dir: vec3f) -> f32 {
+//#if NEE
+//#if ENVIRONMENT
+    if bsdf_pdf > 0.0 {
+        return power_heuristic(bsdf_pdf, light_at(params.light_count - 1u).pick * environment_pdf(dir));
+    }
+//#endif
+//#endif
+    return 1.0;
+}
+
 fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
     var ray = primary;
     var total = vec3f(0.0);
     var throughput = vec3f(1.0);
     var medium = 0u;
-//#if NEE
     // The pdf with which the BSDF (or phase function) chose `ray` from `origin`; 0 when light
-    // sampling could not have chosen it (camera rays, delta BSDFs), so light it finds counts
-    // in full.
+    // sampling could not have chosen it (camera rays, delta BSDFs; always without NEE), so
+    // light it finds counts in full.
     var bsdf_pdf = 0.0;
+//#if NEE
     var origin = ray.origin;
 //#endif
     for (var segment = 0u; segment < params.max_depth; segment++) {
@@ -192,13 +229,13 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
         }
         if event.kind != EVENT_SURFACE {
             if event.kind == EVENT_ESCAPED {
-                total += throughput * background(ray.dir);
+                total += throughput * escaped_weight(bsdf_pdf, ray.dir) * background(ray.dir);
             }
             break;
         }
 //#else
         if !intersect(ray, &hit) {
-            total += throughput * background(ray.dir);
+            total += throughput * escaped_weight(bsdf_pdf, ray.dir) * background(ray.dir);
             break;
         }
 //#endif

@@ -98,7 +98,7 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
         (*c).material = q.material;
         (*c).outward = q.normal;
         (*c).plane_offset = q.d;
-//#if UV_CHECKER
+//#if UV_CHECKER || IMAGE_TEXTURE
         let along_corner = ray.origin + t * ray.dir - q.q;
         (*c).uv = vec2f(dot(along_corner, q.alpha_axis), dot(along_corner, q.beta_axis));
 //#endif
@@ -143,7 +143,7 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
-//#if UV_CHECKER
+//#if UV_CHECKER || IMAGE_TEXTURE
     (*hit).uv = c.uv;
 //#if SPHERES
     if primitive_kind(c.primitive) == KIND_SPHERE {

@@ -163,6 +163,27 @@ fn look_up_albedo(@builtin(global_invocation_id) gid: vec3u) {
     bounces[slot].dir = albedo_at(material_at(s.primitive), hit);
 }
 
+//#if ENVIRONMENT
+// The environment, for comparing it with the CPU: each slot holds a unit direction (`point`)
+// and two uniform numbers (`normal.xy`) on input; on output the radiance from that direction
+// (`point`), its pdf (`primitive`, as bits), the direction sampled with the two numbers
+// (`normal`) and that sample's pdf (`hit`, as bits; 0: none).
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
+fn look_up_environment(@builtin(global_invocation_id) gid: vec3u) {
+    if !in_tile(gid) {
+        return;
+    }
+    let slot = gid.y * dispatch.tile_size.x + gid.x;
+    let s = bounces[slot];
+    let e = environment_sample(s.normal.x, s.normal.y);
+    bounces[slot] = FirstBounce(
+        environment_radiance(s.point), bitcast<u32>(environment_pdf(s.point)),
+        e.dir, bitcast<u32>(e.pdf),
+        vec3f(0.0), 0u,
+    );
+}
+//#endif
+
 // Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:
 // origin, dir: direction) and its hit on output (dir is kept).
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)

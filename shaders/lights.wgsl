@@ -70,6 +70,11 @@ fn quad_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
 
 // Solid-angle pdf of light sampling choosing the direction from x that reaches l at p.
 fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
+//#if ENVIRONMENT
+    if l.kind == KIND_ENVIRONMENT {
+        return l.pick * environment_pdf(dir);
+    }
+//#endif
     if l.kind == KIND_SPHERE {
         let cone = sphere_cone(l.position, l.size, x);
         if cone.w > 0.0 {
@@ -83,12 +88,21 @@ fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
 struct LightSample {
     dir: vec3f,
     pdf: f32,       // 0: no sample
-    point: vec3f,   // where it meets the light: the shadow ray aims here
+    point: vec3f,   // where it meets the light: the shadow ray aims here (not the environment's)
 }
 
 // A unit direction from x toward l and its solid-angle pdf (with the pick probability).
 fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
     var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
+//#if ENVIRONMENT
+    if l.kind == KIND_ENVIRONMENT {
+        let e = environment_sample(u1, u2);
+        out.dir = e.dir;
+        out.pdf = l.pick * e.pdf;
+        out.point = x + e.dir;
+        return out;
+    }
+//#endif
 //#if SPHERES
     if l.kind == KIND_SPHERE {
         let cone = sphere_cone(l.position, l.size, x);

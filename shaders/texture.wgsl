@@ -8,7 +8,7 @@ fn parity(x: f32) -> f32 {
 }
 //#endif
 
-//#if UV_CHECKER
+//#if UV_CHECKER || IMAGE_TEXTURE
 // A sphere's (longitude, latitude) at unit outward direction n (Ray Tracing: The Next Week).
 fn sphere_uv(n: vec3f) -> vec2f {
     let u = (atan2(-n.z, n.x) + PI) / (2.0 * PI);
@@ -17,7 +17,46 @@ fn sphere_uv(n: vec3f) -> vec2f {
 }
 //#endif
 
+//#if IMAGE_TEXTURE || ENVIRONMENT
+// Texel (x, y) of the image of `width` columns whose texels start at `start` in `images`.
+fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
+    let i = start + 3u * (y * width + x);
+    return vec3f(images[i], images[i + 1u], images[i + 2u]);
+}
+
+// Integer-valued i wrapped into 0..n in f32 arithmetic (as the CPU does), then kept in range
+// whatever i was (NaN included): the kernel runs without bounds checks.
+fn wrap(i: f32, n: f32) -> u32 {
+    return min(u32(clamp(i - n * floor(i / n), 0.0, n - 1.0)), u32(n) - 1u);
+}
+
+// An image filtered bilinearly at image coordinates (s across, t down; texel centres at
+// half-integers), wrapping around both edges.
+fn bilinear(start: u32, width: u32, height: u32, s: f32, t: f32) -> vec3f {
+    let w = f32(width);
+    let h = f32(height);
+    let x = s * w - 0.5;
+    let y = t * h - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xa = wrap(x0, w);
+    let xb = wrap(x0 + 1.0, w);
+    let ya = wrap(y0, h);
+    let yb = wrap(y0 + 1.0, h);
+    let top = texel(start, width, xa, ya) * (1.0 - fx) + texel(start, width, xb, ya) * fx;
+    let bottom = texel(start, width, xa, yb) * (1.0 - fx) + texel(start, width, xb, yb) * fx;
+    return top * (1.0 - fy) + bottom * fy;
+}
+//#endif
+
 fn albedo_at(m: Material, hit: Hit) -> vec3f {
+//#if IMAGE_TEXTURE
+    if m.texture == TEXTURE_IMAGE {
+        return bilinear(m.texture_image, u32(m.texture_odd.x), u32(m.texture_odd.y), hit.uv.x, 1.0 - hit.uv.y);
+    }
+//#endif
     var parities = 0.0;
 //#if CHECKER
     if m.texture == TEXTURE_CHECKER {

@@ -98,7 +98,12 @@ fn transmittance_through_slabs_is_exponential() {
             (0.3 * 2.0 + 1.1 * 0.5) / dir.z
         }),
     ] {
-        let arriving = light_arriving(&flat, from, target, light_index, medium_at_start)
+        let sample = rt_gpu::cpu::lights::LightSample {
+            dir: (target - from).normalize(),
+            pdf: 1.0,
+            point: target,
+        };
+        let arriving = light_arriving(&flat, from, &sample, light_index, medium_at_start)
             .expect("the light is reached through invisible boundaries");
         let expected = radiance * (-optical_depth).exp();
         assert!(

@@ -310,6 +310,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
                 hit_sphere(&s, &ray, 0.0, f32::INFINITY)
             }
             LightShape::Quad { .. } => hit_quad(&quad, &ray, 0.0, f32::INFINITY),
+            LightShape::Environment(_) => unreachable!("tests/environment.rs"),
         };
         t.map(|t| ray.at(t))
     };
@@ -317,6 +318,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
     let centre = match light.shape {
         LightShape::Sphere { center, .. } => center,
         LightShape::Quad { corner, u, v, .. } => corner + 0.5 * (u + v),
+        LightShape::Environment(_) => unreachable!("tests/environment.rs"),
     };
     let axis = (centre - X).normalize();
     let (t, b) = rt_gpu::cpu::sampling::basis(axis);
@@ -329,6 +331,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
                 .iter()
                 .map(|&c| 1.0 - axis.dot((corner + c - X).normalize()) as f64)
                 .fold(0.0, f64::max),
+            LightShape::Environment(_) => unreachable!("tests/environment.rs"),
         };
     let (n_theta, n_phi, sub) = (24usize, 24usize, 24usize);
     let cell_solid_angle = c_max * 2.0 * PI / (n_theta * n_phi) as f64;

@@ -215,7 +215,7 @@ fn bad_files_name_the_file_line_and_problem() {
             "[camera]",
             "[render]\nbackground = \"skyy\"\n[camera]",
             "bad.toml:3:14:",
-            "background must be a colour [r, g, b] or \"sky\", got \"skyy\"",
+            "background must be a colour [r, g, b], \"sky\" or { image = \"file\", strength, rotate_y }, got \"skyy\"",
         ),
         (
             "[camera]",

@@ -242,6 +242,7 @@ fn gpu_texture_lookups_match_the_cpu() {
             rt_gpu::scene::texture::Texture::Checker(c)
             | rt_gpu::scene::texture::Texture::UvChecker(c) => (c.even, c.odd),
             rt_gpu::scene::texture::Texture::Colour(c) => (*c, *c),
+            rt_gpu::scene::texture::Texture::Image(_) => unreachable!("no images here"),
         };
         assert!(
             gpu_value == even || gpu_value == odd,

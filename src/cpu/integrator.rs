@@ -23,7 +23,7 @@ use crate::material::Medium;
 use crate::options::{Integrator, RenderOptions};
 use crate::sampler::Sampler;
 use crate::scene::Material;
-use crate::scene::flat::FlatScene;
+use crate::scene::flat::{FlatScene, LightShape};
 use glam::Vec3;
 
 /// Roulette keeps a path with the probability of its largest throughput component, capped here
@@ -104,7 +104,15 @@ pub fn radiance(
     for segment in 0..opts.max_depth {
         let hit = match next_event(scene, &mut ray, &mut medium, sampler) {
             Event::Escaped => {
-                total += throughput * background(&scene.background, ray.dir);
+                let mut weight = 1.0;
+                if let Some(index) = scene.environment_light()
+                    && nee
+                    && bsdf_pdf > 0.0
+                {
+                    let light_pdf = lights::pdf(&scene.lights[index], origin, origin, ray.dir);
+                    weight = lights::power_heuristic(bsdf_pdf, light_pdf);
+                }
+                total += throughput * weight * background(&scene.background, ray.dir);
                 break;
             }
             Event::Lost => break,
@@ -249,7 +257,7 @@ fn direct_light(
     let (weight, bsdf_pdf) = material.bsdf(hit, sample.dir)?;
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
     // light is not missed by the width of the offset.
-    let le = light_arriving(scene, leave(hit, hit.normal), sample.point, index, medium)?;
+    let le = light_arriving(scene, leave(hit, hit.normal), &sample, index, medium)?;
     Some((
         weight,
         le * lights::light_sample_factor(sample.pdf, bsdf_pdf),
@@ -274,38 +282,52 @@ fn medium_direct_light(
     let index = lights::pick_light(scene, u0);
     let sample = lights::sample(&scene.lights[index], point, u1, u2)?;
     let phase_pdf = hg_pdf(g, dir.dot(sample.dir));
-    let le = light_arriving(scene, point, sample.point, index, medium)?;
+    let le = light_arriving(scene, point, &sample, index, medium)?;
     Some(le * lights::light_sample_factor(sample.pdf, phase_pdf))
 }
 
-/// The radiance light `index` sends from `target` to `from`, where the shadow ray starts in
-/// `medium`: what it emits there times the transmittance of the media on the way, stepping
-/// through invisible medium boundaries. `None` when anything else is hit first.
+/// The radiance light `index` sends to `from` along `sample` (toward its point; the
+/// environment along its direction), where the shadow ray starts in `medium`: what it emits
+/// there times the transmittance of the media on the way, stepping through invisible medium
+/// boundaries. `None` when anything else is hit first.
 #[inline(always)]
 pub fn light_arriving(
     scene: &FlatScene,
     from: Vec3,
-    target: Vec3,
+    sample: &lights::LightSample,
     index: usize,
     mut medium: u32,
 ) -> Option<Vec3> {
-    let to_light = target - from;
-    if !(to_light.length_squared() > 0.0) {
-        return None;
-    }
-    let mut ray = Ray {
-        origin: from,
-        dir: to_light.normalize(),
+    let environment = match scene.lights[index].shape {
+        LightShape::Environment(env) => Some(env),
+        _ => None,
     };
+    let dir = if environment.is_some() {
+        sample.dir
+    } else {
+        let to_light = sample.point - from;
+        if !(to_light.length_squared() > 0.0) {
+            return None;
+        }
+        to_light.normalize()
+    };
+    let mut ray = Ray { origin: from, dir };
+    // What the ray finds where nothing stops it first: the environment, or nothing.
+    let escaped = || environment.map(|env| super::environment::radiance(&env, dir));
     if medium == 0 && scene.medium_crossings == 0 {
         // No medium on the way (the loop below, without its cost).
-        let hit = intersect(scene, &ray)?;
+        let Some(hit) = intersect(scene, &ray) else {
+            return escaped();
+        };
         return (scene.light_of(hit.primitive) == index as u32 + 1)
             .then(|| scene.materials[hit.material as usize].emitted(&hit));
     }
     let mut transmitted = 1.0;
     for _ in 0..=scene.medium_crossings {
-        let hit = intersect(scene, &ray)?;
+        let Some(hit) = intersect(scene, &ray) else {
+            // (Media are closed: a ray that escapes has left every one.)
+            return escaped().map(|le| le * transmitted);
+        };
         if let Some(interior) = scene.medium(medium) {
             transmitted *= transmittance(interior.density, hit.t);
         }

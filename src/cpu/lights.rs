@@ -2,6 +2,7 @@
 //! proportion to its power, then a direction toward it, and the solid-angle pdf of both, which
 //! multiple importance sampling also needs for directions BSDF sampling found.
 
+use super::environment;
 use super::sampling::basis;
 use super::shapes::{Ray, hit_sphere};
 use crate::scene::flat::{FlatScene, Light, LightShape, Sphere};
@@ -63,11 +64,13 @@ pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
         LightShape::Quad {
             normal, inv_area, ..
         } => quad_pdf(light.pick, normal, inv_area, x, p, dir),
+        LightShape::Environment(env) => light.pick * environment::pdf(&env, dir),
     }
 }
 
 /// A sample of a light seen from `x`: a unit direction, its solid-angle pdf (with the pick
-/// probability), and the point on the light it reaches (where the shadow ray aims).
+/// probability), and the point on the light it reaches (where the shadow ray aims; for the
+/// environment, which is at infinity, the shadow ray follows `dir` and `point` is unused).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightSample {
     pub dir: Vec3,
@@ -121,6 +124,15 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
             let dir = to_light / dist2.sqrt();
             let pdf = quad_pdf(light.pick, normal, inv_area, x, point, dir);
             (pdf > 0.0).then_some(LightSample { dir, pdf, point })
+        }
+        LightShape::Environment(env) => {
+            let (dir, pdf) = environment::sample(&env, u1, u2)?;
+            let pdf = light.pick * pdf;
+            (pdf > 0.0).then_some(LightSample {
+                dir,
+                pdf,
+                point: x + dir,
+            })
         }
     }
 }

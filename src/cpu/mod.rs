@@ -4,6 +4,7 @@
 
 pub mod background;
 pub mod camera;
+pub mod environment;
 pub mod integrator;
 pub mod lights;
 pub mod medium;

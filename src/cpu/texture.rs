@@ -1,6 +1,7 @@
 //! Texture lookups (twin: `shaders/texture.wgsl`) and the surface coordinates they use.
 
 use super::shapes::Hit;
+use crate::scene::image::Image;
 use crate::scene::texture::Texture;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -18,7 +19,31 @@ pub fn value(texture: &Texture, hit: &Hit) -> Vec3 {
             let p = hit.uv * c.scale;
             pick(parity(p.x) + parity(p.y), c.even, c.odd)
         }
+        Texture::Image(image) => bilinear(image, hit.uv.x, 1.0 - hit.uv.y),
     }
+}
+
+/// `image` filtered bilinearly at image coordinates (s, t) (s across, t down, [0, 1] spans
+/// the image once; texel centres at half-integers), wrapping around both edges.
+#[inline]
+pub fn bilinear(image: &Image, s: f32, t: f32) -> Vec3 {
+    let (w, h) = (image.width as f32, image.height as f32);
+    let x = s * w - 0.5;
+    let y = t * h - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, x1) = (wrap(x0, w), wrap(x0 + 1.0, w));
+    let (y0, y1) = (wrap(y0, h), wrap(y0 + 1.0, h));
+    let top = image.texel(x0, y0) * (1.0 - fx) + image.texel(x1, y0) * fx;
+    let bottom = image.texel(x0, y1) * (1.0 - fx) + image.texel(x1, y1) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+/// Integer-valued `i` wrapped into 0..n, in f32 arithmetic as the kernel does it (clamped,
+/// for coordinates so large that rounding leaves them outside).
+#[inline]
+fn wrap(i: f32, n: f32) -> u32 {
+    (i - n * (i / n).floor()).clamp(0.0, n - 1.0) as u32
 }
 
 /// floor(x) mod 2, as 0 or 1, in f32 arithmetic (exact below 2^24; no integer conversion,

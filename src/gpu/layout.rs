@@ -3,8 +3,10 @@
 //! `tests/gpu_layout.rs` checks sizes and field offsets against naga's layout of the WGSL.
 
 use crate::options::RenderOptions;
+use crate::scene::Background;
 use crate::scene::flat::{FlatScene, Light, LightShape};
-use crate::scene::{Background, Material};
+use crate::scene::image::Image;
+use crate::scene::texture::Texture;
 use bytemuck::{Pod, Zeroable};
 
 /// A Rust type as a WGSL type, and a value of it as a WGSL literal.
@@ -44,6 +46,14 @@ impl WgslType for [u32; 3] {
     const WGSL: &'static str = "vec3u";
     fn literal(&self) -> String {
         format!("vec3u({}u, {}u, {}u)", self[0], self[1], self[2])
+    }
+}
+
+impl WgslType for [f32; 2] {
+    const WGSL: &'static str = "vec2f";
+    fn literal(&self) -> String {
+        let [x, y] = self.map(float_literal);
+        format!("vec2f({x}, {y})")
     }
 }
 
@@ -188,11 +198,13 @@ gpu_struct! {
         medium_albedo: [f32; 3],
         medium_density: f32,
         medium_g: f32,
-        /// The albedo's texture: `TEXTURE_NONE`, `TEXTURE_CHECKER` or `TEXTURE_UV_CHECKER`;
-        /// then `albedo` is its even colour.
+        /// The albedo's texture: `TEXTURE_NONE`, `TEXTURE_CHECKER`, `TEXTURE_UV_CHECKER`
+        /// (then `albedo` is its even colour) or `TEXTURE_IMAGE` (then `texture_image` is
+        /// where its texels start in the images array, and `texture_odd` holds its width and
+        /// height).
         texture: u32,
         texture_scale: f32,
-        _pad: u32,
+        texture_image: u32,
         texture_odd: [f32; 3],
         _pad1: u32,
         /// See `scene::texture::Checker::shift`.
@@ -204,15 +216,25 @@ gpu_struct! {
 pub const TEXTURE_NONE: u32 = 0;
 pub const TEXTURE_CHECKER: u32 = 1;
 pub const TEXTURE_UV_CHECKER: u32 = 2;
+pub const TEXTURE_IMAGE: u32 = 3;
+/// `GpuLight::kind` of the environment (beside the primitive kinds of spheres and quads).
+pub const KIND_ENVIRONMENT: u32 = 15;
 
 impl GpuMaterial {
     /// A material whose albedo is `texture`.
-    pub fn with_albedo(texture: &crate::scene::texture::Texture) -> Self {
-        use crate::scene::texture::Texture;
+    pub fn with_albedo(texture: &Texture) -> Self {
         let (texture, checker) = match texture {
             Texture::Colour(c) => {
                 return GpuMaterial {
                     albedo: c.to_array(),
+                    ..Default::default()
+                };
+            }
+            Texture::Image(image) => {
+                // `texture_image` is set where the scene's images are laid out (SceneBuffers).
+                return GpuMaterial {
+                    texture: TEXTURE_IMAGE,
+                    texture_odd: [image.width as f32, image.height as f32, 0.0],
                     ..Default::default()
                 };
             }
@@ -252,6 +274,16 @@ gpu_struct! {
         sky: u32,
         /// Russian roulette from this many segments on; 0: off.
         roulette_depth: u32,
+        /// The environment (see `scene::environment`): cos and sin of its rotation about y,
+        environment_rotation: [f32; 2],
+        /// where its texels, its row table and its column tables start in the images array,
+        environment_texels: u32,
+        environment_rows: u32,
+        environment_columns: u32,
+        /// its size and its strength.
+        environment_width: u32,
+        environment_height: u32,
+        environment_strength: f32,
         _pad: [u32; 2],
     }
 }
@@ -325,6 +357,8 @@ fn wgsl_constants() -> String {
         ("KIND_SPHERE", KIND_SPHERE.literal()),
         ("TEXTURE_CHECKER", TEXTURE_CHECKER.literal()),
         ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
+        ("TEXTURE_IMAGE", TEXTURE_IMAGE.literal()),
+        ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),
         (
             "MAX_SURVIVAL",
@@ -412,6 +446,80 @@ pub struct SceneBuffers {
     pub quads: Vec<GpuQuad>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
+    pub images: ImageArray,
+}
+
+/// Every image a scene reads, in one f32 array (the kernel's `images`): each image's texels
+/// (three values each, rows from the top), and after the environment's its sampling tables
+/// (`scene::environment::Distribution`).
+#[derive(Clone, Debug, Default)]
+pub struct ImageArray {
+    pub values: Vec<f32>,
+    /// (image, where its texels start).
+    placed: Vec<(&'static Image, u32)>,
+    /// Where the environment's texels, row table and column tables start.
+    pub environment: Option<[u32; 3]>,
+    /// How many values it holds (at least 1: a binding cannot be empty).
+    len: u64,
+}
+
+impl ImageArray {
+    pub fn new(scene: &FlatScene) -> Self {
+        Self::lay_out(scene, true)
+    }
+
+    /// Where everything goes, without the values.
+    pub fn plan(scene: &FlatScene) -> Self {
+        Self::lay_out(scene, false)
+    }
+
+    fn lay_out(scene: &FlatScene, fill: bool) -> Self {
+        let mut out = ImageArray::default();
+        let mut len = 0u64;
+        let mut place = |out: &mut ImageArray, values: &[f32]| {
+            let at = len as u32;
+            len += values.len() as u64;
+            if fill {
+                out.values.extend(values);
+            }
+            at
+        };
+        for m in &scene.materials {
+            for texture in m.textures() {
+                if let Texture::Image(image) = texture
+                    && !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image))
+                {
+                    let at = place(&mut out, &image.texels);
+                    out.placed.push((image, at));
+                }
+            }
+        }
+        if let Background::Environment(env) = scene.background {
+            let d = env.distribution();
+            let texels = place(&mut out, &env.image.texels);
+            let rows = place(&mut out, &d.rows);
+            let columns = place(&mut out, &d.columns);
+            out.environment = Some([texels, rows, columns]);
+        }
+        out.len = len.max(1);
+        if fill && out.values.is_empty() {
+            out.values.push(0.0);
+        }
+        out
+    }
+
+    /// Where `image`'s texels start (it must have been placed).
+    pub fn texels_of(&self, image: &Image) -> u32 {
+        self.placed
+            .iter()
+            .find(|(i, _)| std::ptr::eq(*i, image))
+            .map_or(0, |(_, at)| *at)
+    }
+
+    /// Its size in bytes.
+    pub fn bytes(&self) -> u64 {
+        self.len * 4
+    }
 }
 
 impl SceneBuffers {
@@ -441,7 +549,20 @@ impl SceneBuffers {
                 edge_tolerance: q.edge_tolerance,
             })
             .collect();
-        let mut materials: Vec<GpuMaterial> = scene.materials.iter().map(Material::gpu).collect();
+        let images = ImageArray::new(scene);
+        let mut materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let mut gpu = m.gpu();
+                for texture in m.textures() {
+                    if let Texture::Image(image) = texture {
+                        gpu.texture_image = images.texels_of(image);
+                    }
+                }
+                gpu
+            })
+            .collect();
         if spheres.is_empty() {
             spheres.push(GpuSphere::default());
         }
@@ -460,6 +581,7 @@ impl SceneBuffers {
             quads,
             materials,
             lights,
+            images,
         }
     }
 }
@@ -492,6 +614,8 @@ fn gpu_light(l: &Light) -> GpuLight {
             out.normal = normal.to_array();
             out.size = inv_area;
         }
+        // Its parameters are the render's (GpuParams::environment_*).
+        LightShape::Environment(_) => out.kind = KIND_ENVIRONMENT,
     }
     out
 }
@@ -502,7 +626,18 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
     let (background, sky) = match scene.background {
         Background::Constant(c) => (c.to_array(), 0),
         Background::Sky => ([0.0; 3], 1),
+        Background::Environment(_) => ([0.0; 3], 0),
     };
+    let mut environment = ([1.0, 0.0], [0; 3], [0; 2], 0.0);
+    if let Background::Environment(env) = scene.background {
+        let slots = ImageArray::plan(scene).environment.unwrap_or_default();
+        environment = (
+            env.rotation,
+            slots,
+            [env.image.width, env.image.height],
+            env.strength,
+        );
+    }
     GpuParams {
         origin: c.origin.to_array(),
         lens_radius: c.lens_radius,
@@ -520,6 +655,13 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         light_count: scene.lights.len() as u32,
         sky,
         roulette_depth: opts.roulette_depth,
+        environment_rotation: environment.0,
+        environment_texels: environment.1[0],
+        environment_rows: environment.1[1],
+        environment_columns: environment.1[2],
+        environment_width: environment.2[0],
+        environment_height: environment.2[1],
+        environment_strength: environment.3,
         _pad: [0; 2],
     }
 }

@@ -36,14 +36,32 @@ fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> Lo
         1
     };
     let trace = rays_per_trace * (1 + primitives);
+    // Sampling the environment: a binary search over its rows and one over a row's columns.
+    let environment = match scene.background {
+        crate::scene::Background::Environment(env) if features.nee => {
+            2 + (env.image.width as u64 + 1).ilog2() as u64
+                + (env.image.height as u64 + 1).ilog2() as u64
+                + 2
+        }
+        _ => 0,
+    };
     let per_segment = if features.nee {
-        5 + 2 * trace + scene.lights.len() as u64
+        5 + 2 * trace + scene.lights.len() as u64 + environment
     } else {
         2 + trace
     };
     LoopCost {
         per_sample: 2 + (max_depth as u64 + 1) * per_segment,
     }
+}
+
+/// What `GpuRenderer::look_up_environment` finds for one direction and two numbers.
+#[derive(Clone, Copy, Debug)]
+pub struct EnvironmentLookup {
+    pub radiance: glam::Vec3,
+    pub pdf: f32,
+    pub sampled: glam::Vec3,
+    pub sampled_pdf: f32,
 }
 
 /// A compiled kernel and the source it was built from.
@@ -122,6 +140,7 @@ impl GpuRenderer {
                 buffer_entry(5, read_write),
                 buffer_entry(6, scene_ty),
                 buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(8, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -177,8 +196,24 @@ impl GpuRenderer {
 
     /// The scene arrays as buffers of the kind `features` asks for: uniform arrays padded to
     /// their fixed capacity, or storage arrays.
-    fn scene_buffers(&self, scene: &FlatScene, features: &Features) -> [wgpu::Buffer; 4] {
+    fn scene_buffers(
+        &self,
+        scene: &FlatScene,
+        features: &Features,
+    ) -> Result<[wgpu::Buffer; 5], GpuError> {
         let mut buffers = SceneBuffers::new(scene);
+        let limit = self
+            .ctx
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.ctx.limits.max_buffer_size);
+        if buffers.images.bytes() > limit {
+            return Err(GpuError::TooLarge(format!(
+                "the scene's images take {} MB, more than this GPU binds at once ({} MB): use smaller textures or environment",
+                buffers.images.bytes() >> 20,
+                limit >> 20
+            )));
+        }
         let usage = if features.uniform_scene {
             let capacity = features.scene_capacity.max(1) as usize;
             buffers.spheres.resize(capacity, Default::default());
@@ -190,19 +225,24 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE
         };
         let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
-        [
+        Ok([
             make("spheres", bytemuck::cast_slice(&buffers.spheres)),
             make("quads", bytemuck::cast_slice(&buffers.quads)),
             make("materials", bytemuck::cast_slice(&buffers.materials)),
             make("lights", bytemuck::cast_slice(&buffers.lights)),
-        ]
+            self.buffer_with(
+                "images",
+                bytemuck::cast_slice(&buffers.images.values),
+                wgpu::BufferUsages::STORAGE,
+            ),
+        ])
     }
 
     fn bind_group(
         &self,
         kernel: &Kernel,
         [params, dispatch]: [&wgpu::Buffer; 2],
-        scene: &[wgpu::Buffer; 4],
+        scene: &[wgpu::Buffer; 5],
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
@@ -226,6 +266,7 @@ impl GpuRenderer {
                     entry(5, debug),
                     entry(6, &scene[3]),
                     entry(7, dispatch),
+                    entry(8, &scene[4]),
                 ],
             })
     }
@@ -314,7 +355,7 @@ impl GpuRenderer {
         };
         let mut sizer = DispatchSizer::new(width, max_tile_pixels, max_slice, *tuning);
         let tile_rows = sizer.max_tile_rows().min(height);
-        let scene_buffers = self.scene_buffers(scene, &kernel.features);
+        let scene_buffers = self.scene_buffers(scene, &kernel.features)?;
         // Per-render params are uniform (lavapipe folds them into the kernel: one variant per
         // render); what changes every dispatch is in storage (folded, each new value compiled
         // and kept a variant: ~1 MB per dispatch).
@@ -530,6 +571,35 @@ impl GpuRenderer {
         Ok(out.iter().map(|b| glam::Vec3::from(b.dir)).collect())
     }
 
+    /// The scene's environment as the kernel sees it (`look_up_environment` in
+    /// `shaders/kernel.wgsl`): for each (unit direction, u1, u2), the radiance from that
+    /// direction and its pdf, and the direction sampled with (u1, u2) and its pdf (0: none).
+    pub fn look_up_environment(
+        &self,
+        scene: &FlatScene,
+        lookups: &[(glam::Vec3, f32, f32)],
+    ) -> Result<Vec<EnvironmentLookup>, GpuError> {
+        let slots: Vec<GpuFirstBounce> = lookups
+            .iter()
+            .map(|(dir, u1, u2)| GpuFirstBounce {
+                point: dir.to_array(),
+                normal: [*u1, *u2, 0.0],
+                ..Default::default()
+            })
+            .collect();
+        let opts = RenderOptions::new(lookups.len().max(1) as u32, 1, 1, 1);
+        let out = self.run_debug(scene, &opts, "look_up_environment", slots)?;
+        Ok(out
+            .iter()
+            .map(|b| EnvironmentLookup {
+                radiance: glam::Vec3::from(b.point),
+                pdf: f32::from_bits(b.primitive),
+                sampled: glam::Vec3::from(b.normal),
+                sampled_pdf: f32::from_bits(b.hit),
+            })
+            .collect())
+    }
+
     /// The first twelve numbers of sample `opts.first_sample` of every pixel, as bits (see
     /// `draw_samples` in `shaders/kernel.wgsl`), under `opts.sampler` and `opts.seed`.
     pub fn draw_samples(
@@ -579,7 +649,7 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE,
         );
         let accum = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
-        let buffers = self.scene_buffers(scene, &kernel.features);
+        let buffers = self.scene_buffers(scene, &kernel.features)?;
         let bind_group = self.bind_group(
             &kernel,
             [&params_buffer, &dispatch_buffer],

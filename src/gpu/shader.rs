@@ -23,6 +23,10 @@ const MODULES: &[(&str, &str)] = &[
     ),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     (
+        "environment.wgsl",
+        include_str!("../../shaders/environment.wgsl"),
+    ),
+    (
         "materials.wgsl",
         include_str!("../../shaders/materials.wgsl"),
     ),
@@ -53,6 +57,8 @@ pub struct Features {
     /// The Sobol sampler (else independent numbers).
     pub sobol: bool,
     pub sky: bool,
+    /// An environment image as the background (and, with nee, a light).
+    pub environment: bool,
     /// The `first_bounce` entry point, for tests.
     pub debug: bool,
     /// Next-event estimation: light sampling with MIS (the nee integrator, in a scene with
@@ -108,6 +114,7 @@ impl Features {
             lens: scene.camera.lens_radius > 0.0,
             sobol: false,
             sky: scene.background == Background::Sky,
+            environment: matches!(scene.background, Background::Environment(_)),
             debug: false,
             nee: false,
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
@@ -121,8 +128,8 @@ impl Features {
     }
 
     /// Everything on, scene arrays in storage buffers: the general kernel any scene can run
-    /// (except `sky`, which replaces the constant background, and `lens`, which changes the
-    /// random-number sequence).
+    /// (except `sky` and `environment`, which replace the constant background, and `lens`,
+    /// which changes the random-number sequence).
     pub fn everything(scene: &FlatScene) -> Self {
         let own = Features::of(scene);
         Features {
@@ -173,6 +180,7 @@ impl Features {
             ("LENS", self.lens),
             ("SOBOL", self.sobol),
             ("SKY", self.sky),
+            ("ENVIRONMENT", self.environment),
             ("DEBUG", self.debug),
             ("NEE", self.nee),
             ("UNIFORM_SCENE", self.uniform_scene),
@@ -189,6 +197,7 @@ impl Features {
             "LENS" => &mut self.lens,
             "SOBOL" => &mut self.sobol,
             "SKY" => &mut self.sky,
+            "ENVIRONMENT" => &mut self.environment,
             "DEBUG" => &mut self.debug,
             "NEE" => &mut self.nee,
             "UNIFORM_SCENE" => &mut self.uniform_scene,

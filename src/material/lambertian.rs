@@ -25,7 +25,7 @@ pub struct Lambertian {
 impl MaterialModel for Lambertian {
     const FEATURE: &'static str = "LAMBERTIAN";
     /// Lambertian surfaces with emission; textured albedos.
-    const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE", "CHECKER", "UV_CHECKER"];
+    const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
 
     fn validate(&self) -> Result<(), String> {
         self.albedo.validate()
@@ -39,6 +39,10 @@ impl MaterialModel for Lambertian {
     }
     const EMITS_UNDER: Option<&'static str> = Some("EMISSIVE");
     const SAMPLES_LIGHTS: bool = true;
+
+    fn textures(&self) -> Vec<Texture> {
+        vec![self.albedo]
+    }
 
     fn extra_features(&self) -> Vec<&'static str> {
         let emissive = (self.emission != Vec3::ZERO).then_some("EMISSIVE");

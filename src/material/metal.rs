@@ -25,13 +25,17 @@ pub struct Metal {
 impl MaterialModel for Metal {
     const FEATURE: &'static str = "METAL";
     /// Textured albedos.
-    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER"];
+    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
 
     fn validate(&self) -> Result<(), String> {
         if !(0.0..=1.0).contains(&self.fuzz) {
             return Err(format!("fuzz must be in [0, 1], got {}", self.fuzz));
         }
         self.albedo.validate()
+    }
+
+    fn textures(&self) -> Vec<Texture> {
+        vec![self.albedo]
     }
 
     fn extra_features(&self) -> Vec<&'static str> {

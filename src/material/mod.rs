@@ -10,6 +10,7 @@
 use crate::cpu::shapes::Hit;
 use crate::gpu::layout::GpuMaterial;
 use crate::sampler::Sampler;
+use crate::scene::texture::Texture;
 use glam::Vec3;
 
 /// What each material provides. The CPU methods are the reference twins of the WGSL functions
@@ -45,6 +46,10 @@ pub trait MaterialModel {
         Self: Sized,
     {
         self
+    }
+    /// The textures it reads (the GPU's image array holds their images).
+    fn textures(&self) -> Vec<Texture> {
+        Vec::new()
     }
     /// The medium filling the object it is the surface of, if any.
     fn interior(&self) -> Option<&Medium> {
@@ -139,6 +144,9 @@ macro_rules! registry {
             }
             pub fn extra_features(&self) -> Vec<&'static str> {
                 match self { $(Material::$ty(m) => m.extra_features(),)+ }
+            }
+            pub fn textures(&self) -> Vec<Texture> {
+                match self { $(Material::$ty(m) => m.textures(),)+ }
             }
             pub fn relocated(self, origin: glam::DVec3) -> Self {
                 match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }

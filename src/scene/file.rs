@@ -46,7 +46,11 @@ pub fn load(path: &Path) -> anyhow::Result<Scene> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    Ok(parse(text, &file, &name)?)
+    // Image paths in the file are relative to its directory.
+    let dir = path.parent().unwrap_or(Path::new("."));
+    Ok(super::image::with_base_dir(dir, || {
+        parse(text, &file, &name)
+    })?)
 }
 
 /// 1-based line and column (in characters) of the end of `before`.
@@ -349,7 +353,7 @@ struct RenderDoc {
     height: Option<Spanned<u32>>,
     max_depth: Option<Spanned<u32>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    background: Option<BackgroundDoc>,
+    background: Option<Spanned<BackgroundDoc>>,
 }
 
 #[derive(Serialize)]
@@ -357,14 +361,26 @@ struct RenderDoc {
 enum BackgroundDoc {
     Colour(Colour),
     Named(String),
+    Environment(EnvironmentDoc),
 }
 
-/// A colour `[r, g, b]` or `"sky"`, with one message for anything else (serde's untagged
-/// enums say only that nothing matched).
+/// `{ image = "sky.hdr", strength = 1, rotate_y = 0 }`.
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct EnvironmentDoc {
+    image: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    strength: Option<Num>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rotate_y: Option<Num>,
+}
+
+/// A colour `[r, g, b]`, `"sky"` or an environment image, with one message for anything else
+/// (serde's untagged enums say only that nothing matched).
 impl<'de> Deserialize<'de> for BackgroundDoc {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error;
-        let expected = "background must be a colour [r, g, b] or \"sky\"";
+        let expected = "background must be a colour [r, g, b], \"sky\" or { image = \"file\", strength, rotate_y }";
         match toml::Value::deserialize(d)? {
             toml::Value::String(name) if name == "sky" => Ok(BackgroundDoc::Named(name)),
             toml::Value::String(name) => Err(D::Error::custom(format!(
@@ -374,6 +390,9 @@ impl<'de> Deserialize<'de> for BackgroundDoc {
             value @ toml::Value::Array(_) => Colour::deserialize(value)
                 .map(BackgroundDoc::Colour)
                 .map_err(|e| D::Error::custom(format!("{expected}: {}", e.message()))),
+            value @ toml::Value::Table(_) => EnvironmentDoc::deserialize(value)
+                .map(BackgroundDoc::Environment)
+                .map_err(|e| D::Error::custom(format!("background: {}", e.message()))),
             other => Err(D::Error::custom(format!("{expected}, got {other}"))),
         }
     }
@@ -470,15 +489,28 @@ impl SceneDoc {
                 MAX_DEPTH_LIMIT,
             )?,
         };
-        let background = match self.render.and_then(|r| r.background) {
+        let background_doc = self.render.and_then(|r| r.background);
+        let background_span = background_doc.as_ref().map(|b| b.span());
+        let background = match background_doc.map(Spanned::into_inner) {
             None => Background::Constant(Vec3::ZERO),
             Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
             Some(BackgroundDoc::Named(n)) if n == "sky" => Background::Sky,
+            Some(BackgroundDoc::Environment(e)) => {
+                let image = super::image::load_named(&e.image)
+                    .map_err(|m| (background_span.clone(), format!("background: {m}")))?;
+                let env = super::environment::Environment::new(
+                    image,
+                    e.strength.map_or(1.0, |s| s.0),
+                    e.rotate_y.map_or(0.0, |r| r.0),
+                )
+                .map_err(|m| (background_span.clone(), m))?;
+                Background::Environment(env)
+            }
             Some(BackgroundDoc::Named(n)) => {
                 return Err((
-                    None,
+                    background_span,
                     format!(
-                        "background must be a colour [r, g, b] or \"sky\", got \"{}\"",
+                        "background must be a colour [r, g, b], \"sky\" or {{ image = \"file\", strength, rotate_y }}, got \"{}\"",
                         quoted(&n)
                     ),
                 ));
@@ -667,10 +699,19 @@ impl SceneDoc {
                 width: Some(Spanned::new(0..0, scene.defaults.width)),
                 height: Some(Spanned::new(0..0, scene.defaults.height)),
                 max_depth: Some(Spanned::new(0..0, scene.defaults.max_depth)),
-                background: Some(match scene.background {
-                    Background::Constant(c) => BackgroundDoc::Colour(Colour(V3::from(c))),
-                    Background::Sky => BackgroundDoc::Named("sky".into()),
-                }),
+                background: Some(Spanned::new(
+                    0..0,
+                    match scene.background {
+                        Background::Constant(c) => BackgroundDoc::Colour(Colour(V3::from(c))),
+                        Background::Sky => BackgroundDoc::Named("sky".into()),
+                        Background::Environment(e) => BackgroundDoc::Environment(EnvironmentDoc {
+                            image: e.image.source.clone(),
+                            strength: Some(Num(e.strength)),
+                            rotate_y: (e.rotate_y_degrees != 0.0)
+                                .then_some(Num(e.rotate_y_degrees)),
+                        }),
+                    },
+                )),
             }),
             camera: Spanned::new(
                 0..0,

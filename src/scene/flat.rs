@@ -134,7 +134,8 @@ pub struct FlatScene {
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
-    /// Every emitting sphere and quad, for next-event estimation (see [`Light`]).
+    /// Every emitting sphere and quad, and last an environment background, for next-event
+    /// estimation (see [`Light`]).
     pub lights: Vec<Light>,
     /// Most invisible medium boundaries a ray steps through between two events: a straight
     /// line crosses a convex surface at most twice, so twice the invisible spheres plus the
@@ -170,6 +171,8 @@ pub enum LightShape {
         normal: Vec3,
         inv_area: f32,
     },
+    /// The environment (always the last light): directions by its image's distribution.
+    Environment(super::environment::Environment),
 }
 
 impl FlatScene {
@@ -234,10 +237,10 @@ impl FlatScene {
             medium_crossings: 0,
             uv_textures: false,
         };
-        flat.uv_textures = flat
-            .materials
-            .iter()
-            .any(|m| m.extra_features().contains(&"UV_CHECKER"));
+        flat.uv_textures = flat.materials.iter().any(|m| {
+            let features = m.extra_features();
+            features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
+        });
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
         Ok(flat)
@@ -288,7 +291,36 @@ impl FlatScene {
         }
     }
 
-    /// Fills `lights` with every emitting primitive (spheres, then quads)
+    /// The index in `lights` of the environment, if the background is one.
+    #[inline]
+    pub fn environment_light(&self) -> Option<usize> {
+        self.lights
+            .last()
+            .filter(|l| matches!(l.shape, LightShape::Environment(_)))
+            .map(|_| self.lights.len() - 1)
+    }
+
+    /// The radius of a sphere holding every primitive (half its bounding box's diagonal; 1
+    /// without any): how large a disc the environment's light crosses, for weighing it against
+    /// the other lights.
+    pub fn bounding_radius(&self) -> f64 {
+        let spheres = self.spheres.iter().flat_map(|s| {
+            let r = Vec3::splat(s.radius.abs());
+            [s.center - r, s.center + r]
+        });
+        let quads = self
+            .quads
+            .iter()
+            .flat_map(|q| [q.q, q.q + q.u, q.q + q.v, q.q + q.u + q.v]);
+        let (min, max) = spheres.chain(quads).fold(
+            (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+            |(min, max), p| (min.min(p.as_dvec3()), max.max(p.as_dvec3())),
+        );
+        let r = 0.5 * (max - min).length();
+        if r > 0.0 && r.is_finite() { r } else { 1.0 }
+    }
+
+    /// Fills `lights` with every emitting primitive (spheres, then quads) and the environment,
     /// and links each primitive to its light. Lights are picked in proportion to their power,
     /// pi * luminance * area (twice that for two-sided ones).
     pub fn collect_lights(&mut self) {
@@ -335,6 +367,14 @@ impl FlatScene {
                 });
                 quad.light = lights.len() as u32;
             }
+        }
+        if let Background::Environment(env) = self.background {
+            powers.push(env.power(self.bounding_radius()));
+            lights.push(Light {
+                shape: LightShape::Environment(env),
+                cdf: 0.0,
+                pick: 0.0,
+            });
         }
         // (A light with no power share is never picked; hits on it then count in full.)
         let total: f64 = powers.iter().sum();

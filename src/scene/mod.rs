@@ -4,8 +4,10 @@
 //! what the backends trace (world-space spheres and quads, resolved material indices).
 
 pub mod builtin;
+pub mod environment;
 pub mod file;
 pub mod flat;
+pub mod image;
 pub mod media;
 pub mod texture;
 
@@ -80,6 +82,8 @@ pub enum Background {
     Constant(Vec3),
     /// White at the horizon blending to (0.5, 0.7, 1.0) overhead, by the ray's y.
     Sky,
+    /// An equirectangular HDR image, sampled as a light by next-event estimation.
+    Environment(environment::Environment),
 }
 
 /// Defaults a scene carries for how it is rendered; the CLI may override them.

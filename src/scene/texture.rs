@@ -2,9 +2,11 @@
 //! `src/cpu/texture.rs`, twin `shaders/texture.wgsl`). Plain data, and with serde its
 //! scene-file syntax: `[r, g, b]`, `{ checker = { scale, even, odd } }` (a solid checker in
 //! space, as in Ray Tracing: The Next Week) or `{ uv_checker = { scale, even, odd } }` (a
-//! checker in the surface's UV coordinates).
+//! checker in the surface's UV coordinates) or `{ image = "file.png" }` (an image in UV
+//! coordinates, bilinear, wrapping; see `scene::image` for formats).
 
 use crate::scene::file::checked;
+use crate::scene::image::Image;
 use glam::{DVec3, Vec3};
 use serde::de::{self, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -17,6 +19,8 @@ pub enum Texture {
     Checker(Checker),
     /// Squares alternating in UV: `scale` of them across u in [0, 1] and as many across v.
     UvChecker(Checker),
+    /// An image across u and v in [0, 1] (u along its rows, v up its columns), repeating.
+    Image(&'static Image),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
@@ -49,6 +53,15 @@ impl Texture {
     pub fn validate(&self) -> Result<(), String> {
         match self {
             Texture::Colour(_) => Ok(()),
+            Texture::Image(image) => {
+                if image.max_value > 1.0 {
+                    return Err(format!(
+                        "image {} has values up to {}: an albedo must lie in [0, 1]",
+                        image.source, image.max_value
+                    ));
+                }
+                Ok(())
+            }
             Texture::Checker(c) | Texture::UvChecker(c) => {
                 if !(c.scale > 0.0 && c.scale <= MAX_SCALE) {
                     return Err(format!(
@@ -61,20 +74,13 @@ impl Texture {
         }
     }
 
-    /// The colour where the texture does not vary (else its even colour).
-    pub fn base(&self) -> Vec3 {
-        match self {
-            Texture::Colour(c) => *c,
-            Texture::Checker(c) | Texture::UvChecker(c) => c.even,
-        }
-    }
-
     /// The kernel feature its evaluation needs, if any.
     pub fn feature(&self) -> Option<&'static str> {
         match self {
             Texture::Colour(_) => None,
             Texture::Checker(_) => Some("CHECKER"),
             Texture::UvChecker(_) => Some("UV_CHECKER"),
+            Texture::Image(_) => Some("IMAGE_TEXTURE"),
         }
     }
 
@@ -105,7 +111,7 @@ impl<'de> Deserialize<'de> for Texture {
             type Value = Texture;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str(
-                    "a colour [r, g, b], { checker = { scale, even, odd } } or { uv_checker = { scale, even, odd } }",
+                    "a colour [r, g, b], { checker = { scale, even, odd } }, { uv_checker = { scale, even, odd } } or { image = \"file\" }",
                 )
             }
             fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Texture, A::Error> {
@@ -114,18 +120,27 @@ impl<'de> Deserialize<'de> for Texture {
             }
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Texture, A::Error> {
                 let key: String = map.next_key()?.ok_or_else(|| {
-                    de::Error::custom("empty texture: expected checker or uv_checker")
+                    de::Error::custom("empty texture: expected checker, uv_checker or image")
                 })?;
                 let texture = match key.as_str() {
                     "checker" => Texture::Checker(map.next_value()?),
                     "uv_checker" => Texture::UvChecker(map.next_value()?),
+                    "image" => {
+                        let source: String = map.next_value()?;
+                        Texture::Image(
+                            crate::scene::image::load_named(&source).map_err(de::Error::custom)?,
+                        )
+                    }
                     other => {
-                        return Err(de::Error::unknown_field(other, &["checker", "uv_checker"]));
+                        return Err(de::Error::unknown_field(
+                            other,
+                            &["checker", "uv_checker", "image"],
+                        ));
                     }
                 };
                 if let Some(extra) = map.next_key::<String>()? {
                     return Err(de::Error::custom(format!(
-                        "a texture is one of checker or uv_checker, found `{extra}` too"
+                        "a texture is one of checker, uv_checker or image, found `{extra}` too"
                     )));
                 }
                 Ok(texture)
@@ -140,6 +155,11 @@ impl Serialize for Texture {
         use serde::ser::SerializeMap;
         match self {
             Texture::Colour(c) => checked::albedo::serialize(c, s),
+            Texture::Image(image) => {
+                let mut map = s.serialize_map(Some(1))?;
+                map.serialize_entry("image", &image.source)?;
+                map.end()
+            }
             Texture::Checker(c) | Texture::UvChecker(c) => {
                 let key = if matches!(self, Texture::Checker(_)) {
                     "checker"

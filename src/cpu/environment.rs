@@ -1,0 +1,145 @@
+//! The environment light (twin: `shaders/environment.wgsl`): what an escaped ray sees, and
+//! directions sampled in proportion to luminance x sin(theta) (see `scene::environment`), with
+//! their solid-angle pdf.
+
+use super::texture::bilinear;
+use crate::scene::environment::{Distribution, Environment};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// `dir` turned by -rotate_y: the image's own frame.
+#[inline]
+fn to_local(env: &Environment, dir: Vec3) -> Vec3 {
+    let [cos, sin] = env.rotation;
+    Vec3::new(cos * dir.x - sin * dir.z, dir.y, sin * dir.x + cos * dir.z)
+}
+
+/// Image coordinates (s across, t down) of unit `local` direction.
+#[inline]
+fn image_coordinates(local: Vec3) -> (f32, f32) {
+    let s = ((-local.z).atan2(local.x) + PI) / (2.0 * PI);
+    let t = local.y.clamp(-1.0, 1.0).acos() / PI;
+    (s, t)
+}
+
+/// Radiance arriving from the environment along unit direction `dir`.
+#[inline]
+pub fn radiance(env: &Environment, dir: Vec3) -> Vec3 {
+    let (s, t) = image_coordinates(to_local(env, dir));
+    // Rows do not wrap over the poles: t stays within the first and last rows' centres.
+    let h = env.image.height as f32;
+    let t = t.clamp(0.5 / h, 1.0 - 0.5 / h);
+    bilinear(env.image, s, t) * env.strength
+}
+
+/// The cell of `table` (a cumulative table of `n + 1` values from 0 to 1) that `u` in [0, 1)
+/// falls in: the last i with table[i] <= u, which has table[i + 1] > table[i].
+#[inline]
+fn find_cell(table: &[f32], u: f32) -> usize {
+    let (mut lo, mut hi) = (0, table.len() - 1);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if table[mid] <= u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// A direction sampled from the environment's distribution with two uniform numbers, and its
+/// solid-angle pdf; `None` at the poles (where the pdf would be infinite).
+#[inline]
+pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
+    let d = env.distribution();
+    let (w, h) = (env.image.width as usize, env.image.height as usize);
+    let y = find_cell(&d.rows, u1);
+    let row_share = d.rows[y + 1] - d.rows[y];
+    let t = (y as f32 + ((u1 - d.rows[y]) / row_share).min(1.0)) / h as f32;
+    let columns = &d.columns[y * (w + 1)..(y + 1) * (w + 1)];
+    let x = find_cell(columns, u2);
+    let column_share = columns[x + 1] - columns[x];
+    let s = (x as f32 + ((u2 - columns[x]) / column_share).min(1.0)) / w as f32;
+    let (sin_theta, cos_theta) = (PI * t).sin_cos();
+    if !(sin_theta > 0.0) {
+        return None;
+    }
+    let (sin_phi, cos_phi) = (2.0 * PI * s - PI).sin_cos();
+    let local = Vec3::new(sin_theta * cos_phi, cos_theta, -sin_theta * sin_phi);
+    let [cos, sin] = env.rotation;
+    let dir = Vec3::new(
+        cos * local.x + sin * local.z,
+        local.y,
+        -sin * local.x + cos * local.z,
+    );
+    let density = row_share * h as f32 * column_share * w as f32;
+    Some((dir, density / (2.0 * PI * PI * sin_theta)))
+}
+
+/// The solid-angle pdf with which [`sample`] picks unit direction `dir`.
+#[inline]
+pub fn pdf(env: &Environment, dir: Vec3) -> f32 {
+    let local = to_local(env, dir);
+    let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+    if !(sin_theta > 0.0) {
+        return 0.0;
+    }
+    let (s, t) = image_coordinates(local);
+    density(env.distribution(), env.image.width, env.image.height, s, t)
+        / (2.0 * PI * PI * sin_theta)
+}
+
+/// The density in image coordinates at (s, t).
+#[inline]
+fn density(d: &Distribution, width: u32, height: u32, s: f32, t: f32) -> f32 {
+    let (w, h) = (width as f32, height as f32);
+    let x = ((s * w).floor().max(0.0) as usize).min(width as usize - 1);
+    let y = ((t * h).floor().max(0.0) as usize).min(height as usize - 1);
+    let row = d.rows[y + 1] - d.rows[y];
+    let columns = &d.columns[y * (width as usize + 1)..];
+    row * h * (columns[x + 1] - columns[x]) * w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::image::Image;
+
+    fn environment(width: u32, height: u32, f: impl Fn(u32, u32) -> f32) -> Environment {
+        let mut texels = Vec::new();
+        for y in 0..height {
+            for x in 0..width {
+                texels.extend([f(x, y); 3]);
+            }
+        }
+        let image = Image::from_linear("test", width, height, texels)
+            .unwrap()
+            .leak();
+        Environment::new(image, 1.0, 30.0).unwrap()
+    }
+
+    #[test]
+    fn samples_land_where_their_pdf_says() {
+        let env = environment(8, 4, |x, y| 1.0 + (x * 3 + y) as f32);
+        for (u1, u2) in [(0.1, 0.2), (0.5, 0.5), (0.93, 0.07), (0.3, 0.999)] {
+            let (dir, pdf) = sample(&env, u1, u2).unwrap();
+            assert!((dir.length() - 1.0).abs() < 1e-5);
+            assert!(
+                (pdf / super::pdf(&env, dir) - 1.0).abs() < 1e-3,
+                "{u1} {u2}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_texel_straight_up_is_the_top_row() {
+        // Only the top row is bright: straight up sees it, straight down does not.
+        let env = environment(4, 4, |_, y| if y == 0 { 1.0 } else { 0.0 });
+        assert!((radiance(&env, Vec3::Y) - Vec3::ONE).length() < 1e-6);
+        assert_eq!(radiance(&env, Vec3::NEG_Y), Vec3::ZERO);
+        // And sampling only ever picks the top row.
+        let (dir, _) = sample(&env, 0.6, 0.4).unwrap();
+        assert!(dir.y > (PI / 4.0).cos());
+    }
+}

@@ -1,0 +1,216 @@
+//! Images that textures and environment lights read: decoded once per file into linear RGB f32
+//! (looked up by `src/cpu/texture.rs` and `src/cpu/environment.rs`, twins in `shaders/`).
+//!
+//! A decoded image lives for the rest of the process and is shared: materials and backgrounds
+//! are small `Copy` data that hold a `&'static Image`, so the same file loaded twice (the same
+//! path, size and modification time) is decoded and kept once.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+
+/// Longest image side accepted.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// A decoded image: `width` x `height` texels, linear RGB, row 0 at the top.
+pub struct Image {
+    /// The path as the scene file wrote it (scene files are written back with it).
+    pub source: String,
+    pub width: u32,
+    pub height: u32,
+    /// Three values per texel, row by row from the top.
+    pub texels: Vec<f32>,
+    /// The largest value of any channel (albedo images must stay within 1).
+    pub max_value: f32,
+    /// Built on first use by an environment light (see `scene::environment`).
+    pub(crate) sampling: OnceLock<super::environment::Distribution>,
+}
+
+impl Image {
+    /// An image from linear RGB values (three per texel, rows from the top); `source` names it.
+    pub fn from_linear(
+        source: &str,
+        width: u32,
+        height: u32,
+        texels: Vec<f32>,
+    ) -> Result<Self, String> {
+        if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+            return Err(format!(
+                "image {source} is {width}x{height}: each side must be in 1..={MAX_IMAGE_SIDE}"
+            ));
+        }
+        if texels.len() != 3 * width as usize * height as usize {
+            return Err(format!("image {source}: wrong number of values"));
+        }
+        let mut max_value = 0.0f32;
+        for (i, &x) in texels.iter().enumerate() {
+            if !(x.is_finite() && x >= 0.0) {
+                let texel = i / 3;
+                return Err(format!(
+                    "image {source} has a value {x} at pixel ({}, {}): every value must be finite and non-negative",
+                    texel % width as usize,
+                    texel / width as usize
+                ));
+            }
+            max_value = max_value.max(x);
+        }
+        Ok(Image {
+            source: source.to_string(),
+            width,
+            height,
+            texels,
+            max_value,
+            sampling: OnceLock::new(),
+        })
+    }
+
+    /// Texel (x, y) (x from the left, y from the top).
+    #[inline]
+    pub fn texel(&self, x: u32, y: u32) -> glam::Vec3 {
+        let i = 3 * (y as usize * self.width as usize + x as usize);
+        glam::Vec3::new(self.texels[i], self.texels[i + 1], self.texels[i + 2])
+    }
+
+    /// Leaks `self` for the rest of the process (see the module's documentation).
+    pub fn leak(self) -> &'static Image {
+        Box::leak(Box::new(self))
+    }
+}
+
+impl std::fmt::Debug for Image {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "Image({}, {}x{})", self.source, self.width, self.height)
+    }
+}
+
+impl PartialEq for Image {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self, other)
+            || (self.width == other.width
+                && self.height == other.height
+                && self.texels == other.texels)
+    }
+}
+
+/// sRGB-encoded value in [0, 1] to linear.
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Reads the image at `path` (PNG, JPEG, OpenEXR or Radiance HDR): 8- and 16-bit images are
+/// decoded from sRGB, floating-point ones are linear; alpha is ignored. `source` is the path as
+/// the scene wrote it. Errors are one line naming the file.
+pub fn load(path: &Path, source: &str) -> Result<&'static Image, String> {
+    /// A file as it was when decoded: its path, size and modification time.
+    type FileVersion = (PathBuf, u64, std::time::SystemTime);
+    static CACHE: OnceLock<Mutex<HashMap<FileVersion, &'static Image>>> = OnceLock::new();
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read image {source}: {e}"))?;
+    if !meta.is_file() {
+        return Err(format!("image {source} is not a file"));
+    }
+    let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
+    let key = (canonical, meta.len(), modified);
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(image) = cache.lock().map_err(|_| "image cache poisoned")?.get(&key) {
+        return Ok(image);
+    }
+    let image = decode(path, source)?.leak();
+    cache
+        .lock()
+        .map_err(|_| "image cache poisoned")?
+        .insert(key, image);
+    Ok(image)
+}
+
+fn decode(path: &Path, source: &str) -> Result<Image, String> {
+    let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;
+    if reader.format().is_none() {
+        return Err(format!(
+            "image {source}: unknown format (rt-gpu reads PNG, JPEG, OpenEXR and Radiance HDR)"
+        ));
+    }
+    let mut reader = reader;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_IMAGE_SIDE);
+    limits.max_image_height = Some(MAX_IMAGE_SIDE);
+    reader.limits(limits);
+    let decoded = reader.decode().map_err(|e| match e {
+        image::ImageError::Unsupported(u) => format!(
+            "image {source}: unsupported ({}; rt-gpu reads PNG, JPEG, OpenEXR and Radiance HDR)",
+            one_line(&u)
+        ),
+        image::ImageError::Limits(_) => format!(
+            "image {source} is too large: each side must be at most {MAX_IMAGE_SIDE} pixels"
+        ),
+        other => format!("cannot decode image {source}: {}", one_line(&other)),
+    })?;
+    let float = matches!(
+        decoded.color(),
+        image::ColorType::Rgb32F | image::ColorType::Rgba32F
+    );
+    let (width, height) = (decoded.width(), decoded.height());
+    let mut texels = decoded.into_rgb32f().into_raw();
+    if !float {
+        for x in &mut texels {
+            *x = srgb_to_linear(*x);
+        }
+    }
+    Image::from_linear(source, width, height, texels)
+}
+
+thread_local! {
+    /// The directory image paths in the scene file being read are relative to.
+    static BASE_DIR: std::cell::RefCell<Option<PathBuf>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` (which reads a scene file) with image paths taken relative to `dir`.
+pub fn with_base_dir<R>(dir: &Path, f: impl FnOnce() -> R) -> R {
+    let previous = BASE_DIR.with(|b| b.replace(Some(dir.to_path_buf())));
+    let out = f();
+    BASE_DIR.with(|b| *b.borrow_mut() = previous);
+    out
+}
+
+/// Loads the image a scene file names as `source`: relative to the scene file's directory
+/// (see [`with_base_dir`]), else to the working directory.
+pub fn load_named(source: &str) -> Result<&'static Image, String> {
+    let path = Path::new(source);
+    let full = BASE_DIR.with(|b| match &*b.borrow() {
+        Some(dir) if path.is_relative() => dir.join(path),
+        _ => path.to_path_buf(),
+    });
+    load(&full, source)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_decoding_matches_the_standard() {
+        assert_eq!(srgb_to_linear(0.0), 0.0);
+        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
+        assert!((srgb_to_linear(0.5) - 0.21404).abs() < 1e-4);
+        assert!((srgb_to_linear(0.04) - 0.04 / 12.92).abs() < 1e-7);
+    }
+
+    #[test]
+    fn bad_values_are_refused() {
+        let err =
+            Image::from_linear("x.exr", 2, 1, vec![0.0, 1.0, f32::NAN, 0.0, 0.0, 0.0]).unwrap_err();
+        assert!(err.contains("x.exr") && err.contains("(0, 0)"), "{err}");
+        let err =
+            Image::from_linear("y.exr", 2, 1, vec![0.0, 1.0, 0.0, 0.0, -1.0, 0.0]).unwrap_err();
+        assert!(err.contains("(1, 0)"), "{err}");
+        assert!(Image::from_linear("z", 0, 1, vec![]).is_err());
+    }
+}
