@@ -33,7 +33,7 @@ fn find_cell(start: u32, n: u32, u: f32) -> u32 {
     var hi = n;
     while hi - lo > 1u {
         let mid = (lo + hi) / 2u;
-        if images[start + mid] <= u {
+        if table(start + mid) <= u {
             lo = mid;
         } else {
             hi = mid;
@@ -52,12 +52,12 @@ fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
     let h = params.environment_height;
     let rows = params.environment_rows;
     let y = find_cell(rows, h, u1);
-    let row_share = images[rows + y + 1u] - images[rows + y];
-    let t = (f32(y) + min((u1 - images[rows + y]) / row_share, 1.0)) / f32(h);
+    let row_share = table(rows + y + 1u) - table(rows + y);
+    let t = (f32(y) + min((u1 - table(rows + y)) / row_share, 1.0)) / f32(h);
     let columns = params.environment_columns + y * (w + 1u);
     let x = find_cell(columns, w, u2);
-    let column_share = images[columns + x + 1u] - images[columns + x];
-    let s = (f32(x) + min((u2 - images[columns + x]) / column_share, 1.0)) / f32(w);
+    let column_share = table(columns + x + 1u) - table(columns + x);
+    let s = (f32(x) + min((u2 - table(columns + x)) / column_share, 1.0)) / f32(w);
     let sin_theta = sin(PI * t);
     if !(sin_theta > 0.0) {
         return EnvironmentSample(vec3f(0.0, 1.0, 0.0), 0.0);
@@ -85,8 +85,8 @@ fn environment_pdf(dir: vec3f) -> f32 {
     let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
     let rows = params.environment_rows;
     let columns = params.environment_columns + y * (w + 1u);
-    let density = (images[rows + y + 1u] - images[rows + y]) * f32(h)
-        * (images[columns + x + 1u] - images[columns + x]) * f32(w);
+    let density = (table(rows + y + 1u) - table(rows + y)) * f32(h)
+        * (table(columns + x + 1u) - table(columns + x)) * f32(w);
     return density / (2.0 * PI * PI * sin_theta);
 }
 //#endif

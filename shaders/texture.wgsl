@@ -20,8 +20,7 @@ fn sphere_uv(n: vec3f) -> vec2f {
 //#if IMAGE_TEXTURE || ENVIRONMENT
 // Texel (x, y) of the image of `width` columns whose texels start at `start` in `images`.
 fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
-    let i = start + 3u * (y * width + x);
-    return vec3f(images[i], images[i + 1u], images[i + 2u]);
+    return images[start + y * width + x].xyz;
 }
 
 // Integer-valued i wrapped into 0..n in f32 arithmetic (as the CPU does), then kept in range

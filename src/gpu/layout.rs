@@ -449,9 +449,10 @@ pub struct SceneBuffers {
     pub images: ImageArray,
 }
 
-/// Every image a scene reads, in one f32 array (the kernel's `images`): each image's texels
-/// (three values each, rows from the top), and after the environment's its sampling tables
-/// (`scene::environment::Distribution`).
+/// Every image a scene reads, in one array of vec4f (the kernel's `images`): each image's
+/// texels (one vec4f each, RGB and a zero, rows from the top; placed in vec4f units), and after
+/// the environment's its sampling tables (`scene::environment::Distribution`; placed in f32
+/// units, each starting at a vec4f).
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {
     pub values: Vec<f32>,
@@ -475,12 +476,26 @@ impl ImageArray {
 
     fn lay_out(scene: &FlatScene, fill: bool) -> Self {
         let mut out = ImageArray::default();
+        // In f32 values; every placement starts at a multiple of 4 (a vec4f).
         let mut len = 0u64;
-        let mut place = |out: &mut ImageArray, values: &[f32]| {
-            let at = len as u32;
-            len += values.len() as u64;
+        let place_table = |out: &mut ImageArray, values: &[f32], len: &mut u64| {
+            let at = *len as u32;
+            *len += (values.len() as u64).next_multiple_of(4);
             if fill {
                 out.values.extend(values);
+                out.values.resize(*len as usize, 0.0);
+            }
+            at
+        };
+        // Texels as vec4f (the kernel loads each with one load), indexed in vec4fs.
+        let place_texels = |out: &mut ImageArray, image: &Image, len: &mut u64| {
+            let at = (*len / 4) as u32;
+            *len += 4 * (image.texels.len() as u64 / 3);
+            if fill {
+                for rgb in image.texels.chunks_exact(3) {
+                    out.values.extend(rgb);
+                    out.values.push(0.0);
+                }
             }
             at
         };
@@ -489,21 +504,21 @@ impl ImageArray {
                 if let Texture::Image(image) = texture
                     && !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image))
                 {
-                    let at = place(&mut out, &image.texels);
+                    let at = place_texels(&mut out, image, &mut len);
                     out.placed.push((image, at));
                 }
             }
         }
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
-            let texels = place(&mut out, &env.image.texels);
-            let rows = place(&mut out, &d.rows);
-            let columns = place(&mut out, &d.columns);
+            let texels = place_texels(&mut out, env.image, &mut len);
+            let rows = place_table(&mut out, &d.rows, &mut len);
+            let columns = place_table(&mut out, &d.columns, &mut len);
             out.environment = Some([texels, rows, columns]);
         }
-        out.len = len.max(1);
+        out.len = len.max(4);
         if fill && out.values.is_empty() {
-            out.values.push(0.0);
+            out.values.resize(4, 0.0);
         }
         out
     }
