@@ -87,7 +87,7 @@ fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> v
         }
         let m = material_at(hit.material);
         if light_of(hit.primitive) == index + 1u {
-            return emitted(m, hit.front_face) * transmitted;
+            return emitted(m, hit) * transmitted;
         }
         if m.kind != MAT_MEDIUM {
             return vec3f(0.0);
@@ -153,7 +153,7 @@ fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -
     if !intersect(Ray(origin, normalize(to_light)), &shadow) || light_of(shadow.primitive) != index + 1u {
         return none;
     }
-    let le = emitted(material_at(shadow.material), shadow.front_face);
+    let le = emitted(material_at(shadow.material), shadow);
 //#endif
     return DirectLight(b.weight, le * light_sample_factor(s.pdf, b.pdf));
 }
@@ -250,7 +250,7 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
             }
         }
 //#endif
-        total += throughput * weight * emitted(m, hit.front_face);
+        total += throughput * weight * emitted(m, hit);
         if segment + 1u == params.max_depth {
             break; // no longer path counts
         }

@@ -40,7 +40,8 @@ fn slab(min: Vec3, max: Vec3, material: u32) -> rt_gpu::scene::Object {
 #[test]
 fn transmittance_through_slabs_is_exponential() {
     let light = Material::Light(rt_gpu::material::Light {
-        radiance: Vec3::new(2.0, 3.0, 4.0),
+        radiance: Vec3::new(2.0, 3.0, 4.0).into(),
+        strength: 1.0,
         two_sided: false,
     });
     let scene = common::scene(
@@ -515,7 +516,8 @@ fn only_scenes_with_media_get_media_code() {
         vec![
             Material::Medium(medium(1.0, 0.8, 0.0)),
             Material::Light(rt_gpu::material::Light {
-                radiance: Vec3::ONE,
+                radiance: Vec3::ONE.into(),
+                strength: 1.0,
                 two_sided: true,
             }),
         ],

@@ -34,7 +34,8 @@ fn cornell_with_sphere_light() -> Scene {
         &mut scene,
         "glow",
         Material::Light(rt_gpu::material::Light {
-            radiance: Vec3::new(2.0, 1.5, 1.0),
+            radiance: Vec3::new(2.0, 1.5, 1.0).into(),
+            strength: 1.0,
             two_sided: false,
         }),
     );
@@ -56,7 +57,8 @@ fn spheres_with_lights() -> Scene {
         &mut scene,
         "lamp",
         Material::Light(rt_gpu::material::Light {
-            radiance: Vec3::splat(6.0),
+            radiance: Vec3::splat(6.0).into(),
+            strength: 1.0,
             two_sided: false,
         }),
     );
@@ -165,7 +167,8 @@ fn nee_comparison_detects_small_real_differences() {
     ] {
         let mut changed = scene.clone();
         changed.materials[light] = Material::Light(rt_gpu::material::Light {
-            radiance: Vec3::splat(radiance),
+            radiance: Vec3::splat(radiance).into(),
+            strength: 1.0,
             two_sided,
         });
         let verdict = compare(&naive, &render_cpu(&changed, &cornell(2, true)));

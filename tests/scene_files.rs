@@ -332,8 +332,12 @@ fn the_documented_example_parses() {
             .expect("scenes/README.md");
     let start = doc.find("```toml\n").expect("a toml block") + "```toml\n".len();
     let end = start + doc[start..].find("```").expect("closed");
-    let scene =
-        parse(&doc[start..end], "scenes/README.md", "example").unwrap_or_else(|e| panic!("{e}"));
+    // Its image paths are relative to scenes/, as a file there would have them.
+    let scene = rt_gpu::scene::image::with_base_dir(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
+        || parse(&doc[start..end], "scenes/README.md", "example"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.objects.len(), 3);
-    assert_eq!(scene.materials.len(), 8);
+    assert_eq!(scene.materials.len(), 9);
 }

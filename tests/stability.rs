@@ -627,7 +627,8 @@ fn tiny_bright_lights_and_edge_on_lights() {
         vec![
             Material::lambertian(Vec3::splat(albedo)),
             Material::Light(rt_gpu::material::Light {
-                radiance: Vec3::splat(radiance),
+                radiance: Vec3::splat(radiance).into(),
+                strength: 1.0,
                 two_sided: false,
             }),
         ],

@@ -1,7 +1,7 @@
 // Ideal diffuse reflection (twin: src/material/lambertian.rs). Random numbers per scatter: 2.
 // Packed: albedo, emission.
 
-fn lambertian_emitted(m: Material, front_face: bool) -> vec3f {
+fn lambertian_emitted(m: Material, hit: Hit) -> vec3f {
     return m.emission;
 }
 

@@ -1,8 +1,9 @@
 // A diffuse area light (twin: src/material/light.rs): emits from its front face unless
-// two-sided, reflects nothing. Packed: emission: radiance; param: 1 if two-sided.
+// two-sided, reflects nothing. Packed: albedo (and texture_*): radiance; emission: strength;
+// param: 1 if two-sided.
 
-fn light_emitted(m: Material, front_face: bool) -> vec3f {
-    return select(vec3f(0.0), m.emission, front_face || m.param > 0.5);
+fn light_emitted(m: Material, hit: Hit) -> vec3f {
+    return select(vec3f(0.0), albedo_at(m, hit) * m.emission, hit.front_face || m.param > 0.5);
 }
 
 fn light_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {

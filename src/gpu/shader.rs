@@ -301,14 +301,12 @@ fn material_dispatch(features: &Features) -> String {
             kind.feature, kind.name
         )
     };
-    out.push_str(
-        "fn emitted(m: Material, front_face: bool) -> vec3f {\n    var out = vec3f(0.0);\n",
-    );
+    out.push_str("fn emitted(m: Material, hit: Hit) -> vec3f {\n    var out = vec3f(0.0);\n");
     for kind in features.kinds() {
         if let Some(feature) = kind.emits_under
             && features.enabled(feature) == Ok(true)
         {
-            out.push_str(&case(kind, "emitted(m, front_face)"));
+            out.push_str(&case(kind, "emitted(m, hit)"));
         }
     }
     out.push_str("    return out;\n}\n\n");

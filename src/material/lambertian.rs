@@ -28,7 +28,7 @@ impl MaterialModel for Lambertian {
     const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
 
     fn validate(&self) -> Result<(), String> {
-        self.albedo.validate()
+        self.albedo.validate_albedo()
     }
 
     fn relocated(self, origin: glam::DVec3) -> Self {

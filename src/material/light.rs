@@ -3,48 +3,92 @@
 
 use super::MaterialModel;
 use crate::cpu::shapes::Hit;
+use crate::cpu::texture;
 use crate::gpu::layout::GpuMaterial;
 use crate::sampler::Sampler;
-use crate::scene::file::checked;
+use crate::scene::texture::{self as textures, Texture};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-/// `{ type = "light", radiance = [r, g, b], two_sided = false }`.
+/// `{ type = "light", radiance = [r, g, b], strength = 1, two_sided = false }`; `radiance` may
+/// be a texture (whose values `strength` scales).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Light {
-    #[serde(with = "checked::colour")]
-    pub radiance: Vec3,
+    #[serde(with = "textures::radiance")]
+    pub radiance: Texture,
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub strength: f32,
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub two_sided: bool,
 }
 
+fn one() -> f32 {
+    1.0
+}
+
+fn is_one(x: &f32) -> bool {
+    *x == 1.0
+}
+
+/// Largest strength accepted.
+pub const MAX_STRENGTH: f32 = 1e6;
+
 impl MaterialModel for Light {
     const FEATURE: &'static str = "LIGHT";
+    /// Textured radiance.
+    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
     const EMITS_UNDER: Option<&'static str> = Some("LIGHT");
+
+    fn validate(&self) -> Result<(), String> {
+        if !(0.0..=MAX_STRENGTH).contains(&self.strength) {
+            return Err(format!(
+                "light strength must be in [0, {MAX_STRENGTH:e}], got {}",
+                self.strength
+            ));
+        }
+        self.radiance.validate()
+    }
+
+    fn relocated(self, origin: glam::DVec3) -> Self {
+        Light {
+            radiance: self.radiance.relocated(origin),
+            ..self
+        }
+    }
+
+    fn textures(&self) -> Vec<Texture> {
+        vec![self.radiance]
+    }
+
+    fn extra_features(&self) -> Vec<&'static str> {
+        self.radiance.feature().into_iter().collect()
+    }
 
     fn emitted(&self, hit: &Hit) -> Vec3 {
         if hit.front_face || self.two_sided {
-            self.radiance
+            texture::value(&self.radiance, hit) * self.strength
         } else {
             Vec3::ZERO
         }
     }
 
     fn area_light(&self) -> Option<(Vec3, bool)> {
-        (self.radiance != Vec3::ZERO).then_some((self.radiance, self.two_sided))
+        let mean = self.radiance.mean() * self.strength;
+        (mean != Vec3::ZERO).then_some((mean, self.two_sided))
     }
 
     fn scatter(&self, _dir_in: Vec3, _hit: &Hit, _sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         None
     }
 
-    /// emission: radiance; param: 1 if two-sided.
+    /// albedo (and texture_*): radiance; emission: strength (each channel); param: 1 if
+    /// two-sided.
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            emission: self.radiance.to_array(),
+            emission: [self.strength; 3],
             param: if self.two_sided { 1.0 } else { 0.0 },
-            ..Default::default()
+            ..GpuMaterial::with_albedo(&self.radiance)
         }
     }
 }

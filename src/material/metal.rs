@@ -31,7 +31,7 @@ impl MaterialModel for Metal {
         if !(0.0..=1.0).contains(&self.fuzz) {
             return Err(format!("fuzz must be in [0, 1], got {}", self.fuzz));
         }
-        self.albedo.validate()
+        self.albedo.validate_albedo()
     }
 
     fn textures(&self) -> Vec<Texture> {

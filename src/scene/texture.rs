@@ -52,16 +52,7 @@ impl Texture {
     /// Its parameter ranges (the colours are checked as they are read).
     pub fn validate(&self) -> Result<(), String> {
         match self {
-            Texture::Colour(_) => Ok(()),
-            Texture::Image(image) => {
-                if image.max_value > 1.0 {
-                    return Err(format!(
-                        "image {} has values up to {}: an albedo must lie in [0, 1]",
-                        image.source, image.max_value
-                    ));
-                }
-                Ok(())
-            }
+            Texture::Colour(_) | Texture::Image(_) => Ok(()),
             Texture::Checker(c) | Texture::UvChecker(c) => {
                 if !(c.scale > 0.0 && c.scale <= MAX_SCALE) {
                     return Err(format!(
@@ -70,6 +61,37 @@ impl Texture {
                     ));
                 }
                 Ok(())
+            }
+        }
+    }
+
+    /// [`Texture::validate`], and every value within [0, 1], as a reflectance must be.
+    pub fn validate_albedo(&self) -> Result<(), String> {
+        if let Texture::Image(image) = self
+            && image.max_value > 1.0
+        {
+            return Err(format!(
+                "image {} has values up to {}: an albedo must lie in [0, 1]",
+                image.source, image.max_value
+            ));
+        }
+        self.validate()
+    }
+
+    /// Its mean value over its surface coordinates (for checkers, of its two colours): what
+    /// light picking weighs a textured emitter by.
+    pub fn mean(&self) -> Vec3 {
+        match self {
+            Texture::Colour(c) => *c,
+            Texture::Checker(c) | Texture::UvChecker(c) => 0.5 * (c.even + c.odd),
+            Texture::Image(image) => {
+                let sum = image
+                    .texels
+                    .chunks_exact(3)
+                    .fold(glam::DVec3::ZERO, |sum, t| {
+                        sum + glam::DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)
+                    });
+                (sum / (image.texels.len() / 3) as f64).as_vec3()
             }
         }
     }
@@ -106,47 +128,68 @@ impl Texture {
 
 impl<'de> Deserialize<'de> for Texture {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct TextureVisitor;
-        impl<'de> Visitor<'de> for TextureVisitor {
-            type Value = Texture;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str(
+        d.deserialize_any(TextureVisitor { radiance: false })
+    }
+}
+
+/// A light's radiance: a [`Texture`] whose plain colour may exceed 1 (any non-negative).
+pub mod radiance {
+    use super::*;
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Texture, D::Error> {
+        d.deserialize_any(TextureVisitor { radiance: true })
+    }
+    pub fn serialize<S: Serializer>(t: &Texture, s: S) -> Result<S::Ok, S::Error> {
+        match t {
+            Texture::Colour(c) => checked::colour::serialize(c, s),
+            other => other.serialize(s),
+        }
+    }
+}
+
+/// Reads a texture; `radiance`: a plain colour is any non-negative one, not a reflectance.
+struct TextureVisitor {
+    radiance: bool,
+}
+
+impl<'de> Visitor<'de> for TextureVisitor {
+    type Value = Texture;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(
                     "a colour [r, g, b], { checker = { scale, even, odd } }, { uv_checker = { scale, even, odd } } or { image = \"file\" }",
                 )
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Texture, A::Error> {
-                checked::albedo::deserialize(de::value::SeqAccessDeserializer::new(seq))
-                    .map(Texture::Colour)
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Texture, A::Error> {
-                let key: String = map.next_key()?.ok_or_else(|| {
-                    de::Error::custom("empty texture: expected checker, uv_checker or image")
-                })?;
-                let texture = match key.as_str() {
-                    "checker" => Texture::Checker(map.next_value()?),
-                    "uv_checker" => Texture::UvChecker(map.next_value()?),
-                    "image" => {
-                        let source: String = map.next_value()?;
-                        Texture::Image(
-                            crate::scene::image::load_named(&source).map_err(de::Error::custom)?,
-                        )
-                    }
-                    other => {
-                        return Err(de::Error::unknown_field(
-                            other,
-                            &["checker", "uv_checker", "image"],
-                        ));
-                    }
-                };
-                if let Some(extra) = map.next_key::<String>()? {
-                    return Err(de::Error::custom(format!(
-                        "a texture is one of checker, uv_checker or image, found `{extra}` too"
-                    )));
-                }
-                Ok(texture)
-            }
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Texture, A::Error> {
+        let colour = de::value::SeqAccessDeserializer::new(seq);
+        if self.radiance {
+            checked::colour::deserialize(colour).map(Texture::Colour)
+        } else {
+            checked::albedo::deserialize(colour).map(Texture::Colour)
         }
-        d.deserialize_any(TextureVisitor)
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Texture, A::Error> {
+        let key: String = map.next_key()?.ok_or_else(|| {
+            de::Error::custom("empty texture: expected checker, uv_checker or image")
+        })?;
+        let texture = match key.as_str() {
+            "checker" => Texture::Checker(map.next_value()?),
+            "uv_checker" => Texture::UvChecker(map.next_value()?),
+            "image" => {
+                let source: String = map.next_value()?;
+                Texture::Image(crate::scene::image::load_named(&source).map_err(de::Error::custom)?)
+            }
+            other => {
+                return Err(de::Error::unknown_field(
+                    other,
+                    &["checker", "uv_checker", "image"],
+                ));
+            }
+        };
+        if let Some(extra) = map.next_key::<String>()? {
+            return Err(de::Error::custom(format!(
+                "a texture is one of checker, uv_checker or image, found `{extra}` too"
+            )));
+        }
+        Ok(texture)
     }
 }
 
