@@ -75,8 +75,8 @@ def sky(x, y, w=128, h=64):
     elevation = math.pi * (0.5 - (y + 0.5) / h)
     d = (math.cos(elevation) * math.cos(lon), math.sin(elevation), math.cos(elevation) * math.sin(lon))
     s = (math.cos(SUN[1]) * math.cos(SUN[0]), math.sin(SUN[1]), math.cos(SUN[1]) * math.sin(SUN[0]))
-    if math.acos(max(-1.0, min(1.0, sum(a * b for a, b in zip(d, s))))) < math.radians(4.0):
-        return (250.0, 225.0, 190.0)
+    if math.acos(max(-1.0, min(1.0, sum(a * b for a, b in zip(d, s))))) < math.radians(6.0):
+        return (111.0, 100.0, 84.0)
     if elevation < 0:
         return (0.25, 0.2, 0.15)
     t = elevation / (math.pi / 2)

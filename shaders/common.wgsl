@@ -12,15 +12,10 @@ struct Ray {
 // Per dispatch: storage, since lavapipe compiles (and keeps) a kernel variant for every new
 // uniform value it folds (see GpuDispatch in src/gpu/layout.rs).
 @group(0) @binding(7) var<storage, read> dispatch: Dispatch;
-// Every image the scene reads (a texel per vec4f), and the environment's sampling tables
+// Every image the scene reads (a texel per vec4f), and the environment's alias table
 // (ImageArray in src/gpu/layout.rs).
 //#if IMAGE_TEXTURE || ENVIRONMENT
 @group(0) @binding(8) var<storage, read> images: array<vec4f>;
-
-// Value i of the tables, in f32 units.
-fn table(i: u32) -> f32 {
-    return images[i >> 2u][i & 3u];
-}
 //#endif
 // Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.

@@ -26,38 +26,32 @@ fn environment_radiance(dir: vec3f) -> vec3f {
     return texels * params.environment_strength;
 }
 
-// The cell of the cumulative table of n + 1 values at `start` that u in [0, 1) falls in: the
-// last i with table[i] <= u.
-fn find_cell(start: u32, n: u32, u: f32) -> u32 {
-    var lo = 0u;
-    var hi = n;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if table(start + mid) <= u {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
-
 struct EnvironmentSample {
     dir: vec3f,
     pdf: f32,   // 0: no sample (a pole)
 }
 
+// A direction from the environment's distribution: u1 picks the texel from the alias table (its
+// vec4f: keep, alias as bits, own density, alias's density), its remainder and u2 place the
+// direction across it (Distribution::pick and cpu::environment::sample).
 fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
     let w = params.environment_width;
     let h = params.environment_height;
-    let rows = params.environment_rows;
-    let y = find_cell(rows, h, u1);
-    let row_share = table(rows + y + 1u) - table(rows + y);
-    let t = (f32(y) + min((u1 - table(rows + y)) / row_share, 1.0)) / f32(h);
-    let columns = params.environment_columns + y * (w + 1u);
-    let x = find_cell(columns, w, u2);
-    let column_share = table(columns + x + 1u) - table(columns + x);
-    let s = (f32(x) + min((u2 - table(columns + x)) / column_share, 1.0)) / f32(w);
+    let n = w * h;
+    let scaled = u1 * f32(n);
+    let i = min(u32(scaled), n - 1u);
+    let r = scaled - f32(i);
+    let slot = images[params.environment_aliases + i];
+    var texel = i;
+    var across = min(r / slot.x, ONE_BELOW);
+    var density = slot.z;
+    if !(r < slot.x) {
+        texel = min(bitcast<u32>(slot.y), n - 1u);
+        across = clamp((r - slot.x) / (1.0 - slot.x), 0.0, ONE_BELOW);
+        density = slot.w;
+    }
+    let s = (f32(texel % w) + across) / f32(w);
+    let t = (f32(texel / w) + u2) / f32(h);
     let sin_theta = sin(PI * t);
     if !(sin_theta > 0.0) {
         return EnvironmentSample(vec3f(0.0, 1.0, 0.0), 0.0);
@@ -67,26 +61,34 @@ fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
     let c = params.environment_rotation.x;
     let sn = params.environment_rotation.y;
     let dir = vec3f(c * local.x + sn * local.z, local.y, -sn * local.x + c * local.z);
-    let density = row_share * f32(h) * column_share * f32(w);
     return EnvironmentSample(dir, density / (2.0 * PI * PI * sin_theta));
 }
 
-// The solid-angle pdf with which environment_sample picks unit direction dir.
-fn environment_pdf(dir: vec3f) -> f32 {
+// The radiance from unit direction dir and the solid-angle pdf with which environment_sample
+// picks it (the image coordinates found once: what an escaped ray needs).
+struct EnvironmentLookup {
+    radiance: vec3f,
+    pdf: f32,
+}
+
+fn environment_lookup(dir: vec3f) -> EnvironmentLookup {
     let local = environment_local(dir);
-    let sin_theta = sqrt(local.x * local.x + local.z * local.z);
-    if !(sin_theta > 0.0) {
-        return 0.0;
-    }
     let st = environment_coordinates(local);
     let w = params.environment_width;
     let h = params.environment_height;
+    let t = clamp(st.y, 0.5 / f32(h), 1.0 - 0.5 / f32(h));
+    let radiance = bilinear(params.environment_texels, w, h, st.x, t) * params.environment_strength;
+    let sin_theta = sqrt(local.x * local.x + local.z * local.z);
+    if !(sin_theta > 0.0) {
+        return EnvironmentLookup(radiance, 0.0);
+    }
     let x = min(u32(max(floor(st.x * f32(w)), 0.0)), w - 1u);
     let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
-    let rows = params.environment_rows;
-    let columns = params.environment_columns + y * (w + 1u);
-    let density = (table(rows + y + 1u) - table(rows + y)) * f32(h)
-        * (table(columns + x + 1u) - table(columns + x)) * f32(w);
-    return density / (2.0 * PI * PI * sin_theta);
+    let density = images[params.environment_texels + y * w + x].w;
+    return EnvironmentLookup(radiance, density / (2.0 * PI * PI * sin_theta));
+}
+
+fn environment_pdf(dir: vec3f) -> f32 {
+    return environment_lookup(dir).pdf;
 }
 //#endif

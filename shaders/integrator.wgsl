@@ -159,17 +159,19 @@ fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -
 }
 //#endif
 
-// The MIS weight of the background a ray escapes to along dir, chosen by the BSDF with pdf
-// bsdf_pdf (0: not by one that light sampling could match): the environment is the last light.
-fn escaped_weight(bsdf_pdf: f32, dir: vec3f) -> f32 {
+// The background a ray escapes to along dir, chosen by the BSDF with pdf bsdf_pdf (0: not by one
+// that light sampling could match), times its MIS weight against sampling the environment (the
+// last light).
+fn escaped(bsdf_pdf: f32, dir: vec3f) -> vec3f {
 //#if NEE
 //#if ENVIRONMENT
     if bsdf_pdf > 0.0 {
-        return power_heuristic(bsdf_pdf, light_at(params.light_count - 1u).pick * environment_pdf(dir));
+        let e = environment_lookup(dir);
+        return power_heuristic(bsdf_pdf, light_at(params.light_count - 1u).pick * e.pdf) * e.radiance;
     }
 //#endif
 //#endif
-    return 1.0;
+    return background(dir);
 }
 
 fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
@@ -229,13 +231,13 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
         }
         if event.kind != EVENT_SURFACE {
             if event.kind == EVENT_ESCAPED {
-                total += throughput * escaped_weight(bsdf_pdf, ray.dir) * background(ray.dir);
+                total += throughput * escaped(bsdf_pdf, ray.dir);
             }
             break;
         }
 //#else
         if !intersect(ray, &hit) {
-            total += throughput * escaped_weight(bsdf_pdf, ray.dir) * background(ray.dir);
+            total += throughput * escaped(bsdf_pdf, ray.dir);
             break;
         }
 //#endif

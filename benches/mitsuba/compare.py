@@ -2,9 +2,12 @@
 """rt-gpu against Mitsuba 3 on the same scene, measured in one run.
 
 Builds the scene of an rt-gpu scene file (quads, boxes rotated about y, spheres; lambertian,
-dielectric and light materials; homogeneous media: a `medium` material becomes a `null` BSDF
-with a `homogeneous` interior medium and an `hg` phase function, a dielectric's `medium` its
-interior) for Mitsuba 3 (variant llvm_ad_rgb, `path` integrator with NEE and MIS, or `volpath`
+dielectric, mirror metal (fuzz 0: a `conductor` of material `none`) and light materials;
+homogeneous media: a `medium` material becomes a `null` BSDF with a `homogeneous` interior
+medium and an `hg` phase function, a dielectric's `medium` its interior; image textures as
+`bitmap`s (bilinear, repeating), `uv_checker` as `checkerboard`, with shapes' UV frames arranged
+to agree; an environment background as an `envmap` whose frame is arranged to agree, a colour
+as a `constant` emitter) for Mitsuba 3 (variant llvm_ad_rgb, `path` integrator with NEE and MIS, or `volpath`
 for scenes with media, with Russian roulette from depth 5 as rt-gpu's default there; box pixel
 filter, the same max depth, sampler `--mitsuba-sampler`, default multijitter, its best here),
 renders it there at SPP samples per pixel, and finds how long rt-gpu, with its default settings,
@@ -51,6 +54,21 @@ def rotate_y(p, degrees):
     return np.array([c * x + s * z, y, -s * x + c * z])
 
 
+def rotation_y(degrees):
+    """rt-gpu's rotation about +y as a 4x4 matrix: x' = cos x + sin z, z' = -sin x + cos z."""
+    a = math.radians(degrees)
+    return np.array([[math.cos(a), 0, math.sin(a), 0], [0, 1, 0, 0], [-math.sin(a), 0, math.cos(a), 0],
+                     [0, 0, 0, 1]], float)
+
+
+def transform3(m):
+    """A 3x3 matrix as a Mitsuba texture-coordinate transform."""
+    import mitsuba as mi
+
+    kind = getattr(mi, "ScalarTransform3f", None) or getattr(mi, "ScalarAffineTransform3f")
+    return kind(m.tolist())
+
+
 def box_faces(lo, hi):
     """As src/scene/flat.rs: (corner, u, v), u x v outward."""
     d = hi - lo
@@ -74,8 +92,23 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
     height = height or render.get("height", 512)
     max_depth = max_depth or render.get("max_depth", 10)
     background = render.get("background", [0, 0, 0])
-    if background != [0, 0, 0]:
-        sys.exit("only black backgrounds are translated")
+    base = os.path.dirname(os.path.abspath(path))
+    environment = {}
+    if isinstance(background, dict):
+        # rt-gpu's column s = (atan2(-z, x) + pi) / 2 pi of the direction turned by -rotate_y;
+        # Mitsuba's u = atan2(x', -z') / 2 pi of its local direction: they agree where
+        # (x', y', z') = (z, y, x) (a reflection), so to_world = rotate_y . swap(x, z). Rows agree.
+        swap = np.array([[0, 0, 1, 0], [0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1]], float)
+        environment["environment"] = {
+            "type": "envmap",
+            "filename": os.path.join(base, background["image"]),
+            "scale": background.get("strength", 1.0),
+            "to_world": mi.ScalarTransform4f((rotation_y(background.get("rotate_y", 0.0)) @ swap).tolist()),
+        }
+    elif background == "sky":
+        sys.exit("the sky background is not translated")
+    elif background != [0, 0, 0]:
+        environment["environment"] = {"type": "constant", "radiance": {"type": "rgb", "value": background}}
     cam = scene["camera"]
     if cam.get("aperture", 0) != 0:
         sys.exit("only pinhole cameras are translated")
@@ -90,6 +123,27 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             "phase": {"type": "hg", "g": medium.get("g", 0.0)},
         }
 
+    textured = set()
+
+    def texture(name, value):
+        """A colour or texture. UVs are arranged (see add_quad and the spheres) so that Mitsuba's
+        v is rt-gpu's 1 - v: Mitsuba's bitmaps put v = 0 at the top row, rt-gpu's at the bottom."""
+        if isinstance(value, list):
+            return {"type": "rgb", "value": value}
+        textured.add(name)
+        if "image" in value:
+            return {"type": "bitmap", "filename": os.path.join(base, value["image"]),
+                    "filter_type": "bilinear", "wrap_mode": "repeat"}
+        if "uv_checker" in value:
+            c = value["uv_checker"]
+            k = c["scale"]
+            # Mitsuba's checkerboard has color0 where frac(u) and frac(v) are both below or both
+            # above 1/2: rt-gpu's even cells, at u, v scaled by k / 2 (and v turned back).
+            to_uv = np.array([[k / 2, 0, 0], [0, -k / 2, k / 2], [0, 0, 1]], float)
+            return {"type": "checkerboard", "color0": {"type": "rgb", "value": c["even"]},
+                    "color1": {"type": "rgb", "value": c["odd"]}, "to_uv": transform3(to_uv)}
+        sys.exit(f"material {name}: only colours, images and uv_checker textures are translated")
+
     for name, m in scene["materials"].items():
         kind = m["type"]
         if kind == "lambertian":
@@ -98,8 +152,14 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             # rt-gpu's lambertian reflects on both faces.
             bsdfs[name] = {
                 "type": "twosided",
-                "inner": {"type": "diffuse", "reflectance": {"type": "rgb", "value": m["albedo"]}},
+                "inner": {"type": "diffuse", "reflectance": texture(name, m["albedo"])},
             }
+        elif kind == "metal":
+            if m.get("fuzz", 0) != 0:
+                sys.exit("fuzzy metal is not translated")
+            # rt-gpu's metal is a mirror reflecting its albedo, no Fresnel.
+            bsdfs[name] = {"type": "conductor", "material": "none",
+                           "specular_reflectance": texture(name, m["albedo"])}
         elif kind == "dielectric":
             bsdfs[name] = {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}
             if "medium" in m:
@@ -111,8 +171,11 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             if m.get("two_sided", False):
                 sys.exit("two-sided lights are not translated")
             # A black, one-sided area light: Mitsuba's area emitters face the shape's normal.
+            if not isinstance(m["radiance"], list):
+                sys.exit("textured lights are not translated")
             bsdfs[name] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}}
-            emitters[name] = {"type": "area", "radiance": {"type": "rgb", "value": m["radiance"]}}
+            radiance = [c * m.get("strength", 1.0) for c in m["radiance"]]
+            emitters[name] = {"type": "area", "radiance": {"type": "rgb", "value": radiance}}
         else:
             sys.exit(f"material type {kind} is not translated")
 
@@ -124,6 +187,8 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
         n = n / np.linalg.norm(n)
         m = np.identity(4)
         m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = u / 2, v / 2, n, q + (u + v) / 2
+        if material in textured:
+            m[:3, 1] = -v / 2  # Mitsuba's v runs along -v: its v is rt-gpu's 1 - v
         shape = {"type": "rectangle", "to_world": mi.ScalarTransform4f(m.tolist()), "bsdf": bsdfs[material]}
         if material in emitters:
             shape["emitter"] = emitters[material]
@@ -146,10 +211,16 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             s = obj["sphere"]
             if s["radius"] <= 0:
                 sys.exit("hollow spheres are not translated")
+            # Mitsuba's sphere UV: u = atan2(y', x') / 2 pi, v = acos(z') / pi of its local
+            # (x', y', z'); rt-gpu's: u = (atan2(-z, x) + pi) / 2 pi, v = acos(-y) / pi. With
+            # (x', y', z') = (-x, z, y) Mitsuba's u is rt-gpu's u and its v rt-gpu's 1 - v.
+            frame = np.array([[-1, 0, 0, 0], [0, 0, 1, 0], [0, 1, 0, 0], [0, 0, 0, 1]], float)
+            place = np.identity(4)
+            place[:3, 3] = rotate_y(s["center"], angle) + t
+            size = np.diag([s["radius"]] * 3 + [1.0])
             shape = {
                 "type": "sphere",
-                "center": (rotate_y(s["center"], angle) + t).tolist(),
-                "radius": s["radius"],
+                "to_world": mi.ScalarTransform4f((place @ frame @ size).tolist()),
                 "bsdf": bsdfs[material],
             }
             if material in emitters:
@@ -182,6 +253,7 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             },
         },
         **shapes,
+        **environment,
     }, width, height, max_depth
 
 

@@ -3,7 +3,7 @@
 //! their solid-angle pdf.
 
 use super::texture::bilinear;
-use crate::scene::environment::{Distribution, Environment};
+use crate::scene::environment::Environment;
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -28,39 +28,20 @@ pub fn radiance(env: &Environment, dir: Vec3) -> Vec3 {
     let (s, t) = image_coordinates(to_local(env, dir));
     // Rows do not wrap over the poles: t stays within the first and last rows' centres.
     let h = env.image.height as f32;
-    let t = t.clamp(0.5 / h, 1.0 - 0.5 / h);
-    bilinear(env.image, s, t) * env.strength
-}
-
-/// The cell of `table` (a cumulative table of `n + 1` values from 0 to 1) that `u` in [0, 1)
-/// falls in: the last i with table[i] <= u, which has table[i + 1] > table[i].
-#[inline]
-fn find_cell(table: &[f32], u: f32) -> usize {
-    let (mut lo, mut hi) = (0, table.len() - 1);
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        if table[mid] <= u {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
+    bilinear(env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength
 }
 
 /// A direction sampled from the environment's distribution with two uniform numbers, and its
-/// solid-angle pdf; `None` at the poles (where the pdf would be infinite).
+/// solid-angle pdf; `None` at the poles (where the pdf would be infinite). The first number
+/// picks the texel (see `Distribution::pick`), its remainder and the second place the direction
+/// across it.
 #[inline]
 pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
     let d = env.distribution();
     let (w, h) = (env.image.width as usize, env.image.height as usize);
-    let y = find_cell(&d.rows, u1);
-    let row_share = d.rows[y + 1] - d.rows[y];
-    let t = (y as f32 + ((u1 - d.rows[y]) / row_share).min(1.0)) / h as f32;
-    let columns = &d.columns[y * (w + 1)..(y + 1) * (w + 1)];
-    let x = find_cell(columns, u2);
-    let column_share = columns[x + 1] - columns[x];
-    let s = (x as f32 + ((u2 - columns[x]) / column_share).min(1.0)) / w as f32;
+    let (i, across) = d.pick(u1);
+    let s = ((i % w) as f32 + across) / w as f32;
+    let t = ((i / w) as f32 + u2) / h as f32;
     let (sin_theta, cos_theta) = (PI * t).sin_cos();
     if !(sin_theta > 0.0) {
         return None;
@@ -73,32 +54,33 @@ pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
         local.y,
         -sin * local.x + cos * local.z,
     );
-    let density = row_share * h as f32 * column_share * w as f32;
-    Some((dir, density / (2.0 * PI * PI * sin_theta)))
+    Some((dir, d.density[i] / (2.0 * PI * PI * sin_theta)))
 }
 
 /// The solid-angle pdf with which [`sample`] picks unit direction `dir`.
 #[inline]
 pub fn pdf(env: &Environment, dir: Vec3) -> f32 {
-    let local = to_local(env, dir);
-    let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
-    if !(sin_theta > 0.0) {
-        return 0.0;
-    }
-    let (s, t) = image_coordinates(local);
-    density(env.distribution(), env.image.width, env.image.height, s, t)
-        / (2.0 * PI * PI * sin_theta)
+    radiance_and_pdf(env, dir).1
 }
 
-/// The density in image coordinates at (s, t).
+/// [`radiance`] and [`pdf`] together, the direction's image coordinates found once (what an
+/// escaped ray needs for its MIS weight).
 #[inline]
-fn density(d: &Distribution, width: u32, height: u32, s: f32, t: f32) -> f32 {
-    let (w, h) = (width as f32, height as f32);
-    let x = ((s * w).floor().max(0.0) as usize).min(width as usize - 1);
+pub fn radiance_and_pdf(env: &Environment, dir: Vec3) -> (Vec3, f32) {
+    let local = to_local(env, dir);
+    let (s, t) = image_coordinates(local);
+    let (width, height) = (env.image.width, env.image.height);
+    let h = height as f32;
+    // Rows do not wrap over the poles: t stays within the first and last rows' centres.
+    let radiance = bilinear(env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength;
+    let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+    if !(sin_theta > 0.0) {
+        return (radiance, 0.0);
+    }
+    let x = ((s * width as f32).floor().max(0.0) as usize).min(width as usize - 1);
     let y = ((t * h).floor().max(0.0) as usize).min(height as usize - 1);
-    let row = d.rows[y + 1] - d.rows[y];
-    let columns = &d.columns[y * (width as usize + 1)..];
-    row * h * (columns[x + 1] - columns[x]) * w
+    let density = env.distribution().density[y * width as usize + x];
+    (radiance, density / (2.0 * PI * PI * sin_theta))
 }
 
 #[cfg(test)]
@@ -122,7 +104,7 @@ mod tests {
     #[test]
     fn samples_land_where_their_pdf_says() {
         let env = environment(8, 4, |x, y| 1.0 + (x * 3 + y) as f32);
-        for (u1, u2) in [(0.1, 0.2), (0.5, 0.5), (0.93, 0.07), (0.3, 0.999)] {
+        for (u1, u2) in [(0.1, 0.2), (0.51, 0.5), (0.93, 0.07), (0.3, 0.999)] {
             let (dir, pdf) = sample(&env, u1, u2).unwrap();
             assert!((dir.length() - 1.0).abs() < 1e-5);
             assert!(

@@ -104,15 +104,7 @@ pub fn radiance(
     for segment in 0..opts.max_depth {
         let hit = match next_event(scene, &mut ray, &mut medium, sampler) {
             Event::Escaped => {
-                let mut weight = 1.0;
-                if let Some(index) = scene.environment_light()
-                    && nee
-                    && bsdf_pdf > 0.0
-                {
-                    let light_pdf = lights::pdf(&scene.lights[index], origin, origin, ray.dir);
-                    weight = lights::power_heuristic(bsdf_pdf, light_pdf);
-                }
-                total += throughput * weight * background(&scene.background, ray.dir);
+                total += throughput * escaped(scene, nee, bsdf_pdf, ray.dir);
                 break;
             }
             Event::Lost => break,
@@ -180,6 +172,23 @@ pub fn radiance(
         }
     }
     total
+}
+
+/// The background a ray escapes to along `dir`, chosen by the BSDF with pdf `bsdf_pdf` (0: not
+/// by one that light sampling could match), times its MIS weight against sampling the
+/// environment.
+#[inline]
+fn escaped(scene: &FlatScene, nee: bool, bsdf_pdf: f32, dir: Vec3) -> Vec3 {
+    if let Some(index) = scene.environment_light()
+        && nee
+        && bsdf_pdf > 0.0
+        && let LightShape::Environment(env) = scene.lights[index].shape
+    {
+        let (radiance, pdf) = super::environment::radiance_and_pdf(&env, dir);
+        let light_pdf = scene.lights[index].pick * pdf;
+        return lights::power_heuristic(bsdf_pdf, light_pdf) * radiance;
+    }
+    background(&scene.background, dir)
 }
 
 /// A scattering event in `interior` (the ray's `medium`) at `point`, reached travelling along

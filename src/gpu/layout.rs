@@ -276,15 +276,14 @@ gpu_struct! {
         roulette_depth: u32,
         /// The environment (see `scene::environment`): cos and sin of its rotation about y,
         environment_rotation: [f32; 2],
-        /// where its texels, its row table and its column tables start in the images array,
+        /// where its texels and its alias table start in the images array,
         environment_texels: u32,
-        environment_rows: u32,
-        environment_columns: u32,
+        environment_aliases: u32,
         /// its size and its strength.
         environment_width: u32,
         environment_height: u32,
         environment_strength: f32,
-        _pad: [u32; 2],
+        _pad: [u32; 3],
     }
 }
 
@@ -359,6 +358,7 @@ fn wgsl_constants() -> String {
         ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
         ("TEXTURE_IMAGE", TEXTURE_IMAGE.literal()),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
+        ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),
         (
             "MAX_SURVIVAL",
@@ -450,16 +450,16 @@ pub struct SceneBuffers {
 }
 
 /// Every image a scene reads, in one array of vec4f (the kernel's `images`): each image's
-/// texels (one vec4f each, RGB and a zero, rows from the top; placed in vec4f units), and after
-/// the environment's its sampling tables (`scene::environment::Distribution`; placed in f32
-/// units, each starting at a vec4f).
+/// texels (one vec4f each: RGB and 0, rows from the top), the environment's with its sampling
+/// density as the fourth value, and after them the environment's alias table (a vec4f per
+/// texel; `scene::environment::Distribution`). Positions count vec4fs.
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {
     pub values: Vec<f32>,
     /// (image, where its texels start).
     placed: Vec<(&'static Image, u32)>,
-    /// Where the environment's texels, row table and column tables start.
-    pub environment: Option<[u32; 3]>,
+    /// Where the environment's texels and its alias table start.
+    pub environment: Option<[u32; 2]>,
     /// How many values it holds (at least 1: a binding cannot be empty).
     len: u64,
 }
@@ -476,25 +476,15 @@ impl ImageArray {
 
     fn lay_out(scene: &FlatScene, fill: bool) -> Self {
         let mut out = ImageArray::default();
-        // In f32 values; every placement starts at a multiple of 4 (a vec4f).
-        let mut len = 0u64;
-        let place_table = |out: &mut ImageArray, values: &[f32], len: &mut u64| {
-            let at = *len as u32;
-            *len += (values.len() as u64).next_multiple_of(4);
+        // Texels as vec4f (RGB and 0, or for the environment its density): one load each.
+        let mut len = 0u32;
+        let mut place = |out: &mut ImageArray, image: &Image, w: &dyn Fn(usize) -> f32| {
+            let at = len;
+            len += image.width * image.height;
             if fill {
-                out.values.extend(values);
-                out.values.resize(*len as usize, 0.0);
-            }
-            at
-        };
-        // Texels as vec4f (the kernel loads each with one load), indexed in vec4fs.
-        let place_texels = |out: &mut ImageArray, image: &Image, len: &mut u64| {
-            let at = (*len / 4) as u32;
-            *len += 4 * (image.texels.len() as u64 / 3);
-            if fill {
-                for rgb in image.texels.chunks_exact(3) {
+                for (i, rgb) in image.texels.chunks_exact(3).enumerate() {
                     out.values.extend(rgb);
-                    out.values.push(0.0);
+                    out.values.push(w(i));
                 }
             }
             at
@@ -504,19 +494,31 @@ impl ImageArray {
                 if let Texture::Image(image) = texture
                     && !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image))
                 {
-                    let at = place_texels(&mut out, image, &mut len);
+                    let at = place(&mut out, image, &|_| 0.0);
                     out.placed.push((image, at));
                 }
             }
         }
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
-            let texels = place_texels(&mut out, env.image, &mut len);
-            let rows = place_table(&mut out, &d.rows, &mut len);
-            let columns = place_table(&mut out, &d.columns, &mut len);
-            out.environment = Some([texels, rows, columns]);
+            let texels = place(&mut out, env.image, &|i| d.density[i]);
+            // Its alias table: per texel (keep, alias as bits, own density, alias's density).
+            let aliases = len;
+            len += d.keep.len() as u32;
+            if fill {
+                for i in 0..d.keep.len() {
+                    let alias = d.alias[i] as usize;
+                    out.values.extend([
+                        d.keep[i],
+                        f32::from_bits(alias as u32),
+                        d.density[i],
+                        d.density[alias],
+                    ]);
+                }
+            }
+            out.environment = Some([texels, aliases]);
         }
-        out.len = len.max(4);
+        out.len = 4 * len.max(1) as u64;
         if fill && out.values.is_empty() {
             out.values.resize(4, 0.0);
         }
@@ -643,7 +645,7 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         Background::Sky => ([0.0; 3], 1),
         Background::Environment(_) => ([0.0; 3], 0),
     };
-    let mut environment = ([1.0, 0.0], [0; 3], [0; 2], 0.0);
+    let mut environment = ([1.0, 0.0], [0; 2], [0; 2], 0.0);
     if let Background::Environment(env) = scene.background {
         let slots = ImageArray::plan(scene).environment.unwrap_or_default();
         environment = (
@@ -672,12 +674,11 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         roulette_depth: opts.roulette_depth,
         environment_rotation: environment.0,
         environment_texels: environment.1[0],
-        environment_rows: environment.1[1],
-        environment_columns: environment.1[2],
+        environment_aliases: environment.1[1],
         environment_width: environment.2[0],
         environment_height: environment.2[1],
         environment_strength: environment.3,
-        _pad: [0; 2],
+        _pad: [0; 3],
     }
 }
 

@@ -36,17 +36,8 @@ fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> Lo
         1
     };
     let trace = rays_per_trace * (1 + primitives);
-    // Sampling the environment: a binary search over its rows and one over a row's columns.
-    let environment = match scene.background {
-        crate::scene::Background::Environment(env) if features.nee => {
-            2 + (env.image.width as u64 + 1).ilog2() as u64
-                + (env.image.height as u64 + 1).ilog2() as u64
-                + 2
-        }
-        _ => 0,
-    };
     let per_segment = if features.nee {
-        5 + 2 * trace + scene.lights.len() as u64 + environment
+        5 + 2 * trace + scene.lights.len() as u64
     } else {
         2 + trace
     };

@@ -68,17 +68,18 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f64 {
 }
 
 /// A piecewise-constant density over the image, texel by texel, in proportion to luminance
-/// times sin(theta) (the solid angle a texel spans): rows first (the marginal), then the
-/// column within the row (the conditional), as cumulative tables rounded to f32 from f64 sums.
-/// The density of texel (x, y) in image coordinates (s, t) in [0, 1]^2 is
-/// `(rows[y + 1] - rows[y]) * height * (columns[y][x + 1] - columns[y][x]) * width`: exactly
-/// the density sampling by inversion of these f32 tables gives.
+/// times sin(theta) (the solid angle a texel spans), sampled with an alias table (Walker 1977;
+/// Vose 1991): one number picks a texel in constant time, whatever the image's size, and its
+/// remainder places the direction across the texel. Built in f64, stored in f32.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Distribution {
-    /// `height + 1` values from 0 to 1.
-    pub rows: Vec<f32>,
-    /// Per row, `width + 1` values from 0 to 1.
-    pub columns: Vec<f32>,
+    /// Per texel, row by row: the chance that a pick landing on it keeps it,
+    pub keep: Vec<f32>,
+    /// else the texel it passes to;
+    pub alias: Vec<u32>,
+    /// and its density in image coordinates (s, t) in [0, 1]^2: its share of the whole times
+    /// the number of texels.
+    pub density: Vec<f32>,
     /// The integral of luminance over directions (steradians), strength 1.
     pub integral: f64,
 }
@@ -86,48 +87,72 @@ pub struct Distribution {
 impl Distribution {
     pub fn new(image: &Image) -> Self {
         let (w, h) = (image.width as usize, image.height as usize);
-        let mut columns = Vec::with_capacity(h * (w + 1));
-        let mut row_sums = Vec::with_capacity(h);
+        let mut weights = Vec::with_capacity(w * h);
         for y in 0..h {
             let sin_theta = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
-            let weights: Vec<f64> = (0..w)
-                .map(|x| {
-                    let t = image.texel(x as u32, y as u32);
-                    luminance(t.x, t.y, t.z) * sin_theta
-                })
-                .collect();
-            let sum: f64 = weights.iter().sum();
-            cumulative(&weights, sum, &mut columns);
-            row_sums.push(sum);
+            for x in 0..w {
+                let t = image.texel(x as u32, y as u32);
+                weights.push(luminance(t.x, t.y, t.z) * sin_theta);
+            }
         }
-        let total: f64 = row_sums.iter().sum();
-        let mut rows = Vec::with_capacity(h + 1);
-        cumulative(&row_sums, total, &mut rows);
+        let total: f64 = weights.iter().sum();
         let texel_solid_angle =
             2.0 * std::f64::consts::PI / w as f64 * std::f64::consts::PI / h as f64;
+        let integral = total * texel_solid_angle;
+        if !(total > 0.0) {
+            weights.fill(1.0); // nothing to favour: uniform over the image
+        }
+        let (keep, alias, density) = alias_table(&weights);
         Distribution {
-            rows,
-            columns,
-            integral: total * texel_solid_angle,
+            keep,
+            alias,
+            density,
+            integral,
+        }
+    }
+
+    /// The texel that `u` in [0, 1) picks, and `u`'s remainder, uniform in [0, 1) again (the
+    /// kernel's `environment_pick` does the same f32 arithmetic).
+    #[inline]
+    pub fn pick(&self, u: f32) -> (usize, f32) {
+        let n = self.keep.len();
+        let scaled = u * n as f32;
+        let i = (scaled as usize).min(n - 1);
+        let r = scaled - i as f32;
+        if r < self.keep[i] {
+            (i, (r / self.keep[i]).min(ONE_BELOW))
+        } else {
+            let rest = ((r - self.keep[i]) / (1.0 - self.keep[i])).clamp(0.0, ONE_BELOW);
+            (self.alias[i] as usize, rest)
         }
     }
 }
 
-/// Appends the cumulative shares of `weights` (summing to `sum`): 0 first, exactly 1 last;
-/// uniform where nothing has weight.
-fn cumulative(weights: &[f64], sum: f64, out: &mut Vec<f32>) {
+/// The largest f32 below 1.
+pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Walker's alias table of `weights` (Vose's construction, in f64): (keep, alias, density).
+fn alias_table(weights: &[f64]) -> (Vec<f32>, Vec<u32>, Vec<f32>) {
     let n = weights.len();
-    out.push(0.0);
-    let mut running = 0.0;
-    for (i, w) in weights.iter().enumerate() {
-        running += w;
-        let share = if sum > 0.0 {
-            running / sum
-        } else {
-            (i + 1) as f64 / n as f64
-        };
-        out.push(if i + 1 == n { 1.0 } else { share as f32 });
+    let total: f64 = weights.iter().sum();
+    let scaled: Vec<f64> = weights.iter().map(|w| w * n as f64 / total).collect();
+    let density = scaled.iter().map(|&d| d as f32).collect();
+    let mut keep = vec![1.0f32; n];
+    let mut alias: Vec<u32> = (0..n as u32).collect();
+    let mut left = scaled.clone();
+    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| left[i] < 1.0);
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        keep[s] = left[s] as f32;
+        alias[s] = l as u32;
+        left[l] -= 1.0 - left[s];
+        if left[l] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
     }
+    // What remains is 1 up to rounding: kept.
+    (keep, alias, density)
 }
 
 #[cfg(test)]
@@ -135,25 +160,59 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tables_are_cumulative_and_weigh_by_solid_angle() {
-        // A uniform white image: rows weighted by sin(theta), columns uniform.
-        let image = Image::from_linear("white", 4, 3, vec![1.0; 36]).unwrap();
+    fn the_alias_table_gives_each_texel_its_share() {
+        // Texels weighted 1..=12 times sin(theta) of their row: each texel's chance, summed
+        // over every slot that can pick it, is its share.
+        let texels: Vec<f32> = (0..12).flat_map(|i| [1.0 + i as f32; 3]).collect();
+        let image = Image::from_linear("ramp", 4, 3, texels).unwrap();
         let d = Distribution::new(&image);
-        assert_eq!(d.rows.len(), 4);
-        assert_eq!(d.columns.len(), 3 * 5);
-        assert_eq!((d.rows[0], d.rows[3]), (0.0, 1.0));
-        let middle = d.rows[2] - d.rows[1];
-        let top = d.rows[1] - d.rows[0];
-        assert!((middle / top - 1.0 / (std::f32::consts::PI / 6.0).sin()).abs() < 1e-5);
-        for row in d.columns.chunks(5) {
-            assert_eq!(row, &[0.0, 0.25, 0.5, 0.75, 1.0]);
+        let n = d.keep.len();
+        let mut chance = vec![0.0f64; n];
+        for i in 0..n {
+            chance[i] += d.keep[i] as f64 / n as f64;
+            chance[d.alias[i] as usize] += (1.0 - d.keep[i] as f64) / n as f64;
         }
-        // The integral of 1 over the sphere is 4 pi, up to the midpoint rule's error.
-        assert!((d.integral / (4.0 * std::f64::consts::PI) - 1.0).abs() < 0.1);
+        for (i, (chance, density)) in chance.iter().zip(&d.density).enumerate() {
+            assert!(
+                (chance * n as f64 - *density as f64).abs() < 1e-5,
+                "texel {i}"
+            );
+        }
+        let middle = d.density[5] / d.density[1];
+        assert!((middle - 6.0 / 2.0 / (std::f32::consts::PI / 6.0).sin()).abs() < 1e-4);
+        // The integral of a white image is 4 pi, up to the midpoint rule's error.
+        let white = Image::from_linear("white", 8, 4, vec![1.0; 96]).unwrap();
+        let d = Distribution::new(&white);
+        assert!((d.integral / (4.0 * std::f64::consts::PI) - 1.0).abs() < 0.05);
         // A black image is sampled uniformly and has no power.
         let black = Image::from_linear("black", 2, 2, vec![0.0; 12]).unwrap();
         let d = Distribution::new(&black);
-        assert_eq!(d.rows, vec![0.0, 0.5, 1.0]);
+        assert_eq!(d.density, vec![1.0; 4]);
         assert_eq!(d.integral, 0.0);
+    }
+
+    #[test]
+    fn picks_land_in_proportion_and_leave_a_uniform_remainder() {
+        let texels: Vec<f32> = (0..6).flat_map(|i| [(i * i) as f32; 3]).collect();
+        let image = Image::from_linear("squares", 3, 2, texels).unwrap();
+        let d = Distribution::new(&image);
+        let m = 60_000;
+        let mut counts = [0usize; 6];
+        let mut remainder = 0.0;
+        for k in 0..m {
+            let (i, r) = d.pick((k as f32 + 0.5) / m as f32);
+            assert!((0.0..1.0).contains(&r));
+            counts[i] += 1;
+            remainder += r as f64 / m as f64;
+        }
+        assert_eq!(counts[0], 0);
+        for (i, (count, density)) in counts.iter().zip(&d.density).enumerate() {
+            let expected = *density as f64 / 6.0;
+            assert!(
+                (*count as f64 / m as f64 - expected).abs() < 1e-3,
+                "texel {i}"
+            );
+        }
+        assert!((remainder - 0.5).abs() < 1e-3);
     }
 }
