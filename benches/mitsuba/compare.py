@@ -61,6 +61,24 @@ def rotation_y(degrees):
                      [0, 0, 0, 1]], float)
 
 
+def corner_aligned(path):
+    """The environment image at `path` for Mitsuba 3.9's envmap, which puts row j at
+    theta = j pi / (H - 1) (rows aligned with the poles), where rt-gpu puts it at (j + 1/2) pi / H
+    (texel centres) and clamps over the poles: 2H + 1 rows sampling rt-gpu's bilinear lookup at
+    its texel centres and halfway between (the top and bottom at the poles), between which it is
+    linear, so Mitsuba's linear interpolation gives the same values."""
+    import mitsuba as mi
+
+    bitmap = mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False)
+    rows = np.array(bitmap, dtype=np.float32)
+    h = rows.shape[0]
+    out = np.empty((2 * h + 1,) + rows.shape[1:], np.float32)
+    out[1::2] = rows
+    out[0], out[-1] = rows[0], rows[-1]
+    out[2:-1:2] = 0.5 * (rows[:-1] + rows[1:])
+    return mi.Bitmap(out)
+
+
 def transform3(m):
     """A 3x3 matrix as a Mitsuba texture-coordinate transform."""
     import mitsuba as mi
@@ -101,7 +119,7 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
         swap = np.array([[0, 0, 1, 0], [0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1]], float)
         environment["environment"] = {
             "type": "envmap",
-            "filename": os.path.join(base, background["image"]),
+            "bitmap": corner_aligned(os.path.join(base, background["image"])),
             "scale": background.get("strength", 1.0),
             "to_world": mi.ScalarTransform4f((rotation_y(background.get("rotate_y", 0.0)) @ swap).tolist()),
         }
