@@ -241,7 +241,11 @@ fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
             break;
         }
 //#endif
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE
+        let m = with_albedo_at(material_at(hit.material), hit);
+//#else
         let m = material_at(hit.material);
+//#endif
         var weight = 1.0;
 //#if NEE
         if bsdf_pdf > 0.0 {

@@ -75,3 +75,14 @@ fn albedo_at(m: Material, hit: Hit) -> vec3f {
     return m.albedo;
 //#endif
 }
+
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE
+// m with its albedo looked up at hit once, for the several uses a path vertex makes of it (light
+// sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe.
+fn with_albedo_at(m: Material, hit: Hit) -> Material {
+    var out = m;
+    out.albedo = albedo_at(m, hit);
+    out.texture = TEXTURE_NONE;
+    return out;
+}
+//#endif

@@ -354,6 +354,7 @@ fn wgsl_constants() -> String {
         ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
         ("KIND_SPHERE", KIND_SPHERE.literal()),
+        ("TEXTURE_NONE", TEXTURE_NONE.literal()),
         ("TEXTURE_CHECKER", TEXTURE_CHECKER.literal()),
         ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
         ("TEXTURE_IMAGE", TEXTURE_IMAGE.literal()),
