@@ -517,3 +517,43 @@ fn bad_images_are_one_line_errors() {
         assert!(!err.contains('\n'), "{err}");
     }
 }
+
+/// Every format the docs name loads: 8-bit PNG and JPEG and 16-bit PNG decoded from sRGB,
+/// OpenEXR and Radiance HDR as linear values (a 2x1 image: mid-grey and black).
+#[test]
+fn every_supported_format_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let grey = 0.5f32;
+    // 128 of 255, and 32896 of 65535, are 128 / 255 decoded from sRGB.
+    let linear_grey = rt_gpu::scene::image::srgb_to_linear(128.0 / 255.0);
+    let eight = image::RgbImage::from_raw(2, 1, vec![128, 128, 128, 0, 0, 0]).unwrap();
+    let sixteen = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(
+        2,
+        1,
+        vec![32896u16, 32896, 32896, 0, 0, 0],
+    )
+    .unwrap();
+    let float = image::Rgb32FImage::from_raw(2, 1, vec![grey, grey, grey, 0.0, 0.0, 0.0]).unwrap();
+    eight.save(dir.path().join("a.png")).unwrap();
+    eight.save(dir.path().join("a.jpg")).unwrap();
+    sixteen.save(dir.path().join("b.png")).unwrap();
+    float.save(dir.path().join("c.exr")).unwrap();
+    float.save(dir.path().join("c.hdr")).unwrap();
+    for (name, expected, tolerance) in [
+        ("a.png", linear_grey, 1e-6),
+        ("a.jpg", linear_grey, 0.02),
+        ("b.png", linear_grey, 1e-6),
+        ("c.exr", grey, 1e-6),
+        ("c.hdr", grey, 1e-2),
+    ] {
+        let image = rt_gpu::scene::image::load(&dir.path().join(name), name)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((image.width, image.height), (2, 1), "{name}");
+        let first = image.texel(0, 0);
+        assert!(
+            (first - Vec3::splat(expected)).abs().max_element() <= tolerance,
+            "{name}: {first} (expected {expected})"
+        );
+        assert!(image.texel(1, 0).max_element() <= 0.02, "{name}");
+    }
+}

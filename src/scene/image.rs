@@ -11,6 +11,8 @@ use std::sync::{Mutex, OnceLock};
 
 /// Longest image side accepted.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Most memory one image's decoding may take (a 16384 x 8192 RGBA float image fits).
+pub const MAX_DECODE_BYTES: u64 = 3 << 30;
 
 /// A decoded image: `width` x `height` texels, linear RGB, row 0 at the top.
 pub struct Image {
@@ -142,14 +144,23 @@ fn decode(path: &Path, source: &str) -> Result<Image, String> {
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_IMAGE_SIDE);
     limits.max_image_height = Some(MAX_IMAGE_SIDE);
+    limits.max_alloc = Some(MAX_DECODE_BYTES);
     reader.limits(limits);
     let decoded = reader.decode().map_err(|e| match e {
         image::ImageError::Unsupported(u) => format!(
             "image {source}: unsupported ({}; rt-gpu reads PNG, JPEG, OpenEXR and Radiance HDR)",
             one_line(&u)
         ),
+        image::ImageError::Limits(l)
+            if matches!(l.kind(), image::error::LimitErrorKind::DimensionError) =>
+        {
+            format!(
+                "image {source} is too large: each side must be at most {MAX_IMAGE_SIDE} pixels"
+            )
+        }
         image::ImageError::Limits(_) => format!(
-            "image {source} is too large: each side must be at most {MAX_IMAGE_SIDE} pixels"
+            "image {source} is too large to decode (the decoder's memory limit is {} MB)",
+            MAX_DECODE_BYTES >> 20
         ),
         other => format!("cannot decode image {source}: {}", one_line(&other)),
     })?;
