@@ -456,6 +456,7 @@ pub struct SceneBuffers {
 /// texel; `scene::environment::Distribution`). Positions count vec4fs.
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {
+    /// The values, four per vec4f (empty in a plan).
     pub values: Vec<f32>,
     /// (image, where its texels start).
     placed: Vec<(&'static Image, u32)>,
@@ -567,7 +568,8 @@ impl SceneBuffers {
                 edge_tolerance: q.edge_tolerance,
             })
             .collect();
-        let images = ImageArray::new(scene);
+        // Where each image goes (its values are gathered only for the upload).
+        let images = ImageArray::plan(scene);
         let mut materials: Vec<GpuMaterial> = scene
             .materials
             .iter()

@@ -4,8 +4,8 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
-    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, SceneBuffers, WORKGROUP_SIZE, base_params,
-    whole_image_dispatch,
+    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, ImageArray, SceneBuffers, WORKGROUP_SIZE,
+    base_params, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -223,7 +223,7 @@ impl GpuRenderer {
             make("lights", bytemuck::cast_slice(&buffers.lights)),
             self.buffer_with(
                 "images",
-                bytemuck::cast_slice(&buffers.images.values),
+                bytemuck::cast_slice(&ImageArray::new(scene).values),
                 wgpu::BufferUsages::STORAGE,
             ),
         ])

@@ -24,6 +24,8 @@ pub struct Image {
     pub texels: Vec<f32>,
     /// The largest value of any channel (albedo images must stay within 1).
     pub max_value: f32,
+    /// The mean texel (what light picking weighs an image-textured emitter by).
+    pub mean: glam::Vec3,
     /// Built on first use by an environment light (see `scene::environment`).
     pub(crate) sampling: OnceLock<super::environment::Distribution>,
 }
@@ -45,6 +47,10 @@ impl Image {
             return Err(format!("image {source}: wrong number of values"));
         }
         let mut max_value = 0.0f32;
+        let mut sum = glam::DVec3::ZERO;
+        for rgb in texels.chunks_exact(3) {
+            sum += glam::DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
+        }
         for (i, &x) in texels.iter().enumerate() {
             if !(x.is_finite() && x >= 0.0) {
                 let texel = i / 3;
@@ -60,6 +66,7 @@ impl Image {
             source: source.to_string(),
             width,
             height,
+            mean: (sum / (width as f64 * height as f64)).as_vec3(),
             texels,
             max_value,
             sampling: OnceLock::new(),
@@ -185,10 +192,16 @@ thread_local! {
 
 /// Runs `f` (which reads a scene file) with image paths taken relative to `dir`.
 pub fn with_base_dir<R>(dir: &Path, f: impl FnOnce() -> R) -> R {
-    let previous = BASE_DIR.with(|b| b.replace(Some(dir.to_path_buf())));
-    let out = f();
-    BASE_DIR.with(|b| *b.borrow_mut() = previous);
-    out
+    /// Puts the previous directory back, however `f` ends.
+    struct Restore(Option<PathBuf>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let previous = self.0.take();
+            BASE_DIR.with(|b| *b.borrow_mut() = previous);
+        }
+    }
+    let _restore = Restore(BASE_DIR.with(|b| b.replace(Some(dir.to_path_buf()))));
+    f()
 }
 
 /// Loads the image a scene file names as `source`: relative to the scene file's directory

@@ -84,15 +84,7 @@ impl Texture {
         match self {
             Texture::Colour(c) => *c,
             Texture::Checker(c) | Texture::UvChecker(c) => 0.5 * (c.even + c.odd),
-            Texture::Image(image) => {
-                let sum = image
-                    .texels
-                    .chunks_exact(3)
-                    .fold(glam::DVec3::ZERO, |sum, t| {
-                        sum + glam::DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)
-                    });
-                (sum / (image.texels.len() / 3) as f64).as_vec3()
-            }
+            Texture::Image(image) => image.mean,
         }
     }
 
@@ -146,6 +138,9 @@ pub mod radiance {
     }
 }
 
+const EXPECTED: &str = "a colour [r, g, b], { checker = { scale, even, odd } }, \
+    { uv_checker = { scale, even, odd } } or { image = \"file\" }";
+
 /// Reads a texture; `radiance`: a plain colour is any non-negative one, not a reflectance.
 struct TextureVisitor {
     radiance: bool,
@@ -154,9 +149,7 @@ struct TextureVisitor {
 impl<'de> Visitor<'de> for TextureVisitor {
     type Value = Texture;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str(
-                    "a colour [r, g, b], { checker = { scale, even, odd } }, { uv_checker = { scale, even, odd } } or { image = \"file\" }",
-                )
+        f.write_str(EXPECTED)
     }
     fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Texture, A::Error> {
         let colour = de::value::SeqAccessDeserializer::new(seq);
