@@ -1,6 +1,6 @@
 // The environment light (twin: src/cpu/environment.rs): what an escaped ray sees, and
 // directions sampled in proportion to luminance x sin(theta), with their solid-angle pdf. Its
-// texels and tables are in `images` (see ImageArray in src/gpu/layout.rs).
+// texels and alias tables are in `images` (see ImageArray in src/gpu/layout.rs).
 
 //#if ENVIRONMENT
 // dir turned by -rotate_y: the image's own frame.
@@ -31,27 +31,37 @@ struct EnvironmentSample {
     pdf: f32,   // 0: no sample (a pole)
 }
 
-// A direction from the environment's distribution: u1 picks the texel from the alias table (its
-// vec4f: keep, alias as bits, own density, alias's density), its remainder and u2 place the
-// direction across it (Distribution::pick and cpu::environment::sample).
+struct AliasPick {
+    index: u32,
+    rest: f32,      // u's remainder, uniform in [0, 1) again
+    density: f32,   // what the slot's vec4f says of the picked slot (columns: its texel's density)
+}
+
+// The slot of the alias table of n slots at `start` that u in [0, 1) picks (AliasTable::pick).
+fn alias_pick(start: u32, n: u32, u: f32) -> AliasPick {
+    let scaled = u * f32(n);
+    let i = min(u32(scaled), n - 1u);
+    let r = scaled - f32(i);
+    let slot = images[start + i];
+    if r < slot.x {
+        return AliasPick(i, min(r / slot.x, ONE_BELOW), slot.z);
+    }
+    let other = min(bitcast<u32>(slot.y), n - 1u);
+    return AliasPick(other, clamp((r - slot.x) / (1.0 - slot.x), 0.0, ONE_BELOW), slot.w);
+}
+
+// A direction from the environment's distribution: u1 picks the row from the rows' alias table,
+// u2 the column from that row's (each slot a vec4f: keep, alias as bits, and for columns the
+// texel's and its alias's densities); their remainders place the direction across the texel
+// (Distribution::pick and cpu::environment::sample).
 fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
     let w = params.environment_width;
     let h = params.environment_height;
-    let n = w * h;
-    let scaled = u1 * f32(n);
-    let i = min(u32(scaled), n - 1u);
-    let r = scaled - f32(i);
-    let slot = images[params.environment_aliases + i];
-    var texel = i;
-    var across = min(r / slot.x, ONE_BELOW);
-    var density = slot.z;
-    if !(r < slot.x) {
-        texel = min(bitcast<u32>(slot.y), n - 1u);
-        across = clamp((r - slot.x) / (1.0 - slot.x), 0.0, ONE_BELOW);
-        density = slot.w;
-    }
-    let s = (f32(texel % w) + across) / f32(w);
-    let t = (f32(texel / w) + u2) / f32(h);
+    let row = alias_pick(params.environment_aliases, h, u1);
+    let column = alias_pick(params.environment_aliases + h + row.index * w, w, u2);
+    let density = column.density;
+    let s = (f32(column.index) + column.rest) / f32(w);
+    let t = (f32(row.index) + row.rest) / f32(h);
     let sin_theta = sin(PI * t);
     if !(sin_theta > 0.0) {
         return EnvironmentSample(vec3f(0.0, 1.0, 0.0), 0.0);

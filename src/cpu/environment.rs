@@ -32,16 +32,16 @@ pub fn radiance(env: &Environment, dir: Vec3) -> Vec3 {
 }
 
 /// A direction sampled from the environment's distribution with two uniform numbers, and its
-/// solid-angle pdf; `None` at the poles (where the pdf would be infinite). The first number
-/// picks the texel (see `Distribution::pick`), its remainder and the second place the direction
-/// across it.
+/// solid-angle pdf; `None` at the poles (where the pdf would be infinite). The numbers pick
+/// the row and the column (see `Distribution::pick`), their remainders place the direction
+/// across the texel.
 #[inline]
 pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
     let d = env.distribution();
     let (w, h) = (env.image.width as usize, env.image.height as usize);
-    let (i, across) = d.pick(u1);
-    let s = ((i % w) as f32 + across) / w as f32;
-    let t = ((i / w) as f32 + u2) / h as f32;
+    let ((x, y), (across, down)) = d.pick(w, h, u1, u2);
+    let s = (x as f32 + across) / w as f32;
+    let t = (y as f32 + down) / h as f32;
     let (sin_theta, cos_theta) = (PI * t).sin_cos();
     if !(sin_theta > 0.0) {
         return None;
@@ -54,7 +54,7 @@ pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
         local.y,
         -sin * local.x + cos * local.z,
     );
-    Some((dir, d.density[i] / (2.0 * PI * PI * sin_theta)))
+    Some((dir, d.density[y * w + x] / (2.0 * PI * PI * sin_theta)))
 }
 
 /// The solid-angle pdf with which [`sample`] picks unit direction `dir`.

@@ -276,7 +276,8 @@ gpu_struct! {
         roulette_depth: u32,
         /// The environment (see `scene::environment`): cos and sin of its rotation about y,
         environment_rotation: [f32; 2],
-        /// where its texels and its alias table start in the images array,
+        /// where its texels and its alias tables (rows, then each row's columns) start in the
+        /// images array,
         environment_texels: u32,
         environment_aliases: u32,
         /// its size and its strength.
@@ -452,15 +453,15 @@ pub struct SceneBuffers {
 
 /// Every image a scene reads, in one array of vec4f (the kernel's `images`): each image's
 /// texels (one vec4f each: RGB and 0, rows from the top), the environment's with its sampling
-/// density as the fourth value, and after them the environment's alias table (a vec4f per
-/// texel; `scene::environment::Distribution`). Positions count vec4fs.
+/// density as the fourth value, and after them the environment's alias tables (a vec4f per row,
+/// then per texel; `scene::environment::Distribution`). Positions count vec4fs.
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {
     /// The values, four per vec4f (empty in a plan).
     pub values: Vec<f32>,
     /// (image, where its texels start).
     placed: Vec<(&'static Image, u32)>,
-    /// Where the environment's texels and its alias table start.
+    /// Where the environment's texels and its alias tables start.
     pub environment: Option<[u32; 2]>,
     /// How many values it holds (at least 1: a binding cannot be empty).
     len: u64,
@@ -504,17 +505,25 @@ impl ImageArray {
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
             let texels = place(&mut out, env.image, &|i| d.density[i]);
-            // Its alias table: per texel (keep, alias as bits, own density, alias's density).
+            // Its alias tables: the rows' (keep, alias as bits, 0, 0) per row, then each row's
+            // columns' (keep, alias as bits, own density, alias's density) per texel.
             let aliases = len;
-            len += d.keep.len() as u32;
+            let (w, h) = (env.image.width as usize, env.image.height as usize);
+            len += (h + w * h) as u32;
             if fill {
-                for i in 0..d.keep.len() {
-                    let alias = d.alias[i] as usize;
+                for y in 0..h {
+                    let alias = d.rows.alias[y];
+                    out.values
+                        .extend([d.rows.keep[y], f32::from_bits(alias), 0.0, 0.0]);
+                }
+                for i in 0..w * h {
+                    let alias = d.columns.alias[i] as usize;
+                    let row = i - i % w;
                     out.values.extend([
-                        d.keep[i],
+                        d.columns.keep[i],
                         f32::from_bits(alias as u32),
                         d.density[i],
-                        d.density[alias],
+                        d.density[row + alias],
                     ]);
                 }
             }

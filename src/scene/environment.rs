@@ -68,20 +68,77 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f64 {
 }
 
 /// A piecewise-constant density over the image, texel by texel, in proportion to luminance
-/// times sin(theta) (the solid angle a texel spans), sampled with an alias table (Walker 1977;
-/// Vose 1991): one number picks a texel in constant time, whatever the image's size, and its
-/// remainder places the direction across the texel. Built in f64, stored in f32.
+/// times sin(theta) (the solid angle a texel spans), sampled with alias tables (Walker 1977;
+/// Vose 1991): the first number picks a row from the rows' table, the second a column from that
+/// row's table, each in constant time, and their remainders place the direction across the
+/// texel. (One table over all texels would ask one f32 number to tell apart more texels than
+/// its 24 bits can in a large image, and leave no bits to place the direction.) Built in f64,
+/// stored in f32.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Distribution {
-    /// Per texel, row by row: the chance that a pick landing on it keeps it,
-    pub keep: Vec<f32>,
-    /// else the texel it passes to;
-    pub alias: Vec<u32>,
-    /// and its density in image coordinates (s, t) in [0, 1]^2: its share of the whole times
-    /// the number of texels.
+    /// The rows' alias table.
+    pub rows: AliasTable,
+    /// Per row, its columns' alias table, row by row (`alias` counts columns within the row).
+    pub columns: AliasTable,
+    /// Per texel, row by row: its density in image coordinates (s, t) in [0, 1]^2, its share
+    /// of the whole times the number of texels.
     pub density: Vec<f32>,
     /// The integral of luminance over directions (steradians), strength 1.
     pub integral: f64,
+}
+
+/// Walker's alias tables, one or several side by side.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct AliasTable {
+    /// Per slot: the chance that a pick landing on it keeps it,
+    pub keep: Vec<f32>,
+    /// else the slot (of its own table) it passes to.
+    pub alias: Vec<u32>,
+}
+
+impl AliasTable {
+    /// The slot of the table of `n` slots starting at `start` that `u` in [0, 1) picks, and
+    /// `u`'s remainder, uniform in [0, 1) again (the kernel's `alias_pick` does the same f32
+    /// arithmetic).
+    #[inline]
+    pub fn pick(&self, start: usize, n: usize, u: f32) -> (usize, f32) {
+        let scaled = u * n as f32;
+        let i = (scaled as usize).min(n - 1);
+        let r = scaled - i as f32;
+        let keep = self.keep[start + i];
+        if r < keep {
+            (i, (r / keep).min(ONE_BELOW))
+        } else {
+            let rest = ((r - keep) / (1.0 - keep)).clamp(0.0, ONE_BELOW);
+            ((self.alias[start + i] as usize).min(n - 1), rest)
+        }
+    }
+
+    /// Appends the table of `weights` (Vose's construction, in f64; uniform if they are all 0).
+    fn push(&mut self, weights: &[f64]) {
+        let n = weights.len();
+        let total: f64 = weights.iter().sum();
+        let mut left: Vec<f64> = if total > 0.0 {
+            weights.iter().map(|w| w * n as f64 / total).collect()
+        } else {
+            vec![1.0; n]
+        };
+        let start = self.keep.len();
+        self.keep.extend(std::iter::repeat_n(1.0f32, n));
+        self.alias.extend(0..n as u32);
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| left[i] < 1.0);
+        while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+            small.pop();
+            self.keep[start + s] = left[s] as f32;
+            self.alias[start + s] = l as u32;
+            left[l] -= 1.0 - left[s];
+            if left[l] < 1.0 {
+                large.pop();
+                small.push(l);
+            }
+        }
+        // What remains is 1 up to rounding: kept.
+    }
 }
 
 impl Distribution {
@@ -102,81 +159,69 @@ impl Distribution {
         if !(total > 0.0) {
             weights.fill(1.0); // nothing to favour: uniform over the image
         }
-        let (keep, alias, density) = alias_table(&weights);
+        let total: f64 = weights.iter().sum();
+        let row_sums: Vec<f64> = weights.chunks_exact(w).map(|r| r.iter().sum()).collect();
+        let mut rows = AliasTable::default();
+        rows.push(&row_sums);
+        let mut columns = AliasTable::default();
+        for row in weights.chunks_exact(w) {
+            columns.push(row);
+        }
+        let n = (w * h) as f64;
         Distribution {
-            keep,
-            alias,
-            density,
+            rows,
+            columns,
+            density: weights.iter().map(|x| (x * n / total) as f32).collect(),
             integral,
         }
     }
 
-    /// The texel that `u` in [0, 1) picks, and `u`'s remainder, uniform in [0, 1) again (the
-    /// kernel's `environment_pick` does the same f32 arithmetic).
+    /// The texel (x, y) that (u1, u2) in [0, 1)^2 pick, and where across it (in [0, 1)^2).
     #[inline]
-    pub fn pick(&self, u: f32) -> (usize, f32) {
-        let n = self.keep.len();
-        let scaled = u * n as f32;
-        let i = (scaled as usize).min(n - 1);
-        let r = scaled - i as f32;
-        if r < self.keep[i] {
-            (i, (r / self.keep[i]).min(ONE_BELOW))
-        } else {
-            let rest = ((r - self.keep[i]) / (1.0 - self.keep[i])).clamp(0.0, ONE_BELOW);
-            (self.alias[i] as usize, rest)
-        }
+    pub fn pick(
+        &self,
+        width: usize,
+        height: usize,
+        u1: f32,
+        u2: f32,
+    ) -> ((usize, usize), (f32, f32)) {
+        let (y, down) = self.rows.pick(0, height, u1);
+        let (x, across) = self.columns.pick(y * width, width, u2);
+        ((x, y), (across, down))
     }
 }
 
 /// The largest f32 below 1.
 pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// Walker's alias table of `weights` (Vose's construction, in f64): (keep, alias, density).
-fn alias_table(weights: &[f64]) -> (Vec<f32>, Vec<u32>, Vec<f32>) {
-    let n = weights.len();
-    let total: f64 = weights.iter().sum();
-    let scaled: Vec<f64> = weights.iter().map(|w| w * n as f64 / total).collect();
-    let density = scaled.iter().map(|&d| d as f32).collect();
-    let mut keep = vec![1.0f32; n];
-    let mut alias: Vec<u32> = (0..n as u32).collect();
-    let mut left = scaled.clone();
-    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| left[i] < 1.0);
-    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
-        small.pop();
-        keep[s] = left[s] as f32;
-        alias[s] = l as u32;
-        left[l] -= 1.0 - left[s];
-        if left[l] < 1.0 {
-            large.pop();
-            small.push(l);
-        }
-    }
-    // What remains is 1 up to rounding: kept.
-    (keep, alias, density)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn the_alias_table_gives_each_texel_its_share() {
+    fn the_alias_tables_give_each_texel_its_share() {
         // Texels weighted 1..=12 times sin(theta) of their row: each texel's chance, summed
-        // over every slot that can pick it, is its share.
+        // over every pair of slots that can pick it, is its share.
         let texels: Vec<f32> = (0..12).flat_map(|i| [1.0 + i as f32; 3]).collect();
         let image = Image::from_linear("ramp", 4, 3, texels).unwrap();
         let d = Distribution::new(&image);
-        let n = d.keep.len();
-        let mut chance = vec![0.0f64; n];
-        for i in 0..n {
-            chance[i] += d.keep[i] as f64 / n as f64;
-            chance[d.alias[i] as usize] += (1.0 - d.keep[i] as f64) / n as f64;
-        }
-        for (i, (chance, density)) in chance.iter().zip(&d.density).enumerate() {
-            assert!(
-                (chance * n as f64 - *density as f64).abs() < 1e-5,
-                "texel {i}"
-            );
+        let chances = |t: &AliasTable, start: usize, n: usize| {
+            let mut chance = vec![0.0f64; n];
+            for i in 0..n {
+                chance[i] += t.keep[start + i] as f64 / n as f64;
+                chance[t.alias[start + i] as usize] += (1.0 - t.keep[start + i] as f64) / n as f64;
+            }
+            chance
+        };
+        let rows = chances(&d.rows, 0, 3);
+        for (y, row) in rows.iter().enumerate() {
+            for (x, column) in chances(&d.columns, 4 * y, 4).iter().enumerate() {
+                let texel = row * column * 12.0;
+                assert!(
+                    (texel - d.density[4 * y + x] as f64).abs() < 1e-5,
+                    "({x}, {y})"
+                );
+            }
         }
         let middle = d.density[5] / d.density[1];
         assert!((middle - 6.0 / 2.0 / (std::f32::consts::PI / 6.0).sin()).abs() < 1e-4);
@@ -196,23 +241,27 @@ mod tests {
         let texels: Vec<f32> = (0..6).flat_map(|i| [(i * i) as f32; 3]).collect();
         let image = Image::from_linear("squares", 3, 2, texels).unwrap();
         let d = Distribution::new(&image);
-        let m = 60_000;
+        let m = 400;
         let mut counts = [0usize; 6];
-        let mut remainder = 0.0;
+        let mut remainder = (0.0, 0.0);
         for k in 0..m {
-            let (i, r) = d.pick((k as f32 + 0.5) / m as f32);
-            assert!((0.0..1.0).contains(&r));
-            counts[i] += 1;
-            remainder += r as f64 / m as f64;
+            for j in 0..m {
+                let (u1, u2) = ((k as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
+                let ((x, y), (across, down)) = d.pick(3, 2, u1, u2);
+                assert!((0.0..1.0).contains(&across) && (0.0..1.0).contains(&down));
+                counts[3 * y + x] += 1;
+                remainder.0 += across as f64 / (m * m) as f64;
+                remainder.1 += down as f64 / (m * m) as f64;
+            }
         }
         assert_eq!(counts[0], 0);
         for (i, (count, density)) in counts.iter().zip(&d.density).enumerate() {
             let expected = *density as f64 / 6.0;
             assert!(
-                (*count as f64 / m as f64 - expected).abs() < 1e-3,
+                (*count as f64 / (m * m) as f64 - expected).abs() < 2e-3,
                 "texel {i}"
             );
         }
-        assert!((remainder - 0.5).abs() < 1e-3);
+        assert!((remainder.0 - 0.5).abs() < 1e-2 && (remainder.1 - 0.5).abs() < 1e-2);
     }
 }
