@@ -17,13 +17,16 @@ fn environment_coordinates(local: vec3f) -> vec2f {
     return vec2f(s, t);
 }
 
-fn environment_radiance(dir: vec3f) -> vec3f {
-    let st = environment_coordinates(environment_local(dir));
-    // Rows do not wrap over the poles.
+// The image filtered at st, times the strength; rows do not wrap over the poles.
+fn environment_radiance_at(st: vec2f) -> vec3f {
     let h = f32(params.environment_height);
     let t = clamp(st.y, 0.5 / h, 1.0 - 0.5 / h);
     let texels = bilinear(params.environment_texels, params.environment_width, params.environment_height, st.x, t);
     return texels * params.environment_strength;
+}
+
+fn environment_radiance(dir: vec3f) -> vec3f {
+    return environment_radiance_at(environment_coordinates(environment_local(dir)));
 }
 
 struct EnvironmentSample {
@@ -84,21 +87,26 @@ struct EnvironmentLookup {
 fn environment_lookup(dir: vec3f) -> EnvironmentLookup {
     let local = environment_local(dir);
     let st = environment_coordinates(local);
-    let w = params.environment_width;
-    let h = params.environment_height;
-    let t = clamp(st.y, 0.5 / f32(h), 1.0 - 0.5 / f32(h));
-    let radiance = bilinear(params.environment_texels, w, h, st.x, t) * params.environment_strength;
-    let sin_theta = sqrt(local.x * local.x + local.z * local.z);
-    if !(sin_theta > 0.0) {
-        return EnvironmentLookup(radiance, 0.0);
-    }
-    let x = min(u32(max(floor(st.x * f32(w)), 0.0)), w - 1u);
-    let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
-    let density = images[params.environment_texels + y * w + x].w;
-    return EnvironmentLookup(radiance, density / (2.0 * PI * PI * sin_theta));
+    return EnvironmentLookup(environment_radiance_at(st), environment_pdf_at(local, st));
 }
 
 fn environment_pdf(dir: vec3f) -> f32 {
-    return environment_lookup(dir).pdf;
+    let local = environment_local(dir);
+    return environment_pdf_at(local, environment_coordinates(local));
+}
+
+// The pdf of local direction `local` at image coordinates st: its texel's density over the
+// solid angle's 2 pi^2 sin(theta).
+fn environment_pdf_at(local: vec3f, st: vec2f) -> f32 {
+    let sin_theta = sqrt(local.x * local.x + local.z * local.z);
+    if !(sin_theta > 0.0) {
+        return 0.0;
+    }
+    let w = params.environment_width;
+    let h = params.environment_height;
+    let x = min(u32(max(floor(st.x * f32(w)), 0.0)), w - 1u);
+    let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
+    let density = images[params.environment_texels + y * w + x].w;
+    return density / (2.0 * PI * PI * sin_theta);
 }
 //#endif

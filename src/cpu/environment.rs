@@ -22,13 +22,19 @@ fn image_coordinates(local: Vec3) -> (f32, f32) {
     (s, t)
 }
 
+/// The image filtered at (s, t), times the strength. Rows do not wrap over the poles: t stays
+/// within the first and last rows' centres.
+#[inline]
+fn radiance_at(env: &Environment, s: f32, t: f32) -> Vec3 {
+    let h = env.image.height as f32;
+    bilinear(env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength
+}
+
 /// Radiance arriving from the environment along unit direction `dir`.
 #[inline]
 pub fn radiance(env: &Environment, dir: Vec3) -> Vec3 {
     let (s, t) = image_coordinates(to_local(env, dir));
-    // Rows do not wrap over the poles: t stays within the first and last rows' centres.
-    let h = env.image.height as f32;
-    bilinear(env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength
+    radiance_at(env, s, t)
 }
 
 /// A direction sampled from the environment's distribution with two uniform numbers, and its
@@ -60,7 +66,9 @@ pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
 /// The solid-angle pdf with which [`sample`] picks unit direction `dir`.
 #[inline]
 pub fn pdf(env: &Environment, dir: Vec3) -> f32 {
-    radiance_and_pdf(env, dir).1
+    let local = to_local(env, dir);
+    let (s, t) = image_coordinates(local);
+    pdf_at(env, local, s, t)
 }
 
 /// [`radiance`] and [`pdf`] together, the direction's image coordinates found once (what an
@@ -69,18 +77,22 @@ pub fn pdf(env: &Environment, dir: Vec3) -> f32 {
 pub fn radiance_and_pdf(env: &Environment, dir: Vec3) -> (Vec3, f32) {
     let local = to_local(env, dir);
     let (s, t) = image_coordinates(local);
-    let (width, height) = (env.image.width, env.image.height);
-    let h = height as f32;
-    // Rows do not wrap over the poles: t stays within the first and last rows' centres.
-    let radiance = bilinear(env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength;
+    (radiance_at(env, s, t), pdf_at(env, local, s, t))
+}
+
+/// The pdf of the local direction `local`, at image coordinates (s, t): its texel's density
+/// over the solid angle's 2 pi^2 sin(theta).
+#[inline]
+fn pdf_at(env: &Environment, local: Vec3, s: f32, t: f32) -> f32 {
     let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
     if !(sin_theta > 0.0) {
-        return (radiance, 0.0);
+        return 0.0;
     }
+    let (width, height) = (env.image.width, env.image.height);
     let x = ((s * width as f32).floor().max(0.0) as usize).min(width as usize - 1);
-    let y = ((t * h).floor().max(0.0) as usize).min(height as usize - 1);
+    let y = ((t * height as f32).floor().max(0.0) as usize).min(height as usize - 1);
     let density = env.distribution().density[y * width as usize + x];
-    (radiance, density / (2.0 * PI * PI * sin_theta))
+    density / (2.0 * PI * PI * sin_theta)
 }
 
 #[cfg(test)]
