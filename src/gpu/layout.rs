@@ -480,10 +480,12 @@ impl ImageArray {
     fn lay_out(scene: &FlatScene, fill: bool) -> Self {
         let mut out = ImageArray::default();
         // Texels as vec4f (RGB and 0, or for the environment its density): one load each.
-        let mut len = 0u32;
+        // Counted in u64: many large images overflow u32, and the size checked against the
+        // device's binding limit must be the true one. (Past that check, offsets fit in u32.)
+        let mut len = 0u64;
         let mut place = |out: &mut ImageArray, image: &Image, w: &dyn Fn(usize) -> f32| {
-            let at = len;
-            len += image.width * image.height;
+            let at = len as u32;
+            len += image.width as u64 * image.height as u64;
             if fill {
                 for (i, rgb) in image.texels.chunks_exact(3).enumerate() {
                     out.values.extend(rgb);
@@ -507,9 +509,9 @@ impl ImageArray {
             let texels = place(&mut out, env.image, &|i| d.density[i]);
             // Its alias tables: the rows' (keep, alias as bits, 0, 0) per row, then each row's
             // columns' (keep, alias as bits, own density, alias's density) per texel.
-            let aliases = len;
+            let aliases = len as u32;
             let (w, h) = (env.image.width as usize, env.image.height as usize);
-            len += (h + w * h) as u32;
+            len += (h + w * h) as u64;
             if fill {
                 for y in 0..h {
                     let alias = d.rows.alias[y];
@@ -529,7 +531,7 @@ impl ImageArray {
             }
             out.environment = Some([texels, aliases]);
         }
-        out.len = 4 * len.max(1) as u64;
+        out.len = 4 * len.max(1);
         if fill && out.values.is_empty() {
             out.values.resize(4, 0.0);
         }
