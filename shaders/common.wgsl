@@ -42,3 +42,11 @@ struct Ray {
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 //#endif
 //#endif
+// Meshes and the BVH: always storage (they may be large).
+//#if TRIANGLES
+@group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
+//#endif
+//#if BVH
+@group(0) @binding(10) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
+//#endif

@@ -53,6 +53,7 @@ struct Closest {
     material: u32,
     found: bool,
     uv: vec2f,          // quad: (a, b), for UV textures
+    weights: vec2f,     // triangle: barycentric weights of its second and third corners
 }
 
 // Where a hit lies: the point put back onto the surface, and a bound on its error.
@@ -106,12 +107,79 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
 }
 //#endif
 
+// A ray in the frame of the watertight triangle test: its dominant axis becomes z (`kz`: which
+// axis that was) and it is sheared to run along +z; computed once per ray.
+struct Shear {
+    kz: u32,
+    s: vec3f,
+}
+
+// v's components in the order (kx, ky, kz), kx = kz + 1 and ky = kz + 2 (mod 3).
+fn permute(v: vec3f, kz: u32) -> vec3f {
+    return select(select(v, v.zxy, kz == 1u), v.yzx, kz == 0u);
+}
+
+fn shear_of(dir: vec3f) -> Shear {
+    let a = abs(dir);
+    let kz = select(select(2u, 1u, a.y > a.z), 0u, a.x > a.y && a.x > a.z);
+    let d = permute(dir, kz);
+    return Shear(kz, vec3f(-d.x / d.z, -d.y / d.z, 1.0 / d.z));
+}
+
+//#if TRIANGLES
+// Distance along the ray to triangle tri and the barycentric weights of its second and third
+// corners there, or t = -1 for a miss: watertight (Woop, Benthin and Wald 2013; see
+// hit_triangle in src/cpu/shapes.rs).
+fn triangle_hit(tri: Triangle, ray: Ray, sh: Shear) -> vec3f {
+    let q0 = permute(tri.p0 - ray.origin, sh.kz);
+    let q1 = permute(tri.p1 - ray.origin, sh.kz);
+    let q2 = permute(tri.p2 - ray.origin, sh.kz);
+    let p0 = vec2f(q0.x + sh.s.x * q0.z, q0.y + sh.s.y * q0.z);
+    let p1 = vec2f(q1.x + sh.s.x * q1.z, q1.y + sh.s.y * q1.z);
+    let p2 = vec2f(q2.x + sh.s.x * q2.z, q2.y + sh.s.y * q2.z);
+    let e0 = p1.x * p2.y - p1.y * p2.x;
+    let e1 = p2.x * p0.y - p2.y * p0.x;
+    let e2 = p0.x * p1.y - p0.y * p1.x;
+    let mixed = (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0);
+    let det = e0 + e1 + e2;
+    let scaled = e0 * (sh.s.z * q0.z) + e1 * (sh.s.z * q1.z) + e2 * (sh.s.z * q2.z);
+    let safe = select(det, 1.0, det == 0.0);
+    let t = scaled / safe;
+    return select(vec3f(t, e1 / safe, e2 / safe), vec3f(-1.0), mixed || det == 0.0);
+}
+
+fn consider_triangle(tri: Triangle, index: u32, ray: Ray, sh: Shear, c: ptr<function, Closest>) {
+    let h = triangle_hit(tri, ray, sh);
+    if h.x > 0.0 && h.x < (*c).t {
+        (*c).t = h.x;
+        (*c).found = true;
+        (*c).primitive = (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index;
+        (*c).material = tri.material;
+        (*c).outward = cross(tri.p1 - tri.p0, tri.p2 - tri.p0);
+        (*c).weights = h.yz;
+    }
+}
+
+// The weighted corners and a bound on the point's error (see triangle_surface in
+// src/cpu/shapes.rs).
+fn triangle_surface(c: Closest) -> Surface {
+    let tri = triangles[primitive_index(c.primitive)];
+    let b0 = 1.0 - c.weights.x - c.weights.y;
+    let point = b0 * tri.p0 + c.weights.x * tri.p1 + c.weights.y * tri.p2;
+    let m = abs(b0) * abs(tri.p0) + abs(c.weights.x) * abs(tri.p1) + abs(c.weights.y) * abs(tri.p2);
+    return Surface(point, POINT_ERROR * max(m.x, max(m.y, m.z)));
+}
+//#endif
+
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0));
+    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0));
 //#if INLINE_SCENE
     // The scene's primitives are constants in this kernel (see inline_scene below).
     inline_scene(ray, &c);
+//#else
+//#if BVH
+    traverse(ray, &c);
 //#else
 //#if SPHERES
     for (var i = 0u; i < params.sphere_count; i++) {
@@ -122,6 +190,7 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     for (var i = 0u; i < params.quad_count; i++) {
         consider_quad(quads[i], i, ray, &c);
     }
+//#endif
 //#endif
 //#endif
     if !c.found {
@@ -136,6 +205,11 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
         surface = sphere_surface(c, along_ray);
     }
 //#endif
+//#if TRIANGLES
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        surface = triangle_surface(c);
+    }
+//#endif
     (*hit).t = c.t;
     (*hit).point = surface.point;
     (*hit).error = surface.error;
@@ -148,6 +222,11 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 //#if SPHERES
     if primitive_kind(c.primitive) == KIND_SPHERE {
         (*hit).uv = sphere_uv((surface.point - c.center) / abs(c.radius));
+    }
+//#endif
+//#if TRIANGLES
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        (*hit).uv = c.weights;
     }
 //#endif
 //#endif

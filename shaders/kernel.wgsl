@@ -50,22 +50,43 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
 //#if SOBOL
     var odd_sum = load_fixed(slot + ACCUM_ODD_SUM);
 //#endif
-    for (var s = 0u; s < dispatch.sample_count; s++) {
-        let index = dispatch.first_sample + s;
+    // Samples first_sample + count onward, until the pixel holds samples_before + sample_count:
+    // a pixel left short by an earlier dispatch continues where it stopped, so the image does
+    // not depend on how the render was sliced.
+    let wanted = dispatch.samples_before + dispatch.sample_count;
+    var fresh = true;
+    while count < wanted {
+//#if BVH
+        // Every loop of a sample other than BVH traversals is bounded by the host; traversals
+        // count their own iterations (accel.wgsl).
+        loop_iterations += params.sample_loop_cost;
+//#endif
+        let index = dispatch.first_sample + count;
         var sampler = sampler_for_sample(pixel, index, dispatch.seed);
         let ray = generate_ray(x, y, &sampler);
         var l = radiance(ray, &sampler);
+//#if BVH
+        if budget_spent {
+            if !fresh {
+                // Left to the next dispatch, which starts with a whole budget.
+                break;
+            }
+            // Not even a whole budget was enough for this one sample: recorded as invalid
+            // (black, and counted) rather than retried forever.
+            l = vec3f(-1.0);
+        }
+//#endif
+        fresh = false;
         if !valid_sample(l) {
             l = vec3f(0.0);
             invalid += 1u;
         }
         let delta = l - mean;
-        mean += delta / f32(dispatch.samples_before + s + 1u);
+        mean += delta / f32(count + 1u);
         m2 += delta * (l - mean);
         let fixed = to_fixed(l);
 //#if SOBOL
-        // Only stratified renders need their replicas' statistics. The same index for every
-        // invocation: a uniform branch.
+        // Only stratified renders need their replicas' statistics.
         if (index & 1u) == 1u {
             odd_sum = fixed_add(odd_sum, fixed);
         } else {

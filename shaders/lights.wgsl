@@ -7,15 +7,20 @@
 // inline_lights in src/gpu/shader.rs): no buffer loads at dynamic indices, which lavapipe
 // gathers lane by lane.
 //#else
-// The light whose cumulative share first exceeds u in [0, 1).
+// The light whose cumulative share first exceeds u in [0, 1), by binary search (the last when
+// none does): the same steps as pick_light in src/cpu/lights.rs.
 fn pick_light(u: f32) -> u32 {
-    let last = params.light_count - 1u;
-    for (var i = 0u; i < last; i++) {
-        if u < lights[i].cdf {
-            return i;
+    var lo = 0u;
+    var hi = params.light_count - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if u < lights[mid].cdf {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
         }
     }
-    return last;
+    return lo;
 }
 
 // 1 + the light index of a (packed) primitive, or 0.
@@ -29,6 +34,11 @@ fn light_of(primitive: u32) -> u32 {
 //#if QUADS
     if primitive_kind(primitive) == KIND_QUAD {
         return quads[index].light;
+    }
+//#endif
+//#if TRIANGLES
+    if primitive_kind(primitive) == KIND_TRIANGLE {
+        return triangles[index].light;
     }
 //#endif
     return 0u;
@@ -123,8 +133,17 @@ fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
         return out;
     }
 //#endif
-    // A quad: uniform on its area.
-    let p = l.position + u1 * l.u + u2 * l.v;
+    // A quad or a triangle: uniform on its area.
+    var a = u1;
+    var b = u2;
+//#if TRIANGLES
+    if l.kind == KIND_TRIANGLE {
+        let s = sqrt(u1);
+        a = s * (1.0 - u2);
+        b = s * u2;
+    }
+//#endif
+    let p = l.position + a * l.u + b * l.v;
     let to_light = p - x;
     let dist2 = dot(to_light, to_light);
     if dist2 > 0.0 {

@@ -4,6 +4,7 @@
 // `!(x > 0.0)` is deliberate throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod accel;
 pub mod backend;
 pub mod converge;
 pub mod cpu;

@@ -546,9 +546,14 @@ fn list_devices() -> anyhow::Result<()> {
 
 /// Renders the same scene on each backend (and the GPU with both kernels) in one run.
 fn bench(args: &BenchArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
     let (scene, _) = resolve_scene(&args.scene)?;
+    let loading = start.elapsed().as_secs_f64();
     let (width, height) = args.size;
+    let start = Instant::now();
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    let flattening = start.elapsed().as_secs_f64();
+    describe_geometry(&flat, loading, flattening)?;
     check_memory(width, height).map_err(anyhow::Error::msg)?;
     let opts = RenderOptions {
         width,
@@ -624,6 +629,43 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             runs.len(),
             failed.join(", ")
         );
+    }
+    Ok(())
+}
+
+/// The scene's geometry and what preparing it cost: reading it (mesh files included), flattening
+/// it, building its BVH (timed again on its own), and its size on the GPU.
+fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow::Result<()> {
+    let (triangles, primitives) = (flat.triangles.len(), flat.primitive_count());
+    say!(
+        "  scene: {primitives} primitives ({triangles} triangles, {} lights); read in {loading:.3} s, flattened in {flattening:.3} s",
+        flat.lights.len()
+    )?;
+    if flat.bvh.is_some() {
+        let mut items = flat.bvh_items();
+        let start = Instant::now();
+        let bvh = rt_gpu::accel::Bvh::build(&mut items);
+        let seconds = start.elapsed().as_secs_f64();
+        let buffers = rt_gpu::gpu::layout::SceneBuffers::new(flat);
+        let geometry = std::mem::size_of_val(&buffers.triangles[..])
+            + std::mem::size_of_val(&buffers.bvh_nodes[..])
+            + std::mem::size_of_val(&buffers.bvh_primitives[..]);
+        let per_triangle = if triangles > 0 {
+            format!(
+                ", {:.1} bytes per triangle",
+                geometry as f64 / triangles as f64
+            )
+        } else {
+            String::new()
+        };
+        say!(
+            "  bvh: built in {seconds:.3} s ({:.2} M primitives/s on {} threads), {} nodes, depth {}; GPU geometry {:.1} MB{per_triangle}",
+            primitives as f64 / seconds / 1e6,
+            rayon::current_num_threads(),
+            bvh.nodes.len(),
+            bvh.depth,
+            geometry as f64 / 1e6
+        )?;
     }
     Ok(())
 }

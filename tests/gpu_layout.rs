@@ -38,7 +38,7 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
     // The declarations are generated from the Rust structs; naga lays them out independently.
     let layouts = rt_gpu::gpu::layout::shared_layouts();
-    assert_eq!(layouts.len(), 7);
+    assert_eq!(layouts.len(), 9);
     for (name, rust_size, rust_fields) in layouts {
         let ty = module
             .types
@@ -181,10 +181,13 @@ fn kernels_leave_out_unused_code() {
     );
     assert_eq!(spheres.matches("    consider_sphere(Sphere(").count(), 4);
     assert!(spheres.contains("fresnel") && spheres.contains("fn metal_scatter"));
-    // A scene too large to inline loops over its buffers.
+    // A scene too large to inline goes through its BVH; no triangle code without triangles.
     let showcase = kernel("showcase");
-    assert!(showcase.contains("spheres[i]") && showcase.contains("quads[i]"));
-    assert!(!showcase.contains("fn inline_scene"));
+    assert!(showcase.contains("fn traverse") && showcase.contains("spheres[index]"));
+    assert!(!showcase.contains("fn inline_scene") && !showcase.contains("fn triangle_hit"));
+    // Nor BVH code in a scene without one.
+    let cornell = kernel("cornell");
+    assert!(!cornell.contains("fn traverse") && !cornell.contains("fn triangle_hit"));
     // Light sampling only for nee, and only where there is a light.
     let with = |name: &str, integrator| {
         let f = flat(name);

@@ -12,11 +12,11 @@ use common::stats::compare;
 use common::{nee_opts, object, opts, render_cpu};
 use glam::Vec3;
 use rt_gpu::cpu::lights;
-use rt_gpu::cpu::shapes::{Ray, hit_quad, hit_sphere};
+use rt_gpu::cpu::shapes::{Ray, hit_quad, hit_sphere, hit_triangle};
 use rt_gpu::gpu::Tuning;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
-use rt_gpu::scene::flat::{Light, LightShape, Quad, Sphere};
+use rt_gpu::scene::flat::{Light, LightShape, Quad, Sphere, Triangle};
 use rt_gpu::scene::{Material, Scene, Shape};
 
 fn add_material(scene: &mut Scene, name: &str, material: Material) -> u32 {
@@ -281,6 +281,21 @@ fn quad_light(quad: &Quad) -> Light {
     }
 }
 
+/// Half of `quad`: the triangle (q, q + u, q + v).
+fn triangle_light(quad: &Quad) -> Light {
+    Light {
+        shape: LightShape::Triangle {
+            corner: quad.q,
+            u: quad.u,
+            v: quad.v,
+            normal: quad.normal,
+            inv_area: 2.0 / quad.u.cross(quad.v).length(),
+        },
+        cdf: 1.0,
+        pick: 1.0,
+    }
+}
+
 fn sphere_light() -> Light {
     Light {
         shape: LightShape::Sphere {
@@ -313,6 +328,16 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
                 hit_sphere(&s, &ray, 0.0, f32::INFINITY)
             }
             LightShape::Quad { .. } => hit_quad(&quad, &ray, 0.0, f32::INFINITY),
+            LightShape::Triangle { corner, u, v, .. } => {
+                let triangle = Triangle {
+                    p0: corner,
+                    p1: corner + u,
+                    p2: corner + v,
+                    material: 0,
+                    light: 1,
+                };
+                hit_triangle(&triangle, &ray, 0.0, f32::INFINITY).map(|(t, _, _)| t)
+            }
             LightShape::Environment(_) => unreachable!("tests/environment.rs"),
         };
         t.map(|t| ray.at(t))
@@ -321,6 +346,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
     let centre = match light.shape {
         LightShape::Sphere { center, .. } => center,
         LightShape::Quad { corner, u, v, .. } => corner + 0.5 * (u + v),
+        LightShape::Triangle { corner, u, v, .. } => corner + (u + v) / 3.0,
         LightShape::Environment(_) => unreachable!("tests/environment.rs"),
     };
     let axis = (centre - X).normalize();
@@ -330,10 +356,12 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
             LightShape::Sphere { center, radius } => {
                 lights::sphere_cone(center, radius, X).expect("outside").1 as f64
             }
-            LightShape::Quad { corner, u, v, .. } => [Vec3::ZERO, u, v, u + v]
-                .iter()
-                .map(|&c| 1.0 - axis.dot((corner + c - X).normalize()) as f64)
-                .fold(0.0, f64::max),
+            LightShape::Quad { corner, u, v, .. } | LightShape::Triangle { corner, u, v, .. } => {
+                [Vec3::ZERO, u, v, u + v]
+                    .iter()
+                    .map(|&c| 1.0 - axis.dot((corner + c - X).normalize()) as f64)
+                    .fold(0.0, f64::max)
+            }
             LightShape::Environment(_) => unreachable!("tests/environment.rs"),
         };
     let (n_theta, n_phi, sub) = (24usize, 24usize, 24usize);
@@ -390,7 +418,11 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
 #[test]
 fn light_sampling_directions_follow_their_pdf() {
     let quad = tilted_quad();
-    for (name, light) in [("quad", quad_light(&quad)), ("sphere", sphere_light())] {
+    for (name, light) in [
+        ("quad", quad_light(&quad)),
+        ("triangle", triangle_light(&quad)),
+        ("sphere", sphere_light()),
+    ] {
         let p = chi_square_p(name, &light, |u1, u2| {
             let s = lights::sample(&light, X, u1, u2).expect("samples");
             // The point it reports is on the light, along the direction.
@@ -424,7 +456,11 @@ fn light_sampling_directions_follow_their_pdf() {
 #[test]
 fn light_sampling_test_detects_a_slightly_wrong_warp() {
     let quad = tilted_quad();
-    for (name, light) in [("quad", quad_light(&quad)), ("sphere", sphere_light())] {
+    for (name, light) in [
+        ("quad", quad_light(&quad)),
+        ("triangle", triangle_light(&quad)),
+        ("sphere", sphere_light()),
+    ] {
         let p = chi_square_p(name, &light, |u1, u2| {
             lights::sample(&light, X, u1.powf(1.02), u2)
                 .expect("samples")

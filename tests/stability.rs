@@ -11,7 +11,7 @@ mod common;
 
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
-use common::{nee_opts, object, render_cpu, scene};
+use common::{nee_opts, object, render_cpu, scene, triangulated};
 use glam::Vec3;
 use rt_gpu::cpu::shapes::{Ray, intersect};
 use rt_gpu::film::Film;
@@ -190,16 +190,32 @@ fn parallel_tangent_and_edge_rays() {
 }
 
 /// Rays from inside closed boxes (axis-aligned, and rotated and moved far away) aimed at their
-/// edges and corners, and a hair to either side, never escape.
+/// edges and corners, and a hair to either side, never escape: boxes of six quads, and the same
+/// boxes as 12-triangle meshes (watertight triangles, through the BVH), whose every face
+/// diagonal is an edge between two triangles too.
 #[test]
 fn closed_boxes_are_watertight() {
     let gpu = renderer();
-    for (name, angle, offset) in [
-        ("axis-aligned", 0.0, Vec3::ZERO),
-        ("rotated 30 degrees", 30.0, Vec3::new(0.3, -0.2, 0.1)),
-        ("rotated, 1e4 away", 37.0, Vec3::new(1e4, -2e4, 5e3)),
+    for (name, angle, offset, mesh) in [
+        ("axis-aligned", 0.0, Vec3::ZERO, false),
+        ("rotated 30 degrees", 30.0, Vec3::new(0.3, -0.2, 0.1), false),
+        ("rotated, 1e4 away", 37.0, Vec3::new(1e4, -2e4, 5e3), false),
+        ("mesh, axis-aligned", 0.0, Vec3::ZERO, true),
+        (
+            "mesh, rotated 30 degrees",
+            30.0,
+            Vec3::new(0.3, -0.2, 0.1),
+            true,
+        ),
+        (
+            "mesh, rotated, 1e4 away",
+            37.0,
+            Vec3::new(1e4, -2e4, 5e3),
+            true,
+        ),
     ] {
         let s = unit_box(angle, offset);
+        let s = if mesh { triangulated(&s) } else { s };
         let flat = FlatScene::new(&s, 8, 8).expect("valid");
         let t = s.objects[0].transform;
         let mut rays = Vec::new();
@@ -214,6 +230,14 @@ fn closed_boxes_are_watertight() {
                     for k in 0..=40 {
                         targets.push(a.lerp(b, k as f32 / 40.0));
                     }
+                }
+            }
+        }
+        // Points along the face diagonals: edges between a mesh's triangles.
+        if mesh {
+            for [q, u, v] in rt_gpu::scene::flat::box_faces(Vec3::ZERO, Vec3::ONE) {
+                for k in 0..=40 {
+                    targets.push(q + (u + v) * (k as f32 / 40.0));
                 }
             }
         }
@@ -273,6 +297,10 @@ fn scaled(scene: &Scene, s: f32, offset: Vec3) -> Scene {
             Shape::Cuboid { min, max } => Shape::Cuboid {
                 min: min * s,
                 max: max * s,
+            },
+            Shape::Mesh { mesh, scale } => Shape::Mesh {
+                mesh,
+                scale: scale * s,
             },
         };
         o.transform.translate = o.transform.translate * s + offset;

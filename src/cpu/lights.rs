@@ -13,14 +13,22 @@ use std::f32::consts::PI;
 /// overflow); BSDF sampling alone covers them, with full weight.
 pub const MIN_LIGHT_COSINE: f32 = 1e-7;
 
-/// The light whose cumulative share first exceeds `u` in [0, 1).
+/// The light whose cumulative share first exceeds `u` in [0, 1), by binary search (scenes may
+/// have thousands of emitting triangles); the last light when none does.
 #[inline]
 pub fn pick_light(scene: &FlatScene, u: f32) -> usize {
     let last = scene.lights.len() - 1;
-    scene.lights[..last]
-        .iter()
-        .position(|l| u < l.cdf)
-        .unwrap_or(last)
+    // The same halving steps as the kernel's `pick_light`.
+    let (mut lo, mut hi) = (0usize, last);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if u < scene.lights[mid].cdf {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    lo
 }
 
 /// The cone a sphere subtends from `x`: its unit axis and 1 - cos(half angle), or `None`
@@ -62,6 +70,9 @@ pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
             None => 0.0,
         },
         LightShape::Quad {
+            normal, inv_area, ..
+        }
+        | LightShape::Triangle {
             normal, inv_area, ..
         } => quad_pdf(light.pick, normal, inv_area, x, p, dir),
         LightShape::Environment(env) => light.pick * environment::pdf(&env, dir),
@@ -114,16 +125,18 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
             v,
             normal,
             inv_area,
+        } => area_sample(light.pick, corner + u1 * u + u2 * v, normal, inv_area, x),
+        LightShape::Triangle {
+            corner,
+            u,
+            v,
+            normal,
+            inv_area,
         } => {
-            let point = corner + u1 * u + u2 * v;
-            let to_light = point - x;
-            let dist2 = to_light.length_squared();
-            if !(dist2 > 0.0) {
-                return None;
-            }
-            let dir = to_light / dist2.sqrt();
-            let pdf = quad_pdf(light.pick, normal, inv_area, x, point, dir);
-            (pdf > 0.0).then_some(LightSample { dir, pdf, point })
+            // Uniform on the triangle: (1 - sqrt(u1)) on the corner's weight.
+            let s = u1.sqrt();
+            let point = corner + (s * (1.0 - u2)) * u + (s * u2) * v;
+            area_sample(light.pick, point, normal, inv_area, x)
         }
         LightShape::Environment(env) => {
             let (dir, pdf) = environment::sample(&env, u1, u2)?;
@@ -135,6 +148,25 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
             })
         }
     }
+}
+
+/// A sample of a quad or triangle light at `point`, seen from `x`.
+#[inline]
+fn area_sample(
+    pick: f32,
+    point: Vec3,
+    normal: Vec3,
+    inv_area: f32,
+    x: Vec3,
+) -> Option<LightSample> {
+    let to_light = point - x;
+    let dist2 = to_light.length_squared();
+    if !(dist2 > 0.0) {
+        return None;
+    }
+    let dir = to_light / dist2.sqrt();
+    let pdf = quad_pdf(pick, normal, inv_area, x, point, dir);
+    (pdf > 0.0).then_some(LightSample { dir, pdf, point })
 }
 
 /// The power heuristic (beta = 2) weight of a strategy with pdf `own` against one with pdf

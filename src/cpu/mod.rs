@@ -2,6 +2,7 @@
 //! in the same order as the WGSL kernel, one counter-based random stream per sample, rayon over
 //! image rows.
 
+pub mod accel;
 pub mod background;
 pub mod camera;
 pub mod environment;

@@ -1,6 +1,6 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
-use crate::scene::flat::{FlatScene, PrimitiveRef, Quad, Sphere};
+use crate::scene::flat::{FlatScene, PrimitiveRef, Quad, Sphere, Triangle};
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,24 +78,131 @@ pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
     (inside(alpha) && inside(beta)).then_some(t)
 }
 
+/// Distance along the ray to `triangle` within (t_min, t_max) and the barycentric weights of
+/// its second and third corners there, if it is hit. Watertight (Woop, Benthin and Wald 2013,
+/// "Watertight Ray/Triangle Intersection"): in a frame sheared so the ray runs along +z from
+/// the origin, the 2D edge functions of an edge shared by two triangles are exact negatives of
+/// each other, so a ray crossing the edge hits at least one of them; a ray through a corner or
+/// along an edge (an edge function exactly 0) counts as a hit.
+#[inline]
+pub fn hit_triangle(
+    triangle: &Triangle,
+    ray: &Ray,
+    t_min: f32,
+    t_max: f32,
+) -> Option<(f32, f32, f32)> {
+    let d = ray.dir;
+    // The dominant axis becomes z.
+    let a = d.abs();
+    let kz = if a.x > a.y && a.x > a.z {
+        0
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    let permute = |v: Vec3| Vec3::new(v[kx], v[ky], v[kz]);
+    let d = permute(d);
+    let (sx, sy, sz) = (-d.x / d.z, -d.y / d.z, 1.0 / d.z);
+    let shear = |p: Vec3| {
+        let p = permute(p - ray.origin);
+        Vec3::new(p.x + sx * p.z, p.y + sy * p.z, p.z)
+    };
+    let (p0, p1, p2) = (shear(triangle.p0), shear(triangle.p1), shear(triangle.p2));
+    let e0 = p1.x * p2.y - p1.y * p2.x;
+    let e1 = p2.x * p0.y - p2.y * p0.x;
+    let e2 = p0.x * p1.y - p0.y * p1.x;
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+    let scaled = e0 * (sz * p0.z) + e1 * (sz * p1.z) + e2 * (sz * p2.z);
+    let t = scaled / det;
+    if !(t > t_min && t < t_max) {
+        return None;
+    }
+    Some((t, e1 / det, e2 / det))
+}
+
+/// What the closest-hit search keeps of the best primitive so far.
+#[derive(Clone, Copy)]
+struct Candidate {
+    primitive: PrimitiveRef,
+    /// The outward normal, not yet of unit length.
+    outward: Vec3,
+    /// A triangle's barycentric weights of its second and third corners.
+    weights: Vec2,
+}
+
+/// Tests primitive `p` against the ray, keeping it if it is closer than `closest`.
+#[inline]
+fn consider(
+    scene: &FlatScene,
+    p: PrimitiveRef,
+    ray: &Ray,
+    closest: &mut f32,
+    found: &mut Option<Candidate>,
+) {
+    let (t, outward, weights) = match p {
+        PrimitiveRef::Sphere(i) => {
+            let sphere = &scene.spheres[i as usize];
+            let Some(t) = hit_sphere(sphere, ray, 0.0, *closest) else {
+                return;
+            };
+            (t, (ray.at(t) - sphere.center) / sphere.radius, Vec2::ZERO)
+        }
+        PrimitiveRef::Quad(i) => {
+            let quad = &scene.quads[i as usize];
+            let Some(t) = hit_quad(quad, ray, 0.0, *closest) else {
+                return;
+            };
+            (t, quad.normal, Vec2::ZERO)
+        }
+        PrimitiveRef::Triangle(i) => {
+            let tri = &scene.triangles[i as usize];
+            let Some((t, b1, b2)) = hit_triangle(tri, ray, 0.0, *closest) else {
+                return;
+            };
+            (
+                t,
+                (tri.p1 - tri.p0).cross(tri.p2 - tri.p0),
+                Vec2::new(b1, b2),
+            )
+        }
+    };
+    *closest = t;
+    *found = Some(Candidate {
+        primitive: p,
+        outward,
+        weights,
+    });
+}
+
 /// The closest hit along `ray` beyond its origin.
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     let mut closest = f32::INFINITY;
-    let mut found: Option<(PrimitiveRef, Vec3)> = None;
-    for (i, sphere) in scene.spheres.iter().enumerate() {
-        if let Some(t) = hit_sphere(sphere, ray, 0.0, closest) {
-            closest = t;
-            let outward = (ray.at(t) - sphere.center) / sphere.radius;
-            found = Some((PrimitiveRef::Sphere(i as u32), outward));
+    let mut found: Option<Candidate> = None;
+    match &scene.bvh {
+        Some(bvh) => super::accel::traverse(bvh, ray, &mut closest, |packed, closest| {
+            if let Some(p) = PrimitiveRef::unpacked(packed) {
+                consider(scene, p, ray, closest, &mut found);
+            }
+        }),
+        None => {
+            for p in scene.primitives() {
+                consider(scene, p, ray, &mut closest, &mut found);
+            }
         }
     }
-    for (i, quad) in scene.quads.iter().enumerate() {
-        if let Some(t) = hit_quad(quad, ray, 0.0, closest) {
-            closest = t;
-            found = Some((PrimitiveRef::Quad(i as u32), quad.normal));
-        }
-    }
-    let (primitive, outward) = found?;
+    let Candidate {
+        primitive,
+        outward,
+        weights,
+    } = found?;
     let outward = outward.normalize();
     let along_ray = ray.at(closest);
     // The hit point, and a bound on its distance from the true surface point, which the origin
@@ -112,6 +219,10 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
             let q = &scene.quads[i as usize];
             (q.material, quad_surface(q, along_ray))
         }
+        PrimitiveRef::Triangle(i) => {
+            let t = &scene.triangles[i as usize];
+            (t.material, triangle_surface(t, weights))
+        }
     };
     let front_face = ray.dir.dot(outward) < 0.0;
     let uv = if scene.uv_textures {
@@ -125,6 +236,7 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
                 let d = along_ray - q.q;
                 Vec2::new(d.dot(q.alpha_axis), d.dot(q.beta_axis))
             }
+            PrimitiveRef::Triangle(_) => weights,
         }
     } else {
         Vec2::ZERO
@@ -155,6 +267,18 @@ pub fn sphere_surface(sphere: &Sphere, along_ray: Vec3) -> (Vec3, f32) {
 pub fn quad_surface(quad: &Quad, along_ray: Vec3) -> (Vec3, f32) {
     let point = along_ray - (quad.normal.dot(along_ray) - quad.d) * quad.normal;
     let scale = point.abs().max_element() + quad.d.abs();
+    (point, POINT_ERROR * scale)
+}
+
+/// A triangle's point with barycentric weights (1 - b1 - b2, b1, b2), and a bound on its error:
+/// the weighted sum is within a few roundings of the corners' magnitudes of the plane.
+#[inline]
+pub fn triangle_surface(t: &Triangle, weights: Vec2) -> (Vec3, f32) {
+    let (b1, b2) = (weights.x, weights.y);
+    let b0 = 1.0 - b1 - b2;
+    let point = b0 * t.p0 + b1 * t.p1 + b2 * t.p2;
+    let scale =
+        (b0.abs() * t.p0.abs() + b1.abs() * t.p1.abs() + b2.abs() * t.p2.abs()).max_element();
     (point, POINT_ERROR * scale)
 }
 

@@ -164,6 +164,31 @@ gpu_struct! {
 }
 
 gpu_struct! {
+    /// A triangle p0 p1 p2, front face counter-clockwise (see `scene::flat::Triangle`).
+    pub struct GpuTriangle as "Triangle" {
+        p0: [f32; 3],
+        material: u32,
+        p1: [f32; 3],
+        /// 1 + its index in the light list; 0 when it does not emit.
+        light: u32,
+        p2: [f32; 3],
+        _pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// A BVH node (see `accel::Node`): its box, and for an interior node the index of its
+    /// second child (the first follows it) and `BVH_INTERIOR | axis`, for a leaf where its
+    /// primitives start in the reference array and how many there are.
+    pub struct GpuBvhNode as "BvhNode" {
+        min: [f32; 3],
+        offset: u32,
+        max: [f32; 3],
+        count: u32,
+    }
+}
+
+gpu_struct! {
     /// A light for next-event estimation (see `scene::flat::Light`): a quad (uniform on its
     /// area) or a sphere (uniform in the cone it subtends), told apart by `kind`.
     pub struct GpuLight as "Light" {
@@ -176,12 +201,12 @@ gpu_struct! {
         /// Chance of picking this light.
         pick: f32,
         v: [f32; 3],
-        /// `KIND_SPHERE` or `KIND_QUAD` (as `PrimitiveRef`): which shape, and so what `size`
-        /// means.
+        /// `KIND_SPHERE`, `KIND_QUAD` or `KIND_TRIANGLE` (as `PrimitiveRef`), or
+        /// `KIND_ENVIRONMENT`: which shape, and so what `size` means.
         kind: u32,
         /// Quad unit normal.
         normal: [f32; 3],
-        /// Sphere: |radius|; quad: 1 / area.
+        /// Sphere: |radius|; quad and triangle: 1 / area.
         size: f32,
     }
 }
@@ -284,7 +309,13 @@ gpu_struct! {
         environment_width: u32,
         environment_height: u32,
         environment_strength: f32,
-        _pad: [u32; 3],
+        /// The loop budget of BVH kernels (see shaders/accel.wgsl): a bound on the loop
+        /// iterations of one sample other than traversals; what each traversal iteration
+        /// counts for (the SIMD lanes that wait for each other on lavapipe); and the count at
+        /// which an invocation stops taking samples.
+        sample_loop_cost: u32,
+        traversal_weight: u32,
+        loop_budget: u32,
     }
 }
 
@@ -295,11 +326,13 @@ gpu_struct! {
     pub struct GpuDispatch as "Dispatch" {
         tile_origin: [u32; 2],
         tile_size: [u32; 2],
-        /// Random-stream index of this dispatch's first sample.
+        /// Random-stream index of the render's first sample: a pixel holding n samples takes
+        /// sample first_sample + n next.
         first_sample: u32,
-        /// Samples per pixel in this dispatch.
+        /// Samples per pixel in this dispatch: each pixel is taken up to `samples_before +
+        /// sample_count` samples.
         sample_count: u32,
-        /// Samples already in the accumulator.
+        /// Samples every pixel held before this dispatch (some may hold more).
         samples_before: u32,
         seed: u32,
     }
@@ -362,6 +395,9 @@ fn wgsl_constants() -> String {
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),
+        ("KIND_TRIANGLE", crate::scene::flat::KIND_TRIANGLE.literal()),
+        ("BVH_INTERIOR", crate::accel::INTERIOR.literal()),
+        ("BOX_FAR_WIDENING", crate::accel::BOX_FAR_WIDENING.literal()),
         (
             "MAX_SURVIVAL",
             crate::cpu::integrator::MAX_SURVIVAL.literal(),
@@ -414,6 +450,8 @@ pub fn shared_layouts() -> Vec<StructLayout> {
     vec![
         layout_of::<GpuSphere>(),
         layout_of::<GpuQuad>(),
+        layout_of::<GpuTriangle>(),
+        layout_of::<GpuBvhNode>(),
         layout_of::<GpuLight>(),
         layout_of::<GpuMaterial>(),
         layout_of::<GpuParams>(),
@@ -430,6 +468,8 @@ pub fn wgsl_shared() -> String {
     for declaration in [
         GpuSphere::wgsl_declaration(),
         GpuQuad::wgsl_declaration(),
+        GpuTriangle::wgsl_declaration(),
+        GpuBvhNode::wgsl_declaration(),
         GpuLight::wgsl_declaration(),
         GpuMaterial::wgsl_declaration(),
         GpuParams::wgsl_declaration(),
@@ -446,6 +486,10 @@ pub fn wgsl_shared() -> String {
 pub struct SceneBuffers {
     pub spheres: Vec<GpuSphere>,
     pub quads: Vec<GpuQuad>,
+    pub triangles: Vec<GpuTriangle>,
+    pub bvh_nodes: Vec<GpuBvhNode>,
+    /// Packed primitive references, in the BVH's leaf order.
+    pub bvh_primitives: Vec<u32>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
     pub images: ImageArray,
@@ -594,6 +638,42 @@ impl SceneBuffers {
                 gpu
             })
             .collect();
+        let mut triangles: Vec<GpuTriangle> = scene
+            .triangles
+            .iter()
+            .map(|t| GpuTriangle {
+                p0: t.p0.to_array(),
+                material: t.material,
+                p1: t.p1.to_array(),
+                light: t.light,
+                p2: t.p2.to_array(),
+                _pad: 0,
+            })
+            .collect();
+        let (mut bvh_nodes, mut bvh_primitives) = match &scene.bvh {
+            Some(bvh) => (
+                bvh.nodes
+                    .iter()
+                    .map(|n| GpuBvhNode {
+                        min: n.min.to_array(),
+                        offset: n.offset,
+                        max: n.max.to_array(),
+                        count: n.count,
+                    })
+                    .collect(),
+                bvh.primitives.clone(),
+            ),
+            None => (Vec::new(), Vec::new()),
+        };
+        if triangles.is_empty() {
+            triangles.push(GpuTriangle::default());
+        }
+        if bvh_nodes.is_empty() {
+            bvh_nodes.push(GpuBvhNode::default());
+        }
+        if bvh_primitives.is_empty() {
+            bvh_primitives.push(0);
+        }
         if spheres.is_empty() {
             spheres.push(GpuSphere::default());
         }
@@ -610,6 +690,9 @@ impl SceneBuffers {
         SceneBuffers {
             spheres,
             quads,
+            triangles,
+            bvh_nodes,
+            bvh_primitives,
             materials,
             lights,
             images,
@@ -637,8 +720,19 @@ fn gpu_light(l: &Light) -> GpuLight {
             v,
             normal,
             inv_area,
+        }
+        | LightShape::Triangle {
+            corner,
+            u,
+            v,
+            normal,
+            inv_area,
         } => {
-            out.kind = KIND_QUAD;
+            out.kind = if matches!(l.shape, LightShape::Quad { .. }) {
+                KIND_QUAD
+            } else {
+                crate::scene::flat::KIND_TRIANGLE
+            };
             out.position = corner.to_array();
             out.u = u.to_array();
             out.v = v.to_array();
@@ -692,7 +786,9 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         environment_width: environment.2[0],
         environment_height: environment.2[1],
         environment_strength: environment.3,
-        _pad: [0; 3],
+        sample_loop_cost: 0,
+        traversal_weight: 1,
+        loop_budget: u32::MAX,
     }
 }
 

@@ -4,7 +4,7 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
-    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, ImageArray, SceneBuffers, WORKGROUP_SIZE,
+    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, WORKGROUP_SIZE,
     base_params, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
@@ -20,12 +20,20 @@ use wgpu::util::DeviceExt;
 /// one pass over each primitive list (none when the scene is inlined as straight-line code),
 /// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
-/// With NEE, a segment also scans the light list and traces a shadow ray. With media, a segment
-/// and a shadow ray each trace up to 1 + `medium_crossings` rays (through invisible
-/// boundaries). (The samplers have no loops.)
-fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> LoopCost {
+/// With NEE, a segment also searches the light list and traces a shadow ray. With media, a
+/// segment and a shadow ray each trace up to 1 + `medium_crossings` rays (through invisible
+/// boundaries). (The samplers have no loops.) Through a BVH a trace has no fixed bound: the
+/// kernel counts those iterations itself (`GpuParams::sample_loop_cost` is this bound with
+/// traversals counted as one iteration each) and `per_sample` estimates them, for sizing
+/// dispatches only.
+fn loop_cost(
+    scene: &FlatScene,
+    features: &Features,
+    opts: &RenderOptions,
+    traversal_weight: u64,
+) -> (LoopCost, u64) {
     let max_depth = opts.max_depth;
-    let primitives = if features.inline_scene {
+    let primitives = if features.inline_scene || features.bvh {
         0
     } else {
         scene.spheres.len() as u64 + scene.quads.len() as u64
@@ -35,15 +43,39 @@ fn loop_cost(scene: &FlatScene, features: &Features, opts: &RenderOptions) -> Lo
     } else {
         1
     };
-    let trace = rays_per_trace * (1 + primitives);
-    let per_segment = if features.nee {
-        5 + 2 * trace + scene.lights.len() as u64
-    } else {
-        2 + trace
+    let light_search = 2 + (scene.lights.len().max(1) as u64).ilog2() as u64;
+    let bound = |per_trace: u64| {
+        let trace = rays_per_trace * per_trace;
+        let per_segment = if features.nee {
+            5 + 2 * trace + light_search
+        } else {
+            2 + trace
+        };
+        2 + (max_depth as u64 + 1) * per_segment
     };
-    LoopCost {
-        per_sample: 2 + (max_depth as u64 + 1) * per_segment,
-    }
+    let fixed = bound(1 + primitives);
+    let (cost, fixed) = match &scene.bvh {
+        Some(bvh) if features.bvh => {
+            // Kernels count against half the budget (see shaders/accel.wgsl): doubled here.
+            let traversal = 4 * (bvh.depth as u64 + crate::accel::MAX_LEAF as u64);
+            (2 * bound(1 + traversal_weight * traversal), fixed)
+        }
+        _ => (fixed, fixed),
+    };
+    (LoopCost { per_sample: cost }, fixed)
+}
+
+/// How many f32 lanes lavapipe's SIMD groups have: its name says how wide its vectors are
+/// ("llvmpipe (LLVM 15.0.6, 256 bits)": 8); 16 (512 bits) when it does not say.
+fn simd_lanes(adapter_name: &str) -> u32 {
+    let bits = adapter_name.find(" bits").and_then(|end| {
+        adapter_name[..end]
+            .rsplit(|c: char| !c.is_ascii_digit())
+            .next()?
+            .parse::<u32>()
+            .ok()
+    });
+    bits.map_or(16, |b| (b / 32).max(1))
 }
 
 /// What `GpuRenderer::look_up_environment` finds for one direction and two numbers.
@@ -132,6 +164,9 @@ impl GpuRenderer {
                 buffer_entry(6, scene_ty),
                 buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(8, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(10, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -191,13 +226,29 @@ impl GpuRenderer {
         &self,
         scene: &FlatScene,
         features: &Features,
-    ) -> Result<[wgpu::Buffer; 5], GpuError> {
+    ) -> Result<[wgpu::Buffer; 8], GpuError> {
         let mut buffers = SceneBuffers::new(scene);
         let limit = self
             .ctx
             .limits
             .max_storage_buffer_binding_size
             .min(self.ctx.limits.max_buffer_size);
+        let geometry = [
+            ("triangles", std::mem::size_of_val(&buffers.triangles[..])),
+            ("BVH nodes", std::mem::size_of_val(&buffers.bvh_nodes[..])),
+            ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
+            ("quads", std::mem::size_of_val(&buffers.quads[..])),
+            ("lights", std::mem::size_of_val(&buffers.lights[..])),
+        ];
+        for (what, bytes) in geometry {
+            if bytes as u64 > limit {
+                return Err(GpuError::TooLarge(format!(
+                    "the scene's {what} take {} MB, more than this GPU binds at once ({} MB): use fewer triangles, or --backend cpu",
+                    bytes >> 20,
+                    limit >> 20
+                )));
+            }
+        }
         if buffers.images.bytes() > limit {
             return Err(GpuError::TooLarge(format!(
                 "the scene's images take {} MB, more than this GPU binds at once ({} MB): use smaller textures or environment",
@@ -226,6 +277,21 @@ impl GpuRenderer {
                 bytemuck::cast_slice(&ImageArray::new(scene).values),
                 wgpu::BufferUsages::STORAGE,
             ),
+            self.buffer_with(
+                "triangles",
+                bytemuck::cast_slice(&buffers.triangles),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            self.buffer_with(
+                "bvh nodes",
+                bytemuck::cast_slice(&buffers.bvh_nodes),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            self.buffer_with(
+                "bvh primitives",
+                bytemuck::cast_slice(&buffers.bvh_primitives),
+                wgpu::BufferUsages::STORAGE,
+            ),
         ])
     }
 
@@ -233,7 +299,7 @@ impl GpuRenderer {
         &self,
         kernel: &Kernel,
         [params, dispatch]: [&wgpu::Buffer; 2],
-        scene: &[wgpu::Buffer; 5],
+        scene: &[wgpu::Buffer; 8],
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
@@ -258,6 +324,9 @@ impl GpuRenderer {
                     entry(6, &scene[3]),
                     entry(7, dispatch),
                     entry(8, &scene[4]),
+                    entry(9, &scene[5]),
+                    entry(10, &scene[6]),
+                    entry(11, &scene[7]),
                 ],
             })
     }
@@ -332,10 +401,24 @@ impl GpuRenderer {
                 "a {width}-pixel row does not fit one GPU storage binding ({max_tile_pixels} pixels)"
             )));
         }
-        let cost = loop_cost(scene, &kernel.features, opts);
         let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
+        // BVH kernels count their loops against a budget on lavapipe (see shaders/accel.wgsl):
+        // half the limit, each traversal iteration counted once per SIMD lane.
+        let budget = if is_llvmpipe && kernel.features.bvh {
+            Some((LOOP_ITERATION_BUDGET / 2, simd_lanes(&self.ctx.info.name)))
+        } else {
+            None
+        };
+        let (cost, sample_loop_cost) = loop_cost(
+            scene,
+            &kernel.features,
+            opts,
+            budget.map_or(1, |(_, lanes)| lanes as u64),
+        );
         let max_slice = match cost.max_samples_per_dispatch() {
             Some(slice) => slice,
+            // Traversals count their own iterations: one sample per dispatch at the least.
+            None if kernel.features.bvh && budget.is_none_or(|(b, _)| sample_loop_cost < b) => 1,
             None if is_llvmpipe => {
                 return Err(GpuError::TooLarge(format!(
                     "this scene needs up to {} loop iterations per sample, more than the {LOOP_ITERATION_BUDGET} rt-gpu allows one invocation on lavapipe (which silently ends it at 65535): use fewer primitives or a lower --max-depth, or --backend cpu",
@@ -352,7 +435,12 @@ impl GpuRenderer {
         // and kept a variant: ~1 MB per dispatch).
         let params_buffer = self.buffer_with(
             "params",
-            bytemuck::bytes_of(&base_params(scene, opts)),
+            bytemuck::bytes_of(&GpuParams {
+                sample_loop_cost: sample_loop_cost.min(u32::MAX as u64) as u32,
+                traversal_weight: budget.map_or(1, |(_, lanes)| lanes),
+                loop_budget: budget.map_or(u32::MAX, |(b, _)| b as u32),
+                ..base_params(scene, opts)
+            }),
             wgpu::BufferUsages::UNIFORM,
         );
         let dispatch_buffer = self.buffer(
@@ -414,21 +502,22 @@ impl GpuRenderer {
                 encoder.clear_buffer(&accum, 0, None);
                 self.ctx.queue.submit([encoder.finish()]);
             }
-            let mut done = 0;
-            while done < opts.spp {
-                let count = slice.min(opts.spp - done);
+            // One dispatch over the tile, until each pixel holds `target` samples; its time.
+            let run = |samples_before: u32, count: u32| -> Result<(f64, f64), GpuError> {
+                // Each pixel takes samples first_sample + (its count so far) onward, so a
+                // pixel the kernel left short (see shaders/accel.wgsl) continues where it
+                // stopped.
                 let dispatch = GpuDispatch {
                     tile_origin: [0, y0],
                     tile_size: [width, rows],
-                    first_sample: opts.first_sample + done,
-                    samples_before: done,
+                    first_sample: opts.first_sample,
+                    samples_before,
                     sample_count: count,
                     ..whole_image_dispatch(opts)
                 };
                 self.ctx
                     .queue
                     .write_buffer(&dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
-
                 let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -450,14 +539,17 @@ impl GpuRenderer {
                 self.ctx.queue.submit([encoder.finish()]);
                 self.ctx.wait()?;
                 let wall = start.elapsed().as_secs_f64();
-                let seconds = match &timer {
-                    Some(t) => {
-                        let s = t.read(self)?;
-                        gpu_seconds += s;
-                        if s > 0.0 { s } else { wall }
-                    }
-                    None => wall,
+                let gpu = match &timer {
+                    Some(t) => t.read(self)?,
+                    None => 0.0,
                 };
+                Ok((if gpu > 0.0 { gpu } else { wall }, gpu))
+            };
+            let mut done = 0;
+            while done < opts.spp {
+                let count = slice.min(opts.spp - done);
+                let (seconds, gpu) = run(done, count)?;
+                gpu_seconds += gpu;
                 timings.dispatches += 1;
                 timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
                 done += count;
@@ -468,10 +560,38 @@ impl GpuRenderer {
                     // RT_GPU_TRACE=1: one line per dispatch, for tuning the sizing.
                     let _ = writeln!(
                         std::io::stderr().lock(),
-                        "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4} wall {wall:.4}"
+                        "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4}"
                     );
                 }
                 slice = sizer.record(count, tile_pixels, seconds);
+            }
+            // A BVH kernel stops a pixel's samples short when its traversals near the loop
+            // budget (each dispatch gives every pixel at least one sample): dispatch again
+            // until every pixel has them all.
+            if kernel.features.bvh {
+                for _ in 0..opts.spp {
+                    let bytes = self.read_back(&accum, tile_bytes)?;
+                    let words: &[u32] = bytemuck::cast_slice(&bytes);
+                    let short = words
+                        .chunks_exact(ACCUM_WORDS as usize)
+                        .filter(|px| px[ACCUM_COUNT as usize] < opts.spp)
+                        .count();
+                    if short == 0 {
+                        break;
+                    }
+                    if trace {
+                        let _ = writeln!(
+                            std::io::stderr().lock(),
+                            "tile y0 {y0}: {short} pixels short of {} samples, dispatching again",
+                            opts.spp
+                        );
+                    }
+                    let (seconds, gpu) = run(opts.spp, 0)?;
+                    gpu_seconds += gpu;
+                    timings.dispatches += 1;
+                    timings.longest_dispatch_seconds =
+                        timings.longest_dispatch_seconds.max(seconds);
+                }
             }
             let bytes = self.read_back(&accum, tile_bytes)?;
             let words: &[u32] = bytemuck::cast_slice(&bytes);
@@ -716,4 +836,17 @@ fn fixed_sums(words: &[u32]) -> [u128; 3] {
     std::array::from_fn(|c| {
         (0..3).fold(0u128, |sum, w| sum | (words[3 * w + c] as u128) << (32 * w))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::simd_lanes;
+
+    #[test]
+    fn lavapipe_simd_width_is_read_from_its_name() {
+        assert_eq!(simd_lanes("llvmpipe (LLVM 15.0.6, 256 bits)"), 8);
+        assert_eq!(simd_lanes("llvmpipe (LLVM 19.1.7, 512 bits)"), 16);
+        assert_eq!(simd_lanes("llvmpipe (LLVM 15.0.6, 128 bits)"), 4);
+        assert_eq!(simd_lanes("llvmpipe"), 16);
+    }
 }

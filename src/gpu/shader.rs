@@ -21,6 +21,7 @@ const MODULES: &[(&str, &str)] = &[
         "intersect.wgsl",
         include_str!("../../shaders/intersect.wgsl"),
     ),
+    ("accel.wgsl", include_str!("../../shaders/accel.wgsl")),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     (
         "environment.wgsl",
@@ -49,6 +50,9 @@ const MODULES: &[(&str, &str)] = &[
 pub struct Features {
     pub spheres: bool,
     pub quads: bool,
+    pub triangles: bool,
+    /// Primitives found through the scene's BVH (else tested one by one).
+    pub bvh: bool,
     /// The material features on, as bits in the order of [`material::features`]: each material
     /// kind the scene uses, and the extra features its instances need.
     pub materials: u32,
@@ -90,6 +94,7 @@ impl Features {
             .iter()
             .map(|s| s.material)
             .chain(scene.quads.iter().map(|q| q.material))
+            .chain(scene.triangles.iter().map(|t| t.material))
         {
             used[m as usize] = true;
         }
@@ -107,9 +112,12 @@ impl Features {
             .max(scene.materials.len())
             .max(scene.lights.len());
         let capacity = (longest.max(1) as u64).next_power_of_two();
+        let bvh = scene.bvh.is_some();
         Features {
             spheres: !scene.spheres.is_empty(),
             quads: !scene.quads.is_empty(),
+            triangles: !scene.triangles.is_empty(),
+            bvh,
             materials,
             lens: scene.camera.lens_radius > 0.0,
             sobol: false,
@@ -117,11 +125,12 @@ impl Features {
             environment: matches!(scene.background, Background::Environment(_)),
             debug: false,
             nee: false,
-            uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
+            uniform_scene: !bvh && capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
             // Bounded in size: a flat scene holds only the materials and lights its primitives
             // use, so neither outnumbers them.
-            inline_scene: scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES
+            inline_scene: !bvh
+                && scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES
                 && scene.materials.len() <= MAX_INLINE_PRIMITIVES
                 && scene.lights.len() <= MAX_INLINE_PRIMITIVES,
         }
@@ -135,6 +144,7 @@ impl Features {
         Features {
             spheres: true,
             quads: true,
+            triangles: true,
             materials: (1 << material::features().len()) - 1,
             uniform_scene: false,
             inline_scene: false,
@@ -170,7 +180,12 @@ impl Features {
 
     /// Every switch by name, in a fixed order: what `//#if` blocks test.
     pub fn flags(&self) -> Vec<(&'static str, bool)> {
-        let mut flags = vec![("SPHERES", self.spheres), ("QUADS", self.quads)];
+        let mut flags = vec![
+            ("SPHERES", self.spheres),
+            ("QUADS", self.quads),
+            ("TRIANGLES", self.triangles),
+            ("BVH", self.bvh),
+        ];
         flags.extend(
             material::features()
                 .into_iter()
@@ -194,6 +209,8 @@ impl Features {
         let switch = match name {
             "SPHERES" => &mut self.spheres,
             "QUADS" => &mut self.quads,
+            "TRIANGLES" => &mut self.triangles,
+            "BVH" => &mut self.bvh,
             "LENS" => &mut self.lens,
             "SOBOL" => &mut self.sobol,
             "SKY" => &mut self.sky,
@@ -259,6 +276,10 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         scene.medium_crossings,
         float_literal(f32::MAX)
     ));
+    // The traversal stack holds at most one entry per level below the root: sized to this
+    // scene's BVH (private arrays cost lavapipe in proportion to their size).
+    let stack = scene.bvh.as_ref().map_or(1, |b| b.depth.max(1));
+    out.push_str(&format!("const BVH_STACK: u32 = {stack}u;\n"));
     if features.uniform_scene {
         out.push_str(&format!(
             "const SCENE_CAPACITY: u32 = {}u;\n",

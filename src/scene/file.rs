@@ -422,7 +422,14 @@ struct ObjectDoc {
     quad: Option<QuadDoc>,
     #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
     cuboid: Option<BoxDoc>,
-    material: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mesh: Option<MeshDoc>,
+    /// A mesh's scale: a number or [x, y, z], applied before rotation and translation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scale: Option<ScaleDoc>,
+    /// Optional only for a glTF mesh, whose own materials are used without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    material: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     rotate_y: Option<Num>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -446,12 +453,77 @@ struct QuadDoc {
 
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
+struct MeshDoc {
+    file: String,
+    /// A glTF node (with its children) by name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    node: Option<String>,
+    /// One of the file's parts (a material's triangles), as rt-gpu writes scenes back; all
+    /// without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    part: Option<u32>,
+}
+
+#[derive(Clone, Copy, Serialize)]
+#[serde(untagged)]
+enum ScaleDoc {
+    Uniform(Num),
+    PerAxis(V3),
+}
+
+impl<'de> Deserialize<'de> for ScaleDoc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        match toml::Value::deserialize(d)? {
+            value @ toml::Value::Array(_) => V3::deserialize(value)
+                .map(ScaleDoc::PerAxis)
+                .map_err(|e| D::Error::custom(format!("scale: {}", e.message()))),
+            value => Num::deserialize(value).map(ScaleDoc::Uniform).map_err(|e| {
+                D::Error::custom(format!(
+                    "scale must be a number or [x, y, z]: {}",
+                    e.message()
+                ))
+            }),
+        }
+    }
+}
+
+impl ScaleDoc {
+    fn vec(self) -> Vec3 {
+        match self {
+            ScaleDoc::Uniform(n) => Vec3::splat(n.0),
+            ScaleDoc::PerAxis(v) => v.vec(),
+        }
+    }
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
 struct BoxDoc {
     min: V3,
     max: V3,
 }
 
 type Located = (Option<Range<usize>>, String);
+
+/// The index of the material a scene file names, or an error listing the names it has.
+fn lookup_material(index: &BTreeMap<String, u32>, name: &str) -> Result<u32, String> {
+    if let Some(&material) = index.get(name) {
+        return Ok(material);
+    }
+    let known: Vec<String> = index.keys().take(20).map(|k| quoted(k)).collect();
+    let more = index.len().saturating_sub(known.len());
+    let more = if more > 0 {
+        format!(" and {more} more")
+    } else {
+        String::new()
+    };
+    Err(format!(
+        "unknown material \"{}\" (defined: {}{more})",
+        quoted(name),
+        known.join(", ")
+    ))
+}
 
 impl SceneDoc {
     fn into_scene(self, name: &str) -> Result<Scene, Located> {
@@ -573,34 +645,85 @@ impl SceneDoc {
                     max: b.max.vec(),
                 });
             }
-            let [shape] = shapes[..] else {
-                return Err((
-                    span,
-                    format!(
-                        "an [[object]] needs exactly one of `sphere`, `quad` or `box`, found {}",
-                        shapes.len()
-                    ),
-                ));
-            };
-            shape.validate().map_err(|e| (span.clone(), e))?;
-            let Some(&material) = material_index.get(&o.material) else {
-                let known: Vec<String> =
-                    material_index.keys().take(20).map(|k| quoted(k)).collect();
-                let more = material_index.len().saturating_sub(known.len());
-                let more = if more > 0 {
-                    format!(" and {more} more")
-                } else {
-                    String::new()
+            let one_kind = shapes.len() + o.mesh.is_some() as usize;
+            // A mesh file gives one shape per part (material), each its own object.
+            let mut parts: Vec<(Shape, Option<&'static super::mesh::Mesh>)> =
+                shapes.into_iter().map(|s| (s, None)).collect();
+            if let Some(m) = &o.mesh {
+                let meshes = super::mesh::load_named(&m.file, m.node.as_deref())
+                    .map_err(|e| (span.clone(), e))?;
+                let meshes = match m.part {
+                    None => meshes,
+                    Some(p) => match meshes.get(p as usize) {
+                        Some(mesh) => vec![*mesh],
+                        None => {
+                            return Err((
+                                span,
+                                format!("mesh {} has {} parts, no part {p}", m.file, meshes.len()),
+                            ));
+                        }
+                    },
                 };
+                let scale = o.scale.map_or(Vec3::ONE, ScaleDoc::vec);
+                parts.extend(
+                    meshes
+                        .into_iter()
+                        .map(|mesh| (Shape::Mesh { mesh, scale }, Some(mesh))),
+                );
+            } else if o.scale.is_some() {
+                return Err((span, "`scale` applies to meshes only".into()));
+            }
+            if one_kind != 1 {
                 return Err((
                     span,
                     format!(
-                        "unknown material \"{}\" (defined: {}{more})",
-                        quoted(&o.material),
-                        known.join(", ")
+                        "an [[object]] needs exactly one of `sphere`, `quad`, `box` or `mesh`, found {one_kind}"
                     ),
                 ));
-            };
+            }
+            let mut placed = Vec::new();
+            for (shape, mesh) in parts {
+                shape.validate().map_err(|e| (span.clone(), e))?;
+                let material = match (&o.material, mesh.and_then(|m| m.material.map(|x| (m, x)))) {
+                    (Some(name), _) => {
+                        lookup_material(&material_index, name).map_err(|e| (span.clone(), e))?
+                    }
+                    (None, Some((mesh, own))) => {
+                        // The file's material, added to the scene once under "file#name".
+                        let name = format!("{}#{}", mesh.source, mesh.material_name);
+                        match material_index.get(&name) {
+                            Some(&i) => i,
+                            None => {
+                                own.validate().map_err(|e| {
+                                    (
+                                        span.clone(),
+                                        format!(
+                                            "mesh {} material \"{}\": {e}",
+                                            mesh.source, mesh.material_name
+                                        ),
+                                    )
+                                })?;
+                                let i = materials.len() as u32;
+                                material_index.insert(name.clone(), i);
+                                materials.push(own);
+                                material_names.push(name);
+                                i
+                            }
+                        }
+                    }
+                    (None, None) => {
+                        let what = match mesh {
+                            Some(m) => format!(
+                                "mesh {} part \"{}\" has no material of its own",
+                                m.source, m.material_name
+                            ),
+                            None => "an [[object]] needs a `material`".to_string(),
+                        };
+                        return Err((span, format!("{what}: name one with `material = \"...\"`")));
+                    }
+                };
+                placed.push((shape, material));
+            }
             let translate = match o.translate {
                 None => Vec3::ZERO,
                 Some(t) => {
@@ -618,14 +741,20 @@ impl SceneDoc {
                     v
                 }
             };
-            objects.push(Object {
-                shape,
-                material,
-                transform: Transform {
-                    rotate_y_degrees: o.rotate_y.map(|r| r.0).unwrap_or(0.0),
-                    translate,
-                },
-            });
+            let transform = Transform {
+                rotate_y_degrees: o.rotate_y.map(|r| r.0).unwrap_or(0.0),
+                translate,
+            };
+            for (i, (shape, material)) in placed.into_iter().enumerate() {
+                if i > 0 {
+                    object_spans.push(span.clone());
+                }
+                objects.push(Object {
+                    shape,
+                    material,
+                    transform,
+                });
+            }
         }
         let scene = Scene {
             name: name.to_string(),
@@ -663,7 +792,9 @@ impl SceneDoc {
                     sphere: None,
                     quad: None,
                     cuboid: None,
-                    material: names[o.material as usize].clone(),
+                    mesh: None,
+                    scale: None,
+                    material: Some(names[o.material as usize].clone()),
                     rotate_y: (o.transform.rotate_y_degrees != 0.0)
                         .then_some(Num(o.transform.rotate_y_degrees)),
                     translate: (o.transform.translate != Vec3::ZERO)
@@ -688,6 +819,15 @@ impl SceneDoc {
                             min: V3::from(min),
                             max: V3::from(max),
                         })
+                    }
+                    Shape::Mesh { mesh, scale } => {
+                        doc.mesh = Some(MeshDoc {
+                            file: mesh.source.clone(),
+                            node: mesh.node.clone(),
+                            part: Some(mesh.part),
+                        });
+                        doc.scale =
+                            (scale != Vec3::ONE).then(|| ScaleDoc::PerAxis(V3::from(scale)));
                     }
                 }
                 Spanned::new(0..0, doc)

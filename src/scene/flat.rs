@@ -65,6 +65,25 @@ fn edge_tolerance(q: Vec3, u: Vec3, v: Vec3) -> f32 {
     (8.0 * f32::EPSILON * magnitude / u.length().min(v.length())).max(1e-5)
 }
 
+/// A triangle `p0 p1 p2`, its front face counter-clockwise (along `(p1 - p0) x (p2 - p0)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub p0: Vec3,
+    pub p1: Vec3,
+    pub p2: Vec3,
+    pub material: u32,
+    /// 1 + this triangle's index in [`FlatScene::lights`]; 0 when it does not emit.
+    pub light: u32,
+}
+
+impl Triangle {
+    /// Its area (in f64: tiny triangles far from the origin keep theirs).
+    pub fn area(&self) -> f64 {
+        let [a, b, c] = [self.p0, self.p1, self.p2].map(|p| p.as_dvec3());
+        0.5 * (b - a).cross(c - a).length()
+    }
+}
+
 /// The camera reduced to what ray generation needs: a ray for film position (s, t) in [0, 1]^2
 /// (t down from the top) from `origin` points along `to_upper_left + s * horizontal - t * vertical`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,6 +104,7 @@ pub struct CameraFrame {
 pub enum PrimitiveRef {
     Sphere(u32),
     Quad(u32),
+    Triangle(u32),
 }
 
 /// A packed [`PrimitiveRef`] (as the kernel passes it) holds the kind above this many bits of
@@ -94,6 +114,7 @@ pub const PRIMITIVE_INDEX_BITS: u32 = 28;
 pub const MAX_PRIMITIVES_PER_KIND: usize = 1 << PRIMITIVE_INDEX_BITS;
 pub const KIND_SPHERE: u32 = 0;
 pub const KIND_QUAD: u32 = 1;
+pub const KIND_TRIANGLE: u32 = 2;
 
 impl PrimitiveRef {
     /// One number for both backends: kind << PRIMITIVE_INDEX_BITS | index.
@@ -101,6 +122,7 @@ impl PrimitiveRef {
         match self {
             PrimitiveRef::Sphere(i) => KIND_SPHERE << PRIMITIVE_INDEX_BITS | i,
             PrimitiveRef::Quad(i) => KIND_QUAD << PRIMITIVE_INDEX_BITS | i,
+            PrimitiveRef::Triangle(i) => KIND_TRIANGLE << PRIMITIVE_INDEX_BITS | i,
         }
     }
 
@@ -110,10 +132,14 @@ impl PrimitiveRef {
         match packed >> PRIMITIVE_INDEX_BITS {
             KIND_SPHERE => Some(PrimitiveRef::Sphere(index)),
             KIND_QUAD => Some(PrimitiveRef::Quad(index)),
+            KIND_TRIANGLE => Some(PrimitiveRef::Triangle(index)),
             _ => None,
         }
     }
 }
+
+/// Scenes with more primitives than this (or any triangle) are traced through a BVH.
+pub const BVH_ABOVE: usize = 64;
 
 /// Flat scenes are re-centred near the camera in steps of this size (a power of two, so the
 /// shift is exact): a scene whose camera is within this distance of the origin is not moved.
@@ -134,7 +160,11 @@ pub struct FlatScene {
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
-    /// Every emitting sphere and quad, and last an environment background, for next-event
+    pub triangles: Vec<Triangle>,
+    /// Over every primitive, in scenes with triangles or more than [`BVH_ABOVE`] primitives
+    /// (smaller ones are tested one by one, on the GPU as straight-line code).
+    pub bvh: Option<crate::accel::Bvh>,
+    /// Every emitting sphere, quad and triangle, and last an environment background, for next-event
     /// estimation (see [`Light`]).
     pub lights: Vec<Light>,
     /// Most invisible medium boundaries a ray steps through between two events: a straight
@@ -171,6 +201,15 @@ pub enum LightShape {
         normal: Vec3,
         inv_area: f32,
     },
+    /// Uniformly on its area, `corner + a u + b v` with a, b >= 0, a + b <= 1.
+    Triangle {
+        corner: Vec3,
+        u: Vec3,
+        v: Vec3,
+        /// Unit normal `u x v / |u x v|`.
+        normal: Vec3,
+        inv_area: f32,
+    },
     /// The environment (always the last light): directions by its image's distribution.
     Environment(super::environment::Environment),
 }
@@ -182,6 +221,7 @@ impl FlatScene {
         crate::film::check_image_size(width, height).map_err(SceneError::Invalid)?;
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
+        let mut triangles = Vec::new();
         // Only the materials some object uses, numbered in order of first use: a scene may
         // define thousands it never places, and the kernel holds every material it is given.
         let mut materials = Vec::new();
@@ -219,11 +259,34 @@ impl FlatScene {
                         ));
                     }
                 }
+                Shape::Mesh { mesh, scale } => {
+                    // A mirroring scale turns the winding around: swap two corners so the
+                    // front face stays the same side of the surface.
+                    let mirrored = scale.x * scale.y * scale.z < 0.0;
+                    let placed: Vec<Vec3> =
+                        mesh.positions.iter().map(|&p| place(p * scale)).collect();
+                    triangles.extend(mesh.triangles.iter().filter_map(|&[a, b, c]| {
+                        let [b, c] = if mirrored { [c, b] } else { [b, c] };
+                        let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
+                        // Triangles that f32 coordinates here flatten to a line are left out.
+                        let n = (p1 - p0).cross(p2 - p0);
+                        (n.length_squared() > 0.0 && n.is_finite()).then_some(Triangle {
+                            p0,
+                            p1,
+                            p2,
+                            material,
+                            light: 0,
+                        })
+                    }));
+                }
             }
         }
-        if spheres.len() > MAX_PRIMITIVES_PER_KIND || quads.len() > MAX_PRIMITIVES_PER_KIND {
+        if spheres.len() > MAX_PRIMITIVES_PER_KIND
+            || quads.len() > MAX_PRIMITIVES_PER_KIND
+            || triangles.len() > MAX_PRIMITIVES_PER_KIND
+        {
             return Err(SceneError::Invalid(format!(
-                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres and as many quads"
+                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads and as many triangles"
             )));
         }
         let mut flat = FlatScene {
@@ -233,6 +296,8 @@ impl FlatScene {
             materials,
             spheres,
             quads,
+            triangles,
+            bvh: None,
             lights: Vec::new(),
             medium_crossings: 0,
             uv_textures: false,
@@ -243,7 +308,59 @@ impl FlatScene {
         });
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
+        if !flat.triangles.is_empty() || flat.primitive_count() > BVH_ABOVE {
+            flat.bvh = Some(crate::accel::Bvh::build(&mut flat.bvh_items()));
+        }
         Ok(flat)
+    }
+
+    pub fn primitive_count(&self) -> usize {
+        self.spheres.len() + self.quads.len() + self.triangles.len()
+    }
+
+    /// Every primitive's bounds, padded for the rounding of the intersection tests: what the
+    /// BVH is built over.
+    pub fn bvh_items(&self) -> Vec<crate::accel::Item> {
+        use crate::accel::Item;
+        // A few ulps of the largest coordinate: spheres' bounds are rounded, and quads count
+        // as hit a little past their edges.
+        let pad = |min: Vec3, max: Vec3, extra: f32| {
+            let ulps = 4.0 * f32::EPSILON * min.abs().max(max.abs()).max_element();
+            let p = Vec3::splat(ulps + extra);
+            (min - p, max + p)
+        };
+        let mut items = Vec::with_capacity(self.primitive_count());
+        for (i, s) in self.spheres.iter().enumerate() {
+            let r = Vec3::splat(s.radius.abs());
+            let (min, max) = pad(s.center - r, s.center + r, 0.0);
+            items.push(Item {
+                min,
+                max,
+                primitive: PrimitiveRef::Sphere(i as u32).packed(),
+            });
+        }
+        for (i, q) in self.quads.iter().enumerate() {
+            let corners = [q.q, q.q + q.u, q.q + q.v, q.q + q.u + q.v];
+            let min = corners.iter().fold(Vec3::MAX, |m, c| m.min(*c));
+            let max = corners.iter().fold(Vec3::MIN, |m, c| m.max(*c));
+            let tolerance = q.edge_tolerance * (q.u.abs() + q.v.abs()).max_element();
+            let (min, max) = pad(min, max, tolerance);
+            items.push(Item {
+                min,
+                max,
+                primitive: PrimitiveRef::Quad(i as u32).packed(),
+            });
+        }
+        let triangles = self.triangles.iter().enumerate().map(|(i, t)| {
+            let (min, max) = pad(t.p0.min(t.p1).min(t.p2), t.p0.max(t.p1).max(t.p2), 0.0);
+            Item {
+                min,
+                max,
+                primitive: PrimitiveRef::Triangle(i as u32).packed(),
+            }
+        });
+        items.extend(triangles);
+        items
     }
 
     /// Every primitive, spheres then quads (the order both backends test them in).
@@ -251,6 +368,7 @@ impl FlatScene {
         (0..self.spheres.len() as u32)
             .map(PrimitiveRef::Sphere)
             .chain((0..self.quads.len() as u32).map(PrimitiveRef::Quad))
+            .chain((0..self.triangles.len() as u32).map(PrimitiveRef::Triangle))
     }
 
     fn count_medium_crossings(&self) -> u32 {
@@ -288,6 +406,7 @@ impl FlatScene {
         match p {
             PrimitiveRef::Sphere(i) => self.spheres[i as usize].light,
             PrimitiveRef::Quad(i) => self.quads[i as usize].light,
+            PrimitiveRef::Triangle(i) => self.triangles[i as usize].light,
         }
     }
 
@@ -312,7 +431,8 @@ impl FlatScene {
             .quads
             .iter()
             .flat_map(|q| [q.q, q.q + q.u, q.q + q.v, q.q + q.u + q.v]);
-        let (min, max) = spheres.chain(quads).fold(
+        let triangles = self.triangles.iter().flat_map(|t| [t.p0, t.p1, t.p2]);
+        let (min, max) = spheres.chain(quads).chain(triangles).fold(
             (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
             |(min, max), p| (min.min(p.as_dvec3()), max.max(p.as_dvec3())),
         );
@@ -366,6 +486,29 @@ impl FlatScene {
                     pick: 0.0,
                 });
                 quad.light = lights.len() as u32;
+            }
+        }
+        for triangle in &mut self.triangles {
+            triangle.light = 0;
+            if let Some((radiance, two_sided)) =
+                self.materials[triangle.material as usize].area_light()
+            {
+                let area = triangle.area();
+                let sides = if two_sided { 2.0 } else { 1.0 };
+                powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
+                let (u, v) = (triangle.p1 - triangle.p0, triangle.p2 - triangle.p0);
+                lights.push(Light {
+                    shape: LightShape::Triangle {
+                        corner: triangle.p0,
+                        u,
+                        v,
+                        normal: u.cross(v).normalize(),
+                        inv_area: (1.0 / area) as f32,
+                    },
+                    cdf: 0.0,
+                    pick: 0.0,
+                });
+                triangle.light = lights.len() as u32;
             }
         }
         if let Background::Environment(env) = self.background {

@@ -186,7 +186,7 @@ fn decode(path: &Path, source: &str) -> Result<Image, String> {
 }
 
 thread_local! {
-    /// The directory image paths in the scene file being read are relative to.
+    /// The directory image and mesh paths in the scene file being read are relative to.
     static BASE_DIR: std::cell::RefCell<Option<PathBuf>> = const { std::cell::RefCell::new(None) };
 }
 
@@ -207,12 +207,17 @@ pub fn with_base_dir<R>(dir: &Path, f: impl FnOnce() -> R) -> R {
 /// Loads the image a scene file names as `source`: relative to the scene file's directory
 /// (see [`with_base_dir`]), else to the working directory.
 pub fn load_named(source: &str) -> Result<&'static Image, String> {
+    load(&resolve(source), source)
+}
+
+/// A path a scene file names (an image, a mesh): relative to the scene file's directory (see
+/// [`with_base_dir`]), else to the working directory.
+pub fn resolve(source: &str) -> PathBuf {
     let path = Path::new(source);
-    let full = BASE_DIR.with(|b| match &*b.borrow() {
+    BASE_DIR.with(|b| match &*b.borrow() {
         Some(dir) if path.is_relative() => dir.join(path),
         _ => path.to_path_buf(),
-    });
-    load(&full, source)
+    })
 }
 
 #[cfg(test)]

@@ -153,6 +153,7 @@ pub fn check(scene: &Scene) -> Result<(), (usize, String)> {
         let Some(region) = Region::of(object) else {
             let shape = match object.shape {
                 Shape::Quad { .. } => "an open quad",
+                Shape::Mesh { .. } => "a mesh",
                 _ => "an inward-facing sphere",
             };
             return Err((

@@ -9,6 +9,7 @@ pub mod file;
 pub mod flat;
 pub mod image;
 pub mod media;
+pub mod mesh;
 pub mod texture;
 
 use glam::Vec3;
@@ -67,6 +68,11 @@ pub enum Shape {
     Quad { q: Vec3, u: Vec3, v: Vec3 },
     /// An axis-aligned box made of six outward-facing quads.
     Cuboid { min: Vec3, max: Vec3 },
+    /// A triangle mesh scaled per axis (before the object's rotation and translation).
+    Mesh {
+        mesh: &'static mesh::Mesh,
+        scale: Vec3,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -234,6 +240,22 @@ impl Shape {
                     ));
                 }
             }
+            Shape::Mesh { mesh, scale } => {
+                let size = scale.abs() * mesh.extent;
+                if !scale.is_finite() || scale.abs().min_element() < MIN_SIZE {
+                    return Err(format!(
+                        "mesh {} scale {scale} must be finite with every component at least {MIN_SIZE:e} in size",
+                        mesh.source
+                    ));
+                }
+                if !within_extent(size) {
+                    return Err(format!(
+                        "mesh {} scaled by {scale} reaches beyond {MAX_EXTENT:e} from the origin: f32 geometry there is too coarse",
+                        mesh.source
+                    ));
+                }
+                return Ok(());
+            }
             Shape::Cuboid { min, max } => {
                 if !min.is_finite() || !max.is_finite() || !(max.cmpgt(min).all()) {
                     return Err(format!(
@@ -252,11 +274,13 @@ impl Shape {
             Shape::Sphere { center, .. } => center,
             Shape::Quad { q, .. } => q,
             Shape::Cuboid { min, .. } => min,
+            Shape::Mesh { .. } => unreachable!("meshes return above"),
         };
         let far = match *self {
             Shape::Sphere { center, radius } => center.abs() + Vec3::splat(radius.abs()),
             Shape::Quad { q, u, v } => q.abs() + u.abs() + v.abs(),
             Shape::Cuboid { max, .. } => max,
+            Shape::Mesh { .. } => unreachable!("meshes return above"),
         };
         if !within_extent(position) || !within_extent(far) {
             return Err(format!(

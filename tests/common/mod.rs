@@ -120,3 +120,36 @@ pub fn cornell_white_2_percent_brighter() -> Scene {
     scene.materials[white] = Material::lambertian(Vec3::splat(0.73 * 1.02));
     scene
 }
+
+/// The triangles of parallelograms `[q, u, v]`: two each, (q, q+u, q+u+v) and (q, q+u+v, q+v),
+/// both counter-clockwise about u x v.
+pub fn parallelogram_mesh(name: &str, faces: &[[Vec3; 3]]) -> &'static rt_gpu::scene::mesh::Mesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for &[q, u, v] in faces {
+        let base = positions.len() as u32;
+        positions.extend([q, q + u, q + u + v, q + v]);
+        triangles.push([base, base + 1, base + 2]);
+        triangles.push([base, base + 2, base + 3]);
+    }
+    rt_gpu::scene::mesh::Mesh::new(name, positions, triangles)
+        .expect("a valid mesh")
+        .leak()
+}
+
+/// `scene` with every quad and box made of triangles (two per parallelogram): the same surfaces.
+pub fn triangulated(scene: &Scene) -> Scene {
+    let mut out = scene.clone();
+    for o in &mut out.objects {
+        let faces: Vec<[Vec3; 3]> = match o.shape {
+            Shape::Quad { q, u, v } => vec![[q, u, v]],
+            Shape::Cuboid { min, max } => rt_gpu::scene::flat::box_faces(min, max).to_vec(),
+            _ => continue,
+        };
+        o.shape = Shape::Mesh {
+            mesh: parallelogram_mesh("triangulated", &faces),
+            scale: Vec3::ONE,
+        };
+    }
+    out
+}

@@ -1,0 +1,95 @@
+// BVH traversal (twin: src/cpu/accel.rs): depth-first, the nearer child (by the ray's direction
+// along the node's split axis) first, pending second children on a stack in private memory.
+//
+// Lavapipe silently breaks every loop of an invocation once its SIMD group has run 65 535 loop
+// iterations in all, and a traversal's length depends on the ray. So the kernel counts: the
+// host's bound on every other loop of a sample is added at the sample's start, and each
+// traversal iteration counts `traversal_weight` (lavapipe's SIMD lanes: a group runs each
+// traversal as long as its slowest lane, so its count is at most the sum of its lanes'); a
+// traversal that would pass `loop_budget` (half lavapipe's limit: the group's samples may be
+// as many as its busiest lane's) stops and marks the sample spent, and the render loop leaves
+// that sample to the next dispatch (see kernel.wgsl and GpuParams in src/gpu/layout.rs).
+
+//#if BVH
+var<private> loop_iterations: u32;
+var<private> budget_spent: bool;
+
+// Whether the ray meets the node's box within [0, t_max] (see hits_box in src/accel.rs).
+fn hits_box(n: BvhNode, origin: vec3f, inverse: vec3f, t_max: f32) -> bool {
+    let t0 = (n.min - origin) * inverse;
+    let t1 = (n.max - origin) * inverse;
+    let lo = min(t0, t1);
+    let hi = max(t0, t1);
+    let near = max(max(lo.x, lo.y), max(lo.z, 0.0));
+    let far = min(min(hi.x, hi.y), min(hi.z, t_max)) * BOX_FAR_WIDENING;
+    return near <= far;
+}
+
+// 1 / dir with components below 1e-20 in size taken as 1e-20 (no infinities in WGSL).
+fn inverse_direction(d: vec3f) -> vec3f {
+    let tiny = select(vec3f(1e-20), vec3f(-1e-20), d < vec3f(0.0));
+    return 1.0 / select(d, tiny, abs(d) < vec3f(1e-20));
+}
+
+fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<function, Closest>) {
+    let kind = primitive_kind(packed);
+    let index = primitive_index(packed);
+//#if TRIANGLES
+    if kind == KIND_TRIANGLE {
+        consider_triangle(triangles[index], index, ray, *sh, c);
+    }
+//#endif
+//#if QUADS
+    if kind == KIND_QUAD {
+        consider_quad(quads[index], index, ray, c);
+    }
+//#endif
+//#if SPHERES
+    if kind == KIND_SPHERE {
+        consider_sphere(spheres[index], index, ray, c);
+    }
+//#endif
+}
+
+fn traverse(ray: Ray, c: ptr<function, Closest>) {
+    let inverse = inverse_direction(ray.dir);
+//#if TRIANGLES
+    var sh = shear_of(ray.dir);
+//#else
+    var sh = Shear(0u, vec3f(0.0));
+//#endif
+    var stack: array<u32, BVH_STACK>;
+    var top = 0u;
+    var index = 0u;
+    loop {
+        if loop_iterations >= params.loop_budget {
+            budget_spent = true;
+            break;
+        }
+        let node = bvh_nodes[index];
+        loop_iterations += params.traversal_weight;
+        var descended = false;
+        if hits_box(node, ray.origin, inverse, (*c).t) {
+            if (node.count & BVH_INTERIOR) == 0u {
+                loop_iterations += params.traversal_weight * (node.count + 1u);
+                for (var i = node.offset; i < node.offset + node.count; i++) {
+                    consider_primitive(bvh_primitives[i], ray, &sh, c);
+                }
+            } else {
+                let negative = ray.dir[node.count & 3u] < 0.0;
+                stack[top] = select(node.offset, index + 1u, negative);
+                top += 1u;
+                index = select(index + 1u, node.offset, negative);
+                descended = true;
+            }
+        }
+        if !descended {
+            if top == 0u {
+                break;
+            }
+            top -= 1u;
+            index = stack[top];
+        }
+    }
+}
+//#endif

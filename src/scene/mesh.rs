@@ -1,0 +1,390 @@
+//! Triangle meshes read from OBJ (the `tobj` crate) and glTF 2.0 (the `gltf` crate) files.
+//!
+//! A file is read once per (file version, node) and its meshes live for the rest of the process,
+//! shared: scene objects are plain data holding a `&'static Mesh`, as textures hold images. A
+//! file becomes one [`Mesh`] per material it uses (a glTF file's own materials; an OBJ file is
+//! one part), in the frame of the file's root (glTF node transforms applied). Triangles keep the
+//! file's winding: counter-clockwise seen from the front.
+
+use super::Material;
+use glam::{DMat4, DVec3, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+
+/// The triangles of one material of a mesh file.
+pub struct Mesh {
+    /// The file as the scene file wrote it, the node taken from it, and which of its parts
+    /// (materials) this is: scene files are written back with them.
+    pub source: String,
+    pub node: Option<String>,
+    pub part: u32,
+    pub positions: Vec<Vec3>,
+    /// Vertex indices, counter-clockwise seen from the front. Degenerate (zero-area) triangles
+    /// are left out at loading.
+    pub triangles: Vec<[u32; 3]>,
+    /// The file's material for this part (glTF), `None` for OBJ or primitives without one.
+    pub material: Option<Material>,
+    /// Its name in the file, or its index.
+    pub material_name: String,
+    /// The largest absolute coordinate (for validating placements).
+    pub extent: f32,
+}
+
+impl std::fmt::Debug for Mesh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Mesh({} part {}: {} triangles)",
+            self.source,
+            self.part,
+            self.triangles.len()
+        )
+    }
+}
+
+impl PartialEq for Mesh {
+    /// Meshes are loaded once per file and shared: one is equal only to itself.
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
+/// Most triangles one file may hold (their indices are packed in 28 bits on the GPU).
+pub const MAX_TRIANGLES: usize = 1 << 27;
+
+impl Mesh {
+    /// A mesh from vertices and triangles: every index must name a vertex, every coordinate be
+    /// finite; zero-area triangles are dropped.
+    pub fn new(
+        source: &str,
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Result<Self, String> {
+        if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+            return Err(format!("mesh {source} has a non-finite vertex {p}"));
+        }
+        let n = positions.len() as u32;
+        if let Some(t) = triangles.iter().find(|t| t.iter().any(|&i| i >= n)) {
+            return Err(format!(
+                "mesh {source} has a triangle {t:?} naming a vertex beyond its {n}"
+            ));
+        }
+        let triangles: Vec<[u32; 3]> = triangles
+            .into_iter()
+            .filter(|&[a, b, c]| {
+                let [a, b, c] = [a, b, c].map(|i| positions[i as usize].as_dvec3());
+                (b - a).cross(c - a).length_squared() > 0.0
+            })
+            .collect();
+        if triangles.len() > MAX_TRIANGLES {
+            return Err(format!(
+                "mesh {source} has {} triangles, more than the {MAX_TRIANGLES} rt-gpu takes",
+                triangles.len()
+            ));
+        }
+        let extent = positions
+            .iter()
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        Ok(Mesh {
+            source: source.to_string(),
+            node: None,
+            part: 0,
+            positions,
+            triangles,
+            material: None,
+            material_name: String::new(),
+            extent,
+        })
+    }
+
+    pub fn leak(self) -> &'static Mesh {
+        Box::leak(Box::new(self))
+    }
+}
+
+/// Reads the mesh file at `path` (`.obj`, `.gltf` or `.glb`), or one node of a glTF file and its
+/// children; `source` is the path as the scene wrote it. Errors are one line naming the file
+/// (and for OBJ the line).
+pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
+    type FileVersion = (PathBuf, u64, std::time::SystemTime, Option<String>);
+    static CACHE: OnceLock<Mutex<HashMap<FileVersion, Vec<&'static Mesh>>>> = OnceLock::new();
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
+    if !meta.is_file() {
+        return Err(format!("mesh {source} is not a file"));
+    }
+    let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
+    let key = (canonical, meta.len(), modified, node.map(str::to_string));
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(parts) = cache.lock().map_err(|_| "mesh cache poisoned")?.get(&key) {
+        return Ok(parts.clone());
+    }
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let mut parts = match extension.as_deref() {
+        Some("obj") => {
+            if node.is_some() {
+                return Err(format!(
+                    "mesh {source}: `node` selects a glTF node; an OBJ file has none"
+                ));
+            }
+            vec![read_obj(path, source)?]
+        }
+        Some("gltf" | "glb") => read_gltf(path, source, node)?,
+        _ => {
+            return Err(format!(
+                "mesh {source}: unknown format (rt-gpu reads .obj, .gltf and .glb)"
+            ));
+        }
+    };
+    parts.retain(|m| !m.triangles.is_empty());
+    if parts.is_empty() {
+        return Err(format!("mesh {source} has no triangles"));
+    }
+    let parts: Vec<&'static Mesh> = parts
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut m)| {
+            m.part = i as u32;
+            m.node = node.map(str::to_string);
+            m.leak()
+        })
+        .collect();
+    cache
+        .lock()
+        .map_err(|_| "mesh cache poisoned")?
+        .insert(key, parts.clone());
+    Ok(parts)
+}
+
+/// Loads the mesh a scene file names as `source`, relative to the scene file's directory (see
+/// `image::with_base_dir`).
+pub fn load_named(source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
+    load(&super::image::resolve(source), source, node)
+}
+
+fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    // Materials (.mtl) are not read: an OBJ object takes the scene's material.
+    let (models, _) = tobj::load_obj(path, &options).map_err(|e| {
+        let line = std::fs::read_to_string(path)
+            .ok()
+            .and_then(|text| obj_error_line(&text, &e));
+        let at = line.map_or(String::new(), |l| format!(":{l}"));
+        format!("cannot read mesh {source}{at}: {}", obj_error(&e))
+    })?;
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for model in models {
+        let base = positions.len() as u32;
+        positions.extend(
+            model
+                .mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        triangles.extend(
+            model
+                .mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
+    }
+    Mesh::new(source, positions, triangles)
+}
+
+fn obj_error(e: &tobj::LoadError) -> String {
+    use tobj::LoadError::*;
+    match e {
+        OpenFileFailed => "cannot open the file".into(),
+        ReadError => "cannot read the file".into(),
+        PositionParseError => "a vertex position (v) is not three numbers".into(),
+        FaceParseError => "a face (f) is not a list of vertex indices".into(),
+        FaceVertexOutOfBounds => "a face (f) names a vertex that does not exist".into(),
+        InvalidPolygon => "a face (f) has fewer than three vertices".into(),
+        other => other.to_string(),
+    }
+}
+
+/// The line a tobj error is about, found by reading the file the way tobj does (it reports no
+/// line itself): the first position or face line that is malformed.
+fn obj_error_line(text: &str, e: &tobj::LoadError) -> Option<usize> {
+    use tobj::LoadError::*;
+    let mut vertices = 0i64;
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match (words.next(), e) {
+            (Some("v"), _) => {
+                let ok = words.take(3).filter(|w| w.parse::<f32>().is_ok()).count() == 3;
+                if !ok && matches!(e, PositionParseError) {
+                    return Some(number + 1);
+                }
+                vertices += 1;
+            }
+            (Some("f"), FaceParseError | FaceVertexOutOfBounds | InvalidPolygon) => {
+                let corners: Vec<&str> = words.collect();
+                let bad_index = corners.iter().any(|c| {
+                    match c.split('/').next().and_then(|i| i.parse::<i64>().ok()) {
+                        None => true,
+                        Some(i) => i == 0 || i > vertices || -i > vertices,
+                    }
+                });
+                if corners.len() < 3 || bad_index {
+                    return Some(number + 1);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// A glTF material's index (`None`: primitives without one), and its vertices and triangles.
+type Part = (Option<usize>, Vec<Vec3>, Vec<[u32; 3]>);
+
+fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
+    let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
+    let gltf::Gltf { document, blob } = gltf::Gltf::open(path)
+        .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
+    let buffers = gltf::import_buffers(&document, path.parent(), blob)
+        .map_err(|e| format!("cannot read mesh {source}: buffers: {}", one_line(&e)))?;
+    let roots: Vec<gltf::Node> = match node {
+        Some(name) => match document.nodes().find(|n| n.name() == Some(name)) {
+            Some(n) => vec![n],
+            None => {
+                let names: Vec<&str> = document.nodes().filter_map(|n| n.name()).take(20).collect();
+                return Err(format!(
+                    "mesh {source} has no node named \"{name}\" (nodes: {})",
+                    names.join(", ")
+                ));
+            }
+        },
+        None => match document
+            .default_scene()
+            .or_else(|| document.scenes().next())
+        {
+            Some(scene) => scene.nodes().collect(),
+            None => return Err(format!("mesh {source} has no scene")),
+        },
+    };
+    // Parts by glTF material (None: primitives without one), in order of first use.
+    let mut parts: Vec<Part> = Vec::new();
+    let mut stack: Vec<(gltf::Node, DMat4)> =
+        roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
+    let mut visited = 0usize;
+    while let Some((n, parent)) = stack.pop() {
+        visited += 1;
+        if visited > 1_000_000 {
+            return Err(format!("mesh {source}: its node hierarchy has a cycle"));
+        }
+        let local = DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
+        let world = parent * local;
+        if let Some(mesh) = n.mesh() {
+            let flip = world.determinant() < 0.0;
+            for primitive in mesh.primitives() {
+                if primitive.mode() != gltf::mesh::Mode::Triangles {
+                    continue;
+                }
+                let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                let Some(read) = reader.read_positions() else {
+                    return Err(format!("mesh {source}: a primitive has no positions"));
+                };
+                let key = primitive.material().index();
+                let at = match parts.iter().position(|p| p.0 == key) {
+                    Some(at) => at,
+                    None => {
+                        parts.push((key, Vec::new(), Vec::new()));
+                        parts.len() - 1
+                    }
+                };
+                let (_, positions, triangles) = &mut parts[at];
+                let base = positions.len() as u32;
+                positions.extend(read.map(|p| {
+                    world
+                        .transform_point3(DVec3::from_array(p.map(|x| x as f64)))
+                        .as_vec3()
+                }));
+                let count = positions.len() as u32 - base;
+                let indices: Vec<u32> = match reader.read_indices() {
+                    Some(i) => i.into_u32().collect(),
+                    None => (0..count).collect(),
+                };
+                if let Some(bad) = indices.iter().find(|&&i| i >= count) {
+                    return Err(format!(
+                        "mesh {source}: an index {bad} names a vertex beyond its primitive's {count}"
+                    ));
+                }
+                triangles.extend(indices.chunks_exact(3).map(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
+                    if flip { [a, c, b] } else { [a, b, c] }
+                }));
+            }
+        }
+        stack.extend(n.children().map(|c| (c, world)));
+    }
+    let materials: Vec<gltf::Material> = document.materials().collect();
+    parts
+        .into_iter()
+        .map(|(key, positions, triangles)| {
+            let mut mesh = Mesh::new(source, positions, triangles)?;
+            if let Some(m) = key.and_then(|k| materials.get(k)) {
+                mesh.material = Some(material_of(m));
+                mesh.material_name = m.name().map_or(
+                    format!("material{}", m.index().unwrap_or(0)),
+                    str::to_string,
+                );
+            } else {
+                mesh.material_name = "default".into();
+            }
+            Ok(mesh)
+        })
+        .collect()
+}
+
+/// A glTF metallic-roughness material as the closest rt-gpu material (textures are not read):
+/// emissive -> light (emissive factor x KHR_materials_emissive_strength, two-sided when the
+/// material is), transmission -> dielectric (KHR_materials_ior, default 1.5), metallic >= 0.5
+/// -> metal (fuzz = roughness), else lambertian with the base colour.
+pub fn material_of(m: &gltf::Material) -> Material {
+    use crate::material::{Dielectric, Lambertian, Light, Metal};
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
+    let emissive = Vec3::from_array(m.emissive_factor());
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    if emissive.max_element() > 0.0 && strength > 0.0 {
+        return Material::Light(Light {
+            radiance: emissive.clamp(Vec3::ZERO, Vec3::splat(1e6)).into(),
+            strength: strength.clamp(0.0, crate::material::light::MAX_STRENGTH),
+            two_sided: m.double_sided(),
+        });
+    }
+    if m.transmission()
+        .is_some_and(|t| t.transmission_factor() > 0.0)
+    {
+        return Material::Dielectric(Dielectric {
+            ior: m.ior().unwrap_or(1.5).clamp(1.0, 4.0),
+            medium: None,
+        });
+    }
+    if pbr.metallic_factor() >= 0.5 {
+        return Material::Metal(Metal {
+            albedo: base.into(),
+            fuzz: pbr.roughness_factor().clamp(0.0, 1.0),
+        });
+    }
+    Material::Lambertian(Lambertian {
+        albedo: base.into(),
+        emission: Vec3::ZERO,
+    })
+}

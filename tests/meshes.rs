@@ -1,0 +1,318 @@
+//! Triangle meshes: OBJ and glTF loading (polygons, negative indices, node transforms and
+//! selection, materials), one-line errors for bad files, and images: the Cornell box with its
+//! quads and boxes as triangles renders as the quads do (Welch z + Sidak at family-wise 0.01,
+//! tests/common/stats.rs), on the CPU and on the GPU against the CPU, each with a negative
+//! control (2% brighter white walls) that the same test detects.
+
+mod common;
+
+use common::gpu::{render_gpu, renderer};
+use common::stats::compare;
+use common::triangulated;
+use glam::Vec3;
+use rt_gpu::gpu::Tuning;
+use rt_gpu::scene::Material;
+use rt_gpu::scene::builtin::builtin;
+use rt_gpu::scene::file::{load, parse, to_toml};
+use rt_gpu::scene::flat::FlatScene;
+use rt_gpu::scene::mesh;
+use std::path::Path;
+
+fn write(dir: &Path, name: &str, text: &[u8]) -> std::path::PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("writes");
+    path
+}
+
+/// A scene file placing `mesh` (a TOML inline table) with `extra` keys.
+fn scene_with(mesh: &str, extra: &str) -> String {
+    format!(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\n\n[materials]\nwhite = {{ type = \"lambertian\", albedo = [0.7, 0.7, 0.7] }}\n\n[[object]]\nmesh = {mesh}\n{extra}\n"
+    )
+}
+
+#[test]
+fn obj_polygons_negative_indices_and_missing_normals() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // A unit square as one polygon (two triangles), then a triangle by negative indices, with
+    // texture coordinates and normals in the face syntax but no `vn` lines for some.
+    let obj = b"# test\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1 4/1\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf -3 -2 -1\n";
+    let path = write(dir.path(), "square.obj", obj);
+    let parts = mesh::load(&path, "square.obj", None).expect("loads");
+    assert_eq!(parts.len(), 1);
+    let m = parts[0];
+    assert_eq!(m.positions.len(), 7);
+    assert_eq!(m.triangles.len(), 3, "{:?}", m.triangles);
+    // Counter-clockwise from +z: every triangle of the square faces +z, the last one too.
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|i| m.positions[i as usize]);
+        assert!((b - a).cross(c - a).z > 0.0, "{t:?}");
+    }
+    assert_eq!(m.triangles[2], [4, 5, 6]);
+    // Placed through a scene file: scale, rotation and translation, relative to the file.
+    let scene_path = write(
+        dir.path(),
+        "s.toml",
+        scene_with(
+            "{ file = \"square.obj\" }",
+            "scale = [2, 3, 1]\ntranslate = [1, 0, 0]\nmaterial = \"white\"",
+        )
+        .as_bytes(),
+    );
+    let scene = load(&scene_path).expect("scene loads");
+    let flat = FlatScene::new(&scene, 8, 8).expect("flattens");
+    assert_eq!(flat.triangles.len(), 3);
+    assert_eq!(flat.triangles[0].p1, Vec3::new(3.0, 0.0, 0.0));
+    assert_eq!(flat.triangles[0].p2, Vec3::new(3.0, 3.0, 0.0));
+    assert!(flat.bvh.is_some());
+    // And written back, it reads the same.
+    let text = to_toml(&scene);
+    let again = rt_gpu::scene::image::with_base_dir(dir.path(), || parse(&text, "again.toml", "s"))
+        .expect("written scene parses");
+    assert_eq!(again.objects, scene.objects);
+    // A mirroring scale keeps the front face on the same side of the surface.
+    let mirrored = write(
+        dir.path(),
+        "m.toml",
+        scene_with(
+            "{ file = \"square.obj\" }",
+            "scale = [-1, 1, 1]\nmaterial = \"white\"",
+        )
+        .as_bytes(),
+    );
+    let flat = FlatScene::new(&load(&mirrored).expect("loads"), 8, 8).expect("flattens");
+    let t = flat.triangles[0];
+    assert!((t.p1 - t.p0).cross(t.p2 - t.p0).z > 0.0);
+}
+
+#[test]
+fn bad_mesh_files_are_one_line_errors_naming_file_and_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let cases: [(&str, &[u8], &str); 6] = [
+        (
+            "badv.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n",
+            "badv.obj:3: a vertex position",
+        ),
+        (
+            "range.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\n\nf 1 2 9\n",
+            "range.obj:5: a face",
+        ),
+        (
+            "empty.obj",
+            b"# nothing\nv 0 0 0\n",
+            "empty.obj has no triangles",
+        ),
+        (
+            "flat.obj",
+            b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+            "flat.obj has no triangles",
+        ),
+        ("model.stl", b"solid x\n", "unknown format"),
+        (
+            "broken.gltf",
+            b"{ \"asset\": ",
+            "cannot read mesh broken.gltf",
+        ),
+    ];
+    for (name, text, words) in cases {
+        write(dir.path(), name, text);
+        let scene_path = write(
+            dir.path(),
+            "s.toml",
+            scene_with(&format!("{{ file = \"{name}\" }}"), "material = \"white\"").as_bytes(),
+        );
+        let error = format!("{:#}", load(&scene_path).expect_err(name));
+        assert!(
+            error.contains(words) && error.contains("s.toml:") && !error.contains('\n'),
+            "{name}: {error}"
+        );
+    }
+    let scene_path = write(
+        dir.path(),
+        "s.toml",
+        scene_with("{ file = \"missing.obj\" }", "material = \"white\"").as_bytes(),
+    );
+    let error = format!("{:#}", load(&scene_path).expect_err("missing"));
+    assert!(error.contains("cannot read mesh missing.obj"), "{error}");
+    // An OBJ object needs a material; `scale` needs a mesh.
+    write(dir.path(), "t.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let scene_path = write(
+        dir.path(),
+        "s.toml",
+        scene_with("{ file = \"t.obj\" }", "").as_bytes(),
+    );
+    let error = format!("{:#}", load(&scene_path).expect_err("no material"));
+    assert!(error.contains("material"), "{error}");
+}
+
+/// A glTF file: a parent node translating a scaled child, and a node placed by a matrix, with
+/// an emissive material (KHR_materials_emissive_strength) and a metallic one.
+fn write_gltf(dir: &Path) -> std::path::PathBuf {
+    let mut bin: Vec<u8> = Vec::new();
+    for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for x in v {
+            bin.extend(x.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0] {
+        bin.extend(i.to_le_bytes());
+    }
+    write(dir, "model.bin", &bin);
+    let json = r#"{
+  "asset": { "version": "2.0" },
+  "extensionsUsed": ["KHR_materials_emissive_strength"],
+  "buffers": [{ "uri": "model.bin", "byteLength": 44 }],
+  "bufferViews": [
+    { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
+    { "buffer": 0, "byteOffset": 36, "byteLength": 6 }
+  ],
+  "accessors": [
+    { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
+    { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
+  ],
+  "materials": [
+    { "name": "Lamp", "emissiveFactor": [1, 0.5, 0.25], "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4 } } },
+    { "name": "Gold", "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.8, 0.1, 1], "metallicFactor": 1, "roughnessFactor": 0.2 } }
+  ],
+  "meshes": [
+    { "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "material": 0 }] },
+    { "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "material": 1 }] }
+  ],
+  "nodes": [
+    { "name": "Parent", "translation": [10, 0, 0], "children": [1] },
+    { "name": "Child", "scale": [2, 2, 2], "mesh": 0 },
+    { "name": "Other", "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,5,0,1], "mesh": 1 }
+  ],
+  "scenes": [{ "nodes": [0, 2] }],
+  "scene": 0
+}"#;
+    write(dir, "model.gltf", json.as_bytes())
+}
+
+#[test]
+fn gltf_node_transforms_selection_and_materials() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = write_gltf(dir.path());
+    let parts = mesh::load(&path, "model.gltf", None).expect("loads");
+    assert_eq!(parts.len(), 2, "one part per material");
+    let lamp = parts
+        .iter()
+        .find(|p| p.material_name == "Lamp")
+        .expect("lamp");
+    let gold = parts
+        .iter()
+        .find(|p| p.material_name == "Gold")
+        .expect("gold");
+    assert_eq!(
+        lamp.positions,
+        vec![
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(12.0, 0.0, 0.0),
+            Vec3::new(10.0, 2.0, 0.0)
+        ]
+    );
+    assert_eq!(gold.positions[2], Vec3::new(0.0, 6.0, 0.0));
+    match lamp.material {
+        Some(Material::Light(l)) => {
+            assert_eq!(l.strength, 4.0);
+            assert!(!l.two_sided);
+        }
+        other => panic!("lamp: {other:?}"),
+    }
+    match gold.material {
+        Some(Material::Metal(m)) => assert!((m.fuzz - 0.2).abs() < 1e-6),
+        other => panic!("gold: {other:?}"),
+    }
+    // One node by name: its own transform and its children's, not its parents'.
+    let child = mesh::load(&path, "model.gltf", Some("Child")).expect("loads");
+    assert_eq!(child.len(), 1);
+    assert_eq!(child[0].positions[1], Vec3::new(2.0, 0.0, 0.0));
+    let parent = mesh::load(&path, "model.gltf", Some("Parent")).expect("loads");
+    assert_eq!(parent[0].positions[1], Vec3::new(12.0, 0.0, 0.0));
+    let error = mesh::load(&path, "model.gltf", Some("Nope")).expect_err("no such node");
+    assert!(
+        error.contains("no node named \"Nope\"") && error.contains("Child"),
+        "{error}"
+    );
+    // In a scene without `material`: the file's materials join the scene, and the lamp is a
+    // light (one-sided: the triangle emits toward +z).
+    let scene_path = write(
+        dir.path(),
+        "s.toml",
+        scene_with("{ file = \"model.gltf\" }", "").as_bytes(),
+    );
+    let scene = load(&scene_path).expect("scene loads");
+    assert_eq!(scene.objects.len(), 2);
+    assert!(scene.material_names.iter().any(|n| n == "model.gltf#Lamp"));
+    let flat = FlatScene::new(&scene, 8, 8).expect("flattens");
+    assert_eq!(flat.lights.len(), 1);
+    // And written back (each part its own object), it reads the same.
+    let again = rt_gpu::scene::image::with_base_dir(dir.path(), || {
+        parse(&to_toml(&scene), "again.toml", "s")
+    })
+    .expect("written scene parses");
+    let named = |s: &rt_gpu::scene::Scene| -> Vec<_> {
+        s.objects
+            .iter()
+            .map(|o| {
+                (
+                    o.shape,
+                    s.materials[o.material as usize],
+                    s.material_names[o.material as usize].clone(),
+                )
+            })
+            .collect()
+    };
+    assert_eq!(named(&again), named(&scene));
+}
+
+/// The Cornell box as quads and as triangles: the same image on the CPU (nee: the light is two
+/// emitting triangles, picked by area), and a 2% brighter white is caught.
+#[test]
+fn triangles_render_as_the_quads_they_replace() {
+    let quads = builtin("cornell").expect("built-in");
+    let triangles = triangulated(&quads);
+    let opts = |seed| common::nee_opts(32, 32, 512, 6, seed);
+    let reference = common::render_cpu(&quads, &opts(1));
+    let film = common::render_cpu(&triangles, &opts(2));
+    let verdict = compare(&reference, &film);
+    eprintln!("quads vs triangles: {verdict:?}");
+    assert!(verdict.passed(), "{verdict:?}");
+    let brighter = triangulated(&common::cornell_white_2_percent_brighter());
+    let verdict = compare(&reference, &common::render_cpu(&brighter, &opts(2)));
+    eprintln!("quads vs triangles with 2% brighter white: {verdict:?}");
+    assert!(!verdict.passed(), "a 2% brighter white went undetected");
+}
+
+/// CPU and GPU render the triangulated Cornell box (BVH, watertight triangles, emissive
+/// triangles) alike, naive and nee; the GPU with 2% brighter white walls is caught.
+#[test]
+fn gpu_meshes_match_cpu_meshes() {
+    let Some(gpu) = renderer() else { return };
+    let scene = triangulated(&builtin("cornell").expect("built-in"));
+    for nee in [false, true] {
+        let opts = |seed| {
+            if nee {
+                common::nee_opts(32, 32, 512, 6, seed)
+            } else {
+                common::opts(32, 32, 1024, 6, seed)
+            }
+        };
+        let cpu = common::render_cpu(&scene, &opts(1));
+        let film = render_gpu(&gpu, &scene, &opts(2), &Tuning::default());
+        let verdict = compare(&cpu, &film);
+        eprintln!("nee {nee}: cpu vs gpu: {verdict:?}");
+        assert!(verdict.passed(), "nee {nee}: {verdict:?}");
+        if nee {
+            let brighter = triangulated(&common::cornell_white_2_percent_brighter());
+            let verdict = compare(
+                &cpu,
+                &render_gpu(&gpu, &brighter, &opts(2), &Tuning::default()),
+            );
+            eprintln!("gpu with 2% brighter white: {verdict:?}");
+            assert!(!verdict.passed(), "a 2% brighter white went undetected");
+        }
+    }
+}
