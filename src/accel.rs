@@ -4,7 +4,7 @@
 //! array: an interior node's first child follows it, its second is at `offset`; a leaf's
 //! primitives are `primitives[offset .. offset + count]`.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// Most primitives a leaf holds, except at the depth limit.
 pub const MAX_LEAF: usize = 4;
@@ -51,30 +51,41 @@ pub struct Item {
 }
 
 impl Item {
-    fn centroid(&self) -> Vec3 {
-        0.5 * (self.min + self.max)
+    #[inline]
+    fn min(&self) -> Vec3A {
+        Vec3A::from(self.min)
+    }
+    #[inline]
+    fn max(&self) -> Vec3A {
+        Vec3A::from(self.max)
+    }
+    #[inline]
+    fn centroid(&self) -> Vec3A {
+        0.5 * (self.min() + self.max())
     }
 }
 
+/// A box as SIMD vectors (the build's inner loops grow thousands of them).
 #[derive(Clone, Copy)]
 struct Bounds {
-    min: Vec3,
-    max: Vec3,
+    min: Vec3A,
+    max: Vec3A,
 }
 
 impl Bounds {
     const EMPTY: Bounds = Bounds {
-        min: Vec3::splat(f32::MAX),
-        max: Vec3::splat(f32::MIN),
+        min: Vec3A::splat(f32::MAX),
+        max: Vec3A::splat(f32::MIN),
     };
-    fn grow(self, min: Vec3, max: Vec3) -> Bounds {
+    #[inline]
+    fn grow(self, min: Vec3A, max: Vec3A) -> Bounds {
         Bounds {
             min: self.min.min(min),
             max: self.max.max(max),
         }
     }
     fn half_area(&self) -> f32 {
-        let d = (self.max - self.min).max(Vec3::ZERO);
+        let d = (self.max - self.min).max(Vec3A::ZERO);
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 }
@@ -98,7 +109,8 @@ impl Bvh {
         if items.is_empty() {
             return Bvh::default();
         }
-        let tree = build(items, 0, 0);
+        let (bounds, centroids) = bounds_of(items);
+        let tree = build(items, 0, 0, bounds, centroids);
         let mut bvh = Bvh {
             nodes: Vec::with_capacity(2 * items.len() / MAX_LEAF + 1),
             primitives: items.iter().map(|i| i.primitive).collect(),
@@ -117,8 +129,8 @@ impl Bvh {
                 first,
                 count,
             } => self.nodes.push(Node {
-                min: bounds.min,
-                max: bounds.max,
+                min: bounds.min.into(),
+                max: bounds.max.into(),
                 offset: *first as u32,
                 count: *count as u32,
             }),
@@ -128,8 +140,8 @@ impl Bvh {
                 children,
             } => {
                 self.nodes.push(Node {
-                    min: bounds.min,
-                    max: bounds.max,
+                    min: bounds.min.into(),
+                    max: bounds.max.into(),
                     offset: 0,
                     count: INTERIOR | *axis as u32,
                 });
@@ -142,10 +154,11 @@ impl Bvh {
     }
 }
 
+/// The bounds of `items` and of their centroids.
 fn bounds_of(items: &[Item]) -> (Bounds, Bounds) {
     let fold = |(b, c): (Bounds, Bounds), i: &Item| {
         let centroid = i.centroid();
-        (b.grow(i.min, i.max), c.grow(centroid, centroid))
+        (b.grow(i.min(), i.max()), c.grow(centroid, centroid))
     };
     if items.len() >= PARALLEL_BELOW * 4 {
         use rayon::prelude::*;
@@ -161,9 +174,63 @@ fn bounds_of(items: &[Item]) -> (Bounds, Bounds) {
     }
 }
 
-/// The subtree over `items`, which start at `first` in the whole array.
-fn build(items: &mut [Item], first: usize, depth: usize) -> Tree {
-    let (bounds, centroids) = bounds_of(items);
+/// What a SAH bin gathers: its items' count, bounds and centroid bounds.
+#[derive(Clone, Copy)]
+struct Bin {
+    count: usize,
+    bounds: Bounds,
+    centroids: Bounds,
+}
+
+impl Bin {
+    const EMPTY: Bin = Bin {
+        count: 0,
+        bounds: Bounds::EMPTY,
+        centroids: Bounds::EMPTY,
+    };
+    fn merge(self, o: Bin) -> Bin {
+        Bin {
+            count: self.count + o.count,
+            bounds: self.bounds.grow(o.bounds.min, o.bounds.max),
+            centroids: self.centroids.grow(o.centroids.min, o.centroids.max),
+        }
+    }
+}
+
+/// The items binned by `bin`, in parallel for large sets.
+fn binned(items: &[Item], bin: &(impl Fn(&Item) -> usize + Sync)) -> [Bin; BINS] {
+    let serial = |chunk: &[Item]| {
+        let mut bins = [Bin::EMPTY; BINS];
+        for item in chunk {
+            let b = &mut bins[bin(item)];
+            let c = item.centroid();
+            b.count += 1;
+            b.bounds = b.bounds.grow(item.min(), item.max());
+            b.centroids = b.centroids.grow(c, c);
+        }
+        bins
+    };
+    if items.len() >= PARALLEL_BELOW * 4 {
+        use rayon::prelude::*;
+        let merge = |a: [Bin; BINS], b: [Bin; BINS]| std::array::from_fn(|k| a[k].merge(b[k]));
+        items
+            .par_chunks(PARALLEL_BELOW * 4)
+            .map(serial)
+            .reduce(|| [Bin::EMPTY; BINS], merge)
+    } else {
+        serial(items)
+    }
+}
+
+/// The subtree over `items`, which start at `first` in the whole array, whose bounds and
+/// centroid bounds are `bounds` and `centroids`.
+fn build(
+    items: &mut [Item],
+    first: usize,
+    depth: usize,
+    bounds: Bounds,
+    centroids: Bounds,
+) -> Tree {
     let leaf = Tree::Leaf {
         bounds,
         first,
@@ -180,33 +247,26 @@ fn build(items: &mut [Item], first: usize, depth: usize) -> Tree {
     } else {
         2
     };
-    let split = if extent[axis] > 0.0 {
+    let (split, children_bounds) = if extent[axis] > 0.0 {
         // Binned SAH along the widest centroid axis (Wald 2007).
         let (lo, scale) = (centroids.min[axis], BINS as f32 / extent[axis]);
-        let bin = |i: &Item| (((i.centroid()[axis] - lo) * scale) as usize).min(BINS - 1);
-        let mut counts = [0usize; BINS];
-        let mut boxes = [Bounds::EMPTY; BINS];
-        for item in items.iter() {
-            let b = bin(item);
-            counts[b] += 1;
-            boxes[b] = boxes[b].grow(item.min, item.max);
-        }
+        let bin = move |i: &Item| (((i.centroid()[axis] - lo) * scale) as usize).min(BINS - 1);
+        let bins = binned(items, &bin);
         // Cost of splitting after bin k: area x count on each side.
-        let mut left_cost = [0.0f32; BINS];
-        let (mut area, mut count) = (Bounds::EMPTY, 0);
+        let mut left = [Bin::EMPTY; BINS];
+        let mut running = Bin::EMPTY;
         for k in 0..BINS - 1 {
-            area = area.grow(boxes[k].min, boxes[k].max);
-            count += counts[k];
-            left_cost[k] = area.half_area() * count as f32;
+            running = running.merge(bins[k]);
+            left[k] = running;
         }
-        let (mut best, mut best_cost) = (0, f32::INFINITY);
-        let (mut area, mut count) = (Bounds::EMPTY, 0);
+        let (mut best, mut best_cost, mut best_right) = (0, f32::INFINITY, Bin::EMPTY);
+        let mut right = Bin::EMPTY;
         for k in (0..BINS - 1).rev() {
-            area = area.grow(boxes[k + 1].min, boxes[k + 1].max);
-            count += counts[k + 1];
-            let cost = left_cost[k] + area.half_area() * count as f32;
+            right = right.merge(bins[k + 1]);
+            let cost = left[k].bounds.half_area() * left[k].count as f32
+                + right.bounds.half_area() * right.count as f32;
             if cost < best_cost {
-                (best, best_cost) = (k, cost);
+                (best, best_cost, best_right) = (k, cost, right);
             }
         }
         // A leaf costs one test per primitive; a split one box test plus the children's.
@@ -215,24 +275,29 @@ fn build(items: &mut [Item], first: usize, depth: usize) -> Tree {
         if items.len() <= MAX_LEAF && leaf_cost <= split_cost {
             return leaf;
         }
-        partition(items, |i| bin(i) <= best)
+        let split = partition(items, |i| bin(i) <= best);
+        (split, Some([left[best], best_right]))
     } else if items.len() <= MAX_LEAF {
         return leaf;
     } else {
         // Every centroid in one place: halves by position in the array.
-        items.len() / 2
+        (items.len() / 2, None)
     };
     let (left, right) = items.split_at_mut(split);
+    let [(lb, lc), (rb, rc)] = match children_bounds {
+        Some(bins) => bins.map(|b| (b.bounds, b.centroids)),
+        None => [bounds_of(left), bounds_of(right)],
+    };
     let children = if left.len() + right.len() > PARALLEL_BELOW {
         let (a, b) = rayon::join(
-            || build(left, first, depth + 1),
-            || build(right, first + split, depth + 1),
+            || build(left, first, depth + 1, lb, lc),
+            || build(right, first + split, depth + 1, rb, rc),
         );
         [a, b]
     } else {
         [
-            build(left, first, depth + 1),
-            build(right, first + split, depth + 1),
+            build(left, first, depth + 1, lb, lc),
+            build(right, first + split, depth + 1, rb, rc),
         ]
     };
     Tree::Interior {

@@ -951,8 +951,16 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     );
     if film.invalid_samples > 0 {
         note!(
-            "warning: {} samples were NaN, infinite, negative or above 2^32 (4.3e9) and were counted as black",
+            "warning: {} samples were NaN, infinite, negative or above 2^32 (4.3e9), or on lavapipe needed more loop iterations than one dispatch allows, and were counted as black",
             film.invalid_samples
+        );
+    }
+    if backend == Backend::Gpu
+        && rendered.device.contains("llvmpipe")
+        && !rt_gpu::gpu::Features::of(&flat).inline_scene
+    {
+        note!(
+            "note: lavapipe traces scenes through their BVH about 10x slower than `--backend cpu` does on the same cores"
         );
     }
     if outcome == Outcome::Stopped {
