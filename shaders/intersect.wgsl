@@ -56,6 +56,13 @@ struct Closest {
     weights: vec2f,     // triangle: barycentric weights of its second and third corners
 }
 
+// Whether a hit at t on primitive `packed` replaces the closest so far: nearer, or as near and
+// earlier in the order spheres, quads, triangles (coincident surfaces resolve the same whatever
+// order a BVH traversal meets them in; see consider in src/cpu/shapes.rs).
+fn replaces(t: f32, packed: u32, c: ptr<function, Closest>) -> bool {
+    return t > 0.0 && (t < (*c).t || (t == (*c).t && (!(*c).found || packed < (*c).primitive)));
+}
+
 // Where a hit lies: the point put back onto the surface, and a bound on its error.
 struct Surface {
     point: vec3f,
@@ -77,7 +84,7 @@ fn sphere_distance(s: Sphere, ray: Ray) -> f32 {
 
 fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
     let t = sphere_distance(s, ray);
-    if t > 0.0 && t < (*c).t {
+    if replaces(t, (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index, c) {
         (*c).t = t;
         (*c).found = true;
         (*c).primitive = (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index;
@@ -92,7 +99,7 @@ fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
 //#if QUADS
 fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
     let t = quad_distance(q, ray);
-    if t > 0.0 && t < (*c).t {
+    if replaces(t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index, c) {
         (*c).t = t;
         (*c).found = true;
         (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index;
@@ -150,7 +157,7 @@ fn triangle_hit(tri: Triangle, ray: Ray, sh: Shear) -> vec3f {
 
 fn consider_triangle(tri: Triangle, index: u32, ray: Ray, sh: Shear, c: ptr<function, Closest>) {
     let h = triangle_hit(tri, ray, sh);
-    if h.x > 0.0 && h.x < (*c).t {
+    if replaces(h.x, (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index, c) {
         (*c).t = h.x;
         (*c).found = true;
         (*c).primitive = (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index;

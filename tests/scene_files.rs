@@ -338,6 +338,7 @@ fn the_documented_example_parses() {
         || parse(&doc[start..end], "scenes/README.md", "example"),
     )
     .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.objects.len(), 3);
+    // Three shapes and the knot of scenes/models/knot.obj.
+    assert_eq!(scene.objects.len(), 4);
     assert_eq!(scene.materials.len(), 9);
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """rt-gpu against Mitsuba 3 on the same scene, measured in one run.
 
-Builds the scene of an rt-gpu scene file (quads, boxes rotated about y, spheres; lambertian,
+Builds the scene of an rt-gpu scene file (quads, boxes rotated about y, spheres, OBJ meshes; lambertian,
 dielectric, mirror metal (fuzz 0: a `conductor` of material `none`) and light materials;
 homogeneous media: a `medium` material becomes a `null` BSDF with a `homogeneous` interior
 medium and an `hg` phase function, a dielectric's `medium` its interior; image textures as
@@ -217,7 +217,7 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
     for obj in scene["object"]:
         angle = obj.get("rotate_y", 0.0)
         t = np.array(obj.get("translate", [0, 0, 0]), dtype=float)
-        material = obj["material"]
+        material = obj.get("material")
         if "quad" in obj:
             q = obj["quad"]
             add_quad(rotate_y(q["q"], angle) + t, rotate_y(q["u"], angle), rotate_y(q["v"], angle), material)
@@ -225,6 +225,23 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             b = obj["box"]
             for q, u, v in box_faces(np.array(b["min"], float), np.array(b["max"], float)):
                 add_quad(rotate_y(q, angle) + t, rotate_y(u, angle), rotate_y(v, angle), material)
+        elif "mesh" in obj:
+            mesh = obj["mesh"]
+            if not mesh["file"].lower().endswith(".obj") or "node" in mesh:
+                sys.exit("only OBJ meshes are translated (Mitsuba reads OBJ and PLY, not glTF)")
+            if material is None:
+                sys.exit("a mesh object needs a material to be translated")
+            scale = obj.get("scale", 1.0)
+            scale = [scale] * 3 if not isinstance(scale, list) else scale
+            place = rotation_y(angle) @ np.diag(list(scale) + [1.0])
+            place[:3, 3] = t
+            # Flat shading with the geometric normal, as rt-gpu's triangles.
+            shape = {"type": "obj", "filename": os.path.join(base, mesh["file"]),
+                     "face_normals": True, "to_world": mi.ScalarTransform4f(place.tolist()),
+                     "bsdf": bsdfs[material]}
+            if material in emitters:
+                shape["emitter"] = emitters[material]
+            shapes[f"shape{len(shapes)}"] = shape
         elif "sphere" in obj:
             s = obj["sphere"]
             if s["radius"] <= 0:
@@ -358,10 +375,30 @@ def main():
     parser.add_argument("--reference-noise", type=float, metavar="RMSE", help="the reference's own RMSE")
     parser.add_argument("--reference-spp", type=int, default=8192)
     parser.add_argument("--cache", default="converge", help="where a rendered reference is kept")
+    parser.add_argument("--rates", action="store_true",
+                        help="only samples per second: Mitsuba's render, then `rt-gpu bench` of both "
+                             "backends at the same size, spp and depth (no reference, no errors)")
     parser.add_argument("--mitsuba-only", metavar="NPZ", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.mitsuba_only:
         render_mitsuba(args)
+        return
+    if args.rates:
+        with tempfile.TemporaryDirectory() as out:
+            mi_path = os.path.join(out, "mitsuba.npz")
+            subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only",
+                            mi_path, "--mitsuba-sampler", args.mitsuba_sampler]
+                           + (["--width", str(args.width)] if args.width else [])
+                           + (["--height", str(args.height)] if args.height else [])
+                           + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
+            data = np.load(mi_path)
+            w, h, depth, seconds = int(data["width"]), int(data["height"]), int(data["max_depth"]), float(data["seconds"])
+            mean = data["image"].reshape(-1, data["image"].shape[-1])[:, :3].mean(axis=0)
+            print(f"Mitsuba {data['version']} ({args.mitsuba_sampler}): {w}x{h}, {args.spp} spp, max depth {depth}: "
+                  f"{seconds:.2f} s, {w * h * args.spp / seconds / 1e6:.3f} Msamples/s, "
+                  f"mean radiance ({mean[0]:.5f}, {mean[1]:.5f}, {mean[2]:.5f})", flush=True)
+        subprocess.run([args.binary, "bench", args.scene, "--spp", str(args.spp), "--size", f"{w}x{h}",
+                        "--max-depth", str(depth)], check=False)
         return
 
     os.makedirs(args.cache, exist_ok=True)

@@ -138,7 +138,10 @@ struct Candidate {
     weights: Vec2,
 }
 
-/// Tests primitive `p` against the ray, keeping it if it is closer than `closest`.
+/// Tests primitive `p` against the ray, keeping it if it is closer than `closest`, or as close
+/// and earlier in the order of [`FlatScene::primitives`]: surfaces that coincide (a smoke box
+/// resting on a floor) resolve the same whatever order a traversal meets them in, as they do
+/// when every primitive is tested in that order (the GPU's small kernels).
 #[inline]
 fn consider(
     scene: &FlatScene,
@@ -147,24 +150,30 @@ fn consider(
     closest: &mut f32,
     found: &mut Option<Candidate>,
 ) {
+    // Up to and including `closest`, for the tie-break below.
+    let t_max = if closest.is_finite() {
+        closest.next_up()
+    } else {
+        *closest
+    };
     let (t, outward, weights) = match p {
         PrimitiveRef::Sphere(i) => {
             let sphere = &scene.spheres[i as usize];
-            let Some(t) = hit_sphere(sphere, ray, 0.0, *closest) else {
+            let Some(t) = hit_sphere(sphere, ray, 0.0, t_max) else {
                 return;
             };
             (t, (ray.at(t) - sphere.center) / sphere.radius, Vec2::ZERO)
         }
         PrimitiveRef::Quad(i) => {
             let quad = &scene.quads[i as usize];
-            let Some(t) = hit_quad(quad, ray, 0.0, *closest) else {
+            let Some(t) = hit_quad(quad, ray, 0.0, t_max) else {
                 return;
             };
             (t, quad.normal, Vec2::ZERO)
         }
         PrimitiveRef::Triangle(i) => {
             let tri = &scene.triangles[i as usize];
-            let Some((t, b1, b2)) = hit_triangle(tri, ray, 0.0, *closest) else {
+            let Some((t, b1, b2)) = hit_triangle(tri, ray, 0.0, t_max) else {
                 return;
             };
             (
@@ -174,6 +183,10 @@ fn consider(
             )
         }
     };
+    let earlier = found.is_none_or(|f| p.packed() < f.primitive.packed());
+    if !(t < *closest || (t == *closest && earlier)) {
+        return;
+    }
     *closest = t;
     *found = Some(Candidate {
         primitive: p,
