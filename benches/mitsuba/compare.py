@@ -378,6 +378,9 @@ def main():
     parser.add_argument("--rates", action="store_true",
                         help="only samples per second: Mitsuba's render, then `rt-gpu bench` of both "
                              "backends at the same size, spp and depth (no reference, no errors)")
+    parser.add_argument("--bench-spp", type=int,
+                        help="with --rates: rt-gpu's spp [default: --spp] (Mitsuba recompiles per spp, "
+                             "so its rate needs many; rt-gpu's does not)")
     parser.add_argument("--mitsuba-only", metavar="NPZ", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.mitsuba_only:
@@ -397,7 +400,7 @@ def main():
             print(f"Mitsuba {data['version']} ({args.mitsuba_sampler}): {w}x{h}, {args.spp} spp, max depth {depth}: "
                   f"{seconds:.2f} s, {w * h * args.spp / seconds / 1e6:.3f} Msamples/s, "
                   f"mean radiance ({mean[0]:.5f}, {mean[1]:.5f}, {mean[2]:.5f})", flush=True)
-        subprocess.run([args.binary, "bench", args.scene, "--spp", str(args.spp), "--size", f"{w}x{h}",
+        subprocess.run([args.binary, "bench", args.scene, "--spp", str(args.bench_spp or args.spp), "--size", f"{w}x{h}",
                         "--max-depth", str(depth)], check=False)
         return
 
