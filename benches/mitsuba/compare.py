@@ -360,6 +360,15 @@ def render_mitsuba(args):
              max_depth=max_depth, version=mi.__version__)
 
 
+def run_mitsuba(args, mi_path):
+    """Mitsuba's render (render_mitsuba) in a process of its own, saved to mi_path."""
+    subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only", mi_path,
+                    "--mitsuba-sampler", args.mitsuba_sampler]
+                   + (["--width", str(args.width)] if args.width else [])
+                   + (["--height", str(args.height)] if args.height else [])
+                   + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scene")
@@ -389,11 +398,7 @@ def main():
     if args.rates:
         with tempfile.TemporaryDirectory() as out:
             mi_path = os.path.join(out, "mitsuba.npz")
-            subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only",
-                            mi_path, "--mitsuba-sampler", args.mitsuba_sampler]
-                           + (["--width", str(args.width)] if args.width else [])
-                           + (["--height", str(args.height)] if args.height else [])
-                           + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
+            run_mitsuba(args, mi_path)
             data = np.load(mi_path)
             w, h, depth, seconds = int(data["width"]), int(data["height"]), int(data["max_depth"]), float(data["seconds"])
             mean = data["image"].reshape(-1, data["image"].shape[-1])[:, :3].mean(axis=0)
@@ -409,11 +414,7 @@ def main():
         # Mitsuba renders in a process of its own, which has exited before rt-gpu starts: Dr.Jit's
         # worker threads would otherwise compete with rt-gpu's for the same cores.
         mi_path = os.path.join(out, "mitsuba.npz")
-        subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only", mi_path,
-                        "--mitsuba-sampler", args.mitsuba_sampler]
-                       + (["--width", str(args.width)] if args.width else [])
-                       + (["--height", str(args.height)] if args.height else [])
-                       + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
+        run_mitsuba(args, mi_path)
         data = np.load(mi_path)
         mi_image, mi_seconds = data["image"], float(data["seconds"])
         args.width, args.height, args.max_depth = int(data["width"]), int(data["height"]), int(data["max_depth"])

@@ -54,15 +54,15 @@ fn loop_cost(
         2 + (max_depth as u64 + 1) * per_segment
     };
     let fixed = bound(1 + primitives);
-    let (cost, fixed) = match &scene.bvh {
+    let per_sample = match &scene.bvh {
         Some(bvh) if features.bvh => {
             // Kernels count against half the budget (see shaders/accel.wgsl): doubled here.
             let traversal = 4 * (bvh.depth as u64 + crate::accel::MAX_LEAF as u64);
-            (2 * bound(1 + traversal_weight * traversal), fixed)
+            2 * bound(1 + traversal_weight * traversal)
         }
-        _ => (fixed, fixed),
+        _ => fixed,
     };
-    (LoopCost { per_sample: cost }, fixed)
+    (LoopCost { per_sample }, fixed)
 }
 
 /// How many f32 lanes lavapipe's SIMD groups have: its name says how wide its vectors are
