@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the models of scenes/meshes.toml (pure Python, no dependencies): a trefoil torus knot
-as an OBJ of quad faces (scenes/models/knot.obj), and a glTF lamp (scenes/models/lamp.gltf and
+as an OBJ of quad faces with vertex normals (scenes/models/knot.obj), and a glTF lamp (scenes/models/lamp.gltf and
 lamp.bin: a white hexagonal stand with a glowing icosphere on top, nodes with transforms, its
 own materials). Run from the repository root: python3 scripts/generate-meshes.py
 
@@ -32,8 +32,8 @@ def normalize(a):
 
 
 def write_knot(path, segments, sides, radius=0.45):
-    """A tube around the knot: `segments` rings of `sides` vertices, quads between them,
-    counter-clockwise seen from outside."""
+    """A tube around the knot: `segments` rings of `sides` vertices, each with the tube's
+    outward normal (smooth shading), quads between them, counter-clockwise seen from outside."""
     with open(path, "w") as f:
         f.write("# (2, 3) torus knot tube, %d x %d quads (scripts/generate-meshes.py)\n"
                 % (segments, sides))
@@ -46,15 +46,16 @@ def write_knot(path, segments, sides, radius=0.45):
             for j in range(sides):
                 a = 2 * math.pi * j / sides
                 c, s = math.cos(a), math.sin(a)
-                v = tuple(p[k] + radius * (c * side[k] + s * up[k]) for k in range(3))
-                f.write("v %.5f %.5f %.5f\n" % v)
+                normal = tuple(c * side[k] + s * up[k] for k in range(3))
+                v = tuple(p[k] + radius * normal[k] for k in range(3))
+                f.write("v %.5f %.5f %.5f\nvn %.4f %.4f %.4f\n" % (v + normal))
         for i in range(segments):
             n = (i + 1) % segments
             for j in range(sides):
                 m = (j + 1) % sides
                 a, b = i * sides + j + 1, n * sides + j + 1
                 c, d = n * sides + m + 1, i * sides + m + 1
-                f.write("f %d %d %d %d\n" % (a, b, c, d))
+                f.write("f %d//%d %d//%d %d//%d %d//%d\n" % (a, a, b, b, c, c, d, d))
 
 
 def icosphere(levels):

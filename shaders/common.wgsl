@@ -46,6 +46,10 @@ struct Ray {
 //#if TRIANGLES
 @group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
 //#endif
+//#if SHADING_NORMALS
+// Per triangle its three corner normals, nine floats (SceneBuffers::triangle_normals).
+@group(0) @binding(12) var<storage, read> triangle_normals: array<f32>;
+//#endif
 //#if BVH
 @group(0) @binding(10) var<storage, read> bvh_nodes: array<BvhNode>;
 @group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;

@@ -4,7 +4,8 @@ struct Hit {
     point: vec3f,
     t: f32,
     error: f32,         // bound on the distance from point to the true surface point
-    normal: vec3f,      // faces the incoming ray
+    normal: vec3f,      // geometric, faces the incoming ray: decides sides and offsets
+    shading: vec3f,     // what materials shade with, on normal's side (see shading_normal)
     material: u32,
     front_face: bool,   // the ray hit the outward (u x v) side
     primitive: u32,     // packed: kind << PRIMITIVE_INDEX_BITS | index among that kind
@@ -187,17 +188,6 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 //#else
 //#if BVH
     traverse(ray, &c);
-//#else
-//#if SPHERES
-    for (var i = 0u; i < params.sphere_count; i++) {
-        consider_sphere(spheres[i], i, ray, &c);
-    }
-//#endif
-//#if QUADS
-    for (var i = 0u; i < params.quad_count; i++) {
-        consider_quad(quads[i], i, ray, &c);
-    }
-//#endif
 //#endif
 //#endif
     if !c.found {
@@ -221,6 +211,13 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     (*hit).point = surface.point;
     (*hit).error = surface.error;
     (*hit).normal = select(-n, n, front);
+    var shading = n;
+//#if SHADING_NORMALS
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        shading = shading_normal(primitive_index(c.primitive), c.weights, n);
+    }
+//#endif
+    (*hit).shading = select(-shading, shading, front);
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
@@ -238,6 +235,36 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 //#endif
 //#endif
     return true;
+}
+
+//#if SHADING_NORMALS
+fn corner_normal(at: u32) -> vec3f {
+    return vec3f(triangle_normals[at], triangle_normals[at + 1u], triangle_normals[at + 2u]);
+}
+
+// Triangle i's corner normals interpolated at weights, unit, turned into the hemisphere of the
+// unit geometric normal `outward`; `outward` where they cancel (twin: shading_normal in
+// src/cpu/shapes.rs).
+fn shading_normal(i: u32, weights: vec2f, outward: vec3f) -> vec3f {
+    let n = (1.0 - weights.x - weights.y) * corner_normal(9u * i) + weights.x * corner_normal(9u * i + 3u)
+        + weights.y * corner_normal(9u * i + 6u);
+    let len2 = dot(n, n);
+    if !(len2 > 1e-12) {
+        return outward;
+    }
+    let unit = n / sqrt(len2);
+    return select(unit, -unit, dot(unit, outward) < 0.0);
+}
+//#endif
+
+// Whether unit dir leaves hit below its geometric surface although the shading normal allowed
+// it: such a scattered path ends (twin: below_surface in src/cpu/shapes.rs).
+fn below_surface(hit: Hit, dir: vec3f) -> bool {
+//#if SHADING_NORMALS
+    return any(hit.shading != hit.normal) && dot(dir, hit.normal) <= 0.0;
+//#else
+    return false;
+//#endif
 }
 
 // The hit point put back onto the surface and a bound on its error, per shape (see

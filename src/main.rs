@@ -641,13 +641,14 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
         "  scene: {primitives} primitives ({triangles} triangles, {} lights); read in {loading:.3} s, flattened in {flattening:.3} s",
         flat.lights.len()
     )?;
-    if flat.bvh.is_some() {
+    if !flat.bvh.nodes.is_empty() {
         let mut items = flat.bvh_items();
         let start = Instant::now();
         let bvh = rt_gpu::accel::Bvh::build(&mut items);
         let seconds = start.elapsed().as_secs_f64();
         let buffers = rt_gpu::gpu::layout::SceneBuffers::new(flat);
         let geometry = std::mem::size_of_val(&buffers.triangles[..])
+            + std::mem::size_of_val(&buffers.triangle_normals[..])
             + std::mem::size_of_val(&buffers.bvh_nodes[..])
             + std::mem::size_of_val(&buffers.bvh_primitives[..]);
         let per_triangle = if triangles > 0 {

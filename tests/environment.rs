@@ -414,6 +414,7 @@ fn gpu_image_lookups_match_the_cpu() {
             point: Vec3::ZERO,
             error: 0.0,
             normal: Vec3::Y,
+            shading: Vec3::Y,
             front_face: true,
             material: *material,
             primitive: rt_gpu::scene::flat::PrimitiveRef::Quad(0),

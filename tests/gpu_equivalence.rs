@@ -22,8 +22,18 @@ use rt_gpu::scene::flat::FlatScene;
 #[test]
 fn first_bounces_match_the_cpu() {
     let Some(gpu) = renderer() else { return };
-    for (name, scale) in [("cornell", 555.0), ("spheres", 3.0), ("showcase", 20.0)] {
-        let scene = builtin(name).expect("built-in");
+    for (name, scale) in [
+        ("cornell", 555.0),
+        ("spheres", 3.0),
+        ("showcase", 20.0),
+        ("smooth", 555.0),
+    ] {
+        // Smooth: the Cornell box with smooth-shaded sphere meshes, whose scattered
+        // directions follow the interpolated normals.
+        let scene = match name {
+            "smooth" => common::with_smooth_spheres(builtin("cornell").expect("built-in")),
+            _ => builtin(name).expect("built-in"),
+        };
         let opts = common::opts(40, 30, 1, 10, 7);
         for sample in [0, 5] {
             let opts = rt_gpu::render::RenderOptions {

@@ -185,6 +185,46 @@ fn kernels_leave_out_unused_code() {
     let showcase = kernel("showcase");
     assert!(showcase.contains("fn traverse") && showcase.contains("spheres[index]"));
     assert!(!showcase.contains("fn inline_scene") && !showcase.contains("fn triangle_hit"));
+    // Shading normals only for meshes that have them.
+    let mesh_scene = |mesh| {
+        let mut scene = rt_gpu::scene::builtin::builtin("cornell").expect("built-in");
+        scene.objects.push(rt_gpu::scene::Object {
+            shape: rt_gpu::scene::Shape::Mesh {
+                mesh,
+                scale: glam::Vec3::splat(50.0),
+            },
+            material: 0,
+            transform: rt_gpu::scene::Transform {
+                rotate_y_degrees: 0.0,
+                translate: glam::Vec3::splat(200.0),
+            },
+        });
+        let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+        compose(&Features::of(&flat), &flat).expect("composes")
+    };
+    let flat_mesh = rt_gpu::scene::mesh::Mesh::new(
+        "tetrahedron",
+        vec![
+            glam::Vec3::ZERO,
+            glam::Vec3::X,
+            glam::Vec3::Y,
+            glam::Vec3::Z,
+        ],
+        vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+    )
+    .expect("valid")
+    .leak();
+    let flat_kernel = mesh_scene(flat_mesh);
+    assert!(flat_kernel.contains("fn triangle_hit") && !flat_kernel.contains("triangle_normals"));
+    let smooth = rt_gpu::scene::mesh::Mesh::with_normals(
+        "smooth tetrahedron",
+        flat_mesh.positions.clone(),
+        flat_mesh.triangles.clone(),
+        vec![Some([glam::Vec3::ONE; 3]); 4],
+    )
+    .expect("valid")
+    .leak();
+    assert!(mesh_scene(smooth).contains("fn shading_normal"));
     // Nor BVH code in a scene without one.
     let cornell = kernel("cornell");
     assert!(!cornell.contains("fn traverse") && !cornell.contains("fn triangle_hit"));

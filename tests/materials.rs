@@ -15,6 +15,7 @@ fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
         point: Vec3::ZERO,
         error: 0.0,
         normal,
+        shading: normal,
         front_face,
         material: 0,
         primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),

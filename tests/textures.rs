@@ -215,6 +215,7 @@ fn gpu_texture_lookups_match_the_cpu() {
             point: *point,
             error: 0.0,
             normal: Vec3::Y,
+            shading: Vec3::Y,
             front_face: true,
             material: *material,
             primitive: rt_gpu::scene::flat::PrimitiveRef::Quad(0),

@@ -235,10 +235,13 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
             scale = [scale] * 3 if not isinstance(scale, list) else scale
             place = rotation_y(angle) @ np.diag(list(scale) + [1.0])
             place[:3, 3] = t
-            # Flat shading with the geometric normal, as rt-gpu's triangles.
-            shape = {"type": "obj", "filename": os.path.join(base, mesh["file"]),
-                     "face_normals": True, "to_world": mi.ScalarTransform4f(place.tolist()),
-                     "bsdf": bsdfs[material]}
+            # rt-gpu shades with the file's vertex normals and flat without them; Mitsuba would
+            # make up smooth normals for a file without any, so it is told not to.
+            filename = os.path.join(base, mesh["file"])
+            with open(filename) as f:
+                has_normals = any(line.startswith("vn ") for line in f)
+            shape = {"type": "obj", "filename": filename, "face_normals": not has_normals,
+                     "to_world": mi.ScalarTransform4f(place.tolist()), "bsdf": bsdfs[material]}
             if material in emitters:
                 shape["emitter"] = emitters[material]
             shapes[f"shape{len(shapes)}"] = shape

@@ -6,9 +6,9 @@ fn lambertian_emitted(m: Material, hit: Hit) -> vec3f {
 }
 
 fn lambertian_bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {
-    // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
-    let cos = dot(hit.normal, dir);
-    let above = cos > 0.0;
+    // Cosine-weighted about the shading normal: pdf = cos / pi, BSDF x cos / pdf = albedo.
+    let cos = dot(hit.shading, dir);
+    let above = cos > 0.0 && !below_surface(hit, dir);
     return Bsdf(select(vec3f(0.0), albedo_at(m, hit), above), select(0.0, cos / PI, above));
 }
 
@@ -16,7 +16,8 @@ fn lambertian_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<functio
     // normal + a uniform unit vector is cosine-distributed about the normal.
     let u1 = sampler_next(sampler);
     let u2 = sampler_next(sampler);
-    let d = hit.normal + unit_vector(u1, u2);
+    let d = hit.shading + unit_vector(u1, u2);
     let len2 = dot(d, d);
-    return Scattered(albedo_at(m, hit), true, select(hit.normal, d / sqrt(len2), len2 > 1e-12));
+    let dir = select(hit.shading, d / sqrt(len2), len2 > 1e-12);
+    return Scattered(albedo_at(m, hit), !below_surface(hit, dir), dir);
 }

@@ -24,7 +24,11 @@ pub struct Hit {
     pub point: Vec3,
     /// A bound on the distance from `point` to the true surface point.
     pub error: f32,
+    /// The geometric normal, facing the incoming ray: it decides sides and offsets.
     pub normal: Vec3,
+    /// The normal materials shade with, on `normal`'s side: a mesh's interpolated vertex
+    /// normals (see [`shading_normal`]), else `normal` itself.
+    pub shading: Vec3,
     pub front_face: bool,
     pub material: u32,
     /// Which primitive was hit.
@@ -199,18 +203,11 @@ fn consider(
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
-    match &scene.bvh {
-        Some(bvh) => super::accel::traverse(bvh, ray, &mut closest, |packed, closest| {
-            if let Some(p) = PrimitiveRef::unpacked(packed) {
-                consider(scene, p, ray, closest, &mut found);
-            }
-        }),
-        None => {
-            for p in scene.primitives() {
-                consider(scene, p, ray, &mut closest, &mut found);
-            }
+    super::accel::traverse(&scene.bvh, ray, &mut closest, |packed, closest| {
+        if let Some(p) = PrimitiveRef::unpacked(packed) {
+            consider(scene, p, ray, closest, &mut found);
         }
-    }
+    });
     let Candidate {
         primitive,
         outward,
@@ -254,16 +251,45 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     } else {
         Vec2::ZERO
     };
+    let shading = match primitive {
+        PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
+            shading_normal(&scene.triangle_normals[i as usize], weights, outward)
+        }
+        _ => outward,
+    };
     Some(Hit {
         t: closest,
         point,
         error,
         normal: if front_face { outward } else { -outward },
+        shading: if front_face { shading } else { -shading },
         front_face,
         material,
         primitive,
         uv,
     })
+}
+
+/// The corner normals `normals` interpolated at barycentric weights (1 - b1 - b2, b1, b2), unit,
+/// turned into the hemisphere of the unit geometric normal `outward` (the winding decides the
+/// front face, whichever way a file's normals point); `outward` where they cancel.
+#[inline]
+pub fn shading_normal(normals: &[Vec3; 3], weights: Vec2, outward: Vec3) -> Vec3 {
+    let (b1, b2) = (weights.x, weights.y);
+    let n = (1.0 - b1 - b2) * normals[0] + b1 * normals[1] + b2 * normals[2];
+    let len2 = n.dot(n);
+    if !(len2 > 1e-12) {
+        return outward;
+    }
+    let n = n / len2.sqrt();
+    if n.dot(outward) < 0.0 { -n } else { n }
+}
+
+/// Whether unit `dir` leaves `hit` below its geometric surface although the shading normal
+/// allowed it: such a scattered path ends (shading normals only; see the materials).
+#[inline]
+pub fn below_surface(hit: &Hit, dir: Vec3) -> bool {
+    hit.shading != hit.normal && dir.dot(hit.normal) <= 0.0
 }
 
 /// A point near `sphere`'s surface put back onto it, and a bound on the result's error.

@@ -81,6 +81,7 @@ mod tests {
             point,
             error: 0.0,
             normal: Vec3::Y,
+            shading: Vec3::Y,
             front_face: true,
             material: 0,
             primitive: PrimitiveRef::Quad(0),

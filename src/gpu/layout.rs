@@ -290,9 +290,9 @@ gpu_struct! {
         vertical: [f32; 3],
         max_depth: u32,
         right: [f32; 3],
-        sphere_count: u32,
+        _pad0: u32,
         up: [f32; 3],
-        quad_count: u32,
+        _pad1: u32,
         background: [f32; 3],
         light_count: u32,
         /// 1: sky gradient background.
@@ -487,6 +487,9 @@ pub struct SceneBuffers {
     pub spheres: Vec<GpuSphere>,
     pub quads: Vec<GpuQuad>,
     pub triangles: Vec<GpuTriangle>,
+    /// Per triangle its three corner normals, nine floats (the kernel's `triangle_normals`),
+    /// when the scene has shading normals.
+    pub triangle_normals: Vec<f32>,
     pub bvh_nodes: Vec<GpuBvhNode>,
     /// Packed primitive references, in the BVH's leaf order.
     pub bvh_primitives: Vec<u32>,
@@ -650,26 +653,31 @@ impl SceneBuffers {
                 _pad: 0,
             })
             .collect();
-        let (mut bvh_nodes, mut bvh_primitives) = match &scene.bvh {
-            Some(bvh) => (
-                bvh.nodes
-                    .iter()
-                    .map(|n| GpuBvhNode {
-                        min: n.min.to_array(),
-                        offset: n.offset,
-                        max: n.max.to_array(),
-                        count: n.count,
-                    })
-                    .collect(),
-                bvh.primitives.clone(),
-            ),
-            None => (Vec::new(), Vec::new()),
-        };
+        let mut bvh_nodes: Vec<GpuBvhNode> = scene
+            .bvh
+            .nodes
+            .iter()
+            .map(|n| GpuBvhNode {
+                min: n.min.to_array(),
+                offset: n.offset,
+                max: n.max.to_array(),
+                count: n.count,
+            })
+            .collect();
+        let mut bvh_primitives = scene.bvh.primitives.clone();
         if triangles.is_empty() {
             triangles.push(GpuTriangle::default());
         }
         if bvh_nodes.is_empty() {
             bvh_nodes.push(GpuBvhNode::default());
+        }
+        let mut triangle_normals: Vec<f32> = scene
+            .triangle_normals
+            .iter()
+            .flat_map(|corners| corners.iter().flat_map(|n| n.to_array()))
+            .collect();
+        if triangle_normals.is_empty() {
+            triangle_normals.push(0.0);
         }
         if bvh_primitives.is_empty() {
             bvh_primitives.push(0);
@@ -691,6 +699,7 @@ impl SceneBuffers {
             spheres,
             quads,
             triangles,
+            triangle_normals,
             bvh_nodes,
             bvh_primitives,
             materials,
@@ -773,9 +782,9 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         vertical: c.vertical.to_array(),
         max_depth: opts.max_depth,
         right: c.right.to_array(),
-        sphere_count: scene.spheres.len() as u32,
+        _pad0: 0,
         up: c.up.to_array(),
-        quad_count: scene.quads.len() as u32,
+        _pad1: 0,
         background,
         light_count: scene.lights.len() as u32,
         sky,

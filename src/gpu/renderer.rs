@@ -17,8 +17,8 @@ use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// A generous bound on the loop iterations one sample costs: the path loop, and in each segment
-/// one pass over each primitive list (none when the scene is inlined as straight-line code),
-/// counting every loop's exit test as an iteration too (measured on lavapipe: a 1-sphere,
+/// a trace (one iteration for a scene inlined as straight-line code), counting every loop's
+/// exit test as an iteration too (measured on lavapipe: a 1-sphere,
 /// depth-2 sample costs about 7).
 /// With NEE, a segment also searches the light list and traces a shadow ray. With media, a
 /// segment and a shadow ray each trace up to 1 + `medium_crossings` rays (through invisible
@@ -33,11 +33,6 @@ fn loop_cost(
     traversal_weight: u64,
 ) -> (LoopCost, u64) {
     let max_depth = opts.max_depth;
-    let primitives = if features.inline_scene || features.bvh {
-        0
-    } else {
-        scene.spheres.len() as u64 + scene.quads.len() as u64
-    };
     let rays_per_trace = if features.has("MEDIA") {
         2 + scene.medium_crossings as u64
     } else {
@@ -53,14 +48,13 @@ fn loop_cost(
         };
         2 + (max_depth as u64 + 1) * per_segment
     };
-    let fixed = bound(1 + primitives);
-    let per_sample = match &scene.bvh {
-        Some(bvh) if features.bvh => {
-            // Kernels count against half the budget (see shaders/accel.wgsl): doubled here.
-            let traversal = 4 * (bvh.depth as u64 + crate::accel::MAX_LEAF as u64);
-            2 * bound(1 + traversal_weight * traversal)
-        }
-        _ => fixed,
+    let fixed = bound(1);
+    let per_sample = if features.bvh {
+        // Kernels count against half the budget (see shaders/accel.wgsl): doubled here.
+        let traversal = 4 * (scene.bvh.depth as u64 + crate::accel::MAX_LEAF as u64);
+        2 * bound(1 + traversal_weight * traversal)
+    } else {
+        fixed
     };
     (LoopCost { per_sample }, fixed)
 }
@@ -167,6 +161,7 @@ impl GpuRenderer {
                 buffer_entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(10, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -226,7 +221,7 @@ impl GpuRenderer {
         &self,
         scene: &FlatScene,
         features: &Features,
-    ) -> Result<[wgpu::Buffer; 8], GpuError> {
+    ) -> Result<[wgpu::Buffer; 9], GpuError> {
         let mut buffers = SceneBuffers::new(scene);
         let limit = self
             .ctx
@@ -235,6 +230,10 @@ impl GpuRenderer {
             .min(self.ctx.limits.max_buffer_size);
         let geometry = [
             ("triangles", std::mem::size_of_val(&buffers.triangles[..])),
+            (
+                "vertex normals",
+                std::mem::size_of_val(&buffers.triangle_normals[..]),
+            ),
             ("BVH nodes", std::mem::size_of_val(&buffers.bvh_nodes[..])),
             ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
             ("quads", std::mem::size_of_val(&buffers.quads[..])),
@@ -292,6 +291,11 @@ impl GpuRenderer {
                 bytemuck::cast_slice(&buffers.bvh_primitives),
                 wgpu::BufferUsages::STORAGE,
             ),
+            self.buffer_with(
+                "triangle normals",
+                bytemuck::cast_slice(&buffers.triangle_normals),
+                wgpu::BufferUsages::STORAGE,
+            ),
         ])
     }
 
@@ -299,7 +303,7 @@ impl GpuRenderer {
         &self,
         kernel: &Kernel,
         [params, dispatch]: [&wgpu::Buffer; 2],
-        scene: &[wgpu::Buffer; 8],
+        scene: &[wgpu::Buffer; 9],
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
@@ -327,6 +331,7 @@ impl GpuRenderer {
                     entry(9, &scene[5]),
                     entry(10, &scene[6]),
                     entry(11, &scene[7]),
+                    entry(12, &scene[8]),
                 ],
             })
     }

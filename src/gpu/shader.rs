@@ -51,7 +51,9 @@ pub struct Features {
     pub spheres: bool,
     pub quads: bool,
     pub triangles: bool,
-    /// Primitives found through the scene's BVH (else tested one by one).
+    /// Triangles shaded with interpolated vertex normals.
+    pub shading_normals: bool,
+    /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
     pub bvh: bool,
     /// The material features on, as bits in the order of [`material::features`]: each material
     /// kind the scene uses, and the extra features its instances need.
@@ -120,11 +122,12 @@ impl Features {
             && scene.lights.len() <= MAX_INLINE_PRIMITIVES;
         // Any other scene goes through its BVH: on lavapipe even 322 primitives (`showcase`)
         // render 2x faster through it than in a loop over all of them.
-        let bvh = !inline_scene && scene.bvh.is_some();
+        let bvh = !inline_scene;
         Features {
             spheres: !scene.spheres.is_empty(),
             quads: !scene.quads.is_empty(),
             triangles: !scene.triangles.is_empty(),
+            shading_normals: !scene.triangle_normals.is_empty(),
             bvh,
             materials,
             lens: scene.camera.lens_radius > 0.0,
@@ -140,15 +143,16 @@ impl Features {
     }
 
     /// Everything on, scene arrays in storage buffers: the general kernel any scene can run
-    /// (except `sky` and `environment`, which replace the constant background, and `lens`,
-    /// which changes the random-number sequence).
+    /// (except `sky` and `environment`, which replace the constant background, `lens`, which
+    /// changes the random-number sequence, and `shading_normals`, whose buffer only scenes with
+    /// vertex normals fill).
     pub fn everything(scene: &FlatScene) -> Self {
         let own = Features::of(scene);
         Features {
             spheres: true,
             quads: true,
             triangles: true,
-            bvh: scene.bvh.is_some(),
+            bvh: true,
             materials: (1 << material::features().len()) - 1,
             uniform_scene: false,
             inline_scene: false,
@@ -188,6 +192,7 @@ impl Features {
             ("SPHERES", self.spheres),
             ("QUADS", self.quads),
             ("TRIANGLES", self.triangles),
+            ("SHADING_NORMALS", self.shading_normals),
             ("BVH", self.bvh),
         ];
         flags.extend(
@@ -214,6 +219,7 @@ impl Features {
             "SPHERES" => &mut self.spheres,
             "QUADS" => &mut self.quads,
             "TRIANGLES" => &mut self.triangles,
+            "SHADING_NORMALS" => &mut self.shading_normals,
             "BVH" => &mut self.bvh,
             "LENS" => &mut self.lens,
             "SOBOL" => &mut self.sobol,
@@ -282,7 +288,7 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     ));
     // The traversal stack holds at most one entry per level below the root: sized to this
     // scene's BVH (private arrays cost lavapipe in proportion to their size).
-    let stack = scene.bvh.as_ref().map_or(1, |b| b.depth.max(1));
+    let stack = scene.bvh.depth.max(1);
     out.push_str(&format!("const BVH_STACK: u32 = {stack}u;\n"));
     if features.uniform_scene {
         out.push_str(&format!(

@@ -58,15 +58,20 @@ impl MaterialModel for Dielectric {
         } else {
             self.ior
         };
-        let cos_i = (-dir_in).dot(hit.normal).clamp(0.0, 1.0);
+        let n = hit.shading;
+        let cos_i = (-dir_in).dot(n).clamp(0.0, 1.0);
         let u = sampler.next_f32();
-        let dir = match refract_cos(cos_i, eta) {
+        let (dir, reflected) = match refract_cos(cos_i, eta) {
             Some(cos_t) if u >= fresnel(cos_i, cos_t, eta) => {
-                eta * dir_in + (eta * cos_i - cos_t) * hit.normal
+                (eta * dir_in + (eta * cos_i - cos_t) * n, false)
             }
-            _ => reflect(dir_in, hit.normal),
+            _ => (reflect(dir_in, n), true),
         };
-        Some((Vec3::ONE, dir.normalize()))
+        let dir = dir.normalize();
+        // A shading normal can send a reflection into the surface or a refraction out of it:
+        // absorbed (the geometric normal decides sides, as for the medium inside).
+        (hit.shading == hit.normal || (dir.dot(hit.normal) > 0.0) == reflected)
+            .then_some((Vec3::ONE, dir))
     }
 
     /// param: ior; medium_*: the medium inside, if any.

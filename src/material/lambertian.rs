@@ -3,7 +3,7 @@
 
 use super::MaterialModel;
 use crate::cpu::sampling::unit_vector;
-use crate::cpu::shapes::Hit;
+use crate::cpu::shapes::{Hit, below_surface};
 use crate::cpu::texture;
 use crate::scene::texture::Texture;
 use crate::gpu::layout::GpuMaterial;
@@ -58,9 +58,9 @@ impl MaterialModel for Lambertian {
     }
 
     fn bsdf(&self, hit: &Hit, dir: Vec3) -> Option<(Vec3, f32)> {
-        // Cosine-weighted: pdf = cos / pi, BSDF x cos / pdf = albedo.
-        let cos = hit.normal.dot(dir);
-        (cos > 0.0).then(|| {
+        // Cosine-weighted about the shading normal: pdf = cos / pi, BSDF x cos / pdf = albedo.
+        let cos = hit.shading.dot(dir);
+        (cos > 0.0 && !below_surface(hit, dir)).then(|| {
             (
                 texture::value(&self.albedo, hit),
                 cos * std::f32::consts::FRAC_1_PI,
@@ -70,14 +70,14 @@ impl MaterialModel for Lambertian {
 
     fn scatter(&self, _dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         // normal + a uniform unit vector is cosine-distributed about the normal.
-        let d = hit.normal + unit_vector(sampler.next_f32(), sampler.next_f32());
+        let d = hit.shading + unit_vector(sampler.next_f32(), sampler.next_f32());
         let len2 = d.length_squared();
         let dir = if len2 > 1e-12 {
             d / len2.sqrt()
         } else {
-            hit.normal
+            hit.shading
         };
-        Some((texture::value(&self.albedo, hit), dir))
+        (!below_surface(hit, dir)).then(|| (texture::value(&self.albedo, hit), dir))
     }
 
     /// albedo (and texture_*), emission.

@@ -51,13 +51,13 @@ impl MaterialModel for Metal {
 
     fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
         let fuzzed =
-            reflect(dir_in, hit.normal) + self.fuzz * unit_vector(sampler.next_f32(), sampler.next_f32());
+            reflect(dir_in, hit.shading) + self.fuzz * unit_vector(sampler.next_f32(), sampler.next_f32());
         let len2 = fuzzed.length_squared();
         if !(len2 > 1e-12) {
             return None;
         }
         let dir = fuzzed / len2.sqrt();
-        // Fuzzed below the surface: absorbed.
+        // Fuzzed (or, by a shading normal, reflected) below the surface: absorbed.
         (dir.dot(hit.normal) > 0.0).then(|| (texture::value(&self.albedo, hit), dir))
     }
 

@@ -84,6 +84,11 @@ impl Triangle {
     }
 }
 
+/// A flat triangle's corner normals: its face's, at every corner.
+fn face_normals(t: &Triangle) -> [Vec3; 3] {
+    [(t.p1 - t.p0).cross(t.p2 - t.p0).normalize(); 3]
+}
+
 /// The camera reduced to what ray generation needs: a ray for film position (s, t) in [0, 1]^2
 /// (t down from the top) from `origin` points along `to_upper_left + s * horizontal - t * vertical`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,10 +163,13 @@ pub struct FlatScene {
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
     pub triangles: Vec<Triangle>,
+    /// Per triangle, its corners' unit shading normals, when some mesh of the scene has vertex
+    /// normals (triangles of the others take their face's); empty otherwise.
+    pub triangle_normals: Vec<[Vec3; 3]>,
     /// Over every primitive. The CPU always traverses it (even the Cornell box's 18 primitives
     /// are found 1.3-1.7x faster through it than one by one); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
-    pub bvh: Option<crate::accel::Bvh>,
+    pub bvh: crate::accel::Bvh,
     /// Every emitting sphere, quad and triangle, and last an environment background, for next-event
     /// estimation (see [`Light`]).
     pub lights: Vec<Light>,
@@ -220,6 +228,8 @@ impl FlatScene {
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
         let mut triangles = Vec::new();
+        let mut triangle_normals: Vec<[Vec3; 3]> = Vec::new();
+        let mut smooth = false;
         // Only the materials some object uses, numbered in order of first use: a scene may
         // define thousands it never places, and the kernel holds every material it is given.
         let mut materials = Vec::new();
@@ -258,24 +268,48 @@ impl FlatScene {
                     }
                 }
                 Shape::Mesh { mesh, scale } => {
+                    // The first mesh with vertex normals: the triangles before it are flat.
+                    if !mesh.normals.is_empty() && !smooth {
+                        smooth = true;
+                        triangle_normals.extend(triangles.iter().map(face_normals));
+                    }
                     // A mirroring scale turns the winding around: swap two corners so the
                     // front face stays the same side of the surface.
                     let mirrored = scale.x * scale.y * scale.z < 0.0;
                     let placed: Vec<Vec3> =
                         mesh.positions.iter().map(|&p| place(p * scale)).collect();
-                    triangles.extend(mesh.triangles.iter().filter_map(|&[a, b, c]| {
+                    // Normals by the inverse transpose: divided by the scale, then rotated.
+                    let shading = |n: Vec3| t.rotate_vector(n / scale).normalize_or_zero();
+                    for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
                         let [b, c] = if mirrored { [c, b] } else { [b, c] };
                         let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
                         // Triangles that f32 coordinates here flatten to a line are left out.
                         let n = (p1 - p0).cross(p2 - p0);
-                        (n.length_squared() > 0.0 && n.is_finite()).then_some(Triangle {
+                        if !(n.length_squared() > 0.0 && n.is_finite()) {
+                            continue;
+                        }
+                        let triangle = Triangle {
                             p0,
                             p1,
                             p2,
                             material,
                             light: 0,
-                        })
-                    }));
+                        };
+                        if smooth {
+                            triangle_normals.push(match mesh.normals.get(i) {
+                                Some(&[n0, n1, n2]) => {
+                                    let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
+                                    let face = n.normalize();
+                                    [n0, n1, n2].map(|n| match shading(n) {
+                                        Vec3::ZERO => face,
+                                        n => n,
+                                    })
+                                }
+                                None => face_normals(&triangle),
+                            });
+                        }
+                        triangles.push(triangle);
+                    }
                 }
             }
         }
@@ -295,7 +329,8 @@ impl FlatScene {
             spheres,
             quads,
             triangles,
-            bvh: None,
+            triangle_normals,
+            bvh: crate::accel::Bvh::default(),
             lights: Vec::new(),
             medium_crossings: 0,
             uv_textures: false,
@@ -306,7 +341,7 @@ impl FlatScene {
         });
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
-        flat.bvh = Some(crate::accel::Bvh::build(&mut flat.bvh_items()));
+        flat.bvh = crate::accel::Bvh::build(&mut flat.bvh_items());
         Ok(flat)
     }
 
@@ -359,7 +394,7 @@ impl FlatScene {
         items
     }
 
-    /// Every primitive, spheres then quads (the order both backends test them in).
+    /// Every primitive: spheres, quads, triangles.
     pub fn primitives(&self) -> impl Iterator<Item = PrimitiveRef> + '_ {
         (0..self.spheres.len() as u32)
             .map(PrimitiveRef::Sphere)

@@ -7,7 +7,7 @@
 //! file's winding: counter-clockwise seen from the front.
 
 use super::Material;
-use glam::{DMat4, DVec3, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -23,6 +23,9 @@ pub struct Mesh {
     /// Vertex indices, counter-clockwise seen from the front. Degenerate (zero-area) triangles
     /// are left out at loading.
     pub triangles: Vec<[u32; 3]>,
+    /// Per triangle, its corners' shading normals (unit), where the file gives vertex normals;
+    /// empty where it gives none. Corners without a usable normal take the face's.
+    pub normals: Vec<[Vec3; 3]>,
     /// The file's material for this part (glTF), `None` for OBJ or primitives without one.
     pub material: Option<Material>,
     /// Its name in the file, or its index.
@@ -61,6 +64,18 @@ impl Mesh {
         positions: Vec<Vec3>,
         triangles: Vec<[u32; 3]>,
     ) -> Result<Self, String> {
+        Self::with_normals(source, positions, triangles, Vec::new())
+    }
+
+    /// A mesh as [`Mesh::new`], with its triangles' corner normals (`normals`: one entry per
+    /// triangle, `None` where the file gives none; all `None` or empty: a flat-shaded mesh).
+    pub fn with_normals(
+        source: &str,
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        normals: Vec<Option<[Vec3; 3]>>,
+    ) -> Result<Self, String> {
+        let smooth = normals.iter().any(Option::is_some);
         if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
             return Err(format!("mesh {source} has a non-finite vertex {p}"));
         }
@@ -70,11 +85,25 @@ impl Mesh {
                 "mesh {source} has a triangle {t:?} naming a vertex beyond its {n}"
             ));
         }
+        let face = |[a, b, c]: [u32; 3]| {
+            let [a, b, c] = [a, b, c].map(|i| positions[i as usize].as_dvec3());
+            (b - a).cross(c - a)
+        };
+        let mut kept_normals = Vec::new();
         let triangles: Vec<[u32; 3]> = triangles
             .into_iter()
-            .filter(|&[a, b, c]| {
-                let [a, b, c] = [a, b, c].map(|i| positions[i as usize].as_dvec3());
-                (b - a).cross(c - a).length_squared() > 0.0
+            .enumerate()
+            .filter(|&(_, t)| face(t).length_squared() > 0.0)
+            .map(|(i, t)| {
+                if smooth {
+                    let face = face(t).normalize().as_vec3();
+                    let corners = normals.get(i).copied().flatten().unwrap_or([face; 3]);
+                    kept_normals.push(corners.map(|n| {
+                        let n = n.normalize_or_zero();
+                        if n == Vec3::ZERO { face } else { n }
+                    }));
+                }
+                t
             })
             .collect();
         if triangles.len() > MAX_TRIANGLES {
@@ -92,6 +121,7 @@ impl Mesh {
             part: 0,
             positions,
             triangles,
+            normals: kept_normals,
             material: None,
             material_name: String::new(),
             extent,
@@ -183,8 +213,23 @@ fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
     })?;
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
+    let mut normals = Vec::new();
     for model in models {
         let base = positions.len() as u32;
+        // Faces name their own normals (`f v//vn`); `tobj` gives them per corner.
+        let mesh = &model.mesh;
+        let vn = |i: u32| {
+            let n = mesh.normals.get(3 * i as usize..3 * i as usize + 3)?;
+            Some(Vec3::new(n[0], n[1], n[2]))
+        };
+        if mesh.normal_indices.len() == mesh.indices.len() {
+            normals.extend(mesh.normal_indices.chunks_exact(3).map(|c| {
+                let [a, b, c] = [vn(c[0])?, vn(c[1])?, vn(c[2])?];
+                Some([a, b, c])
+            }));
+        } else {
+            normals.extend(std::iter::repeat_n(None, mesh.indices.len() / 3));
+        }
         positions.extend(
             model
                 .mesh
@@ -200,7 +245,7 @@ fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
                 .map(|t| [base + t[0], base + t[1], base + t[2]]),
         );
     }
-    Mesh::new(source, positions, triangles)
+    Mesh::with_normals(source, positions, triangles, normals)
 }
 
 fn obj_error(e: &tobj::LoadError) -> String {
@@ -249,8 +294,14 @@ fn obj_error_line(text: &str, e: &tobj::LoadError) -> Option<usize> {
     None
 }
 
-/// A glTF material's index (`None`: primitives without one), and its vertices and triangles.
-type Part = (Option<usize>, Vec<Vec3>, Vec<[u32; 3]>);
+/// A glTF material's index (`None`: primitives without one), its vertices, triangles and their
+/// corner normals.
+type Part = (
+    Option<usize>,
+    Vec<Vec3>,
+    Vec<[u32; 3]>,
+    Vec<Option<[Vec3; 3]>>,
+);
 
 fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
     let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
@@ -303,12 +354,18 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
                 let at = match parts.iter().position(|p| p.0 == key) {
                     Some(at) => at,
                     None => {
-                        parts.push((key, Vec::new(), Vec::new()));
+                        parts.push((key, Vec::new(), Vec::new(), Vec::new()));
                         parts.len() - 1
                     }
                 };
-                let (_, positions, triangles) = &mut parts[at];
+                let (_, positions, triangles, normals) = &mut parts[at];
                 let base = positions.len() as u32;
+                // Normals transform by the inverse transpose (non-uniform scales bend them).
+                let to_world = DMat3::from_mat4(world).inverse().transpose();
+                let vertex_normals: Option<Vec<Vec3>> = reader.read_normals().map(|read| {
+                    read.map(|n| (to_world * DVec3::from_array(n.map(|x| x as f64))).as_vec3())
+                        .collect()
+                });
                 positions.extend(read.map(|p| {
                     world
                         .transform_point3(DVec3::from_array(p.map(|x| x as f64)))
@@ -328,6 +385,12 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
                     let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
                     if flip { [a, c, b] } else { [a, b, c] }
                 }));
+                normals.extend(indices.chunks_exact(3).map(|t| {
+                    let vertex_normals = vertex_normals.as_ref()?;
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| vertex_normals.get(i as usize));
+                    let [a, b, c] = [*a?, *b?, *c?];
+                    Some(if flip { [a, c, b] } else { [a, b, c] })
+                }));
             }
         }
         stack.extend(n.children().map(|c| (c, world)));
@@ -335,8 +398,8 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
     let materials: Vec<gltf::Material> = document.materials().collect();
     parts
         .into_iter()
-        .map(|(key, positions, triangles)| {
-            let mut mesh = Mesh::new(source, positions, triangles)?;
+        .map(|(key, positions, triangles, normals)| {
+            let mut mesh = Mesh::with_normals(source, positions, triangles, normals)?;
             if let Some(m) = key.and_then(|k| materials.get(k)) {
                 mesh.material = Some(material_of(m));
                 mesh.material_name = m.name().map_or(

@@ -137,6 +137,86 @@ pub fn parallelogram_mesh(name: &str, faces: &[[Vec3; 3]]) -> &'static rt_gpu::s
         .leak()
 }
 
+/// A UV sphere of unit radius, `rings` x `segments` quads as two triangles each (counter-clockwise
+/// from outside), every vertex with its radial normal: a smooth-shaded mesh.
+pub fn smooth_sphere_mesh(rings: u32, segments: u32) -> &'static rt_gpu::scene::mesh::Mesh {
+    let vertex = |i: u32, j: u32| {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        let phi = 2.0 * std::f32::consts::PI * j as f32 / segments as f32;
+        Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.cos(),
+            -theta.sin() * phi.sin(),
+        )
+    };
+    let positions: Vec<Vec3> = (0..=rings)
+        .flat_map(|i| (0..segments).map(move |j| vertex(i, j)))
+        .collect();
+    let index = |i: u32, j: u32| i * segments + j % segments;
+    let mut triangles = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            let [a, b, c, d] = [
+                index(i, j),
+                index(i + 1, j),
+                index(i + 1, j + 1),
+                index(i, j + 1),
+            ];
+            triangles.extend([[a, b, c], [a, c, d]]);
+        }
+    }
+    let normals = triangles
+        .iter()
+        .map(|t: &[u32; 3]| Some(t.map(|v| positions[v as usize])))
+        .collect();
+    rt_gpu::scene::mesh::Mesh::with_normals("smooth sphere", positions, triangles, normals)
+        .expect("a valid mesh")
+        .leak()
+}
+
+/// `scene` (the Cornell box's materials) with three smooth sphere meshes of 8 x 16 facets: a
+/// white ellipsoid, glass and brushed metal, so that lambertian, dielectric and metal shade
+/// through interpolated normals.
+pub fn with_smooth_spheres(mut scene: Scene) -> Scene {
+    use rt_gpu::scene::{Shape, Transform};
+    let mesh = smooth_sphere_mesh(8, 16);
+    let white = scene.material_names.iter().position(|n| n == "white");
+    let glass = scene.materials.len() as u32;
+    scene
+        .materials
+        .push(Material::Dielectric(rt_gpu::material::Dielectric::clear(
+            1.5,
+        )));
+    scene.material_names.push("glass".into());
+    let metal = scene.materials.len() as u32;
+    scene
+        .materials
+        .push(Material::Metal(rt_gpu::material::Metal {
+            albedo: Vec3::new(0.8, 0.6, 0.3).into(),
+            fuzz: 0.2,
+        }));
+    scene.material_names.push("metal".into());
+    for (scale, translate, material) in [
+        (
+            Vec3::new(120.0, 60.0, 60.0),
+            Vec3::new(180.0, 60.0, 180.0),
+            white.expect("white") as u32,
+        ),
+        (Vec3::splat(80.0), Vec3::new(380.0, 80.0, 300.0), glass),
+        (Vec3::splat(70.0), Vec3::new(270.0, 330.0, 350.0), metal),
+    ] {
+        scene.objects.push(Object {
+            shape: Shape::Mesh { mesh, scale },
+            material,
+            transform: Transform {
+                translate,
+                rotate_y_degrees: 20.0,
+            },
+        });
+    }
+    scene
+}
+
 /// `scene` with every quad and box made of triangles (two per parallelogram): the same surfaces.
 pub fn triangulated(scene: &Scene) -> Scene {
     let mut out = scene.clone();
