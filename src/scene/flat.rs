@@ -296,16 +296,16 @@ impl FlatScene {
                             light: 0,
                         };
                         if smooth {
+                            let face = n.normalize();
                             triangle_normals.push(match mesh.normals.get(i) {
                                 Some(&[n0, n1, n2]) => {
                                     let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
-                                    let face = n.normalize();
                                     [n0, n1, n2].map(|n| match shading(n) {
                                         Vec3::ZERO => face,
                                         n => n,
                                     })
                                 }
-                                None => face_normals(&triangle),
+                                None => [face; 3],
                             });
                         }
                         triangles.push(triangle);

@@ -93,17 +93,20 @@ impl Mesh {
         let triangles: Vec<[u32; 3]> = triangles
             .into_iter()
             .enumerate()
-            .filter(|&(_, t)| face(t).length_squared() > 0.0)
-            .map(|(i, t)| {
+            .filter_map(|(i, t)| {
+                let face = face(t);
+                if !(face.length_squared() > 0.0) {
+                    return None;
+                }
                 if smooth {
-                    let face = face(t).normalize().as_vec3();
+                    let face = face.normalize().as_vec3();
                     let corners = normals.get(i).copied().flatten().unwrap_or([face; 3]);
                     kept_normals.push(corners.map(|n| {
                         let n = n.normalize_or_zero();
                         if n == Vec3::ZERO { face } else { n }
                     }));
                 }
-                t
+                Some(t)
             })
             .collect();
         if triangles.len() > MAX_TRIANGLES {
