@@ -2,7 +2,8 @@
 //! selection, materials), one-line errors for bad files, and images: the Cornell box with its
 //! quads and boxes as triangles renders as the quads do (Welch z + Sidak at family-wise 0.01,
 //! tests/common/stats.rs), on the CPU and on the GPU against the CPU, each with a negative
-//! control (2% brighter white walls) that the same test detects.
+//! control (2% brighter white walls) that the same test detects; vertex normals: read, placed
+//! by the inverse transpose, shading on both backends alike.
 
 mod common;
 
