@@ -49,7 +49,72 @@ fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<fu
         consider_sphere(spheres[index], index, ray, c);
     }
 //#endif
+//#if TRIANGLES
+//#if INSTANCES
+    if kind == KIND_INSTANCE {
+        traverse_instance(index, ray, c);
+    }
+//#endif
+//#endif
 }
+
+//#if TRIANGLES
+//#if INSTANCES
+// The triangles of instance `index` against the ray transformed into its mesh's coordinates
+// (not renormalised: t stays the world ray's), through its mesh's BVH: the same traversal as
+// traverse below, with its own stack (WGSL has no recursion), counted against the same budget
+// (see consider_instance in src/cpu/shapes.rs).
+fn traverse_instance(index: u32, world: Ray, c: ptr<function, Closest>) {
+    let inst = instances[index];
+    let ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));
+    let packed = (KIND_INSTANCE << PRIMITIVE_INDEX_BITS) | index;
+    let inverse = inverse_direction(ray.dir);
+    let sh = shear_of(ray.dir);
+    var stack: array<u32, BVH_STACK>;
+    var top = 0u;
+    var node_index = inst.root;
+    loop {
+        if loop_iterations >= params.loop_budget {
+            budget_spent = true;
+            break;
+        }
+        let node = bvh_nodes[node_index];
+        loop_iterations += params.traversal_weight;
+        var descended = false;
+        if hits_box(node, ray.origin, inverse, (*c).t) {
+            if (node.count & BVH_INTERIOR) == 0u {
+                loop_iterations += params.traversal_weight * (node.count + 1u);
+                for (var i = node.offset; i < node.offset + node.count; i++) {
+                    let triangle = primitive_index(bvh_primitives[i]);
+                    let h = triangle_hit(triangles[triangle], ray, sh);
+                    if replaces_in_instance(h.x, packed, triangle, c) {
+                        (*c).t = h.x;
+                        (*c).found = true;
+                        (*c).primitive = packed;
+                        (*c).triangle = triangle;
+                        (*c).material = inst.material;
+                        (*c).weights = h.yz;
+                    }
+                }
+            } else {
+                let negative = ray.dir[node.count & 3u] < 0.0;
+                stack[top] = select(node.offset, node_index + 1u, negative);
+                top += 1u;
+                node_index = select(node_index + 1u, node.offset, negative);
+                descended = true;
+            }
+        }
+        if !descended {
+            if top == 0u {
+                break;
+            }
+            top -= 1u;
+            node_index = stack[top];
+        }
+    }
+}
+//#endif
+//#endif
 
 fn traverse(ray: Ray, c: ptr<function, Closest>) {
     let inverse = inverse_direction(ray.dir);

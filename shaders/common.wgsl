@@ -50,6 +50,9 @@ struct Ray {
 // Per triangle its three corner normals, nine floats (SceneBuffers::triangle_normals).
 @group(0) @binding(12) var<storage, read> triangle_normals: array<f32>;
 //#endif
+//#if INSTANCES
+@group(0) @binding(13) var<storage, read> instances: array<Instance>;
+//#endif
 //#if BVH
 @group(0) @binding(10) var<storage, read> bvh_nodes: array<BvhNode>;
 @group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;

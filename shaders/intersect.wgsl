@@ -55,6 +55,7 @@ struct Closest {
     found: bool,
     uv: vec2f,          // quad: (a, b), for UV textures
     weights: vec2f,     // triangle: barycentric weights of its second and third corners
+    triangle: u32,      // instance: which of its mesh's triangles (index in triangles)
 }
 
 // Whether a hit at t on primitive `packed` replaces the closest so far: nearer, or as near and
@@ -63,6 +64,42 @@ struct Closest {
 fn replaces(t: f32, packed: u32, c: ptr<function, Closest>) -> bool {
     return t > 0.0 && (t < (*c).t || (t == (*c).t && (!(*c).found || packed < (*c).primitive)));
 }
+
+//#if INSTANCES
+// `replaces` for triangle `triangle` of the instance packed as `packed`: as near and the same
+// instance, the earlier triangle wins (see replaces in src/cpu/shapes.rs).
+fn replaces_in_instance(t: f32, packed: u32, triangle: u32, c: ptr<function, Closest>) -> bool {
+    let earlier = packed < (*c).primitive || (packed == (*c).primitive && triangle < (*c).triangle);
+    return t > 0.0 && (t < (*c).t || (t == (*c).t && (!(*c).found || earlier)));
+}
+
+// Instance maps (twins of Instance's methods in src/scene/flat.rs).
+fn instance_to_world(i: Instance, p: vec3f) -> vec3f {
+    return vec3f(dot(i.to_world_x.xyz, p) + i.to_world_x.w, dot(i.to_world_y.xyz, p) + i.to_world_y.w,
+        dot(i.to_world_z.xyz, p) + i.to_world_z.w);
+}
+
+fn instance_to_local(i: Instance, p: vec3f) -> vec3f {
+    return vec3f(dot(i.to_local_x.xyz, p) + i.to_local_x.w, dot(i.to_local_y.xyz, p) + i.to_local_y.w,
+        dot(i.to_local_z.xyz, p) + i.to_local_z.w);
+}
+
+// Not renormalised: distances along a ray stay the same in both coordinates.
+fn instance_vector_to_local(i: Instance, v: vec3f) -> vec3f {
+    return vec3f(dot(i.to_local_x.xyz, v), dot(i.to_local_y.xyz, v), dot(i.to_local_z.xyz, v));
+}
+
+// By the transpose of to_local (the inverse transpose of to_world), not normalised.
+fn instance_normal_to_world(i: Instance, n: vec3f) -> vec3f {
+    return i.to_local_x.xyz * n.x + i.to_local_y.xyz * n.y + i.to_local_z.xyz * n.z;
+}
+
+fn instance_magnitude_to_world(i: Instance, p: vec3f) -> vec3f {
+    let a = abs(p);
+    return vec3f(dot(abs(i.to_world_x.xyz), a) + abs(i.to_world_x.w),
+        dot(abs(i.to_world_y.xyz), a) + abs(i.to_world_y.w), dot(abs(i.to_world_z.xyz), a) + abs(i.to_world_z.w));
+}
+//#endif
 
 // Where a hit lies: the point put back onto the surface, and a bound on its error.
 struct Surface {
@@ -179,9 +216,27 @@ fn triangle_surface(c: Closest) -> Surface {
 }
 //#endif
 
+//#if TRIANGLES
+//#if INSTANCES
+// triangle_surface for a triangle of an instance's mesh, placed (see instanced_triangle_surface
+// in src/cpu/shapes.rs).
+fn instanced_triangle_surface(c: Closest) -> Surface {
+    let inst = instances[primitive_index(c.primitive)];
+    let tri = triangles[c.triangle];
+    let b0 = 1.0 - c.weights.x - c.weights.y;
+    let point = b0 * instance_to_world(inst, tri.p0) + c.weights.x * instance_to_world(inst, tri.p1)
+        + c.weights.y * instance_to_world(inst, tri.p2);
+    let m = abs(b0) * instance_magnitude_to_world(inst, tri.p0)
+        + abs(c.weights.x) * instance_magnitude_to_world(inst, tri.p1)
+        + abs(c.weights.y) * instance_magnitude_to_world(inst, tri.p2);
+    return Surface(point, 2.0 * POINT_ERROR * max(m.x, max(m.y, m.z)));
+}
+//#endif
+//#endif
+
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0));
+    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
 //#if INLINE_SCENE
     // The scene's primitives are constants in this kernel (see inline_scene below).
     inline_scene(ray, &c);
@@ -193,6 +248,16 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     if !c.found {
         return false;
     }
+//#if TRIANGLES
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE {
+        // By the inverse transpose: a mirroring placement turns the normal around with it.
+        let tri = triangles[c.triangle];
+        c.outward = instance_normal_to_world(instances[primitive_index(c.primitive)],
+            cross(tri.p1 - tri.p0, tri.p2 - tri.p0));
+    }
+//#endif
+//#endif
     let n = normalize(c.outward);
     let front = dot(ray.dir, n) < 0.0;
     let along_ray = ray.origin + c.t * ray.dir;
@@ -207,6 +272,13 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
         surface = triangle_surface(c);
     }
 //#endif
+//#if TRIANGLES
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE {
+        surface = instanced_triangle_surface(c);
+    }
+//#endif
+//#endif
     (*hit).t = c.t;
     (*hit).point = surface.point;
     (*hit).error = surface.error;
@@ -216,6 +288,11 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     if primitive_kind(c.primitive) == KIND_TRIANGLE {
         shading = shading_normal(primitive_index(c.primitive), c.weights, n);
     }
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE {
+        shading = instanced_shading_normal(instances[primitive_index(c.primitive)], c.triangle, c.weights, n);
+    }
+//#endif
 //#endif
     (*hit).shading = select(-shading, shading, front);
     (*hit).front_face = front;
@@ -229,7 +306,7 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     }
 //#endif
 //#if TRIANGLES
-    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+    if primitive_kind(c.primitive) == KIND_TRIANGLE || primitive_kind(c.primitive) == KIND_INSTANCE {
         (*hit).uv = c.weights;
     }
 //#endif
@@ -246,8 +323,29 @@ fn corner_normal(at: u32) -> vec3f {
 // unit geometric normal `outward`; `outward` where they cancel (twin: shading_normal in
 // src/cpu/shapes.rs).
 fn shading_normal(i: u32, weights: vec2f, outward: vec3f) -> vec3f {
-    let n = (1.0 - weights.x - weights.y) * corner_normal(9u * i) + weights.x * corner_normal(9u * i + 3u)
-        + weights.y * corner_normal(9u * i + 6u);
+    return interpolated_normal(corner_normal(9u * i), corner_normal(9u * i + 3u), corner_normal(9u * i + 6u),
+        weights, outward);
+}
+
+//#if INSTANCES
+// A mesh corner's normal placed by instance `inst` as flattening places it (one the placement
+// collapses takes the face's, `outward`).
+fn placed_corner_normal(inst: Instance, n: vec3f, outward: vec3f) -> vec3f {
+    let placed = instance_normal_to_world(inst, n);
+    let len2 = dot(placed, placed);
+    return select(outward, placed * (1.0 / sqrt(len2)), len2 > 0.0);
+}
+
+// shading_normal for triangle i of an instance's mesh, its corner normals placed first.
+fn instanced_shading_normal(inst: Instance, i: u32, weights: vec2f, outward: vec3f) -> vec3f {
+    return interpolated_normal(placed_corner_normal(inst, corner_normal(9u * i), outward),
+        placed_corner_normal(inst, corner_normal(9u * i + 3u), outward),
+        placed_corner_normal(inst, corner_normal(9u * i + 6u), outward), weights, outward);
+}
+//#endif
+
+fn interpolated_normal(n0: vec3f, n1: vec3f, n2: vec3f, weights: vec2f, outward: vec3f) -> vec3f {
+    let n = (1.0 - weights.x - weights.y) * n0 + weights.x * n1 + weights.y * n2;
     let len2 = dot(n, n);
     if !(len2 > 1e-12) {
         return outward;

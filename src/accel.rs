@@ -126,6 +126,24 @@ impl Bvh {
         bvh
     }
 
+    /// Appends `other`'s nodes and primitives after this hierarchy's (a second level, reached
+    /// from an instance); returns the index of its root.
+    pub fn append_hierarchy(&mut self, other: Bvh) -> u32 {
+        let node_base = self.nodes.len() as u32;
+        let primitive_base = self.primitives.len() as u32;
+        self.nodes.extend(other.nodes.into_iter().map(|mut node| {
+            node.offset += if node.is_leaf() {
+                primitive_base
+            } else {
+                node_base
+            };
+            node
+        }));
+        self.primitives.extend(other.primitives);
+        self.depth = self.depth.max(other.depth);
+        node_base
+    }
+
     /// Appends a built part's nodes; returns its depth.
     fn append(&mut self, part: Part) -> usize {
         match part {
@@ -514,6 +532,43 @@ mod tests {
             let bvh = Bvh::build(&mut items);
             check(&bvh, &original);
         }
+    }
+
+    #[test]
+    fn appended_hierarchies_keep_their_structure() {
+        let mut top_items = random_items(100);
+        let mut top = Bvh::build(&mut top_items);
+        let mut mesh_items = random_items(1000);
+        let original = mesh_items.clone();
+        let mesh = Bvh::build(&mut mesh_items);
+        let (nodes, primitives) = (top.nodes.len(), top.primitives.len());
+        let root = top.append_hierarchy(mesh.clone());
+        assert_eq!(root as usize, nodes);
+        assert_eq!(top.primitives[primitives..], mesh.primitives[..]);
+        // Every node of the appended hierarchy points where it did, moved by the offsets.
+        for (i, node) in mesh.nodes.iter().enumerate() {
+            let moved = top.nodes[nodes + i];
+            let base = if node.is_leaf() { primitives } else { nodes };
+            assert_eq!(moved.offset as usize, node.offset as usize + base);
+            assert_eq!(
+                (moved.min, moved.max, moved.count),
+                (node.min, node.max, node.count)
+            );
+        }
+        // Checked from its own root, it is the hierarchy it was.
+        let from_root = Bvh {
+            nodes: top.nodes[nodes..]
+                .iter()
+                .map(|n| Node {
+                    offset: n.offset - if n.is_leaf() { primitives } else { nodes } as u32,
+                    ..*n
+                })
+                .collect(),
+            primitives: top.primitives[primitives..].to_vec(),
+            depth: mesh.depth,
+        };
+        check(&from_root, &original);
+        assert!(top.depth >= mesh.depth);
     }
 
     #[test]

@@ -637,12 +637,23 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
 /// it, building its BVH (timed again on its own), and its size on the GPU.
 fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow::Result<()> {
     let (triangles, primitives) = (flat.triangles.len(), flat.primitive_count());
+    let placed = flat.placed_triangles();
+    let instances = if flat.instances.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; {} mesh placements instanced, {placed} triangles placed",
+            flat.instances.len()
+        )
+    };
     say!(
-        "  scene: {primitives} primitives ({triangles} triangles, {} lights); read in {loading:.3} s, flattened in {flattening:.3} s",
+        "  scene: {primitives} primitives ({triangles} triangles, {} lights{instances}); read in {loading:.3} s, flattened in {flattening:.3} s",
         flat.lights.len()
     )?;
     if !flat.bvh.nodes.is_empty() {
+        // The top level (over every primitive of a scene without instances).
         let mut items = flat.bvh_items();
+        let built = items.len();
         let start = Instant::now();
         let bvh = rt_gpu::accel::Bvh::build(&mut items);
         let seconds = start.elapsed().as_secs_f64();
@@ -650,8 +661,15 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
         let geometry = std::mem::size_of_val(&buffers.triangles[..])
             + std::mem::size_of_val(&buffers.triangle_normals[..])
             + std::mem::size_of_val(&buffers.bvh_nodes[..])
-            + std::mem::size_of_val(&buffers.bvh_primitives[..]);
-        let per_triangle = if triangles > 0 {
+            + std::mem::size_of_val(&buffers.bvh_primitives[..])
+            + std::mem::size_of_val(&buffers.instances[..]);
+        let per_triangle = if placed != triangles {
+            format!(
+                ", {:.1} bytes per triangle stored, {:.2} per triangle placed",
+                geometry as f64 / triangles as f64,
+                geometry as f64 / placed as f64
+            )
+        } else if triangles > 0 {
             format!(
                 ", {:.1} bytes per triangle",
                 geometry as f64 / triangles as f64
@@ -661,7 +679,7 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
         };
         say!(
             "  bvh: built in {seconds:.3} s ({:.2} M primitives/s on {} threads), {} nodes, depth {}; GPU geometry {:.1} MB{per_triangle}",
-            primitives as f64 / seconds / 1e6,
+            built as f64 / seconds / 1e6,
             rayon::current_num_threads(),
             bvh.nodes.len(),
             bvh.depth,

@@ -27,11 +27,14 @@ fn first_bounces_match_the_cpu() {
         ("spheres", 3.0),
         ("showcase", 20.0),
         ("smooth", 555.0),
+        ("instanced", 555.0),
     ] {
         // Smooth: the Cornell box with smooth-shaded sphere meshes, whose scattered
-        // directions follow the interpolated normals.
+        // directions follow the interpolated normals; instanced: with meshes placed three
+        // times each (flat and smooth, mirrored and stretched), as instances.
         let scene = match name {
             "smooth" => common::with_smooth_spheres(builtin("cornell").expect("built-in")),
+            "instanced" => common::with_instanced_meshes(builtin("cornell").expect("built-in")),
             _ => builtin(name).expect("built-in"),
         };
         let opts = common::opts(40, 30, 1, 10, 7);

@@ -38,7 +38,7 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
     // The declarations are generated from the Rust structs; naga lays them out independently.
     let layouts = rt_gpu::gpu::layout::shared_layouts();
-    assert_eq!(layouts.len(), 9);
+    assert_eq!(layouts.len(), 10);
     for (name, rust_size, rust_fields) in layouts {
         let ty = module
             .types
@@ -122,7 +122,7 @@ fn pairwise_covering(features: u32) -> Vec<u32> {
 
 /// Kernel variants compose into valid WGSL: none and all features, every feature alone and
 /// every feature left out, and a pairwise covering set (every two features in every on/off
-/// combination): about 60 kernels, where all combinations are 2^18 and double with each new
+/// combination): about 60 kernels, where all combinations are 2^19 and double with each new
 /// feature. The full set: `cargo test --test gpu_layout -- --ignored`.
 #[test]
 fn kernel_variants_validate() {
@@ -141,9 +141,9 @@ fn kernel_variants_validate() {
     }
 }
 
-/// Every combination of features (2^18 kernels) composes into valid WGSL.
+/// Every combination of features (2^19 kernels) composes into valid WGSL.
 #[test]
-#[ignore = "slow: 2^18 kernels; the pairwise set above runs by default"]
+#[ignore = "slow: 2^19 kernels; the pairwise set above runs by default"]
 fn every_kernel_variant_validates() {
     for bits in 0u32..1 << feature_count() {
         assert_validates(bits);
@@ -186,19 +186,21 @@ fn kernels_leave_out_unused_code() {
     assert!(showcase.contains("fn traverse") && showcase.contains("spheres[index]"));
     assert!(!showcase.contains("fn inline_scene") && !showcase.contains("fn triangle_hit"));
     // Shading normals only for meshes that have them.
-    let mesh_scene = |mesh| {
+    let placed = |mesh, placements| {
         let mut scene = rt_gpu::scene::builtin::builtin("cornell").expect("built-in");
-        scene.objects.push(rt_gpu::scene::Object {
-            shape: rt_gpu::scene::Shape::Mesh {
-                mesh,
-                scale: glam::Vec3::splat(50.0),
-            },
-            material: 0,
-            transform: rt_gpu::scene::Transform {
-                rotate_y_degrees: 0.0,
-                translate: glam::Vec3::splat(200.0),
-            },
-        });
+        for k in 0..placements {
+            scene.objects.push(rt_gpu::scene::Object {
+                shape: rt_gpu::scene::Shape::Mesh {
+                    mesh,
+                    scale: glam::Vec3::splat(50.0),
+                },
+                material: 0,
+                transform: rt_gpu::scene::Transform {
+                    rotate_y_degrees: 0.0,
+                    translate: glam::Vec3::splat(200.0 + 60.0 * k as f32),
+                },
+            });
+        }
         let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
         compose(&Features::of(&flat), &flat).expect("composes")
     };
@@ -214,8 +216,12 @@ fn kernels_leave_out_unused_code() {
     )
     .expect("valid")
     .leak();
+    let mesh_scene = |mesh| placed(mesh, 1);
     let flat_kernel = mesh_scene(flat_mesh);
     assert!(flat_kernel.contains("fn triangle_hit") && !flat_kernel.contains("triangle_normals"));
+    // Instances (a mesh placed more than once) only where there are some.
+    assert!(!flat_kernel.contains("fn traverse_instance") && !flat_kernel.contains("instances"));
+    assert!(placed(flat_mesh, 2).contains("fn traverse_instance"));
     let smooth = rt_gpu::scene::mesh::Mesh::with_normals(
         "smooth tetrahedron",
         flat_mesh.positions.clone(),

@@ -192,31 +192,53 @@ fn parallel_tangent_and_edge_rays() {
 /// Rays from inside closed boxes (axis-aligned, and rotated and moved far away) aimed at their
 /// edges and corners, and a hair to either side, never escape: boxes of six quads, and the same
 /// boxes as 12-triangle meshes (watertight triangles, through the BVH), whose every face
-/// diagonal is an edge between two triangles too.
+/// diagonal is an edge between two triangles too, copied into the scene or instanced (the rays
+/// transformed into the mesh's coordinates).
 #[test]
 fn closed_boxes_are_watertight() {
     let gpu = renderer();
-    for (name, angle, offset, mesh) in [
-        ("axis-aligned", 0.0, Vec3::ZERO, false),
-        ("rotated 30 degrees", 30.0, Vec3::new(0.3, -0.2, 0.1), false),
-        ("rotated, 1e4 away", 37.0, Vec3::new(1e4, -2e4, 5e3), false),
-        ("mesh, axis-aligned", 0.0, Vec3::ZERO, true),
+    let (quads, mesh, instanced) = (0, 1, 2);
+    for (name, angle, offset, kind) in [
+        ("axis-aligned", 0.0, Vec3::ZERO, quads),
+        ("rotated 30 degrees", 30.0, Vec3::new(0.3, -0.2, 0.1), quads),
+        ("rotated, 1e4 away", 37.0, Vec3::new(1e4, -2e4, 5e3), quads),
+        ("mesh, axis-aligned", 0.0, Vec3::ZERO, mesh),
         (
             "mesh, rotated 30 degrees",
             30.0,
             Vec3::new(0.3, -0.2, 0.1),
-            true,
+            mesh,
         ),
         (
             "mesh, rotated, 1e4 away",
             37.0,
             Vec3::new(1e4, -2e4, 5e3),
-            true,
+            mesh,
+        ),
+        (
+            "instanced mesh, rotated 30 degrees",
+            30.0,
+            Vec3::new(0.3, -0.2, 0.1),
+            instanced,
+        ),
+        (
+            "instanced mesh, rotated, 1e4 away",
+            37.0,
+            Vec3::new(1e4, -2e4, 5e3),
+            instanced,
         ),
     ] {
         let s = unit_box(angle, offset);
-        let s = if mesh { triangulated(&s) } else { s };
+        let mut s = if kind == quads { s } else { triangulated(&s) };
+        if kind == instanced {
+            // The same mesh placed a second time beside it: both become instances.
+            let mut beside = s.objects[0].clone();
+            beside.transform.translate += Vec3::new(3.0, 0.0, 0.0);
+            s.objects.push(beside);
+        }
+        let mesh = kind != quads;
         let flat = FlatScene::new(&s, 8, 8).expect("valid");
+        assert_eq!(flat.instances.len(), if kind == instanced { 2 } else { 0 });
         let t = s.objects[0].transform;
         let mut rays = Vec::new();
         let corners: Vec<Vec3> = (0..8)

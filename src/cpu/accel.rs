@@ -5,10 +5,17 @@
 use super::shapes::Ray;
 use crate::accel::{Bvh, MAX_DEPTH, hits_box, inverse_direction};
 
-/// Calls `test(packed primitive, closest)` for every primitive in a leaf whose box the ray
-/// meets before `closest`; `test` shortens `closest` when it finds a nearer hit.
+/// Calls `test(packed primitive, closest)` for every primitive in a leaf, below node `root`,
+/// whose box the ray meets before `closest`; `test` shortens `closest` when it finds a nearer
+/// hit. The scene's hierarchy starts at node 0, an instanced mesh's at its instance's root.
 #[inline]
-pub fn traverse(bvh: &Bvh, ray: &Ray, closest: &mut f32, mut test: impl FnMut(u32, &mut f32)) {
+pub fn traverse(
+    bvh: &Bvh,
+    root: u32,
+    ray: &Ray,
+    closest: &mut f32,
+    mut test: impl FnMut(u32, &mut f32),
+) {
     if bvh.nodes.is_empty() {
         return;
     }
@@ -16,7 +23,7 @@ pub fn traverse(bvh: &Bvh, ray: &Ray, closest: &mut f32, mut test: impl FnMut(u3
     let negative = [ray.dir.x < 0.0, ray.dir.y < 0.0, ray.dir.z < 0.0];
     let mut stack = [0u32; MAX_DEPTH];
     let mut top = 0;
-    let mut index = 0u32;
+    let mut index = root;
     loop {
         let node = &bvh.nodes[index as usize];
         if hits_box(node.min, node.max, ray.origin, inverse, *closest) {

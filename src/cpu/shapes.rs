@@ -1,6 +1,8 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
-use crate::scene::flat::{FlatScene, PrimitiveRef, Quad, Sphere, Triangle};
+use crate::scene::flat::{
+    FlatScene, Instance, PRIMITIVE_INDEX_BITS, PrimitiveRef, Quad, Sphere, Triangle,
+};
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,6 +142,32 @@ struct Candidate {
     outward: Vec3,
     /// A triangle's barycentric weights of its second and third corners.
     weights: Vec2,
+    /// An instance's triangle (index in `FlatScene::triangles`); 0 for other primitives.
+    triangle: u32,
+}
+
+impl Candidate {
+    /// The order in which coincident hits win: primitive, then an instance's triangle.
+    fn key(&self) -> (u32, u32) {
+        (self.primitive.packed(), self.triangle)
+    }
+}
+
+/// Whether a hit at `t` on the primitive keyed `key` replaces the closest so far (see
+/// `consider`); `closest` is `found`'s distance.
+#[inline]
+fn replaces(t: f32, key: (u32, u32), closest: f32, found: &Option<Candidate>) -> bool {
+    t < closest || (t == closest && found.is_none_or(|f| key < f.key()))
+}
+
+/// Up to and including `closest`, for the tie-break in [`replaces`].
+#[inline]
+fn reach(closest: f32) -> f32 {
+    if closest.is_finite() {
+        closest.next_up()
+    } else {
+        closest
+    }
 }
 
 /// Tests primitive `p` against the ray, keeping it if it is closer than `closest`, or as close
@@ -154,12 +182,7 @@ fn consider(
     closest: &mut f32,
     found: &mut Option<Candidate>,
 ) {
-    // Up to and including `closest`, for the tie-break below.
-    let t_max = if closest.is_finite() {
-        closest.next_up()
-    } else {
-        *closest
-    };
+    let t_max = reach(*closest);
     let (t, outward, weights) = match p {
         PrimitiveRef::Sphere(i) => {
             let sphere = &scene.spheres[i as usize];
@@ -186,9 +209,9 @@ fn consider(
                 Vec2::new(b1, b2),
             )
         }
+        PrimitiveRef::Instance(i) => return consider_instance(scene, i, ray, closest, found),
     };
-    let earlier = found.is_none_or(|f| p.packed() < f.primitive.packed());
-    if !(t < *closest || (t == *closest && earlier)) {
+    if !replaces(t, (p.packed(), 0), *closest, found) {
         return;
     }
     *closest = t;
@@ -196,14 +219,57 @@ fn consider(
         primitive: p,
         outward,
         weights,
+        triangle: 0,
     });
+}
+
+/// Tests the triangles of instance `index` against the ray, transformed into its mesh's
+/// coordinates (its direction not renormalised, so that distances along it stay those of
+/// `ray`), as `consider` does a primitive's. Its normal is found once the closest hit is known.
+#[inline]
+fn consider_instance(
+    scene: &FlatScene,
+    index: u32,
+    ray: &Ray,
+    closest: &mut f32,
+    found: &mut Option<Candidate>,
+) {
+    let instance = &scene.instances[index as usize];
+    let local = Ray {
+        origin: instance.point_to_local(ray.origin),
+        dir: instance.vector_to_local(ray.dir),
+    };
+    let primitive = PrimitiveRef::Instance(index);
+    super::accel::traverse(
+        &scene.bvh,
+        instance.root,
+        &local,
+        closest,
+        |packed, closest| {
+            let triangle = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
+            let tri = &scene.triangles[triangle as usize];
+            let Some((t, b1, b2)) = hit_triangle(tri, &local, 0.0, reach(*closest)) else {
+                return;
+            };
+            if !replaces(t, (primitive.packed(), triangle), *closest, found) {
+                return;
+            }
+            *closest = t;
+            *found = Some(Candidate {
+                primitive,
+                outward: Vec3::ZERO,
+                weights: Vec2::new(b1, b2),
+                triangle,
+            });
+        },
+    );
 }
 
 /// The closest hit along `ray` beyond its origin.
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
-    super::accel::traverse(&scene.bvh, ray, &mut closest, |packed, closest| {
+    super::accel::traverse(&scene.bvh, 0, ray, &mut closest, |packed, closest| {
         if let Some(p) = PrimitiveRef::unpacked(packed) {
             consider(scene, p, ray, closest, &mut found);
         }
@@ -212,8 +278,24 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         primitive,
         outward,
         weights,
+        triangle,
     } = found?;
-    let outward = outward.normalize();
+    let instanced = |i: u32| {
+        (
+            &scene.instances[i as usize],
+            &scene.triangles[triangle as usize],
+        )
+    };
+    let outward = match primitive {
+        // By the inverse transpose: a mirroring placement turns the winding's normal around
+        // with it, as flattening's swapped corners do.
+        PrimitiveRef::Instance(i) => {
+            let (instance, tri) = instanced(i);
+            instance.normal_to_world((tri.p1 - tri.p0).cross(tri.p2 - tri.p0))
+        }
+        _ => outward,
+    }
+    .normalize();
     let along_ray = ray.at(closest);
     // The hit point, and a bound on its distance from the true surface point, which the origin
     // of a ray leaving it must clear. o + t d carries the rounding of the ray's origin and of
@@ -233,6 +315,13 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
             let t = &scene.triangles[i as usize];
             (t.material, triangle_surface(t, weights))
         }
+        PrimitiveRef::Instance(i) => {
+            let (instance, tri) = instanced(i);
+            (
+                instance.material,
+                instanced_triangle_surface(instance, tri, weights),
+            )
+        }
     };
     let front_face = ray.dir.dot(outward) < 0.0;
     let uv = if scene.uv_textures {
@@ -246,7 +335,7 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
                 let d = along_ray - q.q;
                 Vec2::new(d.dot(q.alpha_axis), d.dot(q.beta_axis))
             }
-            PrimitiveRef::Triangle(_) => weights,
+            PrimitiveRef::Triangle(_) | PrimitiveRef::Instance(_) => weights,
         }
     } else {
         Vec2::ZERO
@@ -254,6 +343,18 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     let shading = match primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
             shading_normal(&scene.triangle_normals[i as usize], weights, outward)
+        }
+        PrimitiveRef::Instance(i) if !scene.triangle_normals.is_empty() => {
+            // Each corner's normal placed as flattening places it (a corner whose normal the
+            // placement collapses takes the face's).
+            let instance = &scene.instances[i as usize];
+            let corners = scene.triangle_normals[triangle as usize].map(|n| {
+                match instance.normal_to_world(n).normalize_or_zero() {
+                    Vec3::ZERO => outward,
+                    n => n,
+                }
+            });
+            shading_normal(&corners, weights, outward)
         }
         _ => outward,
     };
@@ -319,6 +420,21 @@ pub fn triangle_surface(t: &Triangle, weights: Vec2) -> (Vec3, f32) {
     let scale =
         (b0.abs() * t.p0.abs() + b1.abs() * t.p1.abs() + b2.abs() * t.p2.abs()).max_element();
     (point, POINT_ERROR * scale)
+}
+
+/// `triangle_surface` for a triangle of `instance`'s mesh: its corners placed, and a bound that
+/// also covers placing them and the transformed ray that found the weights (each a few
+/// roundings of the magnitudes summed in placing, whatever cancels there): twice the placed
+/// triangle's.
+#[inline]
+pub fn instanced_triangle_surface(instance: &Instance, t: &Triangle, weights: Vec2) -> (Vec3, f32) {
+    let (b1, b2) = (weights.x, weights.y);
+    let b0 = 1.0 - b1 - b2;
+    let [p0, p1, p2] = [t.p0, t.p1, t.p2].map(|p| instance.point_to_world(p));
+    let point = b0 * p0 + b1 * p1 + b2 * p2;
+    let [m0, m1, m2] = [t.p0, t.p1, t.p2].map(|p| instance.magnitude_to_world(p));
+    let scale = (b0.abs() * m0 + b1.abs() * m1 + b2.abs() * m2).max_element();
+    (point, 2.0 * POINT_ERROR * scale)
 }
 
 /// Relative bound on a hit point's error: eight roundings of the coordinates it came from.

@@ -49,6 +49,14 @@ impl WgslType for [u32; 3] {
     }
 }
 
+impl WgslType for [f32; 4] {
+    const WGSL: &'static str = "vec4f";
+    fn literal(&self) -> String {
+        let [x, y, z, w] = self.map(float_literal);
+        format!("vec4f({x}, {y}, {z}, {w})")
+    }
+}
+
 impl WgslType for [f32; 2] {
     const WGSL: &'static str = "vec2f";
     fn literal(&self) -> String {
@@ -173,6 +181,22 @@ gpu_struct! {
         light: u32,
         p2: [f32; 3],
         _pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// A placed mesh (see `scene::flat::Instance`): rows of its 3x4 affine maps from mesh to
+    /// scene coordinates and back, where its mesh's BVH starts, its material.
+    pub struct GpuInstance as "Instance" {
+        to_world_x: [f32; 4],
+        to_world_y: [f32; 4],
+        to_world_z: [f32; 4],
+        to_local_x: [f32; 4],
+        to_local_y: [f32; 4],
+        to_local_z: [f32; 4],
+        root: u32,
+        material: u32,
+        _pad: [u32; 2],
     }
 }
 
@@ -396,6 +420,7 @@ fn wgsl_constants() -> String {
         ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),
         ("KIND_TRIANGLE", crate::scene::flat::KIND_TRIANGLE.literal()),
+        ("KIND_INSTANCE", crate::scene::flat::KIND_INSTANCE.literal()),
         ("BVH_INTERIOR", crate::accel::INTERIOR.literal()),
         ("BOX_FAR_WIDENING", crate::accel::BOX_FAR_WIDENING.literal()),
         (
@@ -452,6 +477,7 @@ pub fn shared_layouts() -> Vec<StructLayout> {
         layout_of::<GpuQuad>(),
         layout_of::<GpuTriangle>(),
         layout_of::<GpuBvhNode>(),
+        layout_of::<GpuInstance>(),
         layout_of::<GpuLight>(),
         layout_of::<GpuMaterial>(),
         layout_of::<GpuParams>(),
@@ -470,6 +496,7 @@ pub fn wgsl_shared() -> String {
         GpuQuad::wgsl_declaration(),
         GpuTriangle::wgsl_declaration(),
         GpuBvhNode::wgsl_declaration(),
+        GpuInstance::wgsl_declaration(),
         GpuLight::wgsl_declaration(),
         GpuMaterial::wgsl_declaration(),
         GpuParams::wgsl_declaration(),
@@ -493,6 +520,7 @@ pub struct SceneBuffers {
     pub bvh_nodes: Vec<GpuBvhNode>,
     /// Packed primitive references, in the BVH's leaf order.
     pub bvh_primitives: Vec<u32>,
+    pub instances: Vec<GpuInstance>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
     pub images: ImageArray,
@@ -665,6 +693,28 @@ impl SceneBuffers {
             })
             .collect();
         let mut bvh_primitives = scene.bvh.primitives.clone();
+        let mut instances: Vec<GpuInstance> = scene
+            .instances
+            .iter()
+            .map(|i| {
+                let [to_world_x, to_world_y, to_world_z] = i.to_world.map(|r| r.to_array());
+                let [to_local_x, to_local_y, to_local_z] = i.to_local.map(|r| r.to_array());
+                GpuInstance {
+                    to_world_x,
+                    to_world_y,
+                    to_world_z,
+                    to_local_x,
+                    to_local_y,
+                    to_local_z,
+                    root: i.root,
+                    material: i.material,
+                    _pad: [0; 2],
+                }
+            })
+            .collect();
+        if instances.is_empty() {
+            instances.push(GpuInstance::default());
+        }
         if triangles.is_empty() {
             triangles.push(GpuTriangle::default());
         }
@@ -702,6 +752,7 @@ impl SceneBuffers {
             triangle_normals,
             bvh_nodes,
             bvh_primitives,
+            instances,
             materials,
             lights,
             images,

@@ -51,7 +51,9 @@ fn loop_cost(
     let fixed = bound(1);
     let per_sample = if features.bvh {
         // Kernels count against half the budget (see shaders/accel.wgsl): doubled here.
-        let traversal = 4 * (scene.bvh.depth as u64 + crate::accel::MAX_LEAF as u64);
+        // An instanced mesh's levels below the top level's (each leaf reached may enter one).
+        let depth = scene.bvh.depth as u64 + scene.instance_depth as u64;
+        let traversal = 4 * (depth + crate::accel::MAX_LEAF as u64);
         2 * bound(1 + traversal_weight * traversal)
     } else {
         fixed
@@ -162,6 +164,7 @@ impl GpuRenderer {
                 buffer_entry(10, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(13, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -221,7 +224,7 @@ impl GpuRenderer {
         &self,
         scene: &FlatScene,
         features: &Features,
-    ) -> Result<[wgpu::Buffer; 9], GpuError> {
+    ) -> Result<[wgpu::Buffer; 10], GpuError> {
         let mut buffers = SceneBuffers::new(scene);
         let limit = self
             .ctx
@@ -235,6 +238,7 @@ impl GpuRenderer {
                 std::mem::size_of_val(&buffers.triangle_normals[..]),
             ),
             ("BVH nodes", std::mem::size_of_val(&buffers.bvh_nodes[..])),
+            ("instances", std::mem::size_of_val(&buffers.instances[..])),
             ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
             ("quads", std::mem::size_of_val(&buffers.quads[..])),
             ("lights", std::mem::size_of_val(&buffers.lights[..])),
@@ -296,6 +300,11 @@ impl GpuRenderer {
                 bytemuck::cast_slice(&buffers.triangle_normals),
                 wgpu::BufferUsages::STORAGE,
             ),
+            self.buffer_with(
+                "instances",
+                bytemuck::cast_slice(&buffers.instances),
+                wgpu::BufferUsages::STORAGE,
+            ),
         ])
     }
 
@@ -303,7 +312,7 @@ impl GpuRenderer {
         &self,
         kernel: &Kernel,
         [params, dispatch]: [&wgpu::Buffer; 2],
-        scene: &[wgpu::Buffer; 9],
+        scene: &[wgpu::Buffer; 10],
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
@@ -332,6 +341,7 @@ impl GpuRenderer {
                     entry(10, &scene[6]),
                     entry(11, &scene[7]),
                     entry(12, &scene[8]),
+                    entry(13, &scene[9]),
                 ],
             })
     }

@@ -53,6 +53,8 @@ pub struct Features {
     pub triangles: bool,
     /// Triangles shaded with interpolated vertex normals.
     pub shading_normals: bool,
+    /// Meshes placed as instances (the BVH's second level; see `scene::flat::Instance`).
+    pub instances: bool,
     /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
     pub bvh: bool,
     /// The material features on, as bits in the order of [`material::features`]: each material
@@ -128,6 +130,7 @@ impl Features {
             quads: !scene.quads.is_empty(),
             triangles: !scene.triangles.is_empty(),
             shading_normals: !scene.triangle_normals.is_empty(),
+            instances: !scene.instances.is_empty(),
             bvh,
             materials,
             lens: scene.camera.lens_radius > 0.0,
@@ -193,6 +196,7 @@ impl Features {
             ("QUADS", self.quads),
             ("TRIANGLES", self.triangles),
             ("SHADING_NORMALS", self.shading_normals),
+            ("INSTANCES", self.instances),
             ("BVH", self.bvh),
         ];
         flags.extend(
@@ -220,6 +224,7 @@ impl Features {
             "QUADS" => &mut self.quads,
             "TRIANGLES" => &mut self.triangles,
             "SHADING_NORMALS" => &mut self.shading_normals,
+            "INSTANCES" => &mut self.instances,
             "BVH" => &mut self.bvh,
             "LENS" => &mut self.lens,
             "SOBOL" => &mut self.sobol,

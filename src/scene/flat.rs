@@ -4,7 +4,7 @@
 //! transforms rays per hit.
 
 use super::{Background, Material, Scene, SceneError, Shape};
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3, Vec4};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
@@ -84,11 +84,6 @@ impl Triangle {
     }
 }
 
-/// A flat triangle's corner normals: its face's, at every corner.
-fn face_normals(t: &Triangle) -> [Vec3; 3] {
-    [(t.p1 - t.p0).cross(t.p2 - t.p0).normalize(); 3]
-}
-
 /// The camera reduced to what ray generation needs: a ray for film position (s, t) in [0, 1]^2
 /// (t down from the top) from `origin` points along `to_upper_left + s * horizontal - t * vertical`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -104,12 +99,77 @@ pub struct CameraFrame {
     pub lens_radius: f32,
 }
 
+/// A mesh placed by transform rather than copied: the same mesh placed more than once (with the
+/// same material) is stored once, its triangles in its own coordinates, under a BVH of its own,
+/// and each placement is an instance of it, which rays enter transformed into the mesh's
+/// coordinates (two-level BVH).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// Mesh coordinates to the scene's: row k of the 3x4 affine map, `p'_k = row.xyz . p + row.w`.
+    pub to_world: [Vec4; 3],
+    /// Its inverse, scene coordinates to the mesh's. Normals are carried by its transpose (the
+    /// inverse transpose of `to_world`'s linear part), as flattening carries them.
+    pub to_local: [Vec4; 3],
+    /// Its placed bounds (in the BVH's top level).
+    pub bounds: [Vec3; 2],
+    /// Its mesh's BVH: the index of the root node in [`FlatScene::bvh`].
+    pub root: u32,
+    pub material: u32,
+}
+
+impl Instance {
+    #[inline]
+    pub fn point_to_world(&self, p: Vec3) -> Vec3 {
+        affine_point(&self.to_world, p)
+    }
+
+    #[inline]
+    pub fn point_to_local(&self, p: Vec3) -> Vec3 {
+        affine_point(&self.to_local, p)
+    }
+
+    /// A direction into mesh coordinates, not renormalised: distances along a ray (its t)
+    /// stay the same in both.
+    #[inline]
+    pub fn vector_to_local(&self, v: Vec3) -> Vec3 {
+        let [a, b, c] = self.to_local.map(|r| r.truncate().dot(v));
+        Vec3::new(a, b, c)
+    }
+
+    /// A mesh normal in scene coordinates (by the transpose of `to_local`), not normalised.
+    #[inline]
+    pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
+        let [r0, r1, r2] = self.to_local.map(|r| r.truncate());
+        r0 * n.x + r1 * n.y + r2 * n.z
+    }
+
+    /// A bound on every coordinate's magnitude in the sums that map `p` to the scene, per axis:
+    /// `|to_world| |p| + |translation|` (what the rounding of `point_to_world` scales with,
+    /// whatever cancels in it).
+    #[inline]
+    pub fn magnitude_to_world(&self, p: Vec3) -> Vec3 {
+        let [a, b, c] = self
+            .to_world
+            .map(|r| r.truncate().abs().dot(p.abs()) + r.w.abs());
+        Vec3::new(a, b, c)
+    }
+}
+
+#[inline]
+fn affine_point(rows: &[Vec4; 3], p: Vec3) -> Vec3 {
+    let [a, b, c] = rows.map(|r| r.truncate().dot(p) + r.w);
+    Vec3::new(a, b, c)
+}
+
 /// A primitive of a flat scene: its kind and its index among the primitives of that kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PrimitiveRef {
     Sphere(u32),
     Quad(u32),
     Triangle(u32),
+    /// A placed mesh (in the top level of the BVH; a hit on one of its triangles is reported as
+    /// a hit on the instance).
+    Instance(u32),
 }
 
 /// A packed [`PrimitiveRef`] (as the kernel passes it) holds the kind above this many bits of
@@ -120,6 +180,7 @@ pub const MAX_PRIMITIVES_PER_KIND: usize = 1 << PRIMITIVE_INDEX_BITS;
 pub const KIND_SPHERE: u32 = 0;
 pub const KIND_QUAD: u32 = 1;
 pub const KIND_TRIANGLE: u32 = 2;
+pub const KIND_INSTANCE: u32 = 3;
 
 impl PrimitiveRef {
     /// One number for both backends: kind << PRIMITIVE_INDEX_BITS | index.
@@ -128,6 +189,7 @@ impl PrimitiveRef {
             PrimitiveRef::Sphere(i) => KIND_SPHERE << PRIMITIVE_INDEX_BITS | i,
             PrimitiveRef::Quad(i) => KIND_QUAD << PRIMITIVE_INDEX_BITS | i,
             PrimitiveRef::Triangle(i) => KIND_TRIANGLE << PRIMITIVE_INDEX_BITS | i,
+            PrimitiveRef::Instance(i) => KIND_INSTANCE << PRIMITIVE_INDEX_BITS | i,
         }
     }
 
@@ -138,6 +200,7 @@ impl PrimitiveRef {
             KIND_SPHERE => Some(PrimitiveRef::Sphere(index)),
             KIND_QUAD => Some(PrimitiveRef::Quad(index)),
             KIND_TRIANGLE => Some(PrimitiveRef::Triangle(index)),
+            KIND_INSTANCE => Some(PrimitiveRef::Instance(index)),
             _ => None,
         }
     }
@@ -162,11 +225,23 @@ pub struct FlatScene {
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
+    /// The triangles placed in the scene, then from `instanced_triangles` on those of meshes
+    /// placed as instances, in their meshes' own coordinates.
     pub triangles: Vec<Triangle>,
     /// Per triangle, its corners' unit shading normals, when some mesh of the scene has vertex
-    /// normals (triangles of the others take their face's); empty otherwise.
+    /// normals (triangles of the others take their face's); empty otherwise. Those of
+    /// instanced meshes are in their meshes' coordinates.
     pub triangle_normals: Vec<[Vec3; 3]>,
-    /// Over every primitive. The CPU always traverses it (even the Cornell box's 18 primitives
+    /// Where the instanced meshes' triangles begin in `triangles`.
+    pub instanced_triangles: usize,
+    /// Every placement of a mesh that is placed more than once with one material (and neither
+    /// emits nor bounds a medium): see [`Instance`].
+    pub instances: Vec<Instance>,
+    /// The deepest instanced mesh's BVH (levels below its root; 0 without instances): a ray
+    /// descends the top level and then that many levels more.
+    pub instance_depth: u32,
+    /// Over every primitive and instance, and after it each instanced mesh's own (see
+    /// [`Instance::root`]). The CPU always traverses it (even the Cornell box's 18 primitives
     /// are found 1.3-1.7x faster through it than one by one); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
     pub bvh: crate::accel::Bvh,
@@ -221,15 +296,50 @@ pub enum LightShape {
 }
 
 impl FlatScene {
-    /// Flattens `scene` for an image of `width` x `height` pixels.
+    /// Flattens `scene` for an image of `width` x `height` pixels; a mesh placed more than once
+    /// (with one material, neither emitting nor bounding a medium) is kept once and instanced.
     pub fn new(scene: &Scene, width: u32, height: u32) -> Result<Self, SceneError> {
+        Self::with_instancing(scene, width, height, true)
+    }
+
+    /// As [`FlatScene::new`], but with `instancing` false every mesh placement is copied into
+    /// the scene (what instancing must match).
+    pub fn with_instancing(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        instancing: bool,
+    ) -> Result<Self, SceneError> {
         scene.validate()?;
         crate::film::check_image_size(width, height).map_err(SceneError::Invalid)?;
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
         let mut triangles = Vec::new();
         let mut triangle_normals: Vec<[Vec3; 3]> = Vec::new();
-        let mut smooth = false;
+        // With vertex normals anywhere, every triangle gets corner normals (its face's if none).
+        let smooth = scene
+            .objects
+            .iter()
+            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
+        // Meshes placed more than once with one material: (mesh, material) -> placements.
+        let instancing_key = |object: &super::Object| match object.shape {
+            Shape::Mesh { mesh, .. } if instancing => {
+                let m = &scene.materials[object.material as usize];
+                (m.area_light().is_none() && !m.is_invisible())
+                    .then_some((std::ptr::from_ref(mesh) as usize, object.material))
+            }
+            _ => None,
+        };
+        let mut placements = std::collections::HashMap::new();
+        for key in scene.objects.iter().filter_map(instancing_key) {
+            *placements.entry(key).or_insert(0usize) += 1;
+        }
+        // Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
+        let mut local_triangles: Vec<Triangle> = Vec::new();
+        let mut local_normals: Vec<[Vec3; 3]> = Vec::new();
+        let mut groups: Vec<std::ops::Range<usize>> = Vec::new();
+        let mut group_of = std::collections::HashMap::new();
+        let mut instances: Vec<(usize, Instance)> = Vec::new();
         // Only the materials some object uses, numbered in order of first use: a scene may
         // define thousands it never places, and the kernel holds every material it is given.
         let mut materials = Vec::new();
@@ -267,12 +377,36 @@ impl FlatScene {
                         ));
                     }
                 }
+                Shape::Mesh { mesh, scale }
+                    if instancing_key(object).is_some_and(|k| placements[&k] > 1) =>
+                {
+                    let key = instancing_key(object).expect("instanced");
+                    let group = *group_of.entry(key).or_insert_with(|| {
+                        let first = local_triangles.len();
+                        for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+                            let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
+                            let n = (p1 - p0).cross(p2 - p0);
+                            if !(n.length_squared() > 0.0 && n.is_finite()) {
+                                continue;
+                            }
+                            local_triangles.push(Triangle {
+                                p0,
+                                p1,
+                                p2,
+                                material,
+                                light: 0,
+                            });
+                            local_normals.push(match mesh.normals.get(i) {
+                                Some(&normals) => normals,
+                                None => [n.normalize(); 3],
+                            });
+                        }
+                        groups.push(first..local_triangles.len());
+                        groups.len() - 1
+                    });
+                    instances.push((group, instance_of(&t, scale, origin, material)));
+                }
                 Shape::Mesh { mesh, scale } => {
-                    // The first mesh with vertex normals: the triangles before it are flat.
-                    if !mesh.normals.is_empty() && !smooth {
-                        smooth = true;
-                        triangle_normals.extend(triangles.iter().map(face_normals));
-                    }
                     // A mirroring scale turns the winding around: swap two corners so the
                     // front face stays the same side of the surface.
                     let mirrored = scale.x * scale.y * scale.z < 0.0;
@@ -313,12 +447,19 @@ impl FlatScene {
                 }
             }
         }
+        let instanced_triangles = triangles.len();
+        let offset = |r: &std::ops::Range<usize>| (r.start + instanced_triangles) as u32;
+        triangles.extend(local_triangles.iter().map(|t| Triangle { light: 0, ..*t }));
+        if smooth {
+            triangle_normals.extend(local_normals);
+        }
         if spheres.len() > MAX_PRIMITIVES_PER_KIND
             || quads.len() > MAX_PRIMITIVES_PER_KIND
             || triangles.len() > MAX_PRIMITIVES_PER_KIND
+            || instances.len() > MAX_PRIMITIVES_PER_KIND
         {
             return Err(SceneError::Invalid(format!(
-                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads and as many triangles"
+                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads, triangles and mesh placements"
             )));
         }
         let mut flat = FlatScene {
@@ -330,6 +471,9 @@ impl FlatScene {
             quads,
             triangles,
             triangle_normals,
+            instanced_triangles,
+            instances: instances.iter().map(|(_, i)| *i).collect(),
+            instance_depth: 0,
             bvh: crate::accel::Bvh::default(),
             lights: Vec::new(),
             medium_crossings: 0,
@@ -341,10 +485,59 @@ impl FlatScene {
         });
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
+        // Each instanced mesh's BVH (in mesh coordinates), then the top level over the placed
+        // primitives and the instances (bounded by their meshes' root boxes, placed), then the
+        // meshes' nodes appended after the top level's.
+        let mesh_bvhs: Vec<crate::accel::Bvh> = groups
+            .iter()
+            .map(|range| {
+                let mut items = triangle_items(
+                    &flat.triangles[offset(range) as usize..][..range.len()],
+                    offset(range),
+                );
+                crate::accel::Bvh::build(&mut items)
+            })
+            .collect();
+        for (instance, (group, _)) in flat.instances.iter_mut().zip(&instances) {
+            let root = &mesh_bvhs[*group].nodes[0];
+            instance.bounds = placed_bounds(instance, root.min, root.max);
+        }
         flat.bvh = crate::accel::Bvh::build(&mut flat.bvh_items());
+        let mut roots = Vec::with_capacity(mesh_bvhs.len());
+        for mesh_bvh in mesh_bvhs {
+            flat.instance_depth = flat.instance_depth.max(mesh_bvh.depth);
+            roots.push(flat.bvh.append_hierarchy(mesh_bvh));
+        }
+        for (instance, (group, _)) in flat.instances.iter_mut().zip(&instances) {
+            instance.root = roots[*group];
+        }
         Ok(flat)
     }
 
+    /// Triangles as placed: the scene's own, and each instanced mesh's once per placement.
+    pub fn placed_triangles(&self) -> usize {
+        let below = |root: u32| {
+            let (mut count, mut stack) = (0, vec![root as usize]);
+            while let Some(i) = stack.pop() {
+                let node = &self.bvh.nodes[i];
+                if node.is_leaf() {
+                    count += node.count as usize;
+                } else {
+                    stack.extend([i + 1, node.offset as usize]);
+                }
+            }
+            count
+        };
+        let mut meshes = std::collections::HashMap::new();
+        let instanced: usize = self
+            .instances
+            .iter()
+            .map(|i| *meshes.entry(i.root).or_insert_with(|| below(i.root)))
+            .sum();
+        self.instanced_triangles + instanced
+    }
+
+    /// Primitives stored (an instanced mesh's triangles once, however often it is placed).
     pub fn primitive_count(&self) -> usize {
         self.spheres.len() + self.quads.len() + self.triangles.len()
     }
@@ -353,13 +546,6 @@ impl FlatScene {
     /// BVH is built over.
     pub fn bvh_items(&self) -> Vec<crate::accel::Item> {
         use crate::accel::Item;
-        // A few ulps of the largest coordinate: spheres' bounds are rounded, and quads count
-        // as hit a little past their edges.
-        let pad = |min: Vec3, max: Vec3, extra: f32| {
-            let ulps = 4.0 * f32::EPSILON * min.abs().max(max.abs()).max_element();
-            let p = Vec3::splat(ulps + extra);
-            (min - p, max + p)
-        };
         let mut items = Vec::with_capacity(self.primitive_count());
         for (i, s) in self.spheres.iter().enumerate() {
             let r = Vec3::splat(s.radius.abs());
@@ -382,24 +568,26 @@ impl FlatScene {
                 primitive: PrimitiveRef::Quad(i as u32).packed(),
             });
         }
-        let triangles = self.triangles.iter().enumerate().map(|(i, t)| {
-            let (min, max) = pad(t.p0.min(t.p1).min(t.p2), t.p0.max(t.p1).max(t.p2), 0.0);
-            Item {
-                min,
-                max,
-                primitive: PrimitiveRef::Triangle(i as u32).packed(),
-            }
+        items.extend(triangle_items(
+            &self.triangles[..self.instanced_triangles],
+            0,
+        ));
+        let instances = self.instances.iter().enumerate().map(|(i, instance)| Item {
+            min: instance.bounds[0],
+            max: instance.bounds[1],
+            primitive: PrimitiveRef::Instance(i as u32).packed(),
         });
-        items.extend(triangles);
+        items.extend(instances);
         items
     }
 
-    /// Every primitive: spheres, quads, triangles.
+    /// Every primitive in the BVH's top level: spheres, quads, placed triangles, instances.
     pub fn primitives(&self) -> impl Iterator<Item = PrimitiveRef> + '_ {
         (0..self.spheres.len() as u32)
             .map(PrimitiveRef::Sphere)
             .chain((0..self.quads.len() as u32).map(PrimitiveRef::Quad))
-            .chain((0..self.triangles.len() as u32).map(PrimitiveRef::Triangle))
+            .chain((0..self.instanced_triangles as u32).map(PrimitiveRef::Triangle))
+            .chain((0..self.instances.len() as u32).map(PrimitiveRef::Instance))
     }
 
     fn count_medium_crossings(&self) -> u32 {
@@ -438,6 +626,7 @@ impl FlatScene {
             PrimitiveRef::Sphere(i) => self.spheres[i as usize].light,
             PrimitiveRef::Quad(i) => self.quads[i as usize].light,
             PrimitiveRef::Triangle(i) => self.triangles[i as usize].light,
+            PrimitiveRef::Instance(_) => 0,
         }
     }
 
@@ -462,8 +651,11 @@ impl FlatScene {
             .quads
             .iter()
             .flat_map(|q| [q.q, q.q + q.u, q.q + q.v, q.q + q.u + q.v]);
-        let triangles = self.triangles.iter().flat_map(|t| [t.p0, t.p1, t.p2]);
-        let (min, max) = spheres.chain(quads).chain(triangles).fold(
+        let triangles = self.triangles[..self.instanced_triangles]
+            .iter()
+            .flat_map(|t| [t.p0, t.p1, t.p2]);
+        let instances = self.instances.iter().flat_map(|i| i.bounds);
+        let (min, max) = spheres.chain(quads).chain(triangles).chain(instances).fold(
             (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
             |(min, max), p| (min.min(p.as_dvec3()), max.max(p.as_dvec3())),
         );
@@ -519,7 +711,7 @@ impl FlatScene {
                 quad.light = lights.len() as u32;
             }
         }
-        for triangle in &mut self.triangles {
+        for triangle in &mut self.triangles[..self.instanced_triangles] {
             triangle.light = 0;
             if let Some((radiance, two_sided)) =
                 self.materials[triangle.material as usize].area_light()
@@ -565,6 +757,82 @@ impl FlatScene {
         }
         self.lights = lights;
     }
+}
+
+/// A box padded by a few ulps of its largest coordinate (spheres' bounds are rounded) and by
+/// `extra` (quads count as hit a little past their edges).
+fn pad(min: Vec3, max: Vec3, extra: f32) -> (Vec3, Vec3) {
+    let ulps = 4.0 * f32::EPSILON * min.abs().max(max.abs()).max_element();
+    let p = Vec3::splat(ulps + extra);
+    (min - p, max + p)
+}
+
+/// BVH items of `triangles`, the first numbered `first`.
+fn triangle_items(triangles: &[Triangle], first: u32) -> Vec<crate::accel::Item> {
+    let item = |(i, t): (usize, &Triangle)| {
+        let (min, max) = pad(t.p0.min(t.p1).min(t.p2), t.p0.max(t.p1).max(t.p2), 0.0);
+        crate::accel::Item {
+            min,
+            max,
+            primitive: PrimitiveRef::Triangle(first + i as u32).packed(),
+        }
+    };
+    triangles.iter().enumerate().map(item).collect()
+}
+
+/// A placement of a mesh scaled by `scale` and then moved by `t`, in a scene whose coordinates
+/// start at `origin` (its bounds and BVH root are filled in once its mesh's BVH is built).
+/// Both maps are worked out in f64 and rounded once.
+fn instance_of(t: &super::Transform, scale: Vec3, origin: DVec3, material: u32) -> Instance {
+    let (sin, cos) = (t.rotate_y_degrees.to_radians() as f64).sin_cos();
+    let s = scale.as_dvec3();
+    let translate = t.translate.as_dvec3() - origin;
+    // p' = R_y diag(s) p + translate, and p = diag(1 / s) R_y^T (p' - translate).
+    let linear = [
+        DVec3::new(cos * s.x, 0.0, sin * s.z),
+        DVec3::new(0.0, s.y, 0.0),
+        DVec3::new(-sin * s.x, 0.0, cos * s.z),
+    ];
+    let inverse = [
+        DVec3::new(cos / s.x, 0.0, -sin / s.x),
+        DVec3::new(0.0, 1.0 / s.y, 0.0),
+        DVec3::new(sin / s.z, 0.0, cos / s.z),
+    ];
+    let row = |r: DVec3, w: f64| r.extend(w).as_vec4();
+    Instance {
+        to_world: [0, 1, 2].map(|k| row(linear[k], translate[k])),
+        to_local: inverse.map(|r| row(r, -r.dot(translate))),
+        bounds: [Vec3::ZERO; 2],
+        root: 0,
+        material,
+    }
+}
+
+/// The box around a mesh-space box placed by `instance` (its corners placed in f64), padded
+/// for the rounding of placing points in f32.
+fn placed_bounds(instance: &Instance, min: Vec3, max: Vec3) -> [Vec3; 2] {
+    let rows = instance.to_world.map(|r| r.as_dvec4());
+    let mut lo = DVec3::splat(f64::MAX);
+    let mut hi = DVec3::splat(f64::MIN);
+    for corner in 0..8 {
+        let p = DVec3::new(
+            if corner & 1 == 0 { min.x } else { max.x } as f64,
+            if corner & 2 == 0 { min.y } else { max.y } as f64,
+            if corner & 4 == 0 { min.z } else { max.z } as f64,
+        );
+        let placed = DVec3::from(rows.map(|r| r.truncate().dot(p) + r.w));
+        lo = lo.min(placed);
+        hi = hi.max(placed);
+    }
+    // Placing rounds each coordinate by a few ulps of the magnitudes summed (see
+    // `Instance::magnitude_to_world`), at most those of the box's placed corners and the
+    // translation's.
+    let translation = Vec3::from(instance.to_world.map(|r| r.w))
+        .abs()
+        .max_element() as f64;
+    let magnitude = lo.abs().max(hi.abs()).max_element() + translation;
+    let p = DVec3::splat(16.0 * f32::EPSILON as f64 * magnitude);
+    [(lo - p).as_vec3(), (hi + p).as_vec3()]
 }
 
 /// The six faces of an axis-aligned box as (corner, u, v), each with u x v pointing outward.

@@ -174,6 +174,22 @@ pub fn smooth_sphere_mesh(rings: u32, segments: u32) -> &'static rt_gpu::scene::
         .leak()
 }
 
+/// Adds `material` to `scene` as `name`; returns its index.
+pub fn add_material(scene: &mut Scene, name: &str, material: Material) -> u32 {
+    scene.materials.push(material);
+    scene.material_names.push(name.into());
+    scene.materials.len() as u32 - 1
+}
+
+/// Adds a brushed brass metal (fuzz 0.2) as "metal"; returns its index.
+pub fn add_brushed_metal(scene: &mut Scene) -> u32 {
+    let metal = rt_gpu::material::Metal {
+        albedo: Vec3::new(0.8, 0.6, 0.3).into(),
+        fuzz: 0.2,
+    };
+    add_material(scene, "metal", Material::Metal(metal))
+}
+
 /// `scene` (the Cornell box's materials) with three smooth sphere meshes of 8 x 16 facets: a
 /// white ellipsoid, glass and brushed metal, so that lambertian, dielectric and metal shade
 /// through interpolated normals.
@@ -181,21 +197,12 @@ pub fn with_smooth_spheres(mut scene: Scene) -> Scene {
     use rt_gpu::scene::{Shape, Transform};
     let mesh = smooth_sphere_mesh(8, 16);
     let white = scene.material_names.iter().position(|n| n == "white");
-    let glass = scene.materials.len() as u32;
-    scene
-        .materials
-        .push(Material::Dielectric(rt_gpu::material::Dielectric::clear(
-            1.5,
-        )));
-    scene.material_names.push("glass".into());
-    let metal = scene.materials.len() as u32;
-    scene
-        .materials
-        .push(Material::Metal(rt_gpu::material::Metal {
-            albedo: Vec3::new(0.8, 0.6, 0.3).into(),
-            fuzz: 0.2,
-        }));
-    scene.material_names.push("metal".into());
+    let glass = add_material(
+        &mut scene,
+        "glass",
+        Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)),
+    );
+    let metal = add_brushed_metal(&mut scene);
     for (scale, translate, material) in [
         (
             Vec3::new(120.0, 60.0, 60.0),
@@ -211,6 +218,77 @@ pub fn with_smooth_spheres(mut scene: Scene) -> Scene {
             transform: Transform {
                 translate,
                 rotate_y_degrees: 20.0,
+            },
+        });
+    }
+    scene
+}
+
+/// `scene` (the Cornell box's materials) with two meshes placed three times each with one
+/// material, so that both are instanced: a box (12 flat triangles) in white, once mirrored and
+/// once stretched, and a smooth sphere (8 x 16 facets, vertex normals) in brushed metal, once
+/// squashed.
+pub fn with_instanced_meshes(mut scene: Scene) -> Scene {
+    use rt_gpu::scene::{Shape, Transform};
+    let white = scene.material_names.iter().position(|n| n == "white");
+    let white = white.expect("white") as u32;
+    let metal = add_brushed_metal(&mut scene);
+    let block = parallelogram_mesh(
+        "block",
+        &rt_gpu::scene::flat::box_faces(Vec3::ZERO, Vec3::ONE),
+    );
+    let ball = smooth_sphere_mesh(8, 16);
+    let placements = [
+        (
+            block,
+            Vec3::splat(80.0),
+            Vec3::new(60.0, 0.0, 300.0),
+            15.0,
+            white,
+        ),
+        (
+            block,
+            Vec3::new(-70.0, 120.0, 70.0),
+            Vec3::new(480.0, 0.0, 380.0),
+            -20.0,
+            white,
+        ),
+        (
+            block,
+            Vec3::new(100.0, 40.0, 60.0),
+            Vec3::new(250.0, 0.0, 80.0),
+            40.0,
+            white,
+        ),
+        (
+            ball,
+            Vec3::splat(45.0),
+            Vec3::new(150.0, 300.0, 250.0),
+            0.0,
+            metal,
+        ),
+        (
+            ball,
+            Vec3::new(70.0, 40.0, 50.0),
+            Vec3::new(400.0, 250.0, 200.0),
+            30.0,
+            metal,
+        ),
+        (
+            ball,
+            Vec3::splat(35.0),
+            Vec3::new(300.0, 450.0, 300.0),
+            -10.0,
+            metal,
+        ),
+    ];
+    for (mesh, scale, translate, rotate_y_degrees, material) in placements {
+        scene.objects.push(Object {
+            shape: Shape::Mesh { mesh, scale },
+            material,
+            transform: Transform {
+                translate,
+                rotate_y_degrees,
             },
         });
     }

@@ -1,0 +1,234 @@
+//! Meshes placed more than once are instanced (`scene::flat::Instance`: stored once, a BVH of
+//! their own, rays transformed into mesh coordinates): they are built once, and they give the
+//! hits and images of the same meshes copied into the scene, on the CPU and on the GPU. Images
+//! are compared by Welch z + Sidak at family-wise 0.01 (tests/common/stats.rs), each test with
+//! a negative control (2% brighter white) that it detects.
+
+mod common;
+
+use common::gpu::{render_gpu, renderer};
+use common::stats::compare;
+use glam::Vec3;
+use rt_gpu::accel::Bvh;
+use rt_gpu::cpu::shapes::{Ray, intersect};
+use rt_gpu::gpu::Tuning;
+use rt_gpu::render::RenderOptions;
+use rt_gpu::scene::builtin::builtin;
+use rt_gpu::scene::flat::{FlatScene, PrimitiveRef};
+use rt_gpu::scene::{Scene, Shape};
+
+fn instanced_scene() -> Scene {
+    common::with_instanced_meshes(builtin("cornell").expect("built-in"))
+}
+
+fn render_cpu_flat(flat: &FlatScene, opts: &RenderOptions) -> rt_gpu::film::Film {
+    rt_gpu::cpu::render(flat, opts, &|| {})
+}
+
+/// The packed primitives in the leaves below node `root` of `bvh` (node 0: the top level, not
+/// entering instances), each as often as a leaf holds it.
+fn leaf_primitives(bvh: &Bvh, root: u32) -> Vec<u32> {
+    let mut out = Vec::new();
+    let mut stack = vec![root as usize];
+    while let Some(i) = stack.pop() {
+        let node = &bvh.nodes[i];
+        if node.is_leaf() {
+            out.extend(&bvh.primitives[node.offset as usize..][..node.count as usize]);
+        } else {
+            stack.extend([i + 1, node.offset as usize]);
+        }
+    }
+    out
+}
+
+/// The triangles below node `root` of `bvh`, an instanced mesh's.
+fn triangles_below(bvh: &Bvh, root: u32) -> Vec<u32> {
+    let triangle = |p: u32| match PrimitiveRef::unpacked(p) {
+        Some(PrimitiveRef::Triangle(t)) => t,
+        other => panic!("an instance's BVH holds {other:?}"),
+    };
+    leaf_primitives(bvh, root)
+        .into_iter()
+        .map(triangle)
+        .collect()
+}
+
+#[test]
+fn a_mesh_placed_many_times_is_stored_and_built_once() {
+    let scene = instanced_scene();
+    let instanced = FlatScene::new(&scene, 8, 8).expect("flattens");
+    let copied = FlatScene::with_instancing(&scene, 8, 8, false).expect("flattens");
+    let mesh_sizes: Vec<usize> = scene
+        .objects
+        .iter()
+        .filter_map(|o| match o.shape {
+            Shape::Mesh { mesh, .. } => Some(mesh.triangles.len()),
+            _ => None,
+        })
+        .collect();
+    let (block, ball) = (mesh_sizes[0], mesh_sizes[3]);
+    assert_eq!(instanced.triangles.len(), block + ball);
+    // Copied three times, less the slivers at the sphere's pole that placing collapses (the
+    // instanced mesh keeps them: they are valid in its own coordinates).
+    let copies = copied.triangles.len();
+    assert!(
+        copies <= 3 * (block + ball) && copies >= 3 * (block + ball - 16),
+        "{copies}"
+    );
+    assert!(copied.instances.is_empty());
+    assert_eq!(instanced.instances.len(), 6);
+    assert_eq!(instanced.instanced_triangles, 0);
+    assert_eq!(instanced.triangles.len(), block + ball);
+    assert!(instanced.instance_depth > 0);
+    // Each instance's BVH holds its mesh's triangles, each in exactly one leaf; the two meshes'
+    // BVHs are shared by their three placements.
+    let mut roots: Vec<u32> = instanced.instances.iter().map(|i| i.root).collect();
+    roots.dedup();
+    assert_eq!(roots.len(), 2, "{roots:?}");
+    for (root, range) in roots.iter().zip([0..block, block..block + ball]) {
+        let mut below = triangles_below(&instanced.bvh, *root);
+        below.sort_unstable();
+        let expected: Vec<u32> = range.map(|t| t as u32).collect();
+        assert_eq!(below, expected);
+    }
+    // The top level holds the quads and the six instances; its bounds of an instance hold every
+    // corner of its mesh, placed.
+    let mut top = Vec::new();
+    for &p in &leaf_primitives(&instanced.bvh, 0) {
+        top.push(PrimitiveRef::unpacked(p).expect("a primitive"));
+    }
+    let placed = instanced.spheres.len() + instanced.quads.len();
+    assert_eq!(top.len(), placed + 6, "{top:?}");
+    for instance in &instanced.instances {
+        let range = if instance.root == roots[0] {
+            0..block
+        } else {
+            block..block + ball
+        };
+        for t in &instanced.triangles[range] {
+            for p in [t.p0, t.p1, t.p2].map(|p| instance.point_to_world(p)) {
+                assert!(
+                    instance.bounds[0].cmple(p).all() && instance.bounds[1].cmpge(p).all(),
+                    "{p} outside {:?}",
+                    instance.bounds
+                );
+            }
+        }
+    }
+    // A mesh placed once, or with a different material each time, is copied.
+    let smooth = common::with_smooth_spheres(builtin("cornell").expect("built-in"));
+    assert!(
+        FlatScene::new(&smooth, 8, 8)
+            .expect("flattens")
+            .instances
+            .is_empty()
+    );
+}
+
+/// Rays from the camera through a 200 x 200 grid and from inside the box in every direction of
+/// a 100 x 100 grid: instanced meshes are hit where their copies are, at the same distance
+/// (to 1e-4 of the box's size), with the same geometric and shading normals (to 1e-3) and
+/// material. A ray grazing an edge may hit a neighbouring triangle or miss on one side: at
+/// most 0.1% of rays may disagree.
+#[test]
+fn instanced_meshes_are_hit_where_their_copies_are() {
+    let scene = instanced_scene();
+    let instanced = FlatScene::new(&scene, 8, 8).expect("flattens");
+    let copied = FlatScene::with_instancing(&scene, 8, 8, false).expect("flattens");
+    let camera = &instanced.camera;
+    let mut rays = Vec::new();
+    for y in 0..200 {
+        for x in 0..200 {
+            let (s, t) = ((x as f32 + 0.5) / 200.0, (y as f32 + 0.5) / 200.0);
+            let dir = camera.to_upper_left + s * camera.horizontal - t * camera.vertical;
+            rays.push(Ray {
+                origin: camera.origin,
+                dir: dir.normalize(),
+            });
+        }
+    }
+    let inside = Vec3::new(278.0, 200.0, 150.0) - instanced.origin.as_vec3();
+    for i in 0..100 {
+        for j in 0..100 {
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 100.0;
+            let phi = std::f32::consts::TAU * (j as f32 + 0.5) / 100.0;
+            let r = (1.0 - z * z).sqrt();
+            rays.push(Ray {
+                origin: inside,
+                dir: Vec3::new(r * phi.cos(), r * phi.sin(), z),
+            });
+        }
+    }
+    let (mut disagree, mut instance_hits) = (0, 0);
+    for ray in &rays {
+        let (a, b) = (intersect(&instanced, ray), intersect(&copied, ray));
+        let same = match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                instance_hits += matches!(a.primitive, PrimitiveRef::Instance(_)) as u32;
+                (a.t - b.t).abs() <= 0.0555
+                    && (a.point - b.point).length() <= 0.0555
+                    && (a.normal - b.normal).length() <= 1e-3
+                    && (a.shading - b.shading).length() <= 1e-3
+                    && a.front_face == b.front_face
+                    && a.material == b.material
+                    && matches!(a.primitive, PrimitiveRef::Instance(_))
+                        == matches!(b.primitive, PrimitiveRef::Triangle(_))
+            }
+            _ => false,
+        };
+        disagree += !same as u32;
+    }
+    assert!(
+        instance_hits > 2000,
+        "only {instance_hits} rays hit an instance"
+    );
+    eprintln!(
+        "{disagree} of {} rays disagree ({instance_hits} hit instances)",
+        rays.len()
+    );
+    let allowed = rays.len() as u32 / 1000;
+    assert!(
+        disagree <= allowed,
+        "{disagree} of {} rays disagree",
+        rays.len()
+    );
+}
+
+/// The instanced scene renders as the one with every placement copied (CPU, nee), and the
+/// instanced one with 2% brighter white is caught.
+#[test]
+fn instanced_meshes_render_as_their_copies() {
+    let scene = instanced_scene();
+    let opts = |seed| common::nee_opts(32, 32, 1024, 6, seed);
+    let copied = FlatScene::with_instancing(&scene, 32, 32, false).expect("flattens");
+    let reference = render_cpu_flat(&copied, &opts(1));
+    let film = common::render_cpu(&scene, &opts(2));
+    let verdict = compare(&reference, &film);
+    eprintln!("copied vs instanced: {verdict:?}");
+    assert!(verdict.passed(), "{verdict:?}");
+    let brighter = common::with_instanced_meshes(common::cornell_white_2_percent_brighter());
+    let verdict = compare(&reference, &common::render_cpu(&brighter, &opts(2)));
+    eprintln!("copied vs instanced with 2% brighter white: {verdict:?}");
+    assert!(!verdict.passed(), "a 2% brighter white went undetected");
+}
+
+/// CPU and GPU render the instanced scene alike (nee); the GPU with 2% brighter white is caught.
+#[test]
+fn gpu_instances_match_cpu() {
+    let Some(gpu) = renderer() else { return };
+    let scene = instanced_scene();
+    let opts = |seed| common::nee_opts(32, 32, 1024, 6, seed);
+    let cpu = common::render_cpu(&scene, &opts(1));
+    let film = render_gpu(&gpu, &scene, &opts(2), &Tuning::default());
+    let verdict = compare(&cpu, &film);
+    eprintln!("instances: cpu vs gpu: {verdict:?}");
+    assert!(verdict.passed(), "{verdict:?}");
+    let brighter = common::with_instanced_meshes(common::cornell_white_2_percent_brighter());
+    let verdict = compare(
+        &cpu,
+        &render_gpu(&gpu, &brighter, &opts(2), &Tuning::default()),
+    );
+    eprintln!("instances, gpu with 2% brighter white: {verdict:?}");
+    assert!(!verdict.passed(), "a 2% brighter white went undetected");
+}
