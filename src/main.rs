@@ -651,12 +651,13 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
         flat.lights.len()
     )?;
     if !flat.bvh.nodes.is_empty() {
-        // The top level (over every primitive of a scene without instances).
-        let mut items = flat.bvh_items();
-        let built = items.len();
+        // Both levels, as flattening builds them: every primitive stored, and the instances.
+        let mut rebuilt = flat.clone();
+        let built = primitives + flat.instances.len();
         let start = Instant::now();
-        let bvh = rt_gpu::accel::Bvh::build(&mut items);
+        rebuilt.build_bvh();
         let seconds = start.elapsed().as_secs_f64();
+        let bvh = rebuilt.bvh;
         let buffers = rt_gpu::gpu::layout::SceneBuffers::new(flat);
         let geometry = std::mem::size_of_val(&buffers.triangles[..])
             + std::mem::size_of_val(&buffers.triangle_normals[..])

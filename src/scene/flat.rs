@@ -112,6 +112,8 @@ pub struct Instance {
     pub to_local: [Vec4; 3],
     /// Its placed bounds (in the BVH's top level).
     pub bounds: [Vec3; 2],
+    /// Its mesh: an index in [`FlatScene::instanced_meshes`].
+    pub mesh: u32,
     /// Its mesh's BVH: the index of the root node in [`FlatScene::bvh`].
     pub root: u32,
     pub material: u32,
@@ -234,6 +236,8 @@ pub struct FlatScene {
     pub triangle_normals: Vec<[Vec3; 3]>,
     /// Where the instanced meshes' triangles begin in `triangles`.
     pub instanced_triangles: usize,
+    /// Each instanced mesh's triangles in `triangles`.
+    pub instanced_meshes: Vec<std::ops::Range<usize>>,
     /// Every placement of a mesh that is placed more than once with one material (and neither
     /// emits nor bounds a medium): see [`Instance`].
     pub instances: Vec<Instance>,
@@ -337,9 +341,9 @@ impl FlatScene {
         // Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
         let mut local_triangles: Vec<Triangle> = Vec::new();
         let mut local_normals: Vec<[Vec3; 3]> = Vec::new();
-        let mut groups: Vec<std::ops::Range<usize>> = Vec::new();
+        let mut meshes: Vec<std::ops::Range<usize>> = Vec::new();
         let mut group_of = std::collections::HashMap::new();
-        let mut instances: Vec<(usize, Instance)> = Vec::new();
+        let mut instances: Vec<Instance> = Vec::new();
         // Only the materials some object uses, numbered in order of first use: a scene may
         // define thousands it never places, and the kernel holds every material it is given.
         let mut materials = Vec::new();
@@ -401,10 +405,10 @@ impl FlatScene {
                                 None => [n.normalize(); 3],
                             });
                         }
-                        groups.push(first..local_triangles.len());
-                        groups.len() - 1
+                        meshes.push(first..local_triangles.len());
+                        meshes.len() as u32 - 1
                     });
-                    instances.push((group, instance_of(&t, scale, origin, material)));
+                    instances.push(instance_of(&t, scale, origin, material, group));
                 }
                 Shape::Mesh { mesh, scale } => {
                     // A mirroring scale turns the winding around: swap two corners so the
@@ -448,7 +452,10 @@ impl FlatScene {
             }
         }
         let instanced_triangles = triangles.len();
-        let offset = |r: &std::ops::Range<usize>| (r.start + instanced_triangles) as u32;
+        let instanced_meshes = meshes
+            .iter()
+            .map(|r| r.start + instanced_triangles..r.end + instanced_triangles)
+            .collect();
         triangles.extend(local_triangles.iter().map(|t| Triangle { light: 0, ..*t }));
         if smooth {
             triangle_normals.extend(local_normals);
@@ -472,7 +479,8 @@ impl FlatScene {
             triangles,
             triangle_normals,
             instanced_triangles,
-            instances: instances.iter().map(|(_, i)| *i).collect(),
+            instanced_meshes,
+            instances,
             instance_depth: 0,
             bvh: crate::accel::Bvh::default(),
             lights: Vec::new(),
@@ -485,56 +493,46 @@ impl FlatScene {
         });
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
-        // Each instanced mesh's BVH (in mesh coordinates), then the top level over the placed
-        // primitives and the instances (bounded by their meshes' root boxes, placed), then the
-        // meshes' nodes appended after the top level's.
-        let mesh_bvhs: Vec<crate::accel::Bvh> = groups
+        flat.build_bvh();
+        Ok(flat)
+    }
+
+    /// Builds `bvh`: each instanced mesh's hierarchy (in mesh coordinates), then the top level
+    /// over the placed primitives and the instances (bounded by their meshes' root boxes,
+    /// placed), then the meshes' nodes appended after the top level's; sets each instance's
+    /// bounds and root.
+    pub fn build_bvh(&mut self) {
+        use crate::accel::Bvh;
+        let mesh_bvhs: Vec<Bvh> = self
+            .instanced_meshes
             .iter()
-            .map(|range| {
-                let mut items = triangle_items(
-                    &flat.triangles[offset(range) as usize..][..range.len()],
-                    offset(range),
-                );
-                crate::accel::Bvh::build(&mut items)
+            .map(|r| {
+                Bvh::build(&mut triangle_items(
+                    &self.triangles[r.clone()],
+                    r.start as u32,
+                ))
             })
             .collect();
-        for (instance, (group, _)) in flat.instances.iter_mut().zip(&instances) {
-            let root = &mesh_bvhs[*group].nodes[0];
+        for instance in &mut self.instances {
+            let root = &mesh_bvhs[instance.mesh as usize].nodes[0];
             instance.bounds = placed_bounds(instance, root.min, root.max);
         }
-        flat.bvh = crate::accel::Bvh::build(&mut flat.bvh_items());
+        self.bvh = Bvh::build(&mut self.bvh_items());
+        self.instance_depth = 0;
         let mut roots = Vec::with_capacity(mesh_bvhs.len());
         for mesh_bvh in mesh_bvhs {
-            flat.instance_depth = flat.instance_depth.max(mesh_bvh.depth);
-            roots.push(flat.bvh.append_hierarchy(mesh_bvh));
+            self.instance_depth = self.instance_depth.max(mesh_bvh.depth);
+            roots.push(self.bvh.append_hierarchy(mesh_bvh));
         }
-        for (instance, (group, _)) in flat.instances.iter_mut().zip(&instances) {
-            instance.root = roots[*group];
+        for instance in &mut self.instances {
+            instance.root = roots[instance.mesh as usize];
         }
-        Ok(flat)
     }
 
     /// Triangles as placed: the scene's own, and each instanced mesh's once per placement.
     pub fn placed_triangles(&self) -> usize {
-        let below = |root: u32| {
-            let (mut count, mut stack) = (0, vec![root as usize]);
-            while let Some(i) = stack.pop() {
-                let node = &self.bvh.nodes[i];
-                if node.is_leaf() {
-                    count += node.count as usize;
-                } else {
-                    stack.extend([i + 1, node.offset as usize]);
-                }
-            }
-            count
-        };
-        let mut meshes = std::collections::HashMap::new();
-        let instanced: usize = self
-            .instances
-            .iter()
-            .map(|i| *meshes.entry(i.root).or_insert_with(|| below(i.root)))
-            .sum();
-        self.instanced_triangles + instanced
+        let mesh_size = |i: &Instance| self.instanced_meshes[i.mesh as usize].len();
+        self.instanced_triangles + self.instances.iter().map(mesh_size).sum::<usize>()
     }
 
     /// Primitives stored (an instanced mesh's triangles once, however often it is placed).
@@ -780,10 +778,16 @@ fn triangle_items(triangles: &[Triangle], first: u32) -> Vec<crate::accel::Item>
     triangles.iter().enumerate().map(item).collect()
 }
 
-/// A placement of a mesh scaled by `scale` and then moved by `t`, in a scene whose coordinates
-/// start at `origin` (its bounds and BVH root are filled in once its mesh's BVH is built).
+/// A placement of instanced mesh `mesh` scaled by `scale` and then moved by `t`, in a scene
+/// whose coordinates start at `origin` (its bounds and BVH root are set by `build_bvh`).
 /// Both maps are worked out in f64 and rounded once.
-fn instance_of(t: &super::Transform, scale: Vec3, origin: DVec3, material: u32) -> Instance {
+fn instance_of(
+    t: &super::Transform,
+    scale: Vec3,
+    origin: DVec3,
+    material: u32,
+    mesh: u32,
+) -> Instance {
     let (sin, cos) = (t.rotate_y_degrees.to_radians() as f64).sin_cos();
     let s = scale.as_dvec3();
     let translate = t.translate.as_dvec3() - origin;
@@ -803,6 +807,7 @@ fn instance_of(t: &super::Transform, scale: Vec3, origin: DVec3, material: u32) 
         to_world: [0, 1, 2].map(|k| row(linear[k], translate[k])),
         to_local: inverse.map(|r| row(r, -r.dot(translate))),
         bounds: [Vec3::ZERO; 2],
+        mesh,
         root: 0,
         material,
     }
