@@ -49,83 +49,55 @@ fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<fu
         consider_sphere(spheres[index], index, ray, c);
     }
 //#endif
-//#if TRIANGLES
-//#if INSTANCES
-    if kind == KIND_INSTANCE {
-        traverse_instance(index, ray, c);
-    }
-//#endif
-//#endif
 }
 
 //#if TRIANGLES
 //#if INSTANCES
-// The triangles of instance `index` against the ray transformed into its mesh's coordinates
-// (not renormalised: t stays the world ray's), through its mesh's BVH: the same traversal as
-// traverse below, with its own stack (WGSL has no recursion), counted against the same budget
-// (see consider_instance in src/cpu/shapes.rs).
-fn traverse_instance(index: u32, world: Ray, c: ptr<function, Closest>) {
-    let inst = instances[index];
-    let ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));
-    let packed = (KIND_INSTANCE << PRIMITIVE_INDEX_BITS) | index;
-    let inverse = inverse_direction(ray.dir);
-    let sh = shear_of(ray.dir);
-    var stack: array<u32, BVH_STACK>;
-    var top = 0u;
-    var node_index = inst.root;
-    loop {
-        if loop_iterations >= params.loop_budget {
-            budget_spent = true;
-            break;
-        }
-        let node = bvh_nodes[node_index];
-        loop_iterations += params.traversal_weight;
-        var descended = false;
-        if hits_box(node, ray.origin, inverse, (*c).t) {
-            if (node.count & BVH_INTERIOR) == 0u {
-                loop_iterations += params.traversal_weight * (node.count + 1u);
-                for (var i = node.offset; i < node.offset + node.count; i++) {
-                    let triangle = primitive_index(bvh_primitives[i]);
-                    let h = triangle_hit(triangles[triangle], ray, sh);
-                    if replaces_in_instance(h.x, packed, triangle, c) {
-                        (*c).t = h.x;
-                        (*c).found = true;
-                        (*c).primitive = packed;
-                        (*c).triangle = triangle;
-                        (*c).material = inst.material;
-                        (*c).weights = h.yz;
-                    }
-                }
-            } else {
-                let negative = ray.dir[node.count & 3u] < 0.0;
-                stack[top] = select(node.offset, node_index + 1u, negative);
-                top += 1u;
-                node_index = select(node_index + 1u, node.offset, negative);
-                descended = true;
-            }
-        }
-        if !descended {
-            if top == 0u {
-                break;
-            }
-            top -= 1u;
-            node_index = stack[top];
-        }
+const NO_INSTANCE: u32 = 0xffffffffu;
+// Marks a stack entry that enters an instance (its index below this bit), not a node.
+const ENTER_INSTANCE: u32 = 0x80000000u;
+
+// Triangle `triangle` of instance `instance`'s mesh against the ray in mesh coordinates.
+fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear, c: ptr<function, Closest>) {
+    let packed = (KIND_INSTANCE << PRIMITIVE_INDEX_BITS) | instance;
+    let h = triangle_hit(triangles[triangle], ray, sh);
+    if replaces_in_instance(h.x, packed, triangle, c) {
+        (*c).t = h.x;
+        (*c).found = true;
+        (*c).primitive = packed;
+        (*c).triangle = triangle;
+        (*c).material = instances[instance].material;
+        (*c).weights = h.yz;
     }
 }
 //#endif
 //#endif
 
-fn traverse(ray: Ray, c: ptr<function, Closest>) {
-    let inverse = inverse_direction(ray.dir);
+// Two levels in one loop (WGSL has no recursion, and SIMD lanes in different levels still step
+// together): a top-level leaf's instances are pushed as stack entries marked ENTER_INSTANCE;
+// popping one moves the ray into the instance's mesh coordinates (not renormalised: t stays
+// the scene ray's) and descends its mesh's BVH from its root; once the stack is back at the
+// height it had then, the scene's ray is restored (see consider_instance in src/cpu/shapes.rs,
+// which re-enters the CPU's traversal instead).
+fn traverse(world: Ray, c: ptr<function, Closest>) {
+    var ray = world;
+    let world_inverse = inverse_direction(world.dir);
+    var inverse = world_inverse;
 //#if TRIANGLES
-    var sh = shear_of(ray.dir);
+    let world_shear = shear_of(world.dir);
 //#else
-    var sh = Shear(0u, vec3f(0.0));
+    let world_shear = Shear(0u, vec3f(0.0));
 //#endif
+    var sh = world_shear;
     var stack: array<u32, BVH_STACK>;
     var top = 0u;
     var index = 0u;
+//#if TRIANGLES
+//#if INSTANCES
+    var instance = NO_INSTANCE;
+    var floor = 0u;
+//#endif
+//#endif
     loop {
         if loop_iterations >= params.loop_budget {
             budget_spent = true;
@@ -138,7 +110,21 @@ fn traverse(ray: Ray, c: ptr<function, Closest>) {
             if (node.count & BVH_INTERIOR) == 0u {
                 loop_iterations += params.traversal_weight * (node.count + 1u);
                 for (var i = node.offset; i < node.offset + node.count; i++) {
-                    consider_primitive(bvh_primitives[i], ray, &sh, c);
+                    let packed = bvh_primitives[i];
+//#if TRIANGLES
+//#if INSTANCES
+                    if instance != NO_INSTANCE {
+                        consider_instanced_triangle(instance, primitive_index(packed), ray, sh, c);
+                        continue;
+                    }
+                    if primitive_kind(packed) == KIND_INSTANCE {
+                        stack[top] = ENTER_INSTANCE | primitive_index(packed);
+                        top += 1u;
+                        continue;
+                    }
+//#endif
+//#endif
+                    consider_primitive(packed, ray, &sh, c);
                 }
             } else {
                 let negative = ray.dir[node.count & 3u] < 0.0;
@@ -149,11 +135,34 @@ fn traverse(ray: Ray, c: ptr<function, Closest>) {
             }
         }
         if !descended {
+//#if TRIANGLES
+//#if INSTANCES
+            if instance != NO_INSTANCE && top == floor {
+                instance = NO_INSTANCE;
+                ray = world;
+                inverse = world_inverse;
+                sh = world_shear;
+            }
+//#endif
+//#endif
             if top == 0u {
                 break;
             }
             top -= 1u;
             index = stack[top];
+//#if TRIANGLES
+//#if INSTANCES
+            if (index & ENTER_INSTANCE) != 0u {
+                instance = index & ~ENTER_INSTANCE;
+                floor = top;
+                let inst = instances[instance];
+                ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));
+                inverse = inverse_direction(ray.dir);
+                sh = shear_of(ray.dir);
+                index = inst.root;
+            }
+//#endif
+//#endif
         }
     }
 }

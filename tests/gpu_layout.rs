@@ -220,8 +220,22 @@ fn kernels_leave_out_unused_code() {
     let flat_kernel = mesh_scene(flat_mesh);
     assert!(flat_kernel.contains("fn triangle_hit") && !flat_kernel.contains("triangle_normals"));
     // Instances (a mesh placed more than once) only where there are some.
-    assert!(!flat_kernel.contains("fn traverse_instance") && !flat_kernel.contains("instances"));
-    assert!(placed(flat_mesh, 2).contains("fn traverse_instance"));
+    let instance_code = [
+        "fn consider_instanced_triangle",
+        "var instance = NO_INSTANCE",
+        "instances[",
+    ];
+    let leaked: Vec<&&str> = instance_code
+        .iter()
+        .filter(|code| flat_kernel.contains(*code))
+        .collect();
+    assert!(leaked.is_empty(), "{leaked:?}");
+    let instanced_kernel = placed(flat_mesh, 2);
+    assert!(
+        instance_code
+            .iter()
+            .all(|code| instanced_kernel.contains(code))
+    );
     let smooth = rt_gpu::scene::mesh::Mesh::with_normals(
         "smooth tetrahedron",
         flat_mesh.positions.clone(),

@@ -292,8 +292,10 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         float_literal(f32::MAX)
     ));
     // The traversal stack holds at most one entry per level below the root: sized to this
-    // scene's BVH (private arrays cost lavapipe in proportion to their size).
-    let stack = scene.bvh.depth.max(1);
+    // scene's BVH (private arrays cost lavapipe in proportion to their size). With instances,
+    // also the instances of one top-level leaf (entered one by one from the stack) and the
+    // levels of an instance's mesh below its root.
+    let stack = scene.bvh.depth.max(1) + scene.largest_instance_leaf() + scene.instance_depth;
     out.push_str(&format!("const BVH_STACK: u32 = {stack}u;\n"));
     if features.uniform_scene {
         out.push_str(&format!(

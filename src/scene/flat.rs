@@ -529,6 +529,25 @@ impl FlatScene {
         }
     }
 
+    /// Most instances one leaf of the BVH's top level holds (0 without instances).
+    pub fn largest_instance_leaf(&self) -> u32 {
+        let Some(first_mesh_node) = self.instances.iter().map(|i| i.root).min() else {
+            return 0;
+        };
+        let instances_in = |n: &crate::accel::Node| {
+            let leaf = &self.bvh.primitives[n.offset as usize..][..n.count as usize];
+            let instance =
+                |p: &&u32| matches!(PrimitiveRef::unpacked(**p), Some(PrimitiveRef::Instance(_)));
+            leaf.iter().filter(instance).count() as u32
+        };
+        self.bvh.nodes[..first_mesh_node as usize]
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(instances_in)
+            .max()
+            .unwrap_or(0)
+    }
+
     /// Triangles as placed: the scene's own, and each instanced mesh's once per placement.
     pub fn placed_triangles(&self) -> usize {
         let mesh_size = |i: &Instance| self.instanced_meshes[i.mesh as usize].len();
