@@ -2,7 +2,8 @@
 //! their own, rays transformed into mesh coordinates): they are built once, and they give the
 //! hits and images of the same meshes copied into the scene, on the CPU and on the GPU. Images
 //! are compared by Welch z + Sidak at family-wise 0.01 (tests/common/stats.rs), each test with
-//! a negative control (2% brighter white) that it detects.
+//! a negative control (2% brighter white) that it detects. The shipped `scenes/knots.toml` is
+//! instanced.
 
 mod common;
 
@@ -231,4 +232,16 @@ fn gpu_instances_match_cpu() {
     );
     eprintln!("instances, gpu with 2% brighter white: {verdict:?}");
     assert!(!verdict.passed(), "a 2% brighter white went undetected");
+}
+
+/// The shipped `scenes/knots.toml` places one OBJ knot 27 times with one material: 27
+/// instances of one stored mesh.
+#[test]
+fn the_shipped_knots_scene_is_instanced() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/knots.toml");
+    let scene = rt_gpu::scene::file::load(&path).expect("loads");
+    let flat = FlatScene::new(&scene, 8, 8).expect("flattens");
+    assert_eq!(flat.instances.len(), 27);
+    assert_eq!(flat.triangles.len(), 11_520);
+    assert_eq!(flat.placed_triangles(), 27 * 11_520);
 }
