@@ -1,7 +1,8 @@
 //! The form every backend traces: world-space spheres and quads with precomputed planes, the
 //! camera as a frame, and resolved materials. Boxes become six quads and instance transforms are
 //! applied once here (a rigid motion of a sphere or parallelogram is again one), so no backend
-//! transforms rays per hit.
+//! transforms rays per hit; only a mesh placed more than once is kept in its own coordinates
+//! and instanced (see [`Instance`]), its rays transformed into them.
 
 use super::{Background, Material, Scene, SceneError, Shape};
 use glam::{DVec3, Vec3, Vec4};
@@ -342,7 +343,7 @@ impl FlatScene {
         let mut local_triangles: Vec<Triangle> = Vec::new();
         let mut local_normals: Vec<[Vec3; 3]> = Vec::new();
         let mut meshes: Vec<std::ops::Range<usize>> = Vec::new();
-        let mut group_of = std::collections::HashMap::new();
+        let mut mesh_of = std::collections::HashMap::new();
         let mut instances: Vec<Instance> = Vec::new();
         // Only the materials some object uses, numbered in order of first use: a scene may
         // define thousands it never places, and the kernel holds every material it is given.
@@ -385,7 +386,7 @@ impl FlatScene {
                     if instancing_key(object).is_some_and(|k| placements[&k] > 1) =>
                 {
                     let key = instancing_key(object).expect("instanced");
-                    let group = *group_of.entry(key).or_insert_with(|| {
+                    let mesh_index = *mesh_of.entry(key).or_insert_with(|| {
                         let first = local_triangles.len();
                         for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
                             let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
@@ -408,7 +409,7 @@ impl FlatScene {
                         meshes.push(first..local_triangles.len());
                         meshes.len() as u32 - 1
                     });
-                    instances.push(instance_of(&t, scale, origin, material, group));
+                    instances.push(instance_of(&t, scale, origin, material, mesh_index));
                 }
                 Shape::Mesh { mesh, scale } => {
                     // A mirroring scale turns the winding around: swap two corners so the
@@ -456,7 +457,7 @@ impl FlatScene {
             .iter()
             .map(|r| r.start + instanced_triangles..r.end + instanced_triangles)
             .collect();
-        triangles.extend(local_triangles.iter().map(|t| Triangle { light: 0, ..*t }));
+        triangles.extend(local_triangles);
         if smooth {
             triangle_normals.extend(local_normals);
         }
