@@ -57,7 +57,8 @@ const NO_INSTANCE: u32 = 0xffffffffu;
 // Marks a stack entry that enters an instance (its index below this bit), not a node.
 const ENTER_INSTANCE: u32 = 0x80000000u;
 
-// Triangle `triangle` of instance `instance`'s mesh against the ray in mesh coordinates.
+// Triangle `triangle` of instance `instance`'s mesh against the ray in mesh coordinates (the
+// instance's material is read once the closest hit is known, in intersect).
 fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear, c: ptr<function, Closest>) {
     let packed = (KIND_INSTANCE << PRIMITIVE_INDEX_BITS) | instance;
     let h = triangle_hit(triangles[triangle], ray, sh);
@@ -66,7 +67,6 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
         (*c).found = true;
         (*c).primitive = packed;
         (*c).triangle = triangle;
-        (*c).material = instances[instance].material;
         (*c).weights = h.yz;
     }
 }

@@ -253,8 +253,9 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
     if primitive_kind(c.primitive) == KIND_INSTANCE {
         // By the inverse transpose: a mirroring placement turns the normal around with it.
         let tri = triangles[c.triangle];
-        c.outward = instance_normal_to_world(instances[primitive_index(c.primitive)],
-            cross(tri.p1 - tri.p0, tri.p2 - tri.p0));
+        let inst = instances[primitive_index(c.primitive)];
+        c.outward = instance_normal_to_world(inst, cross(tri.p1 - tri.p0, tri.p2 - tri.p0));
+        c.material = inst.material;
     }
 //#endif
 //#endif
