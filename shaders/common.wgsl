@@ -42,7 +42,7 @@ struct Ray {
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 //#endif
 //#endif
-// Meshes and the BVH: always storage (they may be large).
+// Meshes and the BVH: never uniform (they may be large).
 //#if TRIANGLES
 @group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
 //#endif
@@ -54,6 +54,16 @@ struct Ray {
 @group(0) @binding(13) var<storage, read> instances: array<Instance>;
 //#endif
 //#if BVH
-@group(0) @binding(10) var<storage, read> bvh_nodes: array<BvhNode>;
+// The nodes are texels (two per node, BVH_NODE_ROW per row: see BvhNodeTexture in
+// src/gpu/layout.rs): lavapipe fetches a texel for all its SIMD lanes at once, where it reads a
+// storage buffer at lane-dependent addresses one lane and one word at a time.
+@group(0) @binding(10) var bvh_node_texels: texture_2d<u32>;
 @group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
+
+fn bvh_node(i: u32) -> BvhNode {
+    let first = 2u * i;
+    let a = textureLoad(bvh_node_texels, vec2u(first % BVH_NODE_ROW, first / BVH_NODE_ROW), 0);
+    let b = textureLoad(bvh_node_texels, vec2u((first + 1u) % BVH_NODE_ROW, (first + 1u) / BVH_NODE_ROW), 0);
+    return BvhNode(bitcast<vec3f>(a.xyz), a.w, bitcast<vec3f>(b.xyz), b.w);
+}
 //#endif

@@ -449,16 +449,16 @@ pub fn inverse_direction(dir: Vec3) -> Vec3 {
     Vec3::new(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z))
 }
 
-/// Whether the ray from `origin` with reciprocal direction `inverse` meets the box within
-/// [0, t_max]; the far distance is widened by 3 ulps' worth (pbrt-v4's 1 + 2 gamma(3)) so that
-/// rounding cannot miss a box the ray grazes.
+/// Where the ray from `origin` with reciprocal direction `inverse` enters the box, if it meets
+/// it within [0, t_max]; the far distance is widened by 3 ulps' worth (pbrt-v4's 1 + 2 gamma(3))
+/// so that rounding cannot miss a box the ray grazes.
 #[inline]
-pub fn hits_box(min: Vec3, max: Vec3, origin: Vec3, inverse: Vec3, t_max: f32) -> bool {
+pub fn box_entry(min: Vec3, max: Vec3, origin: Vec3, inverse: Vec3, t_max: f32) -> Option<f32> {
     let t0 = (min - origin) * inverse;
     let t1 = (max - origin) * inverse;
     let near = t0.min(t1).max_element().max(0.0);
     let far = t0.max(t1).min_element().min(t_max) * BOX_FAR_WIDENING;
-    near <= far
+    (near <= far).then_some(near)
 }
 
 /// 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps), eps = 2^-24.
@@ -586,10 +586,22 @@ mod tests {
         check(&bvh, &original);
     }
 
+    fn hits_box(min: Vec3, max: Vec3, origin: Vec3, inverse: Vec3, t_max: f32) -> bool {
+        box_entry(min, max, origin, inverse, t_max).is_some()
+    }
+
     #[test]
     fn boxes_are_hit_conservatively() {
         let (min, max) = (Vec3::splat(-1.0), Vec3::splat(1.0));
         let o = Vec3::new(0.0, 0.0, -5.0);
+        assert_eq!(
+            box_entry(min, max, o, inverse_direction(Vec3::Z), 10.0),
+            Some(4.0)
+        );
+        assert_eq!(
+            box_entry(min, max, Vec3::ZERO, inverse_direction(Vec3::Z), 10.0),
+            Some(0.0)
+        );
         assert!(hits_box(min, max, o, inverse_direction(Vec3::Z), f32::MAX));
         assert!(!hits_box(min, max, o, inverse_direction(Vec3::Z), 3.9));
         assert!(!hits_box(

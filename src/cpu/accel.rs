@@ -1,13 +1,15 @@
-//! Traversal of the scene's BVH (twin: `shaders/accel.wgsl`): nodes depth-first, the nearer
-//! child (by the ray's direction along the node's split axis) first, a stack of pending second
-//! children.
+//! Traversal of the scene's BVH (twin: `shaders/accel.wgsl`): depth-first; an interior node
+//! tests both children's boxes, enters the nearer (by where the ray enters them) and pushes the
+//! other with its entry distance; a popped child whose box now lies beyond the closest hit is
+//! skipped without being read.
 
 use super::shapes::Ray;
-use crate::accel::{Bvh, MAX_DEPTH, hits_box, inverse_direction};
+use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, box_entry, inverse_direction};
 
 /// Calls `test(packed primitive, closest)` for every primitive in a leaf, below node `root`,
-/// whose box the ray meets before `closest`; `test` shortens `closest` when it finds a nearer
-/// hit. The scene's hierarchy starts at node 0, an instanced mesh's at its instance's root.
+/// whose box the ray meets before `closest` (and for a leaf root's, unconditionally); `test`
+/// shortens `closest` when it finds a nearer hit. The scene's hierarchy starts at node 0, an
+/// instanced mesh's at its instance's root.
 #[inline]
 pub fn traverse(
     bvh: &Bvh,
@@ -20,34 +22,56 @@ pub fn traverse(
         return;
     }
     let inverse = inverse_direction(ray.dir);
-    let negative = [ray.dir.x < 0.0, ray.dir.y < 0.0, ray.dir.z < 0.0];
-    let mut stack = [0u32; MAX_DEPTH];
+    let entry = |index: u32, closest: f32| {
+        let node = &bvh.nodes[index as usize];
+        box_entry(node.min, node.max, ray.origin, inverse, closest)
+    };
+    let mut stack = [(0u32, 0f32); MAX_DEPTH];
     let mut top = 0;
     let mut index = root;
     loop {
         let node = &bvh.nodes[index as usize];
-        if hits_box(node.min, node.max, ray.origin, inverse, *closest) {
-            if node.is_leaf() {
-                let first = node.offset as usize;
-                for &p in &bvh.primitives[first..first + node.count as usize] {
-                    test(p, closest);
+        if node.is_leaf() {
+            let first = node.offset as usize;
+            for &p in &bvh.primitives[first..first + node.count as usize] {
+                test(p, closest);
+            }
+        } else {
+            let (first, second) = (index + 1, node.offset);
+            match (entry(first, *closest), entry(second, *closest)) {
+                (Some(t_first), Some(t_second)) => {
+                    let (near, far, t_far) = if t_second < t_first {
+                        (second, first, t_first)
+                    } else {
+                        (first, second, t_second)
+                    };
+                    stack[top] = (far, t_far);
+                    top += 1;
+                    index = near;
+                    continue;
                 }
-            } else {
-                let (near, far) = if negative[(node.count & 3) as usize] {
-                    (node.offset, index + 1)
-                } else {
-                    (index + 1, node.offset)
-                };
-                stack[top] = far;
-                top += 1;
-                index = near;
-                continue;
+                (Some(_), None) => {
+                    index = first;
+                    continue;
+                }
+                (None, Some(_)) => {
+                    index = second;
+                    continue;
+                }
+                (None, None) => {}
             }
         }
-        if top == 0 {
-            return;
+        loop {
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            let (pending, t_entry) = stack[top];
+            // The box as box_entry would test it against the closest hit now.
+            if t_entry <= *closest * BOX_FAR_WIDENING {
+                index = pending;
+                break;
+            }
         }
-        top -= 1;
-        index = stack[top];
     }
 }

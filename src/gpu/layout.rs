@@ -212,6 +212,16 @@ gpu_struct! {
     }
 }
 
+/// Texels per row of the BVH node texture (the kernel's `bvh_node_texels`): node i is texels 2i
+/// (min, offset) and 2i + 1 (max, count), counted along rows. WebGPU's smallest guaranteed 2D
+/// texture (8192 rows) holds 16 M nodes.
+pub const BVH_NODE_ROW: u32 = 4096;
+
+/// Rows of the BVH node texture for `nodes` nodes (at least one).
+pub fn bvh_node_rows(nodes: usize) -> u32 {
+    (2 * nodes as u64).div_ceil(BVH_NODE_ROW as u64).max(1) as u32
+}
+
 gpu_struct! {
     /// A light for next-event estimation (see `scene::flat::Light`): a quad (uniform on its
     /// area) or a sphere (uniform in the cone it subtends), told apart by `kind`.
@@ -423,6 +433,7 @@ fn wgsl_constants() -> String {
         ("KIND_INSTANCE", crate::scene::flat::KIND_INSTANCE.literal()),
         ("BVH_INTERIOR", crate::accel::INTERIOR.literal()),
         ("BOX_FAR_WIDENING", crate::accel::BOX_FAR_WIDENING.literal()),
+        ("BVH_NODE_ROW", BVH_NODE_ROW.literal()),
         (
             "MAX_SURVIVAL",
             crate::cpu::integrator::MAX_SURVIVAL.literal(),

@@ -4,8 +4,8 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
-    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, WORKGROUP_SIZE,
-    base_params, whole_image_dispatch,
+    ACCUM_WORDS, BVH_NODE_ROW, GpuBvhNode, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray,
+    SceneBuffers, WORKGROUP_SIZE, base_params, bvh_node_rows, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -100,6 +100,13 @@ pub struct Timings {
     pub longest_dispatch_seconds: f64,
 }
 
+/// What a scene binds: its buffers (spheres, quads, materials, lights, images, triangles, BVH
+/// primitives, vertex normals, instances) and its BVH's nodes.
+struct SceneBindings {
+    buffers: [wgpu::Buffer; 9],
+    bvh_nodes: wgpu::TextureView,
+}
+
 pub struct GpuRenderer {
     pub ctx: GpuContext,
 }
@@ -161,7 +168,16 @@ impl GpuRenderer {
                 buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(8, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
-                buffer_entry(10, wgpu::BufferBindingType::Storage { read_only: true }),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 10,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
                 buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(13, wgpu::BufferBindingType::Storage { read_only: true }),
@@ -224,7 +240,7 @@ impl GpuRenderer {
         &self,
         scene: &FlatScene,
         features: &Features,
-    ) -> Result<[wgpu::Buffer; 10], GpuError> {
+    ) -> Result<SceneBindings, GpuError> {
         let mut buffers = SceneBuffers::new(scene);
         let limit = self
             .ctx
@@ -237,7 +253,6 @@ impl GpuRenderer {
                 "vertex normals",
                 std::mem::size_of_val(&buffers.triangle_normals[..]),
             ),
-            ("BVH nodes", std::mem::size_of_val(&buffers.bvh_nodes[..])),
             ("instances", std::mem::size_of_val(&buffers.instances[..])),
             ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
             ("quads", std::mem::size_of_val(&buffers.quads[..])),
@@ -251,6 +266,13 @@ impl GpuRenderer {
                     limit >> 20
                 )));
             }
+        }
+        let node_rows = bvh_node_rows(buffers.bvh_nodes.len());
+        if node_rows > self.ctx.limits.max_texture_dimension_2d {
+            return Err(GpuError::TooLarge(format!(
+                "the scene's BVH nodes take {node_rows} rows of texels, more than this GPU's largest texture ({}): use fewer triangles, or --backend cpu",
+                self.ctx.limits.max_texture_dimension_2d
+            )));
         }
         if buffers.images.bytes() > limit {
             return Err(GpuError::TooLarge(format!(
@@ -270,7 +292,8 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE
         };
         let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
-        Ok([
+        let bvh_nodes = self.bvh_node_texture(&buffers.bvh_nodes, node_rows);
+        let buffers = [
             make("spheres", bytemuck::cast_slice(&buffers.spheres)),
             make("quads", bytemuck::cast_slice(&buffers.quads)),
             make("materials", bytemuck::cast_slice(&buffers.materials)),
@@ -283,11 +306,6 @@ impl GpuRenderer {
             self.buffer_with(
                 "triangles",
                 bytemuck::cast_slice(&buffers.triangles),
-                wgpu::BufferUsages::STORAGE,
-            ),
-            self.buffer_with(
-                "bvh nodes",
-                bytemuck::cast_slice(&buffers.bvh_nodes),
                 wgpu::BufferUsages::STORAGE,
             ),
             self.buffer_with(
@@ -305,14 +323,41 @@ impl GpuRenderer {
                 bytemuck::cast_slice(&buffers.instances),
                 wgpu::BufferUsages::STORAGE,
             ),
-        ])
+        ];
+        Ok(SceneBindings { buffers, bvh_nodes })
+    }
+
+    /// The BVH's nodes as texels, two per node, `BVH_NODE_ROW` per row.
+    fn bvh_node_texture(&self, nodes: &[GpuBvhNode], rows: u32) -> wgpu::TextureView {
+        let mut texels: Vec<u8> = bytemuck::cast_slice(nodes).to_vec();
+        texels.resize(rows as usize * BVH_NODE_ROW as usize * 16, 0);
+        let texture = self.ctx.device.create_texture_with_data(
+            &self.ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("bvh nodes"),
+                size: wgpu::Extent3d {
+                    width: BVH_NODE_ROW,
+                    height: rows,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Uint,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &texels,
+        );
+        texture.create_view(&Default::default())
     }
 
     fn bind_group(
         &self,
         kernel: &Kernel,
         [params, dispatch]: [&wgpu::Buffer; 2],
-        scene: &[wgpu::Buffer; 10],
+        scene: &SceneBindings,
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
@@ -322,6 +367,7 @@ impl GpuRenderer {
                 resource: buffer.as_entire_binding(),
             }
         }
+        let SceneBindings { buffers, bvh_nodes } = scene;
         self.ctx
             .device
             .create_bind_group(&wgpu::BindGroupDescriptor {
@@ -329,19 +375,22 @@ impl GpuRenderer {
                 layout: &kernel.bind_group_layout,
                 entries: &[
                     entry(0, params),
-                    entry(1, &scene[0]),
-                    entry(2, &scene[1]),
-                    entry(3, &scene[2]),
+                    entry(1, &buffers[0]),
+                    entry(2, &buffers[1]),
+                    entry(3, &buffers[2]),
                     entry(4, accum),
                     entry(5, debug),
-                    entry(6, &scene[3]),
+                    entry(6, &buffers[3]),
                     entry(7, dispatch),
-                    entry(8, &scene[4]),
-                    entry(9, &scene[5]),
-                    entry(10, &scene[6]),
-                    entry(11, &scene[7]),
-                    entry(12, &scene[8]),
-                    entry(13, &scene[9]),
+                    entry(8, &buffers[4]),
+                    entry(9, &buffers[5]),
+                    wgpu::BindGroupEntry {
+                        binding: 10,
+                        resource: wgpu::BindingResource::TextureView(bvh_nodes),
+                    },
+                    entry(11, &buffers[6]),
+                    entry(12, &buffers[7]),
+                    entry(13, &buffers[8]),
                 ],
             })
     }
