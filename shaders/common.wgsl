@@ -12,10 +12,19 @@ struct Ray {
 // Per dispatch: storage, since lavapipe compiles (and keeps) a kernel variant for every new
 // uniform value it folds (see GpuDispatch in src/gpu/layout.rs).
 @group(0) @binding(7) var<storage, read> dispatch: Dispatch;
+// Texel i of an array kept as a texture (TEXEL_ROW in src/gpu/layout.rs says why and how).
+fn texel_at(t: texture_2d<u32>, i: u32) -> vec4u {
+    return textureLoad(t, vec2u(i % TEXEL_ROW, i / TEXEL_ROW), 0);
+}
+
 // Every image the scene reads (a texel per vec4f), and the environment's alias table
 // (ImageArray in src/gpu/layout.rs).
 //#if IMAGE_TEXTURE || ENVIRONMENT
-@group(0) @binding(8) var<storage, read> images: array<vec4f>;
+@group(0) @binding(8) var image_texels: texture_2d<u32>;
+
+fn image_value(i: u32) -> vec4f {
+    return bitcast<vec4f>(texel_at(image_texels, i));
+}
 //#endif
 // Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
@@ -54,16 +63,13 @@ struct Ray {
 @group(0) @binding(13) var<storage, read> instances: array<Instance>;
 //#endif
 //#if BVH
-// The nodes are texels (two per node, BVH_NODE_ROW per row: see BvhNodeTexture in
-// src/gpu/layout.rs): lavapipe fetches a texel for all its SIMD lanes at once, where it reads a
-// storage buffer at lane-dependent addresses one lane and one word at a time.
+// Two texels per node (TEXEL_ROW in src/gpu/layout.rs).
 @group(0) @binding(10) var bvh_node_texels: texture_2d<u32>;
 @group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
 
 fn bvh_node(i: u32) -> BvhNode {
-    let first = 2u * i;
-    let a = textureLoad(bvh_node_texels, vec2u(first % BVH_NODE_ROW, first / BVH_NODE_ROW), 0);
-    let b = textureLoad(bvh_node_texels, vec2u((first + 1u) % BVH_NODE_ROW, (first + 1u) / BVH_NODE_ROW), 0);
+    let a = texel_at(bvh_node_texels, 2u * i);
+    let b = texel_at(bvh_node_texels, 2u * i + 1u);
     return BvhNode(bitcast<vec3f>(a.xyz), a.w, bitcast<vec3f>(b.xyz), b.w);
 }
 //#endif

@@ -45,7 +45,7 @@ fn alias_pick(start: u32, n: u32, u: f32) -> AliasPick {
     let scaled = u * f32(n);
     let i = min(u32(scaled), n - 1u);
     let r = scaled - f32(i);
-    let slot = images[start + i];
+    let slot = image_value(start + i);
     if r < slot.x {
         return AliasPick(i, min(r / slot.x, ONE_BELOW), slot.z);
     }
@@ -106,7 +106,7 @@ fn environment_pdf_at(local: vec3f, st: vec2f) -> f32 {
     let h = params.environment_height;
     let x = min(u32(max(floor(st.x * f32(w)), 0.0)), w - 1u);
     let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
-    let density = images[params.environment_texels + y * w + x].w;
+    let density = image_value(params.environment_texels + y * w + x).w;
     return density / (2.0 * PI * PI * sin_theta);
 }
 //#endif

@@ -18,9 +18,9 @@ fn sphere_uv(n: vec3f) -> vec2f {
 //#endif
 
 //#if IMAGE_TEXTURE || ENVIRONMENT
-// Texel (x, y) of the image of `width` columns whose texels start at `start` in `images`.
+// Texel (x, y) of the image of `width` columns whose texels start at `start` among the images.
 fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
-    return images[start + y * width + x].xyz;
+    return image_value(start + y * width + x).xyz;
 }
 
 // Integer-valued i wrapped into 0..n in f32 arithmetic (as the CPU does), then kept in range

@@ -594,7 +594,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
                 let rate = samples / seconds / 1e6;
                 let gpu_time = rendered
                     .gpu_seconds
-                    .map(|s| format!(", {:.2} Msamples/s by GPU time", samples / s / 1e6))
+                    .map(|s| format!(", {:.3} Msamples/s by GPU time", samples / s / 1e6))
                     .unwrap_or_default();
                 let longest = rendered
                     .longest_dispatch_seconds

@@ -212,14 +212,17 @@ gpu_struct! {
     }
 }
 
-/// Texels per row of the BVH node texture (the kernel's `bvh_node_texels`): node i is texels 2i
-/// (min, offset) and 2i + 1 (max, count), counted along rows. WebGPU's smallest guaranteed 2D
-/// texture (8192 rows) holds 16 M nodes.
-pub const BVH_NODE_ROW: u32 = 4096;
+/// Texels per row of the textures the kernel reads arrays from (`Rgba32Uint`, texel i at
+/// column i % TEXEL_ROW of row i / TEXEL_ROW): the BVH's nodes (`bvh_node_texels`, node i is
+/// texels 2i (min, offset) and 2i + 1 (max, count)) and the images (`image_texels`, one vec4f
+/// of `ImageArray` each). Lavapipe fetches a texel for all its SIMD lanes at once, where it reads
+/// a storage buffer at lane-dependent addresses one lane and one word at a time. WebGPU's
+/// smallest guaranteed 2D texture (8192 rows) holds 32 M texels: 16 M nodes, 512 MB.
+pub const TEXEL_ROW: u32 = 4096;
 
-/// Rows of the BVH node texture for `nodes` nodes (at least one).
-pub fn bvh_node_rows(nodes: usize) -> u32 {
-    (2 * nodes as u64).div_ceil(BVH_NODE_ROW as u64).max(1) as u32
+/// Rows of a texture holding `texels` texels (at least one).
+pub fn texel_rows(texels: u64) -> u64 {
+    texels.div_ceil(TEXEL_ROW as u64).max(1)
 }
 
 gpu_struct! {
@@ -433,7 +436,7 @@ fn wgsl_constants() -> String {
         ("KIND_INSTANCE", crate::scene::flat::KIND_INSTANCE.literal()),
         ("BVH_INTERIOR", crate::accel::INTERIOR.literal()),
         ("BOX_FAR_WIDENING", crate::accel::BOX_FAR_WIDENING.literal()),
-        ("BVH_NODE_ROW", BVH_NODE_ROW.literal()),
+        ("TEXEL_ROW", TEXEL_ROW.literal()),
         (
             "MAX_SURVIVAL",
             crate::cpu::integrator::MAX_SURVIVAL.literal(),

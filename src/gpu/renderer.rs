@@ -4,8 +4,8 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
-    ACCUM_WORDS, BVH_NODE_ROW, GpuBvhNode, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray,
-    SceneBuffers, WORKGROUP_SIZE, base_params, bvh_node_rows, whole_image_dispatch,
+    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, TEXEL_ROW,
+    WORKGROUP_SIZE, base_params, texel_rows, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -100,11 +100,12 @@ pub struct Timings {
     pub longest_dispatch_seconds: f64,
 }
 
-/// What a scene binds: its buffers (spheres, quads, materials, lights, images, triangles, BVH
-/// primitives, vertex normals, instances) and its BVH's nodes.
+/// What a scene binds: its buffers (spheres, quads, materials, lights, triangles, BVH
+/// primitives, vertex normals, instances) and, as textures, its BVH's nodes and its images.
 struct SceneBindings {
-    buffers: [wgpu::Buffer; 9],
+    buffers: [wgpu::Buffer; 8],
     bvh_nodes: wgpu::TextureView,
+    images: wgpu::TextureView,
 }
 
 pub struct GpuRenderer {
@@ -119,6 +120,19 @@ fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLay
             ty,
             has_dynamic_offset: false,
             min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
         },
         count: None,
     }
@@ -166,18 +180,9 @@ impl GpuRenderer {
                 buffer_entry(5, read_write),
                 buffer_entry(6, scene_ty),
                 buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
-                buffer_entry(8, wgpu::BufferBindingType::Storage { read_only: true }),
+                texture_entry(8),
                 buffer_entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 10,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture_entry(10),
                 buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(13, wgpu::BufferBindingType::Storage { read_only: true }),
@@ -267,18 +272,19 @@ impl GpuRenderer {
                 )));
             }
         }
-        let node_rows = bvh_node_rows(buffers.bvh_nodes.len());
-        if node_rows > self.ctx.limits.max_texture_dimension_2d {
+        let max_rows = self.ctx.limits.max_texture_dimension_2d as u64;
+        let node_rows = texel_rows(2 * buffers.bvh_nodes.len() as u64);
+        if node_rows > max_rows {
             return Err(GpuError::TooLarge(format!(
-                "the scene's BVH nodes take {node_rows} rows of texels, more than this GPU's largest texture ({}): use fewer triangles, or --backend cpu",
-                self.ctx.limits.max_texture_dimension_2d
+                "the scene's BVH nodes take {node_rows} rows of texels, more than this GPU's largest texture ({max_rows}): use fewer triangles, or --backend cpu"
             )));
         }
-        if buffers.images.bytes() > limit {
+        let image_rows = texel_rows(buffers.images.bytes() / 16);
+        if image_rows > max_rows {
             return Err(GpuError::TooLarge(format!(
-                "the scene's images take {} MB, more than this GPU binds at once ({} MB): use smaller textures or environment",
+                "the scene's images take {} MB, more than this GPU's largest texture holds ({} MB): use smaller textures or environment",
                 buffers.images.bytes() >> 20,
-                limit >> 20
+                (max_rows * TEXEL_ROW as u64 * 16) >> 20
             )));
         }
         let usage = if features.uniform_scene {
@@ -292,17 +298,21 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE
         };
         let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
-        let bvh_nodes = self.bvh_node_texture(&buffers.bvh_nodes, node_rows);
+        let bvh_nodes = self.texel_texture(
+            "bvh nodes",
+            bytemuck::cast_slice(&buffers.bvh_nodes),
+            node_rows as u32,
+        );
+        let images = self.texel_texture(
+            "images",
+            bytemuck::cast_slice(&ImageArray::new(scene).values),
+            image_rows as u32,
+        );
         let buffers = [
             make("spheres", bytemuck::cast_slice(&buffers.spheres)),
             make("quads", bytemuck::cast_slice(&buffers.quads)),
             make("materials", bytemuck::cast_slice(&buffers.materials)),
             make("lights", bytemuck::cast_slice(&buffers.lights)),
-            self.buffer_with(
-                "images",
-                bytemuck::cast_slice(&ImageArray::new(scene).values),
-                wgpu::BufferUsages::STORAGE,
-            ),
             self.buffer_with(
                 "triangles",
                 bytemuck::cast_slice(&buffers.triangles),
@@ -324,19 +334,23 @@ impl GpuRenderer {
                 wgpu::BufferUsages::STORAGE,
             ),
         ];
-        Ok(SceneBindings { buffers, bvh_nodes })
+        Ok(SceneBindings {
+            buffers,
+            bvh_nodes,
+            images,
+        })
     }
 
-    /// The BVH's nodes as texels, two per node, `BVH_NODE_ROW` per row.
-    fn bvh_node_texture(&self, nodes: &[GpuBvhNode], rows: u32) -> wgpu::TextureView {
-        let mut texels: Vec<u8> = bytemuck::cast_slice(nodes).to_vec();
-        texels.resize(rows as usize * BVH_NODE_ROW as usize * 16, 0);
+    /// `bytes` as the `Rgba32Uint` texels of a texture `TEXEL_ROW` wide and `rows` high.
+    fn texel_texture(&self, label: &str, bytes: &[u8], rows: u32) -> wgpu::TextureView {
+        let mut texels = bytes.to_vec();
+        texels.resize(rows as usize * TEXEL_ROW as usize * 16, 0);
         let texture = self.ctx.device.create_texture_with_data(
             &self.ctx.queue,
             &wgpu::TextureDescriptor {
-                label: Some("bvh nodes"),
+                label: Some(label),
                 size: wgpu::Extent3d {
-                    width: BVH_NODE_ROW,
+                    width: TEXEL_ROW,
                     height: rows,
                     depth_or_array_layers: 1,
                 },
@@ -367,7 +381,11 @@ impl GpuRenderer {
                 resource: buffer.as_entire_binding(),
             }
         }
-        let SceneBindings { buffers, bvh_nodes } = scene;
+        let SceneBindings {
+            buffers,
+            bvh_nodes,
+            images,
+        } = scene;
         self.ctx
             .device
             .create_bind_group(&wgpu::BindGroupDescriptor {
@@ -382,15 +400,18 @@ impl GpuRenderer {
                     entry(5, debug),
                     entry(6, &buffers[3]),
                     entry(7, dispatch),
-                    entry(8, &buffers[4]),
-                    entry(9, &buffers[5]),
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: wgpu::BindingResource::TextureView(images),
+                    },
+                    entry(9, &buffers[4]),
                     wgpu::BindGroupEntry {
                         binding: 10,
                         resource: wgpu::BindingResource::TextureView(bvh_nodes),
                     },
-                    entry(11, &buffers[6]),
-                    entry(12, &buffers[7]),
-                    entry(13, &buffers[8]),
+                    entry(11, &buffers[5]),
+                    entry(12, &buffers[6]),
+                    entry(13, &buffers[7]),
                 ],
             })
     }
