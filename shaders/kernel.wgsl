@@ -35,13 +35,16 @@ fn in_tile(gid: vec3u) -> bool {
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn render(@builtin(global_invocation_id) gid: vec3u) {
-    if !in_tile(gid) {
+    // Read before any branch: lavapipe reads a storage word once for all its SIMD lanes only
+    // where they all run; past a branch, each lane reads it on its own, every sample.
+    let d = dispatch;
+    if gid.x >= d.tile_size.x || gid.y >= d.tile_size.y {
         return;
     }
-    let x = dispatch.tile_origin.x + gid.x;
-    let y = dispatch.tile_origin.y + gid.y;
+    let x = d.tile_origin.x + gid.x;
+    let y = d.tile_origin.y + gid.y;
     let pixel = y * params.width + x;
-    let slot = ACCUM_WORDS * (gid.y * dispatch.tile_size.x + gid.x);
+    let slot = ACCUM_WORDS * (gid.y * d.tile_size.x + gid.x);
     var mean = bitcast<vec3f>(load3(slot + ACCUM_MEAN));
     var count = accum[slot + ACCUM_COUNT];
     var m2 = bitcast<vec3f>(load3(slot + ACCUM_M2));
@@ -53,7 +56,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     // Samples first_sample + count onward, until the pixel holds samples_before + sample_count:
     // a pixel left short by an earlier dispatch continues where it stopped, so the image does
     // not depend on how the render was sliced.
-    let wanted = dispatch.samples_before + dispatch.sample_count;
+    let wanted = d.samples_before + d.sample_count;
     var fresh = true;
     while count < wanted {
 //#if BVH
@@ -61,8 +64,8 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
         // count their own iterations (accel.wgsl).
         loop_iterations += params.sample_loop_cost;
 //#endif
-        let index = dispatch.first_sample + count;
-        var sampler = sampler_for_sample(pixel, index, dispatch.seed);
+        let index = d.first_sample + count;
+        var sampler = sampler_for_sample(pixel, index, d.seed);
         let ray = generate_ray(x, y, &sampler);
         var l = radiance(ray, &sampler);
 //#if BVH

@@ -6,6 +6,12 @@
 /// that a band of the image 2x costlier than the one measured before it still stays under.
 pub const TARGET_DISPATCH_SECONDS: f64 = 0.04;
 
+/// Samples per pixel that a tile's dispatches grow to within the target time: tiles are sized
+/// for this many, not one, because a dispatch reads and writes each pixel's accumulator once
+/// (26 words, which lavapipe moves lane by lane: a sixth of the Cornell box's time at one sample
+/// per dispatch), however many samples it takes.
+pub const TILE_SAMPLES: u32 = 8;
+
 /// Rows of the first tile, before any dispatch has been timed.
 pub const PROBE_TILE_ROWS: u32 = 4;
 
@@ -79,15 +85,16 @@ impl DispatchSizer {
     }
 
     /// Rows of the next tile, which starts at a row with `rows_left` rows below it: as tall as
-    /// one 1-spp dispatch may be (so even a tile's first dispatch stays short), at most 2x the
-    /// last tile (costs differ across the image: a band of sky is cheap, of glass not); before
-    /// the first measurement, a short probe tile.
+    /// one dispatch of `TILE_SAMPLES` samples per pixel (or fewer, as the loop budget allows)
+    /// may be, at most 2x the last tile (costs differ across the image: a band of sky is cheap,
+    /// of glass not); before the first measurement, a short probe tile.
     pub fn next_tile_rows(&mut self, rows_left: u32) -> u32 {
         let rows = match self.cost {
             _ if self.tuning.max_tile_pixels.is_some() => self.max_tile_rows,
             None => PROBE_TILE_ROWS.min(self.max_tile_rows),
             Some(cost) => {
-                let fit = TARGET_DISPATCH_SECONDS / (cost * self.width as f64);
+                let samples = TILE_SAMPLES.min(self.max_slice) as f64;
+                let fit = TARGET_DISPATCH_SECONDS / (cost * self.width as f64 * samples);
                 (fit.floor().min(u32::MAX as f64) as u32)
                     .clamp(1, self.max_tile_rows)
                     .min(self.last_rows.saturating_mul(2))
@@ -100,7 +107,7 @@ impl DispatchSizer {
     }
 
     /// Samples in a new tile's first dispatch: its cost is unknown, so one sample per pixel
-    /// (which the tile height keeps near the target).
+    /// (which the tile height keeps well under the target).
     pub fn first_slice(&self) -> u32 {
         self.tuning
             .samples_per_dispatch
@@ -186,6 +193,11 @@ mod tests {
                     settled.3 >= TARGET_DISPATCH_SECONDS * 0.5,
                     "cost {cost}: {settled:?}"
                 );
+                // Tiles short enough that a dispatch takes several samples per pixel, so that
+                // reading and writing the accumulators is paid once for them all.
+                if cost <= 1e-7 {
+                    assert!(settled.2 >= TILE_SAMPLES, "cost {cost}: {settled:?}");
+                }
             }
         }
     }
