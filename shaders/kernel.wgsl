@@ -29,8 +29,8 @@ fn store_fixed(at: u32, f: Fixed) {
 }
 
 // Workgroups overhang the tile's edges; those invocations do nothing.
-fn in_tile(gid: vec3u) -> bool {
-    return gid.x < dispatch.tile_size.x && gid.y < dispatch.tile_size.y;
+fn in_tile(gid: vec3u, tile_size: vec2u) -> bool {
+    return gid.x < tile_size.x && gid.y < tile_size.y;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
@@ -38,7 +38,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     // Read before any branch: lavapipe reads a storage word once for all its SIMD lanes only
     // where they all run; past a branch, each lane reads it on its own, every sample.
     let d = dispatch;
-    if gid.x >= d.tile_size.x || gid.y >= d.tile_size.y {
+    if !in_tile(gid, d.tile_size) {
         return;
     }
     let x = d.tile_origin.x + gid.x;
@@ -128,7 +128,7 @@ fn trace_debug(ray: Ray, hit: ptr<function, Hit>) -> FirstBounce {
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
-    if !in_tile(gid) {
+    if !in_tile(gid, dispatch.tile_size) {
         return;
     }
     let x = dispatch.tile_origin.x + gid.x;
@@ -152,7 +152,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
 // group).
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn draw_samples(@builtin(global_invocation_id) gid: vec3u) {
-    if !in_tile(gid) {
+    if !in_tile(gid, dispatch.tile_size) {
         return;
     }
     let pixel = (dispatch.tile_origin.y + gid.y) * params.width + dispatch.tile_origin.x + gid.x;
@@ -176,7 +176,7 @@ fn draw_samples(@builtin(global_invocation_id) gid: vec3u) {
 // albedo there (`dir`) on output.
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn look_up_albedo(@builtin(global_invocation_id) gid: vec3u) {
-    if !in_tile(gid) {
+    if !in_tile(gid, dispatch.tile_size) {
         return;
     }
     let slot = gid.y * dispatch.tile_size.x + gid.x;
@@ -194,7 +194,7 @@ fn look_up_albedo(@builtin(global_invocation_id) gid: vec3u) {
 // (`normal`) and that sample's pdf (`hit`, as bits; 0: none).
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn look_up_environment(@builtin(global_invocation_id) gid: vec3u) {
-    if !in_tile(gid) {
+    if !in_tile(gid, dispatch.tile_size) {
         return;
     }
     let slot = gid.y * dispatch.tile_size.x + gid.x;
@@ -212,7 +212,7 @@ fn look_up_environment(@builtin(global_invocation_id) gid: vec3u) {
 // origin, dir: direction) and its hit on output (dir is kept).
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
-    if !in_tile(gid) {
+    if !in_tile(gid, dispatch.tile_size) {
         return;
     }
     let slot = gid.y * dispatch.tile_size.x + gid.x;
