@@ -174,134 +174,158 @@ fn escaped(bsdf_pdf: f32, dir: vec3f) -> vec3f {
     return background(dir);
 }
 
-fn radiance(primary: Ray, sampler: ptr<function, Sampler>) -> vec3f {
-    var ray = primary;
-    var total = vec3f(0.0);
-    var throughput = vec3f(1.0);
-    var medium = 0u;
+// A path under way (twin: the loop of radiance in src/cpu/integrator.rs, one iteration per
+// extend_path call). The render kernel advances each invocation's path a segment at a time and
+// starts its pixel's next sample as soon as one ends, rather than looping over a sample's
+// segments inside a loop over samples: SIMD lanes step together, so with nested loops a lane
+// whose path ended early idled until its group's longest path ended (path regeneration, Novak,
+// Havran and Dachsbacher 2010).
+struct Path {
+    ray: Ray,
+    total: vec3f,
+    throughput: vec3f,
+    // Segments traced so far.
+    segment: u32,
+    // The medium the ray is in: 1 + the index of the material filled with it; 0: none.
+    medium: u32,
     // The pdf with which the BSDF (or phase function) chose `ray` from `origin`; 0 when light
     // sampling could not have chosen it (camera rays, delta BSDFs; always without NEE), so
     // light it finds counts in full.
-    var bsdf_pdf = 0.0;
-//#if NEE
-    var origin = ray.origin;
-//#endif
-    for (var segment = 0u; segment < params.max_depth; segment++) {
-        var hit: Hit;
+    bsdf_pdf: f32,
+    origin: vec3f,
+}
+
+fn start_path(primary: Ray) -> Path {
+    return Path(primary, vec3f(0.0), vec3f(1.0), 0u, 0u, 0.0, primary.origin);
+}
+
+// Traces the path's next segment and adds what it finds to `total`: whether the path goes on.
+fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bool {
+    let segment = (*path).segment;
+    if segment >= params.max_depth {
+        return false;
+    }
+    (*path).segment = segment + 1u;
+    var hit: Hit;
 //#if MEDIA
-        let event = next_event(&ray, &medium, &hit, sampler);
-        if event.kind == EVENT_IN_MEDIUM {
-            // Nothing is emitted here; this vertex can only extend the path.
-            if segment + 1u == params.max_depth {
-                break;
-            }
-            let interior = material_at(medium - 1u);
-            throughput *= interior.medium_albedo;
-//#if NEE
-            bsdf_pdf = 0.0;
-            {
-                sampler_begin(sampler);
-                let u0 = sampler_next(sampler);
-                sampler_begin(sampler);
-                let u1 = sampler_next(sampler);
-                let u2 = sampler_next(sampler);
-                total += throughput * medium_direct_light(event.point, ray.dir, interior.medium_g, medium, u0, u1, u2);
-            }
-//#endif
-            sampler_begin(sampler);
-            let u1 = sampler_next(sampler);
-            let u2 = sampler_next(sampler);
-            let dir = sample_hg(interior.medium_g, ray.dir, u1, u2);
-//#if NEE
-            bsdf_pdf = hg_pdf(interior.medium_g, dot(ray.dir, dir));
-            origin = event.point;
-//#endif
-            ray = Ray(event.point, dir);
-            // Russian roulette: the path goes on with the chance of its largest throughput
-            // component (at most MAX_SURVIVAL), reweighted. Random numbers: 1 when it plays.
-            if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
-                let survival = min(max(throughput.x, max(throughput.y, throughput.z)), MAX_SURVIVAL);
-                sampler_begin(sampler);
-                if !(sampler_next(sampler) < survival) {
-                    break;
-                }
-                throughput /= survival;
-            }
-            continue;
-        }
-        if event.kind != EVENT_SURFACE {
-            if event.kind == EVENT_ESCAPED {
-                total += throughput * escaped(bsdf_pdf, ray.dir);
-            }
-            break;
-        }
-//#else
-        if !intersect(ray, &hit) {
-            total += throughput * escaped(bsdf_pdf, ray.dir);
-            break;
-        }
-//#endif
-//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE
-        let m = with_albedo_at(material_at(hit.material), hit);
-//#else
-        let m = material_at(hit.material);
-//#endif
-        var weight = 1.0;
-//#if NEE
-        if bsdf_pdf > 0.0 {
-            let light = light_of(hit.primitive);
-            if light > 0u {
-                let l = light_at(light - 1u);
-                weight = power_heuristic(bsdf_pdf, light_pdf(l, origin, hit.point, ray.dir));
-            }
-        }
-//#endif
-        total += throughput * weight * emitted(m, hit);
+    // Through locals: naga 30's SPIR-V writer fails on pointers into a pointed-to struct
+    // passed on to a function.
+    var ray = (*path).ray;
+    var medium = (*path).medium;
+    let event = next_event(&ray, &medium, &hit, sampler);
+    (*path).ray = ray;
+    (*path).medium = medium;
+    if event.kind == EVENT_IN_MEDIUM {
+        // Nothing is emitted here; this vertex can only extend the path.
         if segment + 1u == params.max_depth {
-            break; // no longer path counts
+            return false;
         }
+        let interior = material_at((*path).medium - 1u);
+        (*path).throughput *= interior.medium_albedo;
 //#if NEE
-        bsdf_pdf = 0.0;
-        let light_sampled = samples_lights(m);
-        if light_sampled {
-            // Purposes: the light pick (1D), the point on the light (2D).
+        (*path).bsdf_pdf = 0.0;
+        {
             sampler_begin(sampler);
             let u0 = sampler_next(sampler);
             sampler_begin(sampler);
             let u1 = sampler_next(sampler);
             let u2 = sampler_next(sampler);
-            let d = direct_light(m, hit, medium, u0, u1, u2);
-            total += throughput * d.weight * d.light;
+            (*path).total += (*path).throughput * medium_direct_light(event.point, (*path).ray.dir, interior.medium_g, (*path).medium, u0, u1, u2);
         }
 //#endif
         sampler_begin(sampler);
-        let s = scatter(m, ray.dir, hit, sampler);
-        if !s.ok {
-            break;
-        }
-        throughput *= s.attenuation;
+        let u1 = sampler_next(sampler);
+        let u2 = sampler_next(sampler);
+        let dir = sample_hg(interior.medium_g, (*path).ray.dir, u1, u2);
 //#if NEE
-        if light_sampled {
-            bsdf_pdf = bsdf(m, hit, s.dir).pdf;
-        }
-        origin = hit.point;
+        (*path).bsdf_pdf = hg_pdf(interior.medium_g, dot((*path).ray.dir, dir));
+        (*path).origin = event.point;
 //#endif
-//#if MEDIA
-        if m.medium_density > 0.0 && dot(s.dir, hit.normal) < 0.0 {
-            medium = entered(hit); // refracted through a surface filled with a medium
-        }
-//#endif
-        ray = spawn(hit, s.dir);
-        // Russian roulette (as after a scattering event in a medium above). Written out, not
-        // a function: called, it cost the Cornell box kernel 17% on lavapipe.
+        (*path).ray = Ray(event.point, dir);
+        // Russian roulette: the path goes on with the chance of its largest throughput
+        // component (at most MAX_SURVIVAL), reweighted. Random numbers: 1 when it plays.
         if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
-            let survival = min(max(throughput.x, max(throughput.y, throughput.z)), MAX_SURVIVAL);
+            let survival = min(max((*path).throughput.x, max((*path).throughput.y, (*path).throughput.z)), MAX_SURVIVAL);
             sampler_begin(sampler);
             if !(sampler_next(sampler) < survival) {
-                break;
+                return false;
             }
-            throughput /= survival;
+            (*path).throughput /= survival;
+        }
+        return true;
+    }
+    if event.kind != EVENT_SURFACE {
+        if event.kind == EVENT_ESCAPED {
+            (*path).total += (*path).throughput * escaped((*path).bsdf_pdf, (*path).ray.dir);
+        }
+        return false;
+    }
+//#else
+    if !intersect((*path).ray, &hit) {
+        (*path).total += (*path).throughput * escaped((*path).bsdf_pdf, (*path).ray.dir);
+        return false;
+    }
+//#endif
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE
+    let m = with_albedo_at(material_at(hit.material), hit);
+//#else
+    let m = material_at(hit.material);
+//#endif
+    var weight = 1.0;
+//#if NEE
+    if (*path).bsdf_pdf > 0.0 {
+        let light = light_of(hit.primitive);
+        if light > 0u {
+            let l = light_at(light - 1u);
+            weight = power_heuristic((*path).bsdf_pdf, light_pdf(l, (*path).origin, hit.point, (*path).ray.dir));
         }
     }
-    return total;
+//#endif
+    (*path).total += (*path).throughput * weight * emitted(m, hit);
+    if segment + 1u == params.max_depth {
+        return false; // no longer path counts
+    }
+//#if NEE
+    (*path).bsdf_pdf = 0.0;
+    let light_sampled = samples_lights(m);
+    if light_sampled {
+        // Purposes: the light pick (1D), the point on the light (2D).
+        sampler_begin(sampler);
+        let u0 = sampler_next(sampler);
+        sampler_begin(sampler);
+        let u1 = sampler_next(sampler);
+        let u2 = sampler_next(sampler);
+        let d = direct_light(m, hit, (*path).medium, u0, u1, u2);
+        (*path).total += (*path).throughput * d.weight * d.light;
+    }
+//#endif
+    sampler_begin(sampler);
+    let s = scatter(m, (*path).ray.dir, hit, sampler);
+    if !s.ok {
+        return false;
+    }
+    (*path).throughput *= s.attenuation;
+//#if NEE
+    if light_sampled {
+        (*path).bsdf_pdf = bsdf(m, hit, s.dir).pdf;
+    }
+    (*path).origin = hit.point;
+//#endif
+//#if MEDIA
+    if m.medium_density > 0.0 && dot(s.dir, hit.normal) < 0.0 {
+        (*path).medium = entered(hit); // refracted through a surface filled with a medium
+    }
+//#endif
+    (*path).ray = spawn(hit, s.dir);
+    // Russian roulette (as after a scattering event in a medium above). Written out, not
+    // a function: called, it cost the Cornell box kernel 17% on lavapipe.
+    if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
+        let survival = min(max((*path).throughput.x, max((*path).throughput.y, (*path).throughput.z)), MAX_SURVIVAL);
+        sampler_begin(sampler);
+        if !(sampler_next(sampler) < survival) {
+            return false;
+        }
+        (*path).throughput /= survival;
+    }
+    return true;
 }

@@ -136,7 +136,12 @@ fn consider_sphere(s: Sphere, index: u32, ray: Ray, c: ptr<function, Closest>) {
 
 //#if QUADS
 fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
-    let t = quad_distance(q, ray);
+    consider_quad_at(quad_distance(q, ray), q, index, ray, c);
+}
+
+// Quad q met at t (-1: missed); kernels with the scene inlined compute t with their own copy of
+// quad_distance per quad, its constant zeros left out (see inline_scene in src/gpu/shader.rs).
+fn consider_quad_at(t: f32, q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
     if replaces(t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index, c) {
         (*c).t = t;
         (*c).found = true;

@@ -57,48 +57,68 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     // a pixel left short by an earlier dispatch continues where it stopped, so the image does
     // not depend on how the render was sliced.
     let wanted = d.samples_before + d.sample_count;
-    var fresh = true;
-    while count < wanted {
+    // One iteration per path segment (integrator.wgsl): a lane whose path ends adds its sample
+    // and starts the next at once, while its group's other lanes go on with theirs.
+    if count < wanted {
+        var fresh = true;
+        var index = d.first_sample + count;
+        var sampler = sampler_for_sample(pixel, index, d.seed);
+        var path = start_path(generate_ray(x, y, &sampler));
 //#if BVH
         // Every loop of a sample other than BVH traversals is bounded by the host; traversals
         // count their own iterations (accel.wgsl).
         loop_iterations += params.sample_loop_cost;
 //#endif
-        let index = d.first_sample + count;
-        var sampler = sampler_for_sample(pixel, index, d.seed);
-        let ray = generate_ray(x, y, &sampler);
-        var l = radiance(ray, &sampler);
+        loop {
+            var goes_on = extend_path(&path, &sampler);
 //#if BVH
-        if budget_spent {
-            if !fresh {
-                // Left to the next dispatch, which starts with a whole budget.
+            goes_on = goes_on && !budget_spent;
+//#endif
+            if goes_on {
+                continue;
+            }
+            var l = path.total;
+//#if BVH
+            if budget_spent {
+                if !fresh {
+                    // Left to the next dispatch, which starts with a whole budget.
+                    break;
+                }
+                // Not even a whole budget was enough for this one sample: recorded as invalid
+                // (black, and counted) rather than retried forever.
+                l = vec3f(-1.0);
+            }
+//#endif
+            fresh = false;
+            if !valid_sample(l) {
+                l = vec3f(0.0);
+                invalid += 1u;
+            }
+            let delta = l - mean;
+            mean += delta / f32(count + 1u);
+            m2 += delta * (l - mean);
+            let fixed = to_fixed(l);
+//#if SOBOL
+            // Only stratified renders need their replicas' statistics.
+            if (index & 1u) == 1u {
+                odd_sum = fixed_add(odd_sum, fixed);
+            } else {
+                even_sum = fixed_add(even_sum, fixed);
+            }
+//#else
+            even_sum = fixed_add(even_sum, fixed);
+//#endif
+            count += 1u;
+            if count >= wanted {
                 break;
             }
-            // Not even a whole budget was enough for this one sample: recorded as invalid
-            // (black, and counted) rather than retried forever.
-            l = vec3f(-1.0);
-        }
+            index = d.first_sample + count;
+            sampler = sampler_for_sample(pixel, index, d.seed);
+            path = start_path(generate_ray(x, y, &sampler));
+//#if BVH
+            loop_iterations += params.sample_loop_cost;
 //#endif
-        fresh = false;
-        if !valid_sample(l) {
-            l = vec3f(0.0);
-            invalid += 1u;
         }
-        let delta = l - mean;
-        mean += delta / f32(count + 1u);
-        m2 += delta * (l - mean);
-        let fixed = to_fixed(l);
-//#if SOBOL
-        // Only stratified renders need their replicas' statistics.
-        if (index & 1u) == 1u {
-            odd_sum = fixed_add(odd_sum, fixed);
-        } else {
-            even_sum = fixed_add(even_sum, fixed);
-        }
-//#else
-        even_sum = fixed_add(even_sum, fixed);
-//#endif
-        count += 1u;
     }
     store3(slot + ACCUM_MEAN, bitcast<vec3u>(mean));
     accum[slot + ACCUM_COUNT] = count;

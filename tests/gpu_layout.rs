@@ -172,7 +172,14 @@ fn kernels_leave_out_unused_code() {
         "metal code in a scene without metal"
     );
     // Small scenes are constants in the kernel: one test per primitive, no buffer loop.
-    assert_eq!(empty.matches("    consider_quad(Quad(").count(), 6);
+    assert_eq!(
+        empty.matches("    consider_quad_at(quad_distance_").count(),
+        6
+    );
+    assert_eq!(empty.matches("fn quad_distance_").count(), 6);
+    // Constant zero terms left out: the back wall (normal +z) meets a ray at a distance found
+    // from z components alone.
+    assert!(empty.contains("let t = (to_corner.z) /"));
     assert!(!empty.contains("quads[i]"));
     let spheres = kernel("spheres");
     assert!(

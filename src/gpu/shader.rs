@@ -3,7 +3,7 @@
 //! only when the scene needs that feature: a scene without spheres gets no sphere code, one
 //! without glass no dielectric branch.
 
-use crate::gpu::layout::{SceneBuffers, WgslStruct, float_literal};
+use crate::gpu::layout::{GpuQuad, SceneBuffers, WgslStruct, float_literal};
 use crate::material::{self, KINDS, MaterialKind};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
@@ -389,16 +389,82 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
             ));
         }
     }
-    if features.quads {
-        for (i, q) in buffers.quads.iter().take(scene.quads.len()).enumerate() {
-            out.push_str(&format!(
-                "    consider_quad({}, {i}u, ray, c);\n",
-                q.wgsl_constructor()
-            ));
-        }
+    let quads = if features.quads {
+        &buffers.quads[..scene.quads.len()]
+    } else {
+        &[]
+    };
+    for (i, q) in quads.iter().enumerate() {
+        out.push_str(&format!(
+            "    consider_quad_at(quad_distance_{i}(ray), {}, {i}u, ray, c);\n",
+            q.wgsl_constructor()
+        ));
     }
     out.push_str("}\n");
+    for (i, q) in quads.iter().enumerate() {
+        out.push_str(&quad_distance_inlined(i, q));
+    }
     out
+}
+
+/// quad_distance (shaders/intersect.wgsl) for one quad, its fields as constants and the terms
+/// of its dot products that multiply by a constant 0 left out: a compiler may not drop them
+/// itself (0 * x is NaN for an infinite x), and most quads of a box are axis-aligned, so this
+/// is about a third of a quad's test (the same arithmetic on every finite value).
+fn quad_distance_inlined(i: usize, q: &GpuQuad) -> String {
+    let corner = float_literal_vec(q.q);
+    let denom = constant_dot(q.normal, "ray.dir");
+    let distance = constant_dot(q.normal, "to_corner");
+    let alpha = constant_dot(q.alpha_axis, "planar");
+    let beta = constant_dot(q.beta_axis, "planar");
+    let lo = float_literal(-q.edge_tolerance);
+    let hi = float_literal(1.0 + q.edge_tolerance);
+    format!(
+        "fn quad_distance_{i}(ray: Ray) -> f32 {{
+    let denom = {denom};
+    let facing = abs(denom) >= 1e-8;
+    let to_corner = {corner} - ray.origin;
+    let t = {distance} / select(1.0, denom, facing);
+    let planar = t * ray.dir - to_corner;
+    let alpha = {alpha};
+    let beta = {beta};
+    let inside = alpha >= {lo} && alpha <= {hi} && beta >= {lo} && beta <= {hi};
+    return select(-1.0, t, facing && inside);
+}}
+"
+    )
+}
+
+/// `vec3f(x, y, z)` of constants.
+fn float_literal_vec(v: [f32; 3]) -> String {
+    format!(
+        "vec3f({}, {}, {})",
+        float_literal(v[0]),
+        float_literal(v[1]),
+        float_literal(v[2])
+    )
+}
+
+/// dot(constant, vector) as WGSL, in dot's order x, y, z, without the terms whose constant is
+/// 0 (and without the product where it is 1).
+fn constant_dot(constant: [f32; 3], vector: &str) -> String {
+    let terms: Vec<String> = constant
+        .iter()
+        .zip(["x", "y", "z"])
+        .filter(|(c, _)| **c != 0.0)
+        .map(|(c, axis)| {
+            if *c == 1.0 {
+                format!("{vector}.{axis}")
+            } else {
+                format!("{} * {vector}.{axis}", float_literal(*c))
+            }
+        })
+        .collect();
+    if terms.is_empty() {
+        "0.0".to_string()
+    } else {
+        format!("({})", terms.join(" + "))
+    }
 }
 
 /// `fn {signature} { switch {selector} { case k: { return v; } ... default: { return d; } } }`.
