@@ -3,7 +3,7 @@
 //! only when the scene needs that feature: a scene without spheres gets no sphere code, one
 //! without glass no dielectric branch.
 
-use crate::gpu::layout::{GpuQuad, SceneBuffers, WgslStruct, float_literal};
+use crate::gpu::layout::{GpuQuad, SceneBuffers, WgslStruct, WgslType, float_literal};
 use crate::material::{self, KINDS, MaterialKind};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
@@ -412,7 +412,7 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
 /// itself (0 * x is NaN for an infinite x), and most quads of a box are axis-aligned, so this
 /// is about a third of a quad's test (the same arithmetic on every finite value).
 fn quad_distance_inlined(i: usize, q: &GpuQuad) -> String {
-    let corner = float_literal_vec(q.q);
+    let corner = q.q.literal();
     let denom = constant_dot(q.normal, "ray.dir");
     let distance = constant_dot(q.normal, "to_corner");
     let alpha = constant_dot(q.alpha_axis, "planar");
@@ -432,16 +432,6 @@ fn quad_distance_inlined(i: usize, q: &GpuQuad) -> String {
     return select(-1.0, t, facing && inside);
 }}
 "
-    )
-}
-
-/// `vec3f(x, y, z)` of constants.
-fn float_literal_vec(v: [f32; 3]) -> String {
-    format!(
-        "vec3f({}, {}, {})",
-        float_literal(v[0]),
-        float_literal(v[1]),
-        float_literal(v[2])
     )
 }
 
