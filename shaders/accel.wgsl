@@ -48,7 +48,7 @@ fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<fu
 //#endif
 //#if SPHERES
     if kind == KIND_SPHERE {
-        consider_sphere(spheres[index], index, ray, c);
+        consider_sphere(spheres[index], index, ray, false, c);
     }
 //#endif
 }

@@ -150,7 +150,7 @@ fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -
         return none;
     }
     var shadow: Hit;
-    if !intersect(Ray(origin, normalize(to_light)), &shadow) || light_of(shadow.primitive) != index + 1u {
+    if !intersect_emitter(Ray(origin, normalize(to_light)), &shadow) || light_of(shadow.primitive) != index + 1u {
         return none;
     }
     let le = emitted(material_at(shadow.material), shadow);

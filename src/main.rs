@@ -182,10 +182,9 @@ struct ConvergeArgs {
     /// Samplers to compare, comma-separated: a series per backend, integrator and sampler.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "sobol")]
     samplers: Vec<SamplerArg>,
-    /// Russian roulette from this many path segments on (0: off) [default: 5 in scenes with
-    /// media, where random walks are long; else 0].
-    #[arg(long, value_name = "N")]
-    roulette_depth: Option<u32>,
+    /// Russian roulette from this many path segments on (0: off).
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    roulette_depth: u32,
     /// Seconds each series may spend on its ladder.
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     budget: f64,
@@ -222,6 +221,9 @@ struct BenchArgs {
     integrator: IntegratorArg,
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     sampler: SamplerArg,
+    /// Russian roulette from this many path segments on, as a render's (0: off).
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    roulette_depth: u32,
     /// GPU adapter (part of its name).
     #[arg(long)]
     adapter: Option<String>,
@@ -281,10 +283,10 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     sampler: SamplerArg,
     /// Russian roulette from this many path segments on: paths end at random, in proportion to
-    /// how little they can still carry, and survivors are reweighted (unbiased); 0: off
-    /// [default: 5 in scenes with media, where random walks are long; else 0].
-    #[arg(long, value_name = "N")]
-    roulette_depth: Option<u32>,
+    /// how little they can still carry, and survivors are reweighted (unbiased), as in Mitsuba 3
+    /// and pbrt-v4; 0: off.
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    roulette_depth: u32,
     /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
     #[arg(long, value_name = "NAME")]
     adapter: Option<String>,
@@ -470,7 +472,6 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
-    let flat_has_media = flat.has_media();
     check_memory(width, height).map_err(anyhow::Error::msg)?;
     if let Some(t) = args.target_rmse
         && !(t > 0.0 && t.is_finite())
@@ -487,9 +488,7 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         backends: args.backends.iter().map(|&b| b.into()).collect(),
         integrators: args.integrators.iter().map(|&i| i.into()).collect(),
         samplers: args.samplers.iter().map(|&s| s.into()).collect(),
-        roulette_depth: args
-            .roulette_depth
-            .unwrap_or(rt_gpu::options::default_roulette_depth(flat_has_media)),
+        roulette_depth: args.roulette_depth,
         budget: args.budget,
         reference: args.reference.clone(),
         reference_spp: args.reference_spp,
@@ -564,8 +563,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth,
         integrator: args.integrator.into(),
         sampler: args.sampler.into(),
-        // As a render of this scene would have it.
-        roulette_depth: rt_gpu::options::default_roulette_depth(flat.has_media()),
+        roulette_depth: args.roulette_depth,
     };
     let samples = width as f64 * height as f64 * args.spp as f64;
     say!(
@@ -830,9 +828,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
         integrator: args.integrator.into(),
         sampler: args.sampler.into(),
-        roulette_depth: args
-            .roulette_depth
-            .unwrap_or(rt_gpu::options::default_roulette_depth(flat.has_media())),
+        roulette_depth: args.roulette_depth,
     };
     let gpu = GpuChoice {
         adapter: args.adapter.clone(),

@@ -181,6 +181,25 @@ fn kernels_leave_out_unused_code() {
     // from z components alone.
     assert!(empty.contains("let t = (to_corner.z) /"));
     assert!(!empty.contains("quads[i]"));
+    // With nee, shadow rays keep only distances and indices of the six, then test the one
+    // emitting quad (the light) in full.
+    let empty_nee = {
+        let scene = flat("cornell-empty");
+        let features = Features::of(&scene).with_integrator(&scene, Integrator::Nee);
+        compose(&features, &scene).expect("composes")
+    };
+    assert_eq!(
+        empty_nee
+            .matches("    consider_first(quad_distance_")
+            .count(),
+        6
+    );
+    assert_eq!(
+        empty_nee
+            .matches("    consider_quad_at(quad_distance_")
+            .count(),
+        6 + 1
+    );
     let spheres = kernel("spheres");
     assert!(
         !spheres.contains("fn consider_quad"),

@@ -8,7 +8,7 @@ medium and an `hg` phase function, a dielectric's `medium` its interior; image t
 `bitmap`s (bilinear, repeating), `uv_checker` as `checkerboard`, with shapes' UV frames arranged
 to agree; an environment background as an `envmap` whose frame is arranged to agree, a colour
 as a `constant` emitter) for Mitsuba 3 (variant llvm_ad_rgb, `path` integrator with NEE and MIS, or `volpath`
-for scenes with media, with Russian roulette from depth 5 as rt-gpu's default there; box pixel
+for scenes with media, both with Russian roulette from depth 5 as rt-gpu's default; box pixel
 filter, the same max depth, sampler `--mitsuba-sampler`, default multijitter, its best here),
 renders it there at SPP samples per pixel, and finds how long rt-gpu, with its default settings,
 needs to reach the same error.
@@ -101,7 +101,7 @@ def box_faces(lo, hi):
     ]
 
 
-def mitsuba_scene(path, width, height, max_depth, sampler):
+def mitsuba_scene(path, width, height, max_depth, sampler, roulette_depth=5):
     import mitsuba as mi
 
     scene = tomllib.load(open(path, "rb"))
@@ -267,10 +267,10 @@ def mitsuba_scene(path, width, height, max_depth, sampler):
                 shape["interior"] = interiors[material]
             shapes[f"shape{len(shapes)}"] = shape
 
-    # Media: volpath, roulette from depth 5 as rt-gpu's default for such scenes (Mitsuba's own
-    # default too); Mitsuba's max_depth counts segments as rt-gpu's does.
-    integrator = {"type": "volpath", "max_depth": max_depth, "rr_depth": 5} if interiors else {
-        "type": "path", "max_depth": max_depth}
+    # Media: volpath. Roulette as rt-gpu's (default depth 5, Mitsuba's own default too; off is a
+    # depth no path reaches); Mitsuba's max_depth counts segments as rt-gpu's does.
+    integrator = {"type": "volpath" if interiors else "path", "max_depth": max_depth,
+                  "rr_depth": roulette_depth if roulette_depth > 0 else max_depth + 1}
     return {
         "type": "scene",
         "integrator": integrator,
@@ -320,7 +320,8 @@ SUMMARY = re.compile(r"estimated RMSE ([0-9.e+-]+)")
 def rt_gpu(binary, scene, spp, args, path, extra=()):
     """One render as a whole process: (seconds, image, its own RMSE estimate)."""
     cmd = [binary, scene, "--spp", str(spp), "--seed", "1", "--backend", args.backend,
-           "--size", f"{args.width}x{args.height}", "--max-depth", str(args.max_depth), "-o", path, *extra]
+           "--size", f"{args.width}x{args.height}", "--max-depth", str(args.max_depth),
+           "--roulette-depth", str(args.roulette_depth), "-o", path, *extra]
     start = time.perf_counter()
     done = subprocess.run(cmd, check=True, stderr=subprocess.PIPE, text=True)
     seconds = time.perf_counter() - start
@@ -352,7 +353,7 @@ def render_mitsuba(args):
 
     mi.set_variant("llvm_ad_rgb")
     desc, width, height, max_depth = mitsuba_scene(args.scene, args.width, args.height, args.max_depth,
-                                                   args.mitsuba_sampler)
+                                                   args.mitsuba_sampler, args.roulette_depth)
     scene = mi.load_dict(desc)
     # Warm-up: Mitsuba compiles its kernels on the first render.
     np.array(mi.render(scene, spp=1, seed=99))
@@ -366,7 +367,7 @@ def render_mitsuba(args):
 def run_mitsuba(args, mi_path):
     """Mitsuba's render (render_mitsuba) in a process of its own, saved to mi_path."""
     subprocess.run([sys.executable, __file__, args.scene, "--spp", str(args.spp), "--mitsuba-only", mi_path,
-                    "--mitsuba-sampler", args.mitsuba_sampler]
+                    "--mitsuba-sampler", args.mitsuba_sampler, "--roulette-depth", str(args.roulette_depth)]
                    + (["--width", str(args.width)] if args.width else [])
                    + (["--height", str(args.height)] if args.height else [])
                    + (["--max-depth", str(args.max_depth)] if args.max_depth else []), check=True)
@@ -382,6 +383,9 @@ def main():
     parser.add_argument("--mitsuba-sampler", default="multijitter",
                         help="independent, stratified, multijitter, ldsampler, orthogonal")
     parser.add_argument("--backend", default="gpu", help="rt-gpu backend")
+    parser.add_argument("--roulette-depth", type=int, default=5, metavar="N",
+                        help="Russian roulette from segment N on in both renderers, 0: off [default: 5, "
+                             "rt-gpu's and Mitsuba's default]")
     parser.add_argument("--binary", default="target/release/rt-gpu")
     parser.add_argument("--reference", metavar="PFM", help="reference image [default: render one]")
     parser.add_argument("--reference-noise", type=float, metavar="RMSE", help="the reference's own RMSE")
@@ -409,7 +413,7 @@ def main():
                   f"{seconds:.2f} s, {w * h * args.spp / seconds / 1e6:.3f} Msamples/s, "
                   f"mean radiance ({mean[0]:.5f}, {mean[1]:.5f}, {mean[2]:.5f})", flush=True)
         subprocess.run([args.binary, "bench", args.scene, "--spp", str(args.bench_spp or args.spp), "--size", f"{w}x{h}",
-                        "--max-depth", str(depth)], check=False)
+                        "--max-depth", str(depth), "--roulette-depth", str(args.roulette_depth)], check=False)
         return
 
     os.makedirs(args.cache, exist_ok=True)

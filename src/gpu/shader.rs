@@ -3,7 +3,7 @@
 //! only when the scene needs that feature: a scene without spheres gets no sphere code, one
 //! without glass no dielectric branch.
 
-use crate::gpu::layout::{GpuQuad, SceneBuffers, WgslStruct, WgslType, float_literal};
+use crate::gpu::layout::{GpuQuad, GpuSphere, SceneBuffers, WgslStruct, WgslType, float_literal};
 use crate::material::{self, KINDS, MaterialKind};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
@@ -375,32 +375,68 @@ fn material_dispatch(features: &Features) -> String {
 }
 
 /// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does), each
-/// with its index among its kind.
+/// with its index among its kind; with nee, for shadow rays (`intersect_emitter`), the same
+/// tests keeping only the closest's distance and index (`inline_scene_first`) and the full
+/// tests of the emitting primitives alone (`inline_emitters`).
 fn inline_scene(scene: &FlatScene, features: &Features) -> String {
     let buffers = SceneBuffers::new(scene);
-    let mut out = String::from(
-        "\n// ---- the scene's primitives, generated ----\nfn inline_scene(ray: Ray, c: ptr<function, Closest>) {\n",
-    );
-    if features.spheres {
-        for (i, s) in buffers.spheres.iter().take(scene.spheres.len()).enumerate() {
-            out.push_str(&format!(
-                "    consider_sphere({}, {i}u, ray, c);\n",
-                s.wgsl_constructor()
-            ));
-        }
-    }
+    let spheres = if features.spheres {
+        &buffers.spheres[..scene.spheres.len()]
+    } else {
+        &[]
+    };
     let quads = if features.quads {
         &buffers.quads[..scene.quads.len()]
     } else {
         &[]
     };
-    for (i, q) in quads.iter().enumerate() {
-        out.push_str(&format!(
-            "    consider_quad_at(quad_distance_{i}(ray), {}, {i}u, ray, c);\n",
+    let full_sphere = |i: usize, s: &GpuSphere| {
+        format!(
+            "    consider_sphere({}, {i}u, ray, true, c);\n",
+            s.wgsl_constructor()
+        )
+    };
+    let full_quad = |i: usize, q: &GpuQuad| {
+        format!(
+            "    consider_quad_at(quad_distance_{i}(ray), {}, {i}u, ray, true, c);\n",
             q.wgsl_constructor()
-        ));
+        )
+    };
+    let mut out = String::from("\n// ---- the scene's primitives, generated ----\n");
+    out.push_str("fn inline_scene(ray: Ray, c: ptr<function, Closest>) {\n");
+    for (i, s) in spheres.iter().enumerate() {
+        out.push_str(&full_sphere(i, s));
+    }
+    for (i, q) in quads.iter().enumerate() {
+        out.push_str(&full_quad(i, q));
     }
     out.push_str("}\n");
+    if features.nee {
+        out.push_str("\nfn inline_scene_first(ray: Ray, c: ptr<function, Closest>) {\n");
+        for (i, s) in spheres.iter().enumerate() {
+            out.push_str(&format!(
+                "    consider_first(sphere_distance({}, ray), (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | {i}u, c);\n",
+                s.wgsl_constructor()
+            ));
+        }
+        for i in 0..quads.len() {
+            out.push_str(&format!(
+                "    consider_first(quad_distance_{i}(ray), (KIND_QUAD << PRIMITIVE_INDEX_BITS) | {i}u, c);\n"
+            ));
+        }
+        out.push_str("}\n\nfn inline_emitters(ray: Ray, c: ptr<function, Closest>) {\n");
+        for (i, s) in spheres.iter().enumerate() {
+            if s.light > 0 {
+                out.push_str(&full_sphere(i, s));
+            }
+        }
+        for (i, q) in quads.iter().enumerate() {
+            if q.light > 0 {
+                out.push_str(&full_quad(i, q));
+            }
+        }
+        out.push_str("}\n");
+    }
     for (i, q) in quads.iter().enumerate() {
         out.push_str(&quad_distance_inlined(i, q));
     }
