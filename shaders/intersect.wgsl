@@ -165,6 +165,39 @@ fn consider_quad_at(t: f32, q: Quad, index: u32, ray: Ray, in_order: bool, c: pt
 }
 //#endif
 
+//#if INLINE_SCENE
+// Where a ray first meets a box's surface: `t` (-1: nowhere ahead) and which of its six quads
+// that is (`face`, in the order of box_faces in src/scene/flat.rs: +z, +x, -z, -x, +y, -y).
+// Kernels with the scene inlined test a box's quads as one (see box_test in
+// src/gpu/shader.rs): about 60% of the work of six quad tests on lavapipe.
+struct BoxHit {
+    t: f32,
+    face: u32,
+}
+
+// The box between the planes of its opposite faces, -x and +x, -y and +y, -z and +z: where the
+// ray crosses them (`low`, `high`: each face's quad_distance before its edges are tested, so
+// that a face coincident with another quad meets the ray at the same t), whether it crosses
+// them at all (not where it runs parallel to them: |denominator| < 1e-8, as for quads) and, if
+// not, whether its origin lies between them. The ray is inside the box where it is between
+// all three pairs: it enters at the latest entry, if that lies ahead, or else leaves at the
+// earliest exit.
+fn slab_hit(low: vec3f, high: vec3f, crosses: vec3<bool>, between: vec3<bool>) -> BoxHit {
+    let unbounded = select(vec3f(3.4e38), vec3f(-3.4e38), between);
+    let enter = select(unbounded, min(low, high), crosses);
+    let exit = select(-unbounded, max(low, high), crosses);
+    let entry = max(max(enter.x, enter.y), enter.z);
+    let leave = min(min(exit.x, exit.y), exit.z);
+    let entering = entry > 0.0;
+    let t = select(leave, entry, entering);
+    // The face crossed at t; at an edge, the earlier quad, as among quads met at one distance.
+    let at_low = (low == vec3f(t)) & crosses;
+    let at_high = (high == vec3f(t)) & crosses;
+    let face = select(select(select(select(select(5u, 4u, at_high.y), 3u, at_low.x), 2u, at_low.z), 1u, at_high.x), 0u, at_high.z);
+    return BoxHit(select(-1.0, t, entry <= leave && t > 0.0), face);
+}
+//#endif
+
 // A ray in the frame of the watertight triangle test: its dominant axis becomes z (`kz`: which
 // axis that was) and it is sheared to run along +z; computed once per ray.
 struct Shear {

@@ -261,6 +261,11 @@ pub struct FlatScene {
     pub medium_crossings: u32,
     /// Whether some material's texture needs surface (UV) coordinates: hits compute them.
     pub uv_textures: bool,
+    /// Where each box's six quads begin in `quads` (in the order of [`box_faces`]): kernels
+    /// with the scene inlined test the six as one, as the slabs between opposite faces (see
+    /// `box_test` in src/gpu/shader.rs: about 60% of the work of six quad tests on lavapipe).
+    /// The quads stay what the CPU, the BVH, lights and hits use.
+    pub boxes: Vec<u32>,
 }
 
 /// An emitting primitive as light sampling sees it, picked in proportion to its power.
@@ -319,6 +324,7 @@ impl FlatScene {
         crate::film::check_image_size(width, height).map_err(SceneError::Invalid)?;
         let mut spheres = Vec::new();
         let mut quads = Vec::new();
+        let mut boxes = Vec::new();
         let mut triangles = Vec::new();
         let mut triangle_normals: Vec<[Vec3; 3]> = Vec::new();
         // With vertex normals anywhere, every triangle gets corner normals (its face's if none).
@@ -373,6 +379,7 @@ impl FlatScene {
                     material,
                 )),
                 Shape::Cuboid { min, max } => {
+                    boxes.push(quads.len() as u32);
                     for [q, u, v] in box_faces(min, max) {
                         quads.push(Quad::new(
                             place(q),
@@ -487,6 +494,7 @@ impl FlatScene {
             lights: Vec::new(),
             medium_crossings: 0,
             uv_textures: false,
+            boxes,
         };
         flat.uv_textures = flat.materials.iter().any(|m| {
             let features = m.extra_features();
