@@ -58,6 +58,9 @@ struct Closest {
     triangle: u32,      // instance: which of its mesh's triangles (index in triangles)
 }
 
+// Nothing found yet: every hit is nearer.
+const NO_CLOSEST = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
+
 // Whether a hit at t on primitive `packed` replaces the closest so far: nearer, or as near and
 // earlier in the order spheres, quads, triangles (coincident surfaces resolve the same whatever
 // order a BVH traversal meets them in; see consider in src/cpu/shapes.rs).
@@ -282,7 +285,7 @@ fn instanced_triangle_surface(c: Closest) -> Surface {
 
 // The closest hit beyond the ray's origin, if any.
 fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
+    var c = NO_CLOSEST;
 //#if INLINE_SCENE
     // The scene's primitives are constants in this kernel (see inline_scene below).
     inline_scene(ray, &c);
@@ -301,12 +304,12 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 // worked out, from the emitting primitives alone (closest of all, it is closest of those, so
 // the hit is intersect's). The Cornell box: 3% fewer instructions on lavapipe.
 fn intersect_emitter(ray: Ray, hit: ptr<function, Hit>) -> bool {
-    var first = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
+    var first = NO_CLOSEST;
     inline_scene_first(ray, &first);
     if !first.found || light_of(first.primitive) == 0u {
         return false;
     }
-    var c = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
+    var c = NO_CLOSEST;
     inline_emitters(ray, &c);
     return hit_at_closest(ray, c, hit);
 }
