@@ -281,8 +281,8 @@ fn specialised_against_general(
     (special, differing)
 }
 
-/// Boxes in kernels with the scene inlined are tested as one (the slabs between opposite faces,
-/// in the box's frame), everywhere else as their six quads: the two agree with the same seed,
+/// Boxes in kernels with the scene inlined are tested as one (the slabs between the planes of
+/// opposite faces), everywhere else as their six quads: the two agree with the same seed,
 /// pixel by pixel as above, for rays that enter boxes, leave them from inside (the camera in a
 /// box room, a glass box), hit emitting boxes and cross smoke in a box, with the naive
 /// integrator and with nee (whose shadow rays test boxes for the closest primitive only).
