@@ -1,6 +1,8 @@
 // BVH traversal (twin: src/cpu/accel.rs): depth-first; an interior node tests both children's
 // boxes, enters the nearer by entry distance and pushes the other, with that distance, on a
-// stack in private memory.
+// stack in private memory. Nodes are read as `gpu_bvh` in src/gpu/layout.rs lays them out:
+// an interior node holds its children's boxes and references, so entering a node is one read
+// and a leaf's primitives are known from its reference.
 //
 // Lavapipe silently breaks every loop of an invocation once its SIMD group has run 65 535 loop
 // iterations in all, and a traversal's length depends on the ray. So the kernel counts: the
@@ -15,11 +17,11 @@
 var<private> loop_iterations: u32;
 var<private> budget_spent: bool;
 
-// Where the ray enters the node's box if it meets it within [0, t_max], else -1 (see
-// box_entry in src/accel.rs).
-fn box_entry(n: BvhNode, origin: vec3f, inverse: vec3f, t_max: f32) -> f32 {
-    let t0 = (n.min - origin) * inverse;
-    let t1 = (n.max - origin) * inverse;
+// Where the ray enters the box if it meets it within [0, t_max], else -1 (see box_entry in
+// src/accel.rs).
+fn box_entry(box_min: vec3f, box_max: vec3f, origin: vec3f, inverse: vec3f, t_max: f32) -> f32 {
+    let t0 = (box_min - origin) * inverse;
+    let t1 = (box_max - origin) * inverse;
     let lo = min(t0, t1);
     let hi = max(t0, t1);
     let near = max(max(lo.x, lo.y), max(lo.z, 0.0));
@@ -56,8 +58,8 @@ fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<fu
 //#if TRIANGLES
 //#if INSTANCES
 const NO_INSTANCE: u32 = 0xffffffffu;
-// Marks a stack entry that enters an instance (its index below this bit), not a node.
-const ENTER_INSTANCE: u32 = 0x80000000u;
+// The entry distance of a stack entry that enters an instance (the entry its index), not a node.
+const ENTER_INSTANCE: f32 = -1.0;
 
 // Triangle `triangle` of instance `instance`'s mesh against the ray in mesh coordinates (the
 // instance's material is read once the closest hit is known, in intersect).
@@ -82,9 +84,10 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 // height it had then, the scene's ray is restored (see consider_instance in src/cpu/shapes.rs,
 // which re-enters the CPU's traversal instead).
 //
-// One iteration per node entered, none for a child whose box the ray misses; a popped entry
-// whose box now lies beyond the closest hit costs an iteration but no node read. (Testing the
-// popped node's own box instead, as before, took 1.25x as long on lavapipe.)
+// One iteration per node entered (`entering`: a node's or a leaf's reference), none for a
+// child whose box the ray misses; a popped entry whose box now lies beyond the closest hit
+// costs an iteration but no node read. (Testing the popped node's own box instead, as before,
+// took 1.25x as long on lavapipe.)
 fn traverse(world: Ray, c: ptr<function, Closest>) {
     var ray = world;
     let world_inverse = inverse_direction(world.dir);
@@ -98,7 +101,7 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
     var stack: array<u32, BVH_STACK>;
     var stack_entry: array<f32, BVH_STACK>;
     var top = 0u;
-    var index = 0u;
+    var entering = BVH_ROOT;
     var entered = true;
 //#if TRIANGLES
 //#if INSTANCES
@@ -114,10 +117,11 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
         loop_iterations += params.traversal_weight;
         var pop = true;
         if entered {
-            let node = bvh_node(index);
-            if (node.count & BVH_INTERIOR) == 0u {
-                loop_iterations += params.traversal_weight * (node.count + 1u);
-                for (var i = node.offset; i < node.offset + node.count; i++) {
+            if (entering & BVH_LEAF) != 0u {
+                let first = entering & (BVH_LEAF_OFFSET_LIMIT - 1u);
+                let count = (entering & ~BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT;
+                loop_iterations += params.traversal_weight * (count + 1u);
+                for (var i = first; i < first + count; i++) {
                     let packed = bvh_primitives[i];
 //#if TRIANGLES
 //#if INSTANCES
@@ -126,8 +130,8 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
                         continue;
                     }
                     if primitive_kind(packed) == KIND_INSTANCE {
-                        stack[top] = ENTER_INSTANCE | primitive_index(packed);
-                        stack_entry[top] = 0.0;
+                        stack[top] = primitive_index(packed);
+                        stack_entry[top] = ENTER_INSTANCE;
                         top += 1u;
                         continue;
                     }
@@ -136,20 +140,19 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
                     consider_primitive(packed, ray, &sh, c);
                 }
             } else {
-                let first = index + 1u;
-                let second = node.offset;
-                let t_first = box_entry(bvh_node(first), ray.origin, inverse, (*c).t);
-                let t_second = box_entry(bvh_node(second), ray.origin, inverse, (*c).t);
+                let node = bvh_node(entering);
+                let t_first = box_entry(node.first_min, node.first_max, ray.origin, inverse, (*c).t);
+                let t_second = box_entry(node.second_min, node.second_max, ray.origin, inverse, (*c).t);
                 let hit_first = t_first >= 0.0;
                 let hit_second = t_second >= 0.0;
                 if hit_first || hit_second {
                     let second_nearer = hit_second && (!hit_first || t_second < t_first);
                     if hit_first && hit_second {
-                        stack[top] = select(second, first, second_nearer);
+                        stack[top] = select(node.second, node.first, second_nearer);
                         stack_entry[top] = select(t_second, t_first, second_nearer);
                         top += 1u;
                     }
-                    index = select(first, second, second_nearer);
+                    entering = select(node.first, node.second, second_nearer);
                     pop = false;
                 }
             }
@@ -169,19 +172,19 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
                 break;
             }
             top -= 1u;
-            index = stack[top];
+            entering = stack[top];
             // The box as box_entry would test it against the closest hit now.
             entered = stack_entry[top] <= (*c).t * BOX_FAR_WIDENING;
 //#if TRIANGLES
 //#if INSTANCES
-            if (index & ENTER_INSTANCE) != 0u {
-                instance = index & ~ENTER_INSTANCE;
+            if stack_entry[top] == ENTER_INSTANCE {
+                instance = entering;
                 floor = top;
                 let inst = instances[instance];
                 ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));
                 inverse = inverse_direction(ray.dir);
                 sh = shear_of(ray.dir);
-                index = inst.root;
+                entering = inst.root;
                 entered = true;
             }
 //#endif

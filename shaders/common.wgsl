@@ -63,13 +63,15 @@ fn image_value(i: u32) -> vec4f {
 @group(0) @binding(13) var<storage, read> instances: array<Instance>;
 //#endif
 //#if BVH
-// Two texels per node (TEXEL_ROW in src/gpu/layout.rs).
+// Four texels per node (TEXEL_ROW and GpuBvhNode in src/gpu/layout.rs).
 @group(0) @binding(10) var bvh_node_texels: texture_2d<u32>;
 @group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
 
 fn bvh_node(i: u32) -> BvhNode {
-    let a = texel_at(bvh_node_texels, 2u * i);
-    let b = texel_at(bvh_node_texels, 2u * i + 1u);
-    return BvhNode(bitcast<vec3f>(a.xyz), a.w, bitcast<vec3f>(b.xyz), b.w);
+    let a = texel_at(bvh_node_texels, 4u * i);
+    let b = texel_at(bvh_node_texels, 4u * i + 1u);
+    let c = texel_at(bvh_node_texels, 4u * i + 2u);
+    let d = texel_at(bvh_node_texels, 4u * i + 3u);
+    return BvhNode(bitcast<vec3f>(a.xyz), a.w, bitcast<vec3f>(b.xyz), b.w, bitcast<vec3f>(c.xyz), bitcast<vec3f>(d.xyz));
 }
 //#endif

@@ -465,10 +465,11 @@ pub fn box_entry(min: Vec3, max: Vec3, origin: Vec3, inverse: Vec3, t_max: f32) 
 pub const BOX_FAR_WIDENING: f32 = 1.0 + 2.0 * (3.0 * 5.960_464_5e-8 / (1.0 - 3.0 * 5.960_464_5e-8));
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn random_items(n: usize) -> Vec<Item> {
+    /// `n` boxes scattered in a 100-unit cube, the same every call.
+    pub(crate) fn random_items(n: usize) -> Vec<Item> {
         let mut state = 12345u64;
         let mut next = move || {
             state = state

@@ -201,23 +201,90 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// A BVH node (see `accel::Node`): its box, and for an interior node the index of its
-    /// second child (the first follows it) and `BVH_INTERIOR | axis`, for a leaf where its
-    /// primitives start in the reference array and how many there are.
+    /// An interior node of the BVH as the kernel reads it (see `gpu_bvh`): both children's
+    /// boxes and references, so that one read of four texels decides which children a ray
+    /// enters, and a leaf is known as one before it is reached.
     pub struct GpuBvhNode as "BvhNode" {
-        min: [f32; 3],
-        offset: u32,
-        max: [f32; 3],
-        count: u32,
+        first_min: [f32; 3],
+        first: u32,
+        first_max: [f32; 3],
+        second: u32,
+        second_min: [f32; 3],
+        _pad0: u32,
+        second_max: [f32; 3],
+        _pad1: u32,
+    }
+}
+
+/// A child reference of `GpuBvhNode`: a leaf's has this bit, its primitive count (at most 7;
+/// `accel::MAX_LEAF`) in the bits `BVH_LEAF_COUNT_SHIFT` up and where its primitives start in
+/// the reference array below; an interior node's is its index among the kernel's nodes.
+pub const BVH_LEAF: u32 = 1 << 31;
+pub const BVH_LEAF_COUNT_SHIFT: u32 = 28;
+/// Where a leaf's primitives may start: below 2^28 (a quarter of a billion references).
+pub const BVH_LEAF_OFFSET_LIMIT: u32 = 1 << BVH_LEAF_COUNT_SHIFT;
+
+/// The kernel's BVH: the host's interior nodes, in their order (the root's first), each with
+/// its two children's boxes and references (`GpuBvhNode`); the same hierarchy the CPU
+/// traverses, with the same decisions, laid out for one read per node entered (a node's own
+/// box is read by its parent). Also the reference of every host node, by its index.
+pub fn gpu_bvh(bvh: &crate::accel::Bvh) -> (Vec<GpuBvhNode>, Vec<u32>) {
+    let mut interior = 0;
+    let references: Vec<u32> = bvh
+        .nodes
+        .iter()
+        .map(|n| {
+            if n.is_leaf() {
+                leaf_reference(n)
+            } else {
+                interior += 1;
+                interior - 1
+            }
+        })
+        .collect();
+    let nodes = bvh
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| !n.is_leaf())
+        .map(|(i, n)| {
+            let (first, second) = (&bvh.nodes[i + 1], &bvh.nodes[n.offset as usize]);
+            GpuBvhNode {
+                first_min: first.min.to_array(),
+                first: references[i + 1],
+                first_max: first.max.to_array(),
+                second: references[n.offset as usize],
+                second_min: second.min.to_array(),
+                _pad0: 0,
+                second_max: second.max.to_array(),
+                _pad1: 0,
+            }
+        })
+        .collect();
+    (nodes, references)
+}
+
+fn leaf_reference(leaf: &crate::accel::Node) -> u32 {
+    const _: () = assert!(crate::accel::MAX_LEAF < 8);
+    BVH_LEAF | (leaf.count << BVH_LEAF_COUNT_SHIFT) | leaf.offset
+}
+
+/// Where the kernel's traversal of the scene starts: its root's reference (`gpu_bvh`); an
+/// empty leaf for an empty hierarchy.
+pub fn bvh_root(bvh: &crate::accel::Bvh) -> u32 {
+    match bvh.nodes.first() {
+        Some(root) if !root.is_leaf() => 0,
+        Some(root) => leaf_reference(root),
+        None => BVH_LEAF,
     }
 }
 
 /// Texels per row of the textures the kernel reads arrays from (`Rgba32Uint`, texel i at
 /// column i % TEXEL_ROW of row i / TEXEL_ROW): the BVH's nodes (`bvh_node_texels`, node i is
-/// texels 2i (min, offset) and 2i + 1 (max, count)) and the images (`image_texels`, one vec4f
+/// texels 4i to 4i + 3) and the images (`image_texels`, one vec4f
 /// of `ImageArray` each). Lavapipe fetches a texel for all its SIMD lanes at once, where it reads
 /// a storage buffer at lane-dependent addresses one lane and one word at a time. WebGPU's
-/// smallest guaranteed 2D texture (8192 rows) holds 32 M texels: 16 M nodes, 512 MB.
+/// smallest guaranteed 2D texture (8192 rows) holds 32 M texels: 8 M nodes, 512 MB.
 pub const TEXEL_ROW: u32 = 4096;
 
 /// Rows of a texture holding `texels` texels (at least one).
@@ -434,7 +501,9 @@ fn wgsl_constants() -> String {
         ("KIND_QUAD", KIND_QUAD.literal()),
         ("KIND_TRIANGLE", crate::scene::flat::KIND_TRIANGLE.literal()),
         ("KIND_INSTANCE", crate::scene::flat::KIND_INSTANCE.literal()),
-        ("BVH_INTERIOR", crate::accel::INTERIOR.literal()),
+        ("BVH_LEAF", BVH_LEAF.literal()),
+        ("BVH_LEAF_COUNT_SHIFT", BVH_LEAF_COUNT_SHIFT.literal()),
+        ("BVH_LEAF_OFFSET_LIMIT", BVH_LEAF_OFFSET_LIMIT.literal()),
         ("BOX_FAR_WIDENING", crate::accel::BOX_FAR_WIDENING.literal()),
         ("TEXEL_ROW", TEXEL_ROW.literal()),
         (
@@ -695,17 +764,7 @@ impl SceneBuffers {
                 _pad: 0,
             })
             .collect();
-        let mut bvh_nodes: Vec<GpuBvhNode> = scene
-            .bvh
-            .nodes
-            .iter()
-            .map(|n| GpuBvhNode {
-                min: n.min.to_array(),
-                offset: n.offset,
-                max: n.max.to_array(),
-                count: n.count,
-            })
-            .collect();
+        let (mut bvh_nodes, bvh_references) = gpu_bvh(&scene.bvh);
         let mut bvh_primitives = scene.bvh.primitives.clone();
         let mut instances: Vec<GpuInstance> = scene
             .instances
@@ -720,7 +779,7 @@ impl SceneBuffers {
                     to_local_x,
                     to_local_y,
                     to_local_z,
-                    root: i.root,
+                    root: bvh_references[i.root as usize],
                     material: i.material,
                     _pad: [0; 2],
                 }
@@ -733,6 +792,7 @@ impl SceneBuffers {
             triangles.push(GpuTriangle::default());
         }
         if bvh_nodes.is_empty() {
+            // Only a lone leaf, or nothing, which the kernel never reads as a node.
             bvh_nodes.push(GpuBvhNode::default());
         }
         let mut triangle_normals: Vec<f32> = scene
@@ -876,5 +936,54 @@ pub fn whole_image_dispatch(opts: &RenderOptions) -> GpuDispatch {
         sample_count: 0,
         samples_before: 0,
         seed: opts.seed,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::Bvh;
+    use crate::accel::tests::random_items;
+
+    /// The kernel's layout is the host's hierarchy: every interior node's children's boxes and
+    /// references where the host has them, leaves' ranges intact, from the scene's root and
+    /// from an appended mesh's.
+    #[test]
+    fn the_kernels_bvh_is_the_hosts() {
+        for n in [1, 2, 5, 300] {
+            let mut bvh = Bvh::build(&mut random_items(n));
+            let mesh_root = bvh.append_hierarchy(Bvh::build(&mut random_items(777)));
+            let (nodes, references) = gpu_bvh(&bvh);
+            assert_eq!(bvh_root(&bvh), references[0]);
+            let mut reached = vec![false; bvh.nodes.len()];
+            let mut stack = vec![0, mesh_root as usize];
+            while let Some(i) = stack.pop() {
+                reached[i] = true;
+                let host = &bvh.nodes[i];
+                let reference = references[i];
+                if host.is_leaf() {
+                    assert_ne!(reference & BVH_LEAF, 0);
+                    assert_eq!(reference & (BVH_LEAF_OFFSET_LIMIT - 1), host.offset);
+                    assert_eq!((reference & !BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT, host.count);
+                    continue;
+                }
+                assert_eq!(reference & BVH_LEAF, 0);
+                let node = &nodes[reference as usize];
+                let (first, second) = (i + 1, host.offset as usize);
+                assert_eq!(node.first, references[first]);
+                assert_eq!(node.second, references[second]);
+                assert_eq!(node.first_min, bvh.nodes[first].min.to_array());
+                assert_eq!(node.first_max, bvh.nodes[first].max.to_array());
+                assert_eq!(node.second_min, bvh.nodes[second].min.to_array());
+                assert_eq!(node.second_max, bvh.nodes[second].max.to_array());
+                stack.extend([first, second]);
+            }
+            assert!(reached.iter().all(|&r| r), "a node is unreachable");
+            assert_eq!(
+                nodes.len(),
+                bvh.nodes.iter().filter(|n| !n.is_leaf()).count()
+            );
+        }
+        assert_eq!(bvh_root(&Bvh::default()), BVH_LEAF);
     }
 }

@@ -4,8 +4,8 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
-    ACCUM_WORDS, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, TEXEL_ROW,
-    WORKGROUP_SIZE, base_params, texel_rows, whole_image_dispatch,
+    ACCUM_WORDS, BVH_LEAF_OFFSET_LIMIT, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray,
+    SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params, texel_rows, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::film::{Film, PixelStats};
@@ -273,7 +273,13 @@ impl GpuRenderer {
             }
         }
         let max_rows = self.ctx.limits.max_texture_dimension_2d as u64;
-        let node_rows = texel_rows(2 * buffers.bvh_nodes.len() as u64);
+        let node_rows = texel_rows(4 * buffers.bvh_nodes.len() as u64);
+        if buffers.bvh_primitives.len() as u64 > BVH_LEAF_OFFSET_LIMIT as u64 {
+            return Err(GpuError::TooLarge(format!(
+                "the scene's BVH has {} primitive references, more than the kernel can address ({BVH_LEAF_OFFSET_LIMIT}): use fewer triangles, or --backend cpu",
+                buffers.bvh_primitives.len()
+            )));
+        }
         if node_rows > max_rows {
             return Err(GpuError::TooLarge(format!(
                 "the scene's BVH nodes take {node_rows} rows of texels, more than this GPU's largest texture ({max_rows}): use fewer triangles, or --backend cpu"

@@ -296,7 +296,10 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     // also the instances of one top-level leaf (entered one by one from the stack) and the
     // levels of an instance's mesh below its root.
     let stack = scene.bvh.depth.max(1) + scene.largest_instance_leaf() + scene.instance_depth;
-    out.push_str(&format!("const BVH_STACK: u32 = {stack}u;\n"));
+    out.push_str(&format!(
+        "const BVH_STACK: u32 = {stack}u;\nconst BVH_ROOT: u32 = {}u;\n",
+        crate::gpu::layout::bvh_root(&scene.bvh)
+    ));
     if features.uniform_scene {
         out.push_str(&format!(
             "const SCENE_CAPACITY: u32 = {}u;\n",
