@@ -51,7 +51,7 @@ fn image_value(i: u32) -> vec4f {
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 //#endif
 //#endif
-// Meshes and the BVH: never uniform (they may be large).
+// Meshes: never uniform (they may be large); the BVH where it fits (UNIFORM_BVH).
 //#if TRIANGLES
 @group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
 //#endif
@@ -63,9 +63,17 @@ fn image_value(i: u32) -> vec4f {
 @group(0) @binding(13) var<storage, read> instances: array<Instance>;
 //#endif
 //#if BVH
+@group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
+//#if UNIFORM_BVH
+// Small hierarchies: read from a uniform array (see uniform_bvh in src/gpu/shader.rs).
+@group(0) @binding(10) var<uniform> bvh_nodes: array<BvhNode, BVH_CAPACITY>;
+
+fn bvh_node(i: u32) -> BvhNode {
+    return bvh_nodes[i];
+}
+//#else
 // Four texels per node (TEXEL_ROW and GpuBvhNode in src/gpu/layout.rs).
 @group(0) @binding(10) var bvh_node_texels: texture_2d<u32>;
-@group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
 
 fn bvh_node(i: u32) -> BvhNode {
     let a = texel_at(bvh_node_texels, 4u * i);
@@ -74,4 +82,5 @@ fn bvh_node(i: u32) -> BvhNode {
     let d = texel_at(bvh_node_texels, 4u * i + 3u);
     return BvhNode(bitcast<vec3f>(a.xyz), a.w, bitcast<vec3f>(b.xyz), b.w, bitcast<vec3f>(c.xyz), bitcast<vec3f>(d.xyz));
 }
+//#endif
 //#endif

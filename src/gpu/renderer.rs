@@ -104,8 +104,14 @@ pub struct Timings {
 /// primitives, vertex normals, instances) and, as textures, its BVH's nodes and its images.
 struct SceneBindings {
     buffers: [wgpu::Buffer; 8],
-    bvh_nodes: wgpu::TextureView,
+    bvh_nodes: NodeBinding,
     images: wgpu::TextureView,
+}
+
+/// The BVH's nodes as the kernel reads them (`Features::uniform_bvh`).
+enum NodeBinding {
+    Texture(wgpu::TextureView),
+    Uniform(wgpu::Buffer),
 }
 
 pub struct GpuRenderer {
@@ -182,7 +188,11 @@ impl GpuRenderer {
                 buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
                 texture_entry(8),
                 buffer_entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
-                texture_entry(10),
+                if features.uniform_bvh {
+                    buffer_entry(10, wgpu::BufferBindingType::Uniform)
+                } else {
+                    texture_entry(10)
+                },
                 buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(13, wgpu::BufferBindingType::Storage { read_only: true }),
@@ -304,11 +314,22 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE
         };
         let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
-        let bvh_nodes = self.texel_texture(
-            "bvh nodes",
-            bytemuck::cast_slice(&buffers.bvh_nodes),
-            node_rows as u32,
-        );
+        let bvh_nodes = if features.uniform_bvh {
+            buffers
+                .bvh_nodes
+                .resize(features.bvh_capacity.max(1) as usize, Default::default());
+            NodeBinding::Uniform(self.buffer_with(
+                "bvh nodes",
+                bytemuck::cast_slice(&buffers.bvh_nodes),
+                wgpu::BufferUsages::UNIFORM,
+            ))
+        } else {
+            NodeBinding::Texture(self.texel_texture(
+                "bvh nodes",
+                bytemuck::cast_slice(&buffers.bvh_nodes),
+                node_rows as u32,
+            ))
+        };
         let images = self.texel_texture(
             "images",
             bytemuck::cast_slice(&ImageArray::new(scene).values),
@@ -413,7 +434,10 @@ impl GpuRenderer {
                     entry(9, &buffers[4]),
                     wgpu::BindGroupEntry {
                         binding: 10,
-                        resource: wgpu::BindingResource::TextureView(bvh_nodes),
+                        resource: match bvh_nodes {
+                            NodeBinding::Texture(view) => wgpu::BindingResource::TextureView(view),
+                            NodeBinding::Uniform(buffer) => buffer.as_entire_binding(),
+                        },
                     },
                     entry(11, &buffers[5]),
                     entry(12, &buffers[6]),
