@@ -976,7 +976,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         && !rt_gpu::gpu::Features::of(&flat).inline_scene
     {
         note!(
-            "note: lavapipe traces scenes through their BVH about 9x slower than `--backend cpu` does on the same cores"
+            "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores"
         );
     }
     if outcome == Outcome::Stopped {
