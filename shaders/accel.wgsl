@@ -7,7 +7,8 @@
 // Lavapipe silently breaks every loop of an invocation once its SIMD group has run 65 535 loop
 // iterations in all, and a traversal's length depends on the ray. So the kernel counts: the
 // host's bound on every other loop of a sample is added at the sample's start, and each
-// traversal iteration counts `traversal_weight` (lavapipe's SIMD lanes: a group runs each
+// traversal iteration (and pass of its popping loop, and primitive of a leaf) counts
+// `traversal_weight` (lavapipe's SIMD lanes: a group runs each
 // traversal as long as its slowest lane, so its count is at most the sum of its lanes'); a
 // traversal that would pass `loop_budget` (half lavapipe's limit: the group's samples may be
 // as many as its busiest lane's) stops and marks the sample spent, and the render loop leaves
@@ -86,8 +87,8 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 //
 // One iteration per interior node entered (`entering`: a node's or a leaf's reference), with
 // the leaf it descends into if it does; one per leaf popped from the stack; none for a child
-// whose box the ray misses; a popped entry whose box now lies beyond the closest hit costs an
-// iteration but no node read. The nodes are visited in the order the CPU visits them. (Testing the popped node's own box instead, as before,
+// whose box the ray misses; a popped entry whose box now lies beyond the closest hit costs a
+// pass of the popping loop, no node read. The nodes are visited in the order the CPU visits them. (Testing the popped node's own box instead, as before,
 // took 1.25x as long on lavapipe.)
 fn traverse(world: Ray, c: ptr<function, Closest>) {
     var ray = world;
@@ -159,37 +160,51 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
             pop = true;
         }
         if pop {
+            // Entries whose boxes now lie beyond the closest hit are dropped in an inner loop,
+            // far cheaper per iteration than the traversal's.
+            var finished = false;
+            loop {
+                // Every pass counts: lavapipe's limit counts this loop's every end.
+                loop_iterations += params.traversal_weight;
 //#if TRIANGLES
 //#if INSTANCES
-            if instance != NO_INSTANCE && top == floor {
-                instance = NO_INSTANCE;
-                ray = world;
-                inverse = world_inverse;
-                sh = world_shear;
+                if instance != NO_INSTANCE && top == floor {
+                    instance = NO_INSTANCE;
+                    ray = world;
+                    inverse = world_inverse;
+                    sh = world_shear;
+                }
+//#endif
+//#endif
+                if top == 0u {
+                    finished = true;
+                    break;
+                }
+                top -= 1u;
+                entering = stack[top];
+                // The box as box_entry would test it against the closest hit now.
+                entered = stack_entry[top] <= (*c).t * BOX_FAR_WIDENING;
+//#if TRIANGLES
+//#if INSTANCES
+                if stack_entry[top] == ENTER_INSTANCE {
+                    instance = entering;
+                    floor = top;
+                    let inst = instances[instance];
+                    ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));
+                    inverse = inverse_direction(ray.dir);
+                    sh = shear_of(ray.dir);
+                    entering = inst.root;
+                    entered = true;
+                }
+//#endif
+//#endif
+                if entered {
+                    break;
+                }
             }
-//#endif
-//#endif
-            if top == 0u {
+            if finished {
                 break;
             }
-            top -= 1u;
-            entering = stack[top];
-            // The box as box_entry would test it against the closest hit now.
-            entered = stack_entry[top] <= (*c).t * BOX_FAR_WIDENING;
-//#if TRIANGLES
-//#if INSTANCES
-            if stack_entry[top] == ENTER_INSTANCE {
-                instance = entering;
-                floor = top;
-                let inst = instances[instance];
-                ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));
-                inverse = inverse_direction(ray.dir);
-                sh = shear_of(ray.dir);
-                entering = inst.root;
-                entered = true;
-            }
-//#endif
-//#endif
         } else {
             entered = true;
         }
