@@ -140,7 +140,7 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
             let count = (entering & ~BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT;
             loop_iterations += params.traversal_weight * (count + 1u);
             for (var i = first; i < first + count; i++) {
-                let packed = bvh_primitives[i];
+                let packed = bvh_primitive(i);
 //#if TRIANGLES
 //#if INSTANCES
                 if instance != NO_INSTANCE {

@@ -63,10 +63,15 @@ fn image_value(i: u32) -> vec4f {
 @group(0) @binding(13) var<storage, read> instances: array<Instance>;
 //#endif
 //#if BVH
-@group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
 //#if UNIFORM_BVH
-// Small hierarchies: read from a uniform array (see uniform_bvh in src/gpu/shader.rs).
+// Small hierarchies: nodes and primitive references (four to a vec4u, the stride uniform
+// arrays need) read from uniform arrays (see uniform_bvh in src/gpu/shader.rs).
 @group(0) @binding(10) var<uniform> bvh_nodes: array<BvhNode, BVH_CAPACITY>;
+@group(0) @binding(11) var<uniform> bvh_primitive_words: array<vec4u, BVH_PRIMITIVE_CAPACITY>;
+
+fn bvh_primitive(i: u32) -> u32 {
+    return bvh_primitive_words[i / 4u][i % 4u];
+}
 
 fn bvh_node(i: u32) -> BvhNode {
     return bvh_nodes[i];
@@ -74,6 +79,11 @@ fn bvh_node(i: u32) -> BvhNode {
 //#else
 // Four texels per node (TEXEL_ROW and GpuBvhNode in src/gpu/layout.rs).
 @group(0) @binding(10) var bvh_node_texels: texture_2d<u32>;
+@group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
+
+fn bvh_primitive(i: u32) -> u32 {
+    return bvh_primitives[i];
+}
 
 fn bvh_node(i: u32) -> BvhNode {
     let a = texel_at(bvh_node_texels, 4u * i);

@@ -101,7 +101,8 @@ pub struct Timings {
 }
 
 /// What a scene binds: its buffers (spheres, quads, materials, lights, triangles, BVH
-/// primitives, vertex normals, instances) and, as textures, its BVH's nodes and its images.
+/// primitives, vertex normals, instances), its BVH's nodes (a texture, or a uniform buffer
+/// for small hierarchies) and its images (a texture).
 struct SceneBindings {
     buffers: [wgpu::Buffer; 8],
     bvh_nodes: NodeBinding,
@@ -193,7 +194,14 @@ impl GpuRenderer {
                 } else {
                     texture_entry(10)
                 },
-                buffer_entry(11, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer_entry(
+                    11,
+                    if features.uniform_bvh {
+                        wgpu::BufferBindingType::Uniform
+                    } else {
+                        wgpu::BufferBindingType::Storage { read_only: true }
+                    },
+                ),
                 buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(13, wgpu::BufferBindingType::Storage { read_only: true }),
             ],
@@ -314,6 +322,13 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE
         };
         let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
+        let primitives_usage = if features.uniform_bvh {
+            let words = 4 * features.bvh_primitive_capacity.max(1) as usize;
+            buffers.bvh_primitives.resize(words, 0);
+            wgpu::BufferUsages::UNIFORM
+        } else {
+            wgpu::BufferUsages::STORAGE
+        };
         let bvh_nodes = if features.uniform_bvh {
             buffers
                 .bvh_nodes
@@ -348,7 +363,7 @@ impl GpuRenderer {
             self.buffer_with(
                 "bvh primitives",
                 bytemuck::cast_slice(&buffers.bvh_primitives),
-                wgpu::BufferUsages::STORAGE,
+                primitives_usage,
             ),
             self.buffer_with(
                 "triangle normals",

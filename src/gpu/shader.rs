@@ -79,6 +79,8 @@ pub struct Features {
     /// than a texture.
     pub uniform_bvh: bool,
     pub bvh_capacity: u32,
+    /// With `uniform_bvh`, the primitive references' array length in vec4u (four each).
+    pub bvh_primitive_capacity: u32,
     /// Spheres and quads written into the kernel as constants, tested in straight-line code:
     /// no loads, no loops, and the compiler folds the zeros of axis-aligned quads.
     pub inline_scene: bool,
@@ -124,6 +126,8 @@ impl Features {
         let capacity = (longest.max(1) as u64).next_power_of_two();
         let interior_nodes = scene.bvh.nodes.iter().filter(|n| !n.is_leaf()).count();
         let bvh_capacity = (interior_nodes.max(1) as u64).next_power_of_two();
+        let reference_words = scene.bvh.primitives.len().div_ceil(4);
+        let bvh_primitive_capacity = (reference_words.max(1) as u64).next_power_of_two();
         // Bounded in size: a flat scene holds only the materials and lights its primitives
         // use, so neither outnumbers them.
         let inline_scene = scene.triangles.is_empty()
@@ -152,9 +156,13 @@ impl Features {
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
             // Lavapipe gathers a uniform array's words lane by lane in straight-line code, where
-            // a texel fetch is a call of ~150 instructions: `showcase` took 13% fewer.
-            uniform_bvh: bvh && bvh_capacity * NODE_BYTES <= MAX_UNIFORM_BYTES,
+            // a texel fetch is a call of ~150 instructions: `showcase` took 13% fewer (the
+            // references, read from storage one lane at a time otherwise: 3% fewer again).
+            uniform_bvh: bvh
+                && bvh_capacity * NODE_BYTES <= MAX_UNIFORM_BYTES
+                && bvh_primitive_capacity * 16 <= MAX_UNIFORM_BYTES,
             bvh_capacity: bvh_capacity as u32,
+            bvh_primitive_capacity: bvh_primitive_capacity as u32,
             inline_scene,
         }
     }
@@ -325,8 +333,9 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     }
     if features.uniform_bvh {
         out.push_str(&format!(
-            "const BVH_CAPACITY: u32 = {}u;\n",
-            features.bvh_capacity.max(1)
+            "const BVH_CAPACITY: u32 = {}u;\nconst BVH_PRIMITIVE_CAPACITY: u32 = {}u;\n",
+            features.bvh_capacity.max(1),
+            features.bvh_primitive_capacity.max(1)
         ));
     }
     for (name, source) in MODULES {
