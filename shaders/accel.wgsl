@@ -88,8 +88,8 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 // One iteration per interior node entered (`entering`: a node's or a leaf's reference), with
 // the leaf it descends into if it does; one per leaf popped from the stack; none for a child
 // whose box the ray misses; a popped entry whose box now lies beyond the closest hit costs a
-// pass of the popping loop, no node read. The nodes are visited in the order the CPU visits them. (Testing the popped node's own box instead, as before,
-// took 1.25x as long on lavapipe.)
+// pass of the popping loop, no node read. The nodes are visited in the order the CPU visits
+// them. (Testing the popped node's own box instead, as before, took 1.25x as long on lavapipe.)
 fn traverse(world: Ray, c: ptr<function, Closest>) {
     var ray = world;
     let world_inverse = inverse_direction(world.dir);
@@ -104,7 +104,6 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
     var stack_entry: array<f32, BVH_STACK>;
     var top = 0u;
     var entering = BVH_ROOT;
-    var entered = true;
 //#if TRIANGLES
 //#if INSTANCES
     var instance = NO_INSTANCE;
@@ -119,8 +118,8 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
         loop_iterations += params.traversal_weight;
         // An interior node first: when it sends the ray into a leaf, the leaf is tested in
         // the same iteration (lavapipe runs both halves every iteration anyway).
-        var pop = !entered;
-        if entered && (entering & BVH_LEAF) == 0u {
+        var pop = false;
+        if (entering & BVH_LEAF) == 0u {
             let node = bvh_node(entering);
             let t_first = box_entry(node.first_min, node.first_max, ray.origin, inverse, (*c).t);
             let t_second = box_entry(node.second_min, node.second_max, ray.origin, inverse, (*c).t);
@@ -183,7 +182,7 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
                 top -= 1u;
                 entering = stack[top];
                 // The box as box_entry would test it against the closest hit now.
-                entered = stack_entry[top] <= (*c).t * BOX_FAR_WIDENING;
+                var entered = stack_entry[top] <= (*c).t * BOX_FAR_WIDENING;
 //#if TRIANGLES
 //#if INSTANCES
                 if stack_entry[top] == ENTER_INSTANCE {
@@ -205,8 +204,6 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
             if finished {
                 break;
             }
-        } else {
-            entered = true;
         }
     }
 }
