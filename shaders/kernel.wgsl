@@ -2,7 +2,8 @@
 
 // Per pixel of the tile, ACCUM_WORDS u32s: a running f32 mean (only for Welford's M2) and the
 // count of samples taken (so the host can prove no loop was cut short), M2 and the count of
-// invalid samples, then the exact fixed-point sums (film.wgsl) of the even-index and of the
+// invalid samples, the exponent of the first non-zero sample (mean and M2 are of samples scaled
+// by its power of two, so f32 squares stay in range at any radiance scale), then the exact sums (film.wgsl) of the even-index and of the
 // odd-index samples (the replicas of a stratified sampler, see src/film.rs; renders without
 // them put every sample in the first). Updated sample by sample in sample order, so the result
 // does not depend on how a render is sliced into dispatches.
@@ -18,14 +19,33 @@ fn store3(at: u32, v: vec3u) {
     accum[at + 2u] = v.z;
 }
 
-fn load_fixed(at: u32) -> Fixed {
-    return Fixed(load3(at), load3(at + 3u), load3(at + 6u));
+fn load_wide(at: u32) -> Wide {
+    return Wide(
+        load3(at), load3(at + 3u), load3(at + 6u), load3(at + 9u), load3(at + 12u),
+        load3(at + 15u), load3(at + 18u), load3(at + 21u), load3(at + 24u), load3(at + 27u),
+    );
 }
 
-fn store_fixed(at: u32, f: Fixed) {
+fn store_wide(at: u32, f: Wide) {
     store3(at, f.w0);
     store3(at + 3u, f.w1);
     store3(at + 6u, f.w2);
+    store3(at + 9u, f.w3);
+    store3(at + 12u, f.w4);
+    store3(at + 15u, f.w5);
+    store3(at + 18u, f.w6);
+    store3(at + 21u, f.w7);
+    store3(at + 24u, f.w8);
+    store3(at + 27u, f.w9);
+}
+
+// 1 / m2_scale(exponent) of src/gpu/renderer.rs: the power of two that brings a sample whose
+// exponent bits are `exponent` near 1 (1 while there is none), a normal f32 however bright or dim.
+fn inverse_m2_scale(exponent: u32) -> f32 {
+    if exponent == 0u {
+        return 1.0;
+    }
+    return bitcast<f32>((254u - clamp(exponent, 1u, 253u)) << 23u);
 }
 
 // Workgroups overhang the tile's edges; those invocations do nothing.
@@ -49,9 +69,11 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var count = accum[slot + ACCUM_COUNT];
     var m2 = bitcast<vec3f>(load3(slot + ACCUM_M2));
     var invalid = accum[slot + ACCUM_INVALID];
-    var even_sum = load_fixed(slot + ACCUM_EVEN_SUM);
+    var m2_exponent = accum[slot + ACCUM_M2_EXPONENT];
+    var m2_inverse = inverse_m2_scale(m2_exponent);
+    var even_sum = load_wide(slot + ACCUM_EVEN_SUM);
 //#if SOBOL
-    var odd_sum = load_fixed(slot + ACCUM_ODD_SUM);
+    var odd_sum = load_wide(slot + ACCUM_ODD_SUM);
 //#endif
     // Samples first_sample + count onward, until the pixel holds samples_before + sample_count:
     // a pixel left short by an earlier dispatch continues where it stopped, so the image does
@@ -94,19 +116,24 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
                 l = vec3f(0.0);
                 invalid += 1u;
             }
-            let delta = l - mean;
+            if m2_exponent == 0u {
+                // Samples before this one were zero: any scale holds them.
+                m2_exponent = bitcast<u32>(max(l.x, max(l.y, l.z))) >> 23u;
+                m2_inverse = inverse_m2_scale(m2_exponent);
+            }
+            let scaled = l * m2_inverse;
+            let delta = scaled - mean;
             mean += delta / f32(count + 1u);
-            m2 += delta * (l - mean);
-            let fixed = to_fixed(l);
+            m2 += delta * (scaled - mean);
 //#if SOBOL
             // Only stratified renders need their replicas' statistics.
             if (index & 1u) == 1u {
-                odd_sum = fixed_add(odd_sum, fixed);
+                odd_sum = wide_add(odd_sum, l);
             } else {
-                even_sum = fixed_add(even_sum, fixed);
+                even_sum = wide_add(even_sum, l);
             }
 //#else
-            even_sum = fixed_add(even_sum, fixed);
+            even_sum = wide_add(even_sum, l);
 //#endif
             count += 1u;
             if count >= wanted {
@@ -124,9 +151,10 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     accum[slot + ACCUM_COUNT] = count;
     store3(slot + ACCUM_M2, bitcast<vec3u>(m2));
     accum[slot + ACCUM_INVALID] = invalid;
-    store_fixed(slot + ACCUM_EVEN_SUM, even_sum);
+    accum[slot + ACCUM_M2_EXPONENT] = m2_exponent;
+    store_wide(slot + ACCUM_EVEN_SUM, even_sum);
 //#if SOBOL
-    store_fixed(slot + ACCUM_ODD_SUM, odd_sum);
+    store_wide(slot + ACCUM_ODD_SUM, odd_sum);
 //#endif
 }
 

@@ -1,8 +1,9 @@
 //! The film: every pixel's samples summed exactly, so each render knows its own noise and any
 //! split of a render's samples (dispatches, passes, checkpoints, shards) adds up to the same bits.
 //!
-//! A sample is rounded to a multiple of 2^-32 and added as an integer: integer addition is
-//! associative, so the mean of samples 0..N is bit-identical however they were grouped. The
+//! A sample is added exactly to a wide integer (`crate::exact_sum`): integer addition is
+//! associative, so the mean of samples 0..N is bit-identical however they were grouped, and no
+//! finite sample is rounded away or dropped, whatever the scene's radiance scale. The
 //! spread of the samples (Welford's M2, for the noise of independent samples) is kept in floating
 //! point and merged with Chan's update: it agrees to about 1e-12 across splits, not bit for bit.
 //!
@@ -12,44 +13,26 @@
 //! and odd sample indices into (`crate::sampler::REPLICAS`): the film keeps the odd samples'
 //! sum beside the overall one.
 
+use crate::exact_sum::ExactSum;
 use glam::{DVec3, Vec3};
 
-/// Bits below the unit in the fixed-point sums: samples are rounded to multiples of 2^-32
-/// (~2.3e-10), far below an f32's precision for any visible radiance.
-pub const FIXED_FRACTION_BITS: u32 = 32;
-const FIXED_ONE: f64 = (1u64 << FIXED_FRACTION_BITS) as f64;
+/// The f32 bits of +infinity: a channel whose bits (sign cleared) reach it is not finite.
+/// Shared with `valid_sample` in shaders/film.wgsl.
+pub const NOT_FINITE_BITS: u32 = 0x7f80_0000;
 
-/// The f32 bits of 2^32: radiance at or above it (or negative, or not finite) cannot be summed
-/// exactly and counts as an invalid sample. Shared with `valid_sample` in shaders/film.wgsl.
-/// With fewer than 2^32 samples of a pixel, its sums stay below 2^64 (three 32-bit words).
-pub const TOO_LARGE_BITS: u32 = 0x4f80_0000;
-
-/// Whether a sample can enter the film: every channel finite, non-negative (or -0) and below
-/// 2^32 (~4.3e9). Others are counted as invalid and added as zero.
+/// Whether a sample can enter the film: every channel finite and non-negative (or -0). Others
+/// (NaN, infinite, negative) are counted as invalid and added as zero; any valid sample is
+/// summed exactly, however dim or bright.
 #[inline]
 pub fn is_valid_sample(sample: Vec3) -> bool {
     sample
         .to_array()
         .iter()
-        .all(|c| c.to_bits() < TOO_LARGE_BITS || c.to_bits() == 0x8000_0000)
+        .all(|c| c.to_bits() < NOT_FINITE_BITS || c.to_bits() == 0x8000_0000)
 }
 
-/// `value` (valid, see [`is_valid_sample`]) in fixed point, rounded to nearest (ties to even),
-/// exactly as shaders/film.wgsl computes it.
-#[inline]
-pub fn to_fixed(value: f32) -> u128 {
-    // Exact: an f32 times a power of two is an f64 without rounding.
-    (value as f64 * FIXED_ONE).round_ties_even() as u128
-}
-
-/// A fixed-point sum as a float.
-#[inline]
-pub fn from_fixed(sum: u128) -> f64 {
-    sum as f64 / FIXED_ONE
-}
-
-fn fixed_rgb(sum: &[u128; 3]) -> DVec3 {
-    DVec3::new(from_fixed(sum[0]), from_fixed(sum[1]), from_fixed(sum[2]))
+fn sums_rgb(sum: &[ExactSum; 3]) -> DVec3 {
+    DVec3::new(sum[0].to_f64(), sum[1].to_f64(), sum[2].to_f64())
 }
 
 /// One pixel's samples: their count and exact sum, Welford's sum of squared deviations, and the
@@ -57,11 +40,11 @@ fn fixed_rgb(sum: &[u128; 3]) -> DVec3 {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelStats {
     pub n: u64,
-    /// Per channel, the samples' sum in fixed point (see [`to_fixed`]).
-    pub sum: [u128; 3],
+    /// Per channel, the samples' exact sum.
+    pub sum: [ExactSum; 3],
     pub m2: DVec3,
     pub odd_n: u64,
-    pub odd_sum: [u128; 3],
+    pub odd_sum: [ExactSum; 3],
 }
 
 impl PixelStats {
@@ -73,7 +56,7 @@ impl PixelStats {
         let before = self.mean();
         self.n += 1;
         for (s, c) in self.sum.iter_mut().zip(sample.to_array()) {
-            *s += to_fixed(c);
+            s.add_f32(c);
         }
         self.m2 += (x - before) * (x - self.mean());
     }
@@ -85,7 +68,7 @@ impl PixelStats {
         if index % 2 == 1 {
             self.odd_n += 1;
             for (s, c) in self.odd_sum.iter_mut().zip(sample.to_array()) {
-                *s += to_fixed(c);
+                s.add_f32(c);
             }
         }
     }
@@ -95,7 +78,7 @@ impl PixelStats {
         if self.n == 0 {
             DVec3::ZERO
         } else {
-            fixed_rgb(&self.sum) / self.n as f64
+            sums_rgb(&self.sum) / self.n as f64
         }
     }
 
@@ -104,15 +87,16 @@ impl PixelStats {
         if self.odd_n == 0 {
             DVec3::ZERO
         } else {
-            fixed_rgb(&self.odd_sum) / self.odd_n as f64
+            sums_rgb(&self.odd_sum) / self.odd_n as f64
         }
     }
 
     /// The mean of the even-index samples (replica 0), if there are any.
     pub fn even_mean(&self) -> Option<DVec3> {
         let even_n = self.n.checked_sub(self.odd_n).filter(|&n| n > 0)?;
-        let even: [u128; 3] = std::array::from_fn(|c| self.sum[c] - self.odd_sum[c]);
-        Some(fixed_rgb(&even) / even_n as f64)
+        let even: [ExactSum; 3] =
+            std::array::from_fn(|c| self.sum[c].minus(&self.odd_sum[c]).unwrap_or_default());
+        Some(sums_rgb(&even) / even_n as f64)
     }
 
     /// Variance of the pixel's mean from the spread of its two replicas' means, independent
@@ -146,8 +130,8 @@ impl PixelStats {
         self.m2 += other.m2 + delta * delta * (self.n as f64 * other.n as f64 / n as f64);
         self.n = n;
         for c in 0..3 {
-            self.sum[c] = self.sum[c].saturating_add(other.sum[c]);
-            self.odd_sum[c] = self.odd_sum[c].saturating_add(other.odd_sum[c]);
+            self.sum[c] = self.sum[c].plus(&other.sum[c]);
+            self.odd_sum[c] = self.odd_sum[c].plus(&other.odd_sum[c]);
         }
         self.odd_n += other.odd_n;
     }
@@ -178,8 +162,7 @@ pub struct Film {
     pub height: u32,
     /// Row-major, row 0 at the top.
     pub pixels: Vec<PixelStats>,
-    /// Samples that came out invalid (NaN, infinite, negative or above 2^32) and were counted
-    /// as zero.
+    /// Samples that came out invalid (NaN, infinite or negative) and were counted as zero.
     pub invalid_samples: u64,
     /// Whether the samples were stratified (not independent): noise is then measured by the
     /// spread of the replicas.
@@ -188,11 +171,11 @@ pub struct Film {
 
 /// Longest image side.
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
-/// Most pixels one image may have (the film keeps 144 bytes of statistics per pixel).
+/// Most pixels one image may have (the film keeps 280 bytes of statistics per pixel).
 pub const MAX_PIXELS: u64 = 1 << 26;
-/// Host memory a render needs per pixel: the film (144 bytes), a pass's film merged into it
-/// (144), GPU readback (128), its mean image (12) and the encoded output (up to 12).
-pub const RENDER_BYTES_PER_PIXEL: u64 = 448;
+/// Host memory a render needs per pixel: the film, a pass's film merged into it, GPU readback
+/// (the kernel's accumulator), its mean image (12 bytes) and the encoded output (up to 12).
+pub const RENDER_BYTES_PER_PIXEL: u64 = 2 * std::mem::size_of::<PixelStats>() as u64 + 276 + 24;
 
 /// The one check of an image size, wherever it comes from (`--size`, a scene file, a test).
 pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
@@ -226,7 +209,7 @@ pub fn check_memory(width: u32, height: u32) -> Result<(), String> {
 }
 
 /// MemAvailable from /proc/meminfo, where there is one.
-fn available_memory() -> Option<u64> {
+pub fn available_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
@@ -337,18 +320,30 @@ mod tests {
     }
 
     #[test]
-    fn fixed_point_rounds_to_nearest_and_the_valid_range_is_what_it_says() {
-        assert_eq!(to_fixed(1.0), 1 << 32);
-        assert_eq!(to_fixed(0.5), 1 << 31);
-        // 2^-33 is a tie: to even (0); 3 * 2^-33 rounds up to 2 * 2^-32.
-        assert_eq!(to_fixed(2f32.powi(-33)), 0);
-        assert_eq!(to_fixed(3.0 * 2f32.powi(-33)), 2);
-        let largest = f32::from_bits(TOO_LARGE_BITS - 1);
-        assert!(is_valid_sample(Vec3::splat(largest)));
-        assert_eq!(from_fixed(to_fixed(largest)), largest as f64);
-        assert!(is_valid_sample(Vec3::new(0.0, -0.0, 1e-30)));
-        for bad in [2f32.powi(32), -1e-30, f32::INFINITY, f32::NAN] {
+    fn every_finite_non_negative_sample_is_valid_and_kept() {
+        for good in [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            1e-30,
+            2f32.powi(32),
+            1e30,
+            f32::MAX,
+        ] {
+            assert!(is_valid_sample(Vec3::new(1.0, good, 1.0)), "{good}");
+        }
+        for bad in [-1e-30, -1.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
             assert!(!is_valid_sample(Vec3::new(1.0, bad, 1.0)), "{bad}");
         }
+        // A sample of 1e30 among ordinary ones is kept, and so are the ordinary ones.
+        let mut p = PixelStats::default();
+        for (i, v) in [0.25f32, 1e30, 1e-20, 0.5].into_iter().enumerate() {
+            p.add_indexed(Vec3::splat(v), i as u32);
+        }
+        let expected = (0.25 + 1e30f32 as f64 + 1e-20f32 as f64 + 0.5) / 4.0;
+        assert!((p.mean().x / expected - 1.0).abs() < 1e-15);
+        let odd = p.odd_mean().x;
+        assert!((odd / ((1e30f32 as f64 + 0.5) / 2.0) - 1.0).abs() < 1e-15);
+        assert!(p.variance().is_finite());
     }
 }

@@ -3,11 +3,14 @@
 //! other samples (shards, `rt-gpu merge`).
 //!
 //! Channels: `R`, `G`, `B` the mean radiance (f32); `variance.R/G/B` the variance of each mean
-//! (f32, for the user); and the exact state as u32 words: `sum.<c>.0..3` and `odd_sum.<c>.0..3`
-//! the fixed-point sums (least significant word first), `m2.<c>.lo/hi` the bits of the f64 M2.
-//! Header attributes `rtgpu.*` say which render it is (scene digest and every option that
-//! changes the image), which sample indices it holds, and the counts.
+//! (f32, for the user); and the exact state as u32 words: `sum.<c>.<w>` and `odd_sum.<c>.<w>`
+//! the words of the exact sums (`crate::exact_sum`) that some pixel uses, `m2.<c>.lo/hi` the
+//! bits of the f64 M2. The header attribute `rtgpu.film` says which render it is (scene digest
+//! and every option that changes the image), which sample indices it holds, and the counts.
+//! The sums, and so the mean, are bit-identical however a render was split; M2 (the variance of
+//! independent samples) is merged in floating point and agrees to about 1e-12, not bit for bit.
 
+use crate::exact_sum::{ExactSum, SUM_WORDS};
 use crate::film::{Film, PixelStats};
 use anyhow::{Context, bail};
 use exr::prelude::*;
@@ -16,10 +19,21 @@ use std::ops::Range;
 use std::path::Path;
 
 const CHANNELS: [&str; 3] = ["R", "G", "B"];
-const ATTR_IDENTITY: &str = "rtgpu.identity";
-const ATTR_SAMPLES: &str = "rtgpu.samples";
-const ATTR_COUNTS: &str = "rtgpu.counts";
-const ATTR_DEVICE: &str = "rtgpu.device";
+/// The header attribute holding a film's metadata, one `key=value` field a line.
+const ATTR_FILM: &str = "rtgpu.film";
+/// Format 2: exact sums in units of 2^-149, only their used words stored (`words=`); format 1
+/// (older films: four words in units of 2^-32, metadata in four attributes) is still read.
+const FORMAT: u32 = 2;
+const FIELD_FORMAT: &str = "format";
+const FIELD_IDENTITY: &str = "identity";
+const FIELD_SAMPLES: &str = "samples";
+const FIELD_COUNTS: &str = "counts";
+const FIELD_WORDS: &str = "words";
+const FIELD_DEVICE: &str = "device";
+const LEGACY_IDENTITY: &str = "rtgpu.identity";
+const LEGACY_SAMPLES: &str = "rtgpu.samples";
+const LEGACY_COUNTS: &str = "rtgpu.counts";
+const LEGACY_DEVICE: &str = "rtgpu.device";
 
 /// What a film file says about the render its samples came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -72,14 +86,30 @@ fn parse_ranges(text: &str) -> std::result::Result<Vec<Range<u32>>, String> {
     text.split(',').map(parse_range).collect()
 }
 
+/// The words of the exact sums that some pixel uses (all zero above and below), so that a film
+/// stores only those: a render's radiance spans a few of the ten.
+fn used_words(film: &Film) -> Range<usize> {
+    let (mut lowest, mut highest) = (SUM_WORDS, 0);
+    for p in &film.pixels {
+        for sum in p.sum.iter().chain(&p.odd_sum) {
+            for w in (0..SUM_WORDS).filter(|&w| sum.word(w) != 0) {
+                lowest = lowest.min(w);
+                highest = highest.max(w + 1);
+            }
+        }
+    }
+    if highest == 0 { 0..1 } else { lowest..highest }
+}
+
 /// `film` as a film file's bytes; without `meta`, an image any viewer reads but rt-gpu cannot
-/// continue or merge.
+/// continue or merge. The same film and metadata give the same bytes.
 pub fn encode(film: &Film, meta: Option<&FilmMeta>) -> anyhow::Result<Vec<u8>> {
     let pixels = &film.pixels;
     let (n, odd_n) = pixels.first().map_or((0, 0), |p| (p.n, p.odd_n));
     if pixels.iter().any(|p| (p.n, p.odd_n) != (n, odd_n)) {
         bail!("a film file needs the same samples in every pixel");
     }
+    let used = used_words(film);
     let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
     let floats = |f: &dyn Fn(&PixelStats) -> f32| FlatSamples::F32(pixels.iter().map(f).collect());
     let words = |f: &dyn Fn(&PixelStats) -> u32| FlatSamples::U32(pixels.iter().map(f).collect());
@@ -89,14 +119,14 @@ pub fn encode(film: &Film, meta: Option<&FilmMeta>) -> anyhow::Result<Vec<u8>> {
             Text::from(format!("variance.{name}").as_str()),
             floats(&|p| film.variance_of_mean(p)[c] as f32),
         ));
-        for w in 0..4 {
+        for w in used.clone() {
             channels.push(AnyChannel::new(
                 Text::from(format!("sum.{name}.{w}").as_str()),
-                words(&|p| (p.sum[c] >> (32 * w)) as u32),
+                words(&|p| p.sum[c].word(w)),
             ));
             channels.push(AnyChannel::new(
                 Text::from(format!("odd_sum.{name}.{w}").as_str()),
-                words(&|p| (p.odd_sum[c] >> (32 * w)) as u32),
+                words(&|p| p.odd_sum[c].word(w)),
             ));
         }
         channels.push(AnyChannel::new(
@@ -110,25 +140,33 @@ pub fn encode(film: &Film, meta: Option<&FilmMeta>) -> anyhow::Result<Vec<u8>> {
     }
     let mut attributes = LayerAttributes::default();
     if let Some(meta) = meta {
-        let text = |s: &str| AttributeValue::Text(Text::from(s));
-        let counts = format!(
-            "spp={n} odd={odd_n} invalid={} stratified={}",
-            film.invalid_samples, film.stratified
-        );
         if meta.spp() != n {
             bail!(
                 "the film holds {n} samples per pixel, its ranges {}",
                 format_ranges(&meta.samples)
             );
         }
-        for (key, value) in [
-            (ATTR_IDENTITY, meta.identity.as_str()),
-            (ATTR_SAMPLES, &format_ranges(&meta.samples)),
-            (ATTR_COUNTS, &counts),
-            (ATTR_DEVICE, &meta.device),
-        ] {
-            attributes.other.insert(Text::from(key), text(value));
-        }
+        // One attribute: the exr crate writes several in hash-map order, which differs from
+        // run to run, and a film's bytes should not.
+        let fields = [
+            (FIELD_FORMAT, FORMAT.to_string()),
+            (FIELD_IDENTITY, meta.identity.clone()),
+            (FIELD_SAMPLES, format_ranges(&meta.samples)),
+            (
+                FIELD_COUNTS,
+                format!(
+                    "spp={n} odd={odd_n} invalid={} stratified={}",
+                    film.invalid_samples, film.stratified
+                ),
+            ),
+            (FIELD_WORDS, format!("{}..{}", used.start, used.end)),
+            (FIELD_DEVICE, meta.device.clone()),
+        ];
+        let text: Vec<String> = fields.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        attributes.other.insert(
+            Text::from(ATTR_FILM),
+            AttributeValue::Text(Text::from(text.join("\n").as_str())),
+        );
     }
     let layer = Layer::new(
         (film.width as usize, film.height as usize),
@@ -141,43 +179,133 @@ pub fn encode(film: &Film, meta: Option<&FilmMeta>) -> anyhow::Result<Vec<u8>> {
     Ok(out.into_inner())
 }
 
-/// Reads a film file written by rt-gpu (with its metadata).
+/// The `key=value` fields of a film's metadata, from its one attribute (or, in films of older
+/// versions, from one attribute each).
+fn metadata_fields(
+    shown: &std::path::Display,
+    attributes: &LayerAttributes,
+) -> anyhow::Result<HashMap<String, String>> {
+    let text = |key: &str| match attributes.other.get(&Text::from(key)) {
+        Some(AttributeValue::Text(t)) => Some(t.to_string()),
+        _ => None,
+    };
+    if let Some(all) = text(ATTR_FILM) {
+        let mut fields = HashMap::new();
+        for line in all.lines() {
+            let (k, v) = line
+                .split_once('=')
+                .with_context(|| format!("{shown}: bad {ATTR_FILM} line '{line}'"))?;
+            fields.insert(k.to_string(), v.to_string());
+        }
+        return Ok(fields);
+    }
+    let mut fields = HashMap::from([(FIELD_FORMAT.to_string(), "1".to_string())]);
+    for (key, field) in [
+        (LEGACY_IDENTITY, FIELD_IDENTITY),
+        (LEGACY_SAMPLES, FIELD_SAMPLES),
+        (LEGACY_COUNTS, FIELD_COUNTS),
+        (LEGACY_DEVICE, FIELD_DEVICE),
+    ] {
+        let value = text(key).with_context(|| {
+            format!("{shown} is not an rt-gpu film file (no {key} attribute): only EXR files that rt-gpu rendered can be continued or merged")
+        })?;
+        fields.insert(field.to_string(), value);
+    }
+    Ok(fields)
+}
+
+/// Most sample ranges a film may list (shards and resumes join adjacent ranges; a film with more
+/// is not one rt-gpu wrote).
+pub const MAX_RANGES: usize = 4096;
+
+/// Reads a film file written by rt-gpu (with its metadata), checking that what it says is
+/// consistent: sizes, counts, sample ranges and every pixel's sums.
 pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
     let shown = path.display();
+    // A FIFO or device named .exr would block or never end.
+    let is_file = std::fs::metadata(path)
+        .with_context(|| format!("cannot read the film file {shown}"))?
+        .is_file();
+    if !is_file {
+        bail!("the film file {shown} is not a regular file");
+    }
     let image = read_exr(path).with_context(|| format!("cannot read the film file {shown}"))?;
     let layer = match image.layer_data.as_slice() {
         [layer] => layer,
         _ => bail!("{shown} is not an rt-gpu film file: it has several layers"),
     };
-    let attr = |key: &str| -> anyhow::Result<String> {
-        match layer.attributes.other.get(&Text::from(key)) {
-            Some(AttributeValue::Text(t)) => Ok(t.to_string()),
-            _ => bail!(
-                "{shown} is not an rt-gpu film file (no {key} attribute): only EXR files that rt-gpu rendered can be continued or merged"
-            ),
-        }
+    let fields = metadata_fields(&shown, &layer.attributes)?;
+    let field = |key: &str| -> anyhow::Result<&str> {
+        fields
+            .get(key)
+            .map(String::as_str)
+            .with_context(|| format!("{shown}: its film metadata lacks {key}"))
     };
-    let identity = attr(ATTR_IDENTITY)?;
-    let samples = parse_ranges(&attr(ATTR_SAMPLES)?)
-        .map_err(|e| anyhow::anyhow!("{shown}: bad {ATTR_SAMPLES}: {e}"))?;
-    let counts = attr(ATTR_COUNTS)?;
-    let device = attr(ATTR_DEVICE)?;
-    let fields: HashMap<&str, &str> = counts
+    let format: u32 = field(FIELD_FORMAT)?
+        .parse()
+        .ok()
+        .filter(|f| (1..=FORMAT).contains(f))
+        .with_context(|| {
+            format!(
+                "{shown}: film format {} is not one this rt-gpu reads (1..={FORMAT})",
+                fields[FIELD_FORMAT]
+            )
+        })?;
+    let identity = field(FIELD_IDENTITY)?.to_string();
+    let samples_text = field(FIELD_SAMPLES)?;
+    if samples_text.matches(',').count() >= MAX_RANGES {
+        bail!("{shown}: bad {FIELD_SAMPLES}: more than {MAX_RANGES} sample ranges");
+    }
+    let samples = parse_ranges(samples_text)
+        .and_then(|r| check_disjoint_sorted(&r).map(|_| r))
+        .map_err(|e| anyhow::anyhow!("{shown}: bad {FIELD_SAMPLES}: {e}"))?;
+    let counts = field(FIELD_COUNTS)?;
+    let device = field(FIELD_DEVICE)?.to_string();
+    let count_fields: HashMap<&str, &str> = counts
         .split_whitespace()
         .filter_map(|f| f.split_once('='))
         .collect();
     let count = |key: &str| -> anyhow::Result<u64> {
-        fields
+        count_fields
             .get(key)
             .and_then(|v| v.parse().ok())
-            .with_context(|| format!("{shown}: bad {ATTR_COUNTS} attribute '{counts}'"))
+            .with_context(|| format!("{shown}: bad {FIELD_COUNTS} '{counts}': no {key}"))
     };
     let (n, odd_n, invalid) = (count("spp")?, count("odd")?, count("invalid")?);
-    let stratified = fields.get("stratified") == Some(&"true");
+    let stratified = count_fields.get("stratified") == Some(&"true");
+    let meta = FilmMeta {
+        identity,
+        samples,
+        device,
+    };
+    if meta.spp() != n {
+        bail!(
+            "{shown}: its sample ranges hold {} samples per pixel, its counts spp={n}",
+            meta.spp()
+        );
+    }
+    let odd_in_ranges: u64 = meta
+        .samples
+        .iter()
+        .map(|r| (r.end as u64 / 2) - (r.start as u64 / 2))
+        .sum();
+    if odd_n != odd_in_ranges && odd_n != 0 {
+        bail!(
+            "{shown}: bad {FIELD_COUNTS}: odd={odd_n}, but its sample ranges hold {odd_in_ranges} odd samples"
+        );
+    }
 
     let size = layer.size;
     let (width, height) = (size.0 as u32, size.1 as u32);
     crate::film::check_image_size(width, height).map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
+    if let Some(claimed) = identity_field(&meta.identity, "size")
+        && claimed != format!("{width}x{height}")
+    {
+        bail!("{shown}: its image is {width}x{height}, its identity says size={claimed}");
+    }
+    if invalid > n.saturating_mul(size.area() as u64) {
+        bail!("{shown}: bad {FIELD_COUNTS}: invalid={invalid} exceeds its samples");
+    }
     let channel = |name: &str| -> anyhow::Result<&[u32]> {
         let found = layer
             .channel_data
@@ -190,40 +318,93 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
             _ => bail!("{shown}: the film channel {name} is not u32 samples of the image"),
         }
     };
+    // Format 1 kept 4 words in units of 2^-32; format 2 the used words of the exact sums.
+    let words: Range<usize> = if format == 1 {
+        0..4
+    } else {
+        let text = field(FIELD_WORDS)?;
+        text.split_once("..")
+            .and_then(|(a, b)| Some(a.parse().ok()?..b.parse().ok()?))
+            .filter(|r: &Range<usize>| !r.is_empty() && r.end <= SUM_WORDS)
+            .with_context(|| format!("{shown}: bad {FIELD_WORDS} '{text}'"))?
+    };
+    let exact = |parts: &[&[u32]], i: usize| -> ExactSum {
+        if format == 1 {
+            let fixed = (0..4).fold(0u128, |s, w| s | (parts[w][i] as u128) << (32 * w));
+            ExactSum::from_fixed(fixed, 32)
+        } else {
+            ExactSum::from_words((0..SUM_WORDS).map(|w| {
+                if words.contains(&w) {
+                    parts[w - words.start][i]
+                } else {
+                    0
+                }
+            }))
+        }
+    };
     let mut film = Film::new(width, height);
     film.invalid_samples = invalid;
     film.stratified = stratified;
+    // No sum can exceed its count times the largest f32.
+    let largest = |count: u64| count as f64 * f32::MAX as f64;
     for (c, name) in CHANNELS.iter().enumerate() {
-        let sum: Vec<&[u32]> = (0..4)
+        let sum: Vec<&[u32]> = words
+            .clone()
             .map(|w| channel(&format!("sum.{name}.{w}")))
             .collect::<anyhow::Result<_>>()?;
-        let odd: Vec<&[u32]> = (0..4)
+        let odd: Vec<&[u32]> = words
+            .clone()
             .map(|w| channel(&format!("odd_sum.{name}.{w}")))
             .collect::<anyhow::Result<_>>()?;
         let (lo, hi) = (
             channel(&format!("m2.{name}.lo"))?,
             channel(&format!("m2.{name}.hi"))?,
         );
-        let wide = |words: &[&[u32]], i: usize| {
-            (0..4).fold(0u128, |s, w| s | (words[w][i] as u128) << (32 * w))
-        };
         for (i, p) in film.pixels.iter_mut().enumerate() {
             p.n = n;
             p.odd_n = odd_n;
-            p.sum[c] = wide(&sum, i);
-            p.odd_sum[c] = wide(&odd, i);
+            p.sum[c] = exact(&sum, i);
+            p.odd_sum[c] = exact(&odd, i);
             p.m2[c] = f64::from_bits(lo[i] as u64 | (hi[i] as u64) << 32);
+            let (x, y) = (i % width as usize, i / width as usize);
+            if p.sum[c].to_f64() > largest(n) {
+                bail!(
+                    "{shown}: sum.{name} of pixel ({x}, {y}) exceeds {n} samples of the largest radiance"
+                );
+            }
+            if p.odd_sum[c].to_f64() > largest(odd_n) || p.sum[c].minus(&p.odd_sum[c]).is_none() {
+                bail!("{shown}: odd_sum.{name} of pixel ({x}, {y}) exceeds what its samples allow");
+            }
+            if !(p.m2[c] >= 0.0 && p.m2[c].is_finite()) {
+                bail!(
+                    "{shown}: m2.{name} of pixel ({x}, {y}) is {}, not a finite non-negative number",
+                    p.m2[c]
+                );
+            }
         }
     }
-    let meta = FilmMeta {
-        identity,
-        samples,
-        device,
-    };
-    if meta.spp() != n {
-        bail!("{shown}: its sample ranges and its sample count disagree");
-    }
     Ok((film, meta))
+}
+
+/// The value of `key=` in an identity, if it has one.
+fn identity_field<'a>(identity: &'a str, key: &str) -> Option<&'a str> {
+    identity
+        .split_whitespace()
+        .filter_map(|f| f.split_once('='))
+        .find(|(k, _)| *k == key)
+        .map(|(_, v)| v)
+}
+
+fn check_disjoint_sorted(ranges: &[Range<u32>]) -> std::result::Result<(), String> {
+    for pair in ranges.windows(2) {
+        if pair[1].start < pair[0].end {
+            return Err(format!(
+                "{}..{} and {}..{} are not sorted and disjoint",
+                pair[0].start, pair[0].end, pair[1].start, pair[1].end
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn read_exr(path: &Path) -> anyhow::Result<Image<Layers<AnyChannels<FlatSamples>>>> {
@@ -392,7 +573,8 @@ mod tests {
         film.stratified = true;
         film.invalid_samples = 7;
         for (i, p) in film.pixels.iter_mut().enumerate() {
-            for s in 0..5u32 {
+            // The sample indices the ranges below name.
+            for s in [0u32, 1, 7, 8, 9] {
                 let v = 1e-3 * (i as f32 + 1.0) * (s as f32 + 0.5);
                 p.add_indexed(Vec3::new(v, 3.0e9, 0.0), s);
             }
@@ -412,6 +594,92 @@ mod tests {
         std::fs::write(&path, encode(&film, None).expect("encodes")).expect("writes");
         let err = read(&path).expect_err("no metadata").to_string();
         assert!(err.contains("not an rt-gpu film file"), "{err}");
+    }
+
+    fn small_film() -> (Film, FilmMeta) {
+        let mut film = Film::new(3, 2);
+        film.stratified = true;
+        for (i, p) in film.pixels.iter_mut().enumerate() {
+            for s in 0..4u32 {
+                p.add_indexed(Vec3::new(1e-30 * (i + 1) as f32, 0.5, 1e30), s);
+            }
+        }
+        let meta = FilmMeta {
+            identity: "scene=0123 size=3x2 seed=4".to_string(),
+            samples: std::iter::once(0..4).collect(),
+            device: "test".to_string(),
+        };
+        (film, meta)
+    }
+
+    fn write_and_read(film: &Film, meta: &FilmMeta) -> anyhow::Result<(Film, FilmMeta)> {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("film.exr");
+        std::fs::write(&path, encode(film, Some(meta)).expect("encodes")).expect("writes");
+        read(&path)
+    }
+
+    #[test]
+    fn film_bytes_are_deterministic_and_keep_any_radiance() {
+        let (film, meta) = small_film();
+        let first = encode(&film, Some(&meta)).expect("encodes");
+        for _ in 0..4 {
+            assert_eq!(encode(&film, Some(&meta)).expect("encodes"), first);
+        }
+        let (back, _) = write_and_read(&film, &meta).expect("reads");
+        assert_eq!(back, film);
+        assert_eq!(back.pixels[5].mean().x, 6e-30f32 as f64);
+        assert_eq!(back.pixels[0].mean().z, 1e30f32 as f64);
+    }
+
+    #[test]
+    fn inconsistent_films_are_refused_naming_the_field() {
+        let (film, meta) = small_film();
+        let refused = |film: &Film, meta: &FilmMeta, what: &str| {
+            let err = format!("{:#}", write_and_read(film, meta).expect_err(what));
+            assert!(err.contains(what), "{err}");
+        };
+        let mut wrong_size = meta.clone();
+        wrong_size.identity = "scene=0123 size=4x4 seed=4".to_string();
+        refused(&film, &wrong_size, "size=4x4");
+        let mut odd_above = film.clone();
+        odd_above.pixels[1].odd_sum[0] =
+            odd_above.pixels[1].sum[0].plus(&ExactSum::from_words([1]));
+        refused(&odd_above, &meta, "odd_sum.R of pixel (1, 0)");
+        let mut bad_m2 = film.clone();
+        bad_m2.pixels[2].m2.y = f64::NAN;
+        refused(&bad_m2, &meta, "m2.G of pixel (2, 0)");
+        let mut huge_sum = film.clone();
+        huge_sum.pixels[0].sum[2] = ExactSum::from_words([u32::MAX; SUM_WORDS]);
+        refused(&huge_sum, &meta, "sum.B of pixel (0, 0)");
+        let mut too_many = film.clone();
+        for p in &mut too_many.pixels {
+            (p.n, p.odd_n) = (5000, 0);
+        }
+        let mut ranges = meta.clone();
+        ranges.samples = (0..5000).map(|i| 2 * i..2 * i + 1).collect();
+        refused(&too_many, &ranges, "more than 4096 sample ranges");
+        let mut odd_count = film.clone();
+        for p in &mut odd_count.pixels {
+            p.odd_n = 3;
+        }
+        refused(&odd_count, &meta, "odd=3");
+        let mut invalid = film.clone();
+        invalid.invalid_samples = u64::MAX;
+        refused(&invalid, &meta, "invalid=");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_is_not_read_as_a_film() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("pipe.exr");
+        let made = std::process::Command::new("mkfifo").arg(&path).status();
+        if !made.is_ok_and(|s| s.success()) {
+            return; // no mkfifo here
+        }
+        let err = format!("{:#}", read(&path).expect_err("a FIFO"));
+        assert!(err.contains("not a regular file"), "{err}");
     }
 
     #[test]

@@ -8,6 +8,7 @@ pub mod accel;
 pub mod backend;
 pub mod converge;
 pub mod cpu;
+pub mod exact_sum;
 pub mod film;
 pub mod film_file;
 pub mod gpu;
@@ -21,3 +22,27 @@ pub mod render;
 pub mod rng;
 pub mod sampler;
 pub mod scene;
+
+thread_local! {
+    static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with this thread's panics marked as expected: a loader that catches a panic in a
+/// dependency (and turns it into an error naming the file) sets it so that the CLI's panic hook
+/// does not also report it as a bug.
+pub fn quiet_panics<T>(f: impl FnOnce() -> T) -> T {
+    let before = QUIET_PANICS.with(|q| q.replace(true));
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            QUIET_PANICS.with(|q| q.set(self.0));
+        }
+    }
+    let _restore = Restore(before);
+    f()
+}
+
+/// Whether a panic on this thread now is one that [`quiet_panics`] expects.
+pub fn panics_are_quiet() -> bool {
+    QUIET_PANICS.with(|q| q.get())
+}

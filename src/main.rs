@@ -254,6 +254,10 @@ struct RenderArgs {
     /// image is bit-identical to one uninterrupted render.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
+    /// Start over although the --checkpoint FILE exists, replacing its samples (without it,
+    /// an existing checkpoint is refused: continue it with --resume FILE).
+    #[arg(long)]
+    force: bool,
     /// Render only sample indices FIRST..END of every pixel (END exclusive) and write a film
     /// file (-o FILE.exr) for `rt-gpu merge`.
     #[arg(long, value_name = "FIRST..END", value_parser = film_file::parse_range, conflicts_with_all = ["shard", "spp", "time"])]
@@ -340,6 +344,9 @@ fn main() -> ExitCode {
     }
     // A bug is one line too, never a backtrace.
     std::panic::set_hook(Box::new(|info| {
+        if rt_gpu::panics_are_quiet() {
+            return;
+        }
         note!(
             "error: internal error, a bug in rt-gpu (please report it): {}",
             one_line(&info.to_string())
@@ -454,11 +461,17 @@ fn timed_render(
     Ok((result?, seconds))
 }
 
-/// A stable 64-bit FNV-1a digest, for cache keys that must not change between builds.
-fn digest(text: &str) -> u64 {
-    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
+/// A mean radiance as the summary line shows it: five decimals where that shows five
+/// significant digits' worth, else in scientific notation (a dim or bright scene is not 0.00000).
+fn shown_radiance(mean: glam::DVec3) -> String {
+    let one = |x: f64| {
+        if x == 0.0 || (1e-2..1e6).contains(&x.abs()) {
+            format!("{x:.5}")
+        } else {
+            format!("{x:.4e}")
+        }
+    };
+    format!("({}, {}, {})", one(mean.x), one(mean.y), one(mean.z))
 }
 
 fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
@@ -481,7 +494,7 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
     let options = rt_gpu::converge::ConvergeOptions {
         scene: flat,
         scene_name: scene.name.clone(),
-        scene_digest: digest(&file::to_toml(&scene)),
+        scene_digest: file::digest(&scene),
         width,
         height,
         max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
@@ -719,6 +732,14 @@ fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
 /// A scene file, or else a built-in scene; with the file's path when it is one.
 fn resolve_scene(arg: &str) -> anyhow::Result<(Scene, Option<PathBuf>)> {
     let path = Path::new(arg);
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if let Some(ext @ ("glb" | "gltf" | "obj")) = extension.as_deref() {
+        bail!(
+            "{arg} is a mesh ({ext}), not a scene: place it in a scene file as `[[object]] mesh = {{ file = \"{arg}\" }}` (see scenes/README.md, e.g. scenes/meshes.toml)"
+        );
+    }
     if path.is_file() || arg.ends_with(".toml") {
         if builtin(arg).is_some() {
             note!(
@@ -800,8 +821,24 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             c.display()
         );
     }
-    if checkpoint.as_deref() == Some(output.as_path()) {
-        bail!("the checkpoint and the output are the same file: name them apart");
+    if let Some(c) = &checkpoint
+        && rt_gpu::output::resolved(c) == rt_gpu::output::resolved(&output)
+    {
+        bail!(
+            "the checkpoint {} and the output {} are the same file: name them apart",
+            c.display(),
+            output.display()
+        );
+    }
+    if let Some(c) = &args.checkpoint
+        && args.resume.is_none()
+        && !args.force
+        && std::fs::symlink_metadata(c).is_ok()
+    {
+        bail!(
+            "{} exists: continue that render with --resume {0}, or add --force to start over and replace it",
+            c.display()
+        );
     }
     let checkpoint_every = args.checkpoint_every.unwrap_or(60.0);
     if !(checkpoint_every > 0.0 && checkpoint_every.is_finite()) {
@@ -843,12 +880,18 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     check_memory(width, height).map_err(anyhow::Error::msg)?;
-    let identity = film_file::identity(
-        digest(&file::to_toml(&scene)),
-        backend,
-        &opts,
-        args.unspecialised,
-    );
+    // Only film files carry the identity (digesting a scene of many objects takes a while).
+    let writes_film = checkpoint.is_some() || format == ImageFormat::Exr;
+    let identity = if writes_film {
+        film_file::identity(file::digest(&scene), backend, &opts, args.unspecialised)
+    } else {
+        String::new()
+    };
+    // Held until the render ends: a second render checkpointing to the same file is refused.
+    let _checkpoint_lock = match &checkpoint {
+        Some(c) => Some(rt_gpu::output::FileLock::acquire(c)?),
+        None => None,
+    };
     let resume = match &args.resume {
         Some(path) => Some(resume_from(path, &identity, &range)?),
         None => None,
@@ -882,6 +925,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         pass_seconds: pass_seconds(checkpoint.is_some().then_some(checkpoint_every), args.time),
     };
     let mut last_checkpoint = Instant::now();
+    let checkpoint_failure: std::cell::RefCell<Option<anyhow::Error>> = Default::default();
     let mut checkpoints = CheckpointWriter {
         path: checkpoint.clone(),
         writing: None,
@@ -891,8 +935,14 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let (rendered, outcome) = job.run(
         resume,
         &mut |film, done| {
-            if last_checkpoint.elapsed().as_secs_f64() >= checkpoint_every {
-                checkpoints.write(film, meta(done))?;
+            // A checkpoint that cannot be written stops the render; the image so far is still
+            // written before the error is reported.
+            if last_checkpoint.elapsed().as_secs_f64() >= checkpoint_every
+                && checkpoint_failure.borrow().is_none()
+            {
+                if let Err(e) = checkpoints.write(film, meta(done)) {
+                    *checkpoint_failure.borrow_mut() = Some(e);
+                }
                 last_checkpoint = Instant::now();
             }
             Ok(())
@@ -914,7 +964,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
                 .unwrap_or_default();
             progress.set_message(format!("{:.0}{total} spp{eta}", p.spp.floor()));
         },
-        &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0,
+        &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0 || checkpoint_failure.borrow().is_some(),
     )?;
     let seconds = start.elapsed().as_secs_f64();
     progress.finish_and_clear();
@@ -929,11 +979,20 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     } else {
         None
     };
-    checkpoints.finish(encoded.as_deref())?;
+    let checkpointed = match checkpoint_failure.into_inner() {
+        Some(e) => Err(e),
+        None => checkpoints.finish(encoded.as_deref()),
+    };
     match &encoded {
         Some(bytes) if output_is_film => pending.commit(bytes)?,
         _ => pending.commit_image(film, args.gamma)?,
     }
+    checkpointed.with_context(|| {
+        format!(
+            "the image was written to {}, but not the checkpoint",
+            output.display()
+        )
+    })?;
 
     // This run's samples: a resumed render's earlier ones took no time here.
     let samples = width as f64 * height as f64 * (done - resumed_at) as f64;
@@ -952,22 +1011,20 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         shown_samples += &format!(" (resumed at {resumed_at})");
     }
     note!(
-        "{}: {width}x{height}, {shown_samples}, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",
+        "{}: {width}x{height}, {shown_samples}, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance {}, estimated RMSE {:.3e} -> {}",
         scene.name,
         backend.name(),
         rendered.device,
         opts.integrator.name(),
         opts.sampler.name(),
         samples / seconds / 1e6,
-        mean.x,
-        mean.y,
-        mean.z,
+        shown_radiance(mean),
         rt_gpu::converge::estimated_rmse(film),
         output.display()
     );
     if film.invalid_samples > 0 {
         note!(
-            "warning: {} samples were NaN, infinite, negative or above 2^32 (4.3e9), or on lavapipe needed more loop iterations than one dispatch allows, and were counted as black",
+            "warning: {} samples were NaN, infinite or negative, or on lavapipe needed more loop iterations than one dispatch allows, and were counted as black",
             film.invalid_samples
         );
     }
@@ -1110,14 +1167,12 @@ fn merge(args: &MergeArgs) -> anyhow::Result<()> {
     pending.commit_render(&merged, &meta, args.gamma)?;
     let mean = merged.image_mean();
     note!(
-        "merged {} films: samples {}, {}x{}, mean radiance ({:.5}, {:.5}, {:.5}), estimated RMSE {:.3e} -> {}",
+        "merged {} films: samples {}, {}x{}, mean radiance {}, estimated RMSE {:.3e} -> {}",
         args.films.len(),
         film_file::format_ranges(&meta.samples),
         merged.width,
         merged.height,
-        mean.x,
-        mean.y,
-        mean.z,
+        shown_radiance(mean),
         rt_gpu::converge::estimated_rmse(&merged),
         args.output.display()
     );

@@ -295,8 +295,12 @@ impl PendingOutput {
             _ => PathBuf::from("."),
         };
         check_directory(&dir)?;
+        // Named after the destination and held locked while this process owns it, so that a
+        // later run can remove what a killed one left (`remove_stale_temporaries`).
+        let prefix = temporary_prefix(name);
+        remove_stale_temporaries(&dir, &prefix);
         let mut builder = tempfile::Builder::new();
-        builder.prefix(".rt-gpu-").suffix(".tmp");
+        builder.prefix(&prefix).suffix(".tmp");
         // Temporary files are private (0600); an output is an ordinary file, or keeps the
         // permissions of the file it replaces.
         #[cfg(unix)]
@@ -308,6 +312,8 @@ impl PendingOutput {
         let tmp = builder
             .tempfile_in(&dir)
             .with_context(|| format!("cannot create a file in {}", dir.display()))?;
+        // Advisory: where the file system has no locks, stale files are only left in place.
+        let _ = tmp.as_file().try_lock();
         PENDING_FILES
             .lock()
             .unwrap_or_else(|p| p.into_inner())
@@ -379,6 +385,110 @@ fn forget_pending(tmp: &Path) {
         .lock()
         .unwrap_or_else(|p| p.into_inner())
         .retain(|p| p != tmp);
+}
+
+/// The start of the temporary files' names of an output named `name`.
+fn temporary_prefix(name: &std::ffi::OsStr) -> String {
+    // Long names are cut (on a character boundary) to keep within file systems' limits.
+    let name = name.to_string_lossy();
+    let mut end = name.len().min(64);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!(".rt-gpu-{}-", &name[..end])
+}
+
+/// Removes temporary files of this output that no running process holds: what a killed render
+/// (`kill -9`, a power cut) left behind.
+fn remove_stale_temporaries(dir: &Path, prefix: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        // The random part tempfile adds is 6 characters: longer names are another output's.
+        let Some(rest) = name.strip_prefix(prefix) else {
+            continue;
+        };
+        if rest.len() != 6 + ".tmp".len() || !rest.ends_with(".tmp") {
+            continue;
+        }
+        let path = entry.path();
+        if let Ok(file) = std::fs::OpenOptions::new().write(true).open(&path)
+            && file.try_lock().is_ok()
+            && std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file())
+        {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
+/// Where `path` leads once its directory and any link at it are resolved (the path itself
+/// when it cannot be resolved), so that two spellings of one file compare equal.
+pub fn resolved(path: &Path) -> PathBuf {
+    if let Ok(canonical) = std::fs::canonicalize(path) {
+        return canonical;
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match (std::fs::canonicalize(dir), path.file_name()) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// A lock held while a render owns a checkpoint file, so that a second render cannot
+/// checkpoint to it at the same time. It lives beside the file (`.NAME.rt-gpu-lock`, since
+/// the file itself is replaced at every write) and goes when the render ends.
+pub struct FileLock {
+    path: PathBuf,
+    _file: std::fs::File,
+}
+
+impl FileLock {
+    pub fn acquire(owned: &Path) -> anyhow::Result<FileLock> {
+        let target = resolved(owned);
+        let name = target
+            .file_name()
+            .with_context(|| format!("{} does not name a file", owned.display()))?;
+        let path = target.with_file_name(format!(".{}.rt-gpu-lock", name.to_string_lossy()));
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .with_context(|| format!("cannot create the lock file {}", path.display()))?;
+        match file.try_lock() {
+            #[cfg(unix)]
+            Ok(()) => {
+                // A render that just ended may have removed the path we opened: then the lock
+                // is on a file no one else will open; take the new one instead.
+                use std::os::unix::fs::MetadataExt;
+                let ours = file.metadata().map(|m| m.ino()).ok();
+                if std::fs::metadata(&path).map(|m| m.ino()).ok() != ours {
+                    return FileLock::acquire(owned);
+                }
+            }
+            #[cfg(not(unix))]
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => anyhow::bail!(
+                "{} is in use by another rt-gpu render: wait for it, or checkpoint elsewhere",
+                owned.display()
+            ),
+            // A file system without locks: rendering goes on unguarded.
+            Err(std::fs::TryLockError::Error(_)) => {}
+        }
+        Ok(FileLock { path, _file: file })
+    }
+}
+
+impl Drop for FileLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
 }
 
 /// Says what is wrong with `dir` as a place for an output file, if anything.

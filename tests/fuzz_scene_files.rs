@@ -11,11 +11,13 @@
 //! `RT_GPU_FUZZ_EXECUTIONS=1000000 cargo test --release --test fuzz_scene_files -- --nocapture`.
 //! Coverage-guided fuzzing with cargo-fuzz lives in `fuzz/` (see its README).
 
+mod common;
+
+use common::mutate::Mutator;
 use rt_gpu::gpu::Features;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::file::{parse, to_toml};
 use rt_gpu::scene::flat::FlatScene;
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 /// Tokens that have broken parsers and validators before.
@@ -79,95 +81,6 @@ const TOKENS: &[&str] = &[
     "background = [1e38, 0, 0]",
 ];
 
-/// SplitMix64: small, fast and good enough to pick mutations.
-struct Mutator {
-    state: u64,
-}
-
-impl Mutator {
-    fn next(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-
-    /// A range of at most `longest` bytes inside `len`.
-    fn range(&mut self, len: usize, longest: usize) -> std::ops::Range<usize> {
-        let start = self.below(len + 1);
-        let end = (start + self.below(longest + 1)).min(len);
-        start..end
-    }
-
-    fn mutate(&mut self, corpus: &[Vec<u8>]) -> Vec<u8> {
-        let mut bytes = corpus[self.below(corpus.len())].clone();
-        for _ in 0..1 + self.below(4) {
-            let len = bytes.len();
-            match self.below(9) {
-                0 if len > 0 => {
-                    let i = self.below(len);
-                    bytes[i] = self.next() as u8;
-                }
-                1 => {
-                    let r = self.range(len, 16);
-                    bytes.drain(r);
-                }
-                2 => {
-                    let r = self.range(len, 64);
-                    let copy = bytes[r].to_vec();
-                    let at = self.below(len + 1);
-                    bytes.splice(at..at, copy);
-                }
-                3 | 4 => {
-                    let token = TOKENS[self.below(TOKENS.len())].as_bytes();
-                    let at = self.below(len + 1);
-                    bytes.splice(at..at, token.iter().copied());
-                }
-                5 => {
-                    // A number replaced by a token: find a digit near a random place.
-                    let at = self.below(len + 1);
-                    if let Some(offset) = bytes[at..].iter().position(u8::is_ascii_digit) {
-                        let start = at + offset;
-                        let end = start
-                            + bytes[start..]
-                                .iter()
-                                .position(|b| !(b.is_ascii_digit() || *b == b'.'))
-                                .unwrap_or(bytes.len() - start);
-                        let token = TOKENS[self.below(TOKENS.len())].as_bytes();
-                        bytes.splice(start..end, token.iter().copied());
-                    }
-                }
-                6 => {
-                    let other = &corpus[self.below(corpus.len())];
-                    let r = self.range(other.len(), 200);
-                    let at = self.below(len + 1);
-                    bytes.splice(at..at, other[r].iter().copied());
-                }
-                7 => {
-                    let at = self.below(len + 1);
-                    bytes.truncate(at);
-                }
-                _ => {
-                    // Two lines swapped.
-                    let text = String::from_utf8_lossy(&bytes).into_owned();
-                    let mut lines: Vec<&str> = text.lines().collect();
-                    if lines.len() > 1 {
-                        let (a, b) = (self.below(lines.len()), self.below(lines.len()));
-                        lines.swap(a, b);
-                        bytes = lines.join("\n").into_bytes();
-                    }
-                }
-            }
-        }
-        bytes
-    }
-}
-
 fn corpus() -> Vec<Vec<u8>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut corpus: Vec<Vec<u8>> = std::fs::read_dir(root.join("scenes"))
@@ -220,14 +133,7 @@ fn check(text: &str) -> Result<(), String> {
 
 #[test]
 fn mutated_scene_files_never_panic() {
-    let executions: usize = std::env::var("RT_GPU_FUZZ_EXECUTIONS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(20_000);
-    let seed: u64 = std::env::var("RT_GPU_FUZZ_SEED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1);
+    let (executions, seed) = common::mutate::run_settings(20_000);
     let corpus = corpus();
     assert!(corpus.len() >= 5, "corpus of {}", corpus.len());
     let mut mutator = Mutator { state: seed };
@@ -236,21 +142,12 @@ fn mutated_scene_files_never_panic() {
     let start = std::time::Instant::now();
     let (mut parsed, mut failures) = (0usize, Vec::new());
     for i in 0..executions {
-        let bytes = mutator.mutate(&corpus);
+        let bytes = mutator.mutate(&corpus, TOKENS);
         let text = String::from_utf8_lossy(&bytes);
         parsed += parse(&text, "x", "x").is_ok() as usize;
-        let outcome = catch_unwind(AssertUnwindSafe(|| check(&text)));
-        let problem = match outcome {
-            Ok(Ok(())) => continue,
-            Ok(Err(problem)) => problem,
-            Err(panic) => format!(
-                "panic: {}",
-                panic
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_default()
-            ),
+        let outcome = common::mutate::problem(|| check(&text));
+        let Some(problem) = outcome else {
+            continue;
         };
         failures.push((i, problem, text.into_owned()));
     }

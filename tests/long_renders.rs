@@ -247,3 +247,104 @@ fn interrupted_renders_resume_bit_identically() {
         assert!(!d.join("y.pfm").exists());
     }
 }
+
+/// A checkpoint is never replaced by accident: an existing one is refused unless --resume or
+/// --force says what to do, the checkpoint and the output are caught as one file however they
+/// are spelled, a checkpoint a render holds is locked against a second render, a checkpoint
+/// that cannot be written still lets the image be written (then the run fails), and temporary
+/// files a killed run left are removed by the next run of the same output.
+#[test]
+fn checkpoints_are_never_replaced_by_accident() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let base = ["cornell", "--backend", "cpu", "--size", "8x8", "--spp", "4"];
+    let with = |extra: &[&'static str]| args(&base, extra);
+    ok(rt_gpu(&with(&["--checkpoint", "ck.exr", "-o", "a.png"]), d));
+    let before = read(d, "ck.exr");
+    let err = one_line_error(&rt_gpu(
+        &with(&["--checkpoint", "ck.exr", "-o", "a.png"]),
+        d,
+    ));
+    assert!(
+        err.contains("--resume ck.exr") && err.contains("--force"),
+        "{err}"
+    );
+    assert_eq!(
+        read(d, "ck.exr"),
+        before,
+        "the refused run touched the checkpoint"
+    );
+    ok(rt_gpu(
+        &with(&["--checkpoint", "ck.exr", "--force", "-o", "a.png"]),
+        d,
+    ));
+    let err = one_line_error(&rt_gpu(
+        &with(&["--checkpoint", "same.exr", "-o", "./same.exr"]),
+        d,
+    ));
+    assert!(err.contains("same file"), "{err}");
+
+    // Another process holds the checkpoint's lock.
+    let lock = std::fs::File::create(d.join(".ck.exr.rt-gpu-lock")).expect("creates");
+    lock.try_lock().expect("locks");
+    let err = one_line_error(&rt_gpu(
+        &args(
+            &base[..5],
+            &["--spp", "8", "--resume", "ck.exr", "-o", "b.png"],
+        ),
+        d,
+    ));
+    assert!(err.contains("in use by another rt-gpu render"), "{err}");
+    drop(lock);
+    ok(rt_gpu(
+        &args(
+            &base[..5],
+            &["--spp", "8", "--resume", "ck.exr", "-o", "b.png"],
+        ),
+        d,
+    ));
+    assert!(
+        !d.join(".ck.exr.rt-gpu-lock").exists(),
+        "the lock file stays"
+    );
+
+    // What a killed run left: removed, unless a live process holds it.
+    std::fs::write(d.join(".rt-gpu-a.png-abcdef.tmp"), b"").expect("writes");
+    let held = d.join(".rt-gpu-a.png-ghijkl.tmp");
+    let live = std::fs::File::create(&held).expect("creates");
+    live.try_lock().expect("locks");
+    ok(rt_gpu(&with(&["-o", "a.png"]), d));
+    assert!(
+        !d.join(".rt-gpu-a.png-abcdef.tmp").exists(),
+        "a stale file stays"
+    );
+    assert!(held.exists(), "a live run's file was removed");
+    drop(live);
+
+    // The checkpoint's directory disappears mid-render: the image is still written.
+    std::fs::create_dir(d.join("sub")).expect("mkdir");
+    let child = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args(args(
+            &base[..5],
+            &[
+                "--time",
+                "4",
+                "--checkpoint",
+                "sub/ck.exr",
+                "--checkpoint-every",
+                "0.1",
+                "-o",
+                "kept.png",
+            ],
+        ))
+        .current_dir(d)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("starts");
+    std::thread::sleep(Duration::from_millis(1500));
+    std::fs::remove_dir_all(d.join("sub")).expect("removes");
+    let out = child.wait_with_output().expect("exits");
+    let err = one_line_error(&out);
+    assert!(err.contains("the image was written to kept.png"), "{err}");
+    assert!(d.join("kept.png").exists());
+}

@@ -803,10 +803,10 @@ fn extreme_cameras_and_image_shapes() {
 /// A million samples per pixel accumulate on the GPU as accurately as in the CPU's f64 film.
 /// The scene is smooth in its random numbers (a lambertian sphere filling the view under a sky,
 /// max depth 2), so each sample agrees between backends to ~1e-6 relative and nearly all of that
-/// averages out; what remains is accumulation error. The kernel sums samples exactly in fixed
-/// point (film.wgsl), so that is only the rounding of each sample to 2^-32, independent of the
-/// count; the bound is one f32 unit in the last place, 2^-23 ~ 1.2e-7 relative (an uncompensated
-/// f32 mean would drift about sqrt(1e6) ulps, ~1e-4).
+/// averages out; what remains is accumulation error. The kernel sums samples exactly
+/// (film.wgsl), so none is left but the samples' own differences; the bound is one f32 unit in
+/// the last place, 2^-23 ~ 1.2e-7 relative (an uncompensated f32 mean would drift about
+/// sqrt(1e6) ulps, ~1e-4).
 #[test]
 fn a_million_samples_accumulate_accurately() {
     let Some(gpu) = renderer() else { return };

@@ -84,8 +84,8 @@ pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync
     film
 }
 
-/// Accumulates one pixel's samples; returns how many were invalid (non-finite, negative or
-/// above 2^32) and counted as zero.
+/// Accumulates one pixel's samples; returns how many were invalid (non-finite or negative) and
+/// counted as zero.
 fn render_pixel(
     scene: &FlatScene,
     opts: &RenderOptions,

@@ -442,18 +442,26 @@ gpu_struct! {
     }
 }
 
+use crate::exact_sum::SUM_WORDS;
+
 /// The per-pixel accumulator, in u32 words (see shaders/kernel.wgsl): a running f32 mean and the
-/// samples taken, M2 and the invalid samples, the exact sums of the even-index and of the
-/// odd-index samples (three words per channel each).
-pub const ACCUM_WORDS: u32 = 26;
+/// samples taken, M2, the invalid samples and the exponent of M2's scale, the exact sums of the even-index and of the
+/// odd-index samples (`SUM_WORDS` words per channel each, word-major: every channel's word 0,
+/// then word 1...).
+pub const ACCUM_WORDS: u32 = ACCUM_ODD_SUM + 3 * SUM_WORDS as u32;
 /// Where each of a pixel's values starts among its words: the running mean (3 words, f32 bits),
-/// the samples taken, M2 (3 words, f32 bits), the invalid samples, and the exact sums.
+/// the samples taken, M2 (3 words, f32 bits), the invalid samples, the exponent M2 is kept at,
+/// and the exact sums.
 pub const ACCUM_MEAN: u32 = 0;
 pub const ACCUM_COUNT: u32 = 3;
 pub const ACCUM_M2: u32 = 4;
 pub const ACCUM_INVALID: u32 = 7;
-pub const ACCUM_EVEN_SUM: u32 = 8;
-pub const ACCUM_ODD_SUM: u32 = 17;
+/// The exponent bits of the pixel's first non-zero sample (0 until there is one): its mean and
+/// M2 are kept of samples scaled by the power of two that brings that sample near 1, so that
+/// f32 squares neither overflow nor underflow at any radiance scale.
+pub const ACCUM_M2_EXPONENT: u32 = 8;
+pub const ACCUM_EVEN_SUM: u32 = 9;
+pub const ACCUM_ODD_SUM: u32 = ACCUM_EVEN_SUM + 3 * SUM_WORDS as u32;
 pub const ACCUM_BYTES_PER_PIXEL: u64 = ACCUM_WORDS as u64 * 4;
 
 /// Invocations per workgroup along x and along y.
@@ -483,11 +491,12 @@ fn wgsl_constants() -> String {
     let constants = [
         ("WORKGROUP_SIZE", WORKGROUP_SIZE.literal()),
         ("ACCUM_WORDS", ACCUM_WORDS.literal()),
-        ("TOO_LARGE_BITS", crate::film::TOO_LARGE_BITS.literal()),
+        ("NOT_FINITE_BITS", crate::film::NOT_FINITE_BITS.literal()),
         ("ACCUM_MEAN", ACCUM_MEAN.literal()),
         ("ACCUM_COUNT", ACCUM_COUNT.literal()),
         ("ACCUM_M2", ACCUM_M2.literal()),
         ("ACCUM_INVALID", ACCUM_INVALID.literal()),
+        ("ACCUM_M2_EXPONENT", ACCUM_M2_EXPONENT.literal()),
         ("ACCUM_EVEN_SUM", ACCUM_EVEN_SUM.literal()),
         ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),

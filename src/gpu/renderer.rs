@@ -3,11 +3,13 @@
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
-    ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_ODD_SUM,
-    ACCUM_WORDS, BVH_LEAF_OFFSET_LIMIT, GpuDispatch, GpuFirstBounce, GpuParams, ImageArray,
-    SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params, texel_rows, whole_image_dispatch,
+    ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_M2_EXPONENT,
+    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_OFFSET_LIMIT, GpuDispatch, GpuFirstBounce, GpuParams,
+    ImageArray, SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params, texel_rows,
+    whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
+use crate::exact_sum::{ExactSum, SUM_WORDS};
 use crate::film::{Film, PixelStats};
 use crate::options::{RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
@@ -745,9 +747,20 @@ impl GpuRenderer {
                 let odd_sum = fixed_sums(&px[ACCUM_ODD_SUM as usize..]);
                 *stats = PixelStats {
                     n: opts.spp as u64,
-                    sum: std::array::from_fn(|c| even_sum[c] + odd_sum[c]),
-                    m2: DVec3::from_array(std::array::from_fn(|c| f(px[ACCUM_M2 as usize + c])))
-                        .max(DVec3::ZERO),
+                    sum: std::array::from_fn(|c| even_sum[c].plus(&odd_sum[c])),
+                    // The kernel's M2 is f32 of samples scaled by 1 / scale: a spread too
+                    // wide even for that (1e19 between samples of one pixel) reads as the
+                    // largest f32, not as an infinity.
+                    m2: DVec3::from_array(std::array::from_fn(|c| {
+                        let m2 = f(px[ACCUM_M2 as usize + c]);
+                        let m2 = if m2.is_finite() {
+                            m2.max(0.0)
+                        } else {
+                            f32::MAX as f64
+                        };
+                        let scale = m2_scale(px[ACCUM_M2_EXPONENT as usize]);
+                        m2 * scale * scale
+                    })),
                     odd_n,
                     odd_sum,
                 };
@@ -961,11 +974,19 @@ impl DispatchTimer {
     }
 }
 
-/// Per channel, a fixed-point sum from its three words (word-major: all channels' w0, then w1...).
-fn fixed_sums(words: &[u32]) -> [u128; 3] {
-    std::array::from_fn(|c| {
-        (0..3).fold(0u128, |sum, w| sum | (words[3 * w + c] as u128) << (32 * w))
-    })
+/// What the kernel divided a pixel's samples by for its mean and M2: the power of two of the
+/// exponent bits `exponent` of its first non-zero sample (1 before there is one). Twin of
+/// `m2_scale` in shaders/kernel.wgsl.
+fn m2_scale(exponent: u32) -> f64 {
+    match exponent {
+        0 => 1.0,
+        e => 2f64.powi(e.clamp(1, 253) as i32 - 127),
+    }
+}
+
+/// Per channel, an exact sum from its words (word-major: all channels' w0, then w1...).
+fn fixed_sums(words: &[u32]) -> [ExactSum; 3] {
+    std::array::from_fn(|c| ExactSum::from_words((0..SUM_WORDS).map(|w| words[3 * w + c])))
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 //! transforms rays per hit; only a mesh placed more than once is kept in its own coordinates
 //! and instanced (see [`Instance`]), its rays transformed into them.
 
+use super::texture::Texture;
 use super::{Background, Material, Scene, SceneError, Shape};
 use glam::{DVec3, Vec3, Vec4};
 
@@ -305,6 +306,9 @@ pub enum LightShape {
     Environment(super::environment::Environment),
 }
 
+/// Most squares a UV checker may put across [0, 1] (f32 resolves 2^24 steps there).
+pub const MAX_UV_CHECKS: f32 = 65536.0;
+
 impl FlatScene {
     /// Flattens `scene` for an image of `width` x `height` pixels; a mesh placed more than once
     /// (with one material, neither emitting nor bounding a medium) is kept once and instanced.
@@ -500,10 +504,40 @@ impl FlatScene {
             let features = m.extra_features();
             features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
         });
+        flat.check_checker_scales()?;
         flat.collect_lights();
         flat.medium_crossings = flat.count_medium_crossings();
         flat.build_bvh();
         Ok(flat)
+    }
+
+    /// Refuses checkers too fine for f32 to resolve where the scene lies: a solid checker's
+    /// cubes must span at least 2^7 f32 steps at the scene's largest (camera-relative)
+    /// coordinate, a UV checker at most 2^16 squares across [0, 1]; finer ones alias into
+    /// noise or one colour.
+    fn check_checker_scales(&self) -> Result<(), SceneError> {
+        let extent = (self.bounding_radius() as f32).max(1e-30);
+        let finest_solid = extent * 2f32.powi(-16);
+        for m in &self.materials {
+            for texture in m.textures() {
+                match texture {
+                    Texture::Checker(c) if c.scale < finest_solid => {
+                        return Err(SceneError::Invalid(format!(
+                            "checker scale {:e} is finer than f32 resolves in a scene {extent:.3e} across: use at least {finest_solid:.3e}",
+                            c.scale
+                        )));
+                    }
+                    Texture::UvChecker(c) if c.scale > MAX_UV_CHECKS => {
+                        return Err(SceneError::Invalid(format!(
+                            "uv_checker scale {:e} puts more squares across a surface than f32 resolves: use at most {MAX_UV_CHECKS}",
+                            c.scale
+                        )));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Builds `bvh`: each instanced mesh's hierarchy (in mesh coordinates), then the top level

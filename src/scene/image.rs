@@ -136,12 +136,120 @@ pub fn load(path: &Path, source: &str) -> Result<&'static Image, String> {
     Ok(image)
 }
 
+/// Most texels an image may have: a 16384x8192 environment (the largest common HDRI), which
+/// takes 1.6 GB as linear f32 RGB.
+pub const MAX_TEXELS: u64 = 1 << 27;
+
+/// Bytes a texel may take at the peak of loading an image (decoded, converted to linear RGB
+/// f32 and, for an environment, its sampling tables built in f64): checked against the memory
+/// available from the image's header, before anything is decoded.
+const PEAK_BYTES_PER_TEXEL: u64 = 64;
+
+/// A Radiance HDR file, whose first line is `#?` and the writing program's name: the `image`
+/// crate reads only `#?RADIANCE`, so others (Mitsuba and many tools write `#?RGBE`) are given
+/// that line. `None` for files of other formats.
+fn radiance_hdr(path: &Path, source: &str) -> Result<Option<Vec<u8>>, String> {
+    use std::io::Read;
+    let mut head = [0u8; 2];
+    let is_hdr = std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && &head == b"#?";
+    if !is_hdr {
+        return Ok(None);
+    }
+    let mut bytes = std::fs::read(path).map_err(|e| format!("cannot read image {source}: {e}"))?;
+    let header_end = bytes.windows(2).take(1 << 16).position(|w| w == b"\n\n");
+    let Some(header_end) = header_end else {
+        return Err(format!(
+            "image {source}: its Radiance HDR header is truncated (no blank line ends it)"
+        ));
+    };
+    let resolution = bytes[header_end + 2..]
+        .split(|&b| b == b'\n')
+        .next()
+        .map(String::from_utf8_lossy)
+        .unwrap_or_default();
+    let words: Vec<&str> = resolution.split_whitespace().collect();
+    if words.len() != 4 || words[1].parse::<u32>().is_err() || words[3].parse::<u32>().is_err() {
+        return Err(format!(
+            "image {source}: its Radiance HDR file has no size line after its header (such as -Y 512 +X 1024)"
+        ));
+    }
+    let first_line = bytes.iter().position(|&b| b == b'\n').unwrap_or(0);
+    if &bytes[..first_line] != b"#?RADIANCE" {
+        bytes.splice(..first_line, b"#?RADIANCE".iter().copied());
+    }
+    Ok(Some(bytes))
+}
+
+/// Refuses an image whose header says it is too large for this machine's memory.
+fn check_size_before_decoding(
+    dimensions: image::ImageResult<(u32, u32)>,
+    source: &str,
+) -> Result<(), String> {
+    let Ok((width, height)) = dimensions else {
+        return Ok(()); // The decoder names what is wrong.
+    };
+    if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(format!(
+            "image {source} is {width}x{height}: each side must be at most {MAX_IMAGE_SIDE} pixels"
+        ));
+    }
+    let texels = width as u64 * height as u64;
+    if texels > MAX_TEXELS {
+        return Err(format!(
+            "image {source} is {width}x{height}: more than the {MAX_TEXELS} texels (16384x8192) an image may have (use a smaller image)"
+        ));
+    }
+    let needed = texels * PEAK_BYTES_PER_TEXEL;
+    if let Some(available) = crate::film::available_memory()
+        && needed > available
+    {
+        return Err(format!(
+            "image {source} is {width}x{height}: loading it needs about {:.1} GB of memory, and {:.1} GB is available (use a smaller image)",
+            needed as f64 / 1e9,
+            available as f64 / 1e9
+        ));
+    }
+    Ok(())
+}
+
 fn decode(path: &Path, source: &str) -> Result<Image, String> {
     let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?
-        .with_guessed_format()
-        .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;
+    let reader = match radiance_hdr(path, source)? {
+        Some(bytes) => {
+            let header = image::ImageReader::with_format(
+                std::io::Cursor::new(&bytes[..]),
+                image::ImageFormat::Hdr,
+            );
+            check_size_before_decoding(header.into_dimensions(), source)?;
+            let cursor = std::io::Cursor::new(bytes);
+            image::ImageReader::with_format(
+                std::io::BufReader::new(Box::new(cursor) as Box<dyn ReadSeek>),
+                image::ImageFormat::Hdr,
+            )
+        }
+        None => {
+            let open = || {
+                image::ImageReader::open(path)
+                    .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?
+                    .with_guessed_format()
+                    .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))
+            };
+            check_size_before_decoding(open()?.into_dimensions(), source)?;
+            let reader = open()?;
+            let format = reader.format();
+            let inner = reader.into_inner();
+            let mut boxed = image::ImageReader::new(std::io::BufReader::new(
+                Box::new(inner) as Box<dyn ReadSeek>
+            ));
+            if let Some(f) = format {
+                boxed.set_format(f);
+            }
+            boxed
+        }
+    };
     if reader.format().is_none() {
         return Err(format!(
             "image {source}: unknown format (rt-gpu reads PNG, JPEG, OpenEXR and Radiance HDR)"
@@ -219,6 +327,10 @@ pub fn resolve(source: &str) -> PathBuf {
         _ => path.to_path_buf(),
     })
 }
+
+/// What an image reader reads from: a file or bytes in memory.
+trait ReadSeek: std::io::Read + std::io::Seek {}
+impl<T: std::io::Read + std::io::Seek> ReadSeek for T {}
 
 #[cfg(test)]
 mod tests {

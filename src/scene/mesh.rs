@@ -206,12 +206,15 @@ fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
         ignore_points: true,
         ignore_lines: true,
     };
-    // Materials (.mtl) are not read: an OBJ object takes the scene's material.
-    let (models, _) = tobj::load_obj(path, &options).map_err(|e| {
-        let line = std::fs::read_to_string(path)
-            .ok()
-            .and_then(|text| obj_error_line(&text, &e));
-        let at = line.map_or(String::new(), |l| format!(":{l}"));
+    let text = obj_text(path, source)?;
+    check_obj_faces(&text)
+        .map_err(|(line, what)| format!("cannot read mesh {source}:{line}: {what}"))?;
+    // Materials (.mtl) are not read, nor even opened (an `mtllib` line may name anything, a
+    // device or a FIFO among them): an OBJ object takes the scene's material.
+    let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
+    let mut reader = std::io::Cursor::new(text.as_bytes());
+    let (models, _) = tobj::load_obj_buf(&mut reader, &options, no_materials).map_err(|e| {
+        let at = obj_error_line(&text, &e).map_or(String::new(), |l| format!(":{l}"));
         format!("cannot read mesh {source}{at}: {}", obj_error(&e))
     })?;
     let mut positions = Vec::new();
@@ -251,6 +254,57 @@ fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
     Mesh::with_normals(source, positions, triangles, normals)
 }
 
+/// An OBJ file's text: UTF-8, or Latin-1 (which some exporters write; OBJ's syntax is ASCII, so
+/// only names and comments can differ). UTF-16 is refused with what to do.
+fn obj_text(path: &Path, source: &str) -> Result<String, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
+    if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
+        return Err(format!(
+            "cannot read mesh {source}: it is UTF-16 text; save it as UTF-8 (or ASCII)"
+        ));
+    }
+    Ok(match String::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
+    })
+}
+
+/// Checks that every face names vertices, texture coordinates and normals that exist by the
+/// time it is read, counting negative (relative) indices back from there: tobj trusts them
+/// (and overflows on far negative ones). The error is the 1-based line and what is wrong.
+fn check_obj_faces(text: &str) -> Result<(), (usize, String)> {
+    let mut counts = [0i64; 3]; // v, vt, vn
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f") => {
+                for corner in words {
+                    for (k, index) in corner.split('/').take(3).enumerate() {
+                        if index.is_empty() && k > 0 {
+                            continue;
+                        }
+                        let valid = index
+                            .parse::<i64>()
+                            .is_ok_and(|i| i != 0 && i <= counts[k] && -i <= counts[k]);
+                        if !valid {
+                            let what = ["vertex (v)", "texture coordinate (vt)", "normal (vn)"][k];
+                            return Err((
+                                number + 1,
+                                format!("a face (f) names a {what} `{index}` that does not exist"),
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 fn obj_error(e: &tobj::LoadError) -> String {
     use tobj::LoadError::*;
     match e {
@@ -260,6 +314,9 @@ fn obj_error(e: &tobj::LoadError) -> String {
         FaceParseError => "a face (f) is not a list of vertex indices".into(),
         FaceVertexOutOfBounds => "a face (f) names a vertex that does not exist".into(),
         InvalidPolygon => "a face (f) has fewer than three vertices".into(),
+        ColorParseError => {
+            "a vertex (v) is not x y z or x y z r g b (three numbers, or six with a colour)".into()
+        }
         other => other.to_string(),
     }
 }
@@ -273,8 +330,18 @@ fn obj_error_line(text: &str, e: &tobj::LoadError) -> Option<usize> {
         let mut words = line.split_whitespace();
         match (words.next(), e) {
             (Some("v"), _) => {
-                let ok = words.take(3).filter(|w| w.parse::<f32>().is_ok()).count() == 3;
+                let numbers: Vec<&str> = words.collect();
+                let ok = numbers
+                    .iter()
+                    .take(3)
+                    .filter(|w| w.parse::<f32>().is_ok())
+                    .count()
+                    == 3;
                 if !ok && matches!(e, PositionParseError) {
+                    return Some(number + 1);
+                }
+                // tobj takes a fourth number as w, and colours only as three more.
+                if matches!(e, ColorParseError) && ![3, 4, 6].contains(&numbers.len()) {
                     return Some(number + 1);
                 }
                 vertices += 1;
@@ -306,14 +373,45 @@ type Part = (
     Vec<Option<[Vec3; 3]>>,
 );
 
+/// Reads a glTF file, checked first (`gltf_check`); a panic inside the `gltf` crate, which
+/// should no longer happen, is one line naming the file too.
 fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
+    let read = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        crate::quiet_panics(|| read_checked_gltf(path, source, node))
+    }));
+    read.unwrap_or_else(|_| {
+        Err(format!(
+            "cannot read mesh {source}: the glTF reader failed on it (a malformed file)"
+        ))
+    })
+}
+
+fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
+    use super::gltf_check;
     let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
-    let gltf::Gltf { document, blob } = gltf::Gltf::open(path)
+    gltf_check::check_container(path, source)?;
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
+    // The crate's own validation indexes some references before checking them.
+    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
         .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
+    gltf_check::check_references(unchecked.document.as_json(), source)?;
+    drop(unchecked);
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
+    drop(bytes);
+    gltf_check::check_buffers(document.as_json(), path.parent(), source)?;
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|e| format!("cannot read mesh {source}: buffers: {}", one_line(&e)))?;
+    let lengths: Vec<usize> = buffers.iter().map(|b| b.0.len()).collect();
+    gltf_check::check_document(document.as_json(), &lengths, source)?;
     let roots: Vec<gltf::Node> = match node {
         Some(name) => match document.nodes().find(|n| n.name() == Some(name)) {
+            Some(n) if document.nodes().filter(|m| m.name() == Some(name)).count() > 1 => {
+                return Err(format!(
+                    "mesh {source} has several nodes named \"{name}\" (node {} among them): rename them apart to pick one",
+                    n.index()
+                ));
+            }
             Some(n) => vec![n],
             None => {
                 let names: Vec<&str> = document.nodes().filter_map(|n| n.name()).take(20).collect();
@@ -369,11 +467,20 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
                     read.map(|n| (to_world * DVec3::from_array(n.map(|x| x as f64))).as_vec3())
                         .collect()
                 });
-                positions.extend(read.map(|p| {
-                    world
-                        .transform_point3(DVec3::from_array(p.map(|x| x as f64)))
-                        .as_vec3()
-                }));
+                let placed: Vec<DVec3> = read
+                    .map(|p| world.transform_point3(DVec3::from_array(p.map(|x| x as f64))))
+                    .collect();
+                if let Some(far) = placed
+                    .iter()
+                    .find(|p| !(p.abs().max_element() <= super::MAX_EXTENT as f64))
+                {
+                    return Err(format!(
+                        "mesh {source}: node {} places a vertex at {far}, beyond {:e} from the origin (rt-gpu's limit: scale or move the model)",
+                        n.index(),
+                        super::MAX_EXTENT
+                    ));
+                }
+                positions.extend(placed.iter().map(|p| p.as_vec3()));
                 let count = positions.len() as u32 - base;
                 let indices: Vec<u32> = match reader.read_indices() {
                     Some(i) => i.into_u32().collect(),

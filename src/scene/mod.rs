@@ -7,6 +7,7 @@ pub mod builtin;
 pub mod environment;
 pub mod file;
 pub mod flat;
+pub mod gltf_check;
 pub mod image;
 pub mod media;
 pub mod mesh;

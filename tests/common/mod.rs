@@ -3,6 +3,7 @@
 
 pub mod cli;
 pub mod gpu;
+pub mod mutate;
 pub mod stats;
 
 use glam::Vec3;

@@ -38,8 +38,9 @@ impl Verdict {
     }
 }
 
-/// (mean, variance of the mean) of each channel over the cell [x0, x1) x [y0, y1).
-fn cell(film: &Film, x0: u32, y0: u32, x1: u32, y1: u32) -> [(f64, f64); 3] {
+/// (mean, variance of the mean) of each channel over the cell [x0, x1) x [y0, y1), of `film`'s
+/// radiance times `scale`.
+fn cell(film: &Film, scale: f64, x0: u32, y0: u32, x1: u32, y1: u32) -> [(f64, f64); 3] {
     let mut out = [(0.0, 0.0); 3];
     let k = ((x1 - x0) * (y1 - y0)) as f64;
     for y in y0..y1 {
@@ -47,8 +48,8 @@ fn cell(film: &Film, x0: u32, y0: u32, x1: u32, y1: u32) -> [(f64, f64); 3] {
             let p = film.pixel(x, y);
             let v = film.variance_of_mean(p);
             for c in 0..3 {
-                out[c].0 += p.mean()[c] / k;
-                out[c].1 += v[c] / (k * k);
+                out[c].0 += scale * p.mean()[c] / k;
+                out[c].1 += scale * scale * v[c] / (k * k);
             }
         }
     }
@@ -69,6 +70,11 @@ fn z(a: (f64, f64), b: (f64, f64)) -> f64 {
 }
 
 pub fn compare(a: &Film, b: &Film) -> Verdict {
+    compare_scaled(a, 1.0, b)
+}
+
+/// [`compare`] of `a`'s radiance times `scale` with `b`'s.
+pub fn compare_scaled(a: &Film, scale: f64, b: &Film) -> Verdict {
     assert_eq!((a.width, a.height), (b.width, b.height));
     let (w, h) = (a.width, a.height);
     let mut cells: Vec<(bool, u32, u32, u32, u32)> = Vec::new();
@@ -101,7 +107,7 @@ pub fn compare(a: &Film, b: &Film) -> Verdict {
         worst_block_z: 0.0,
     };
     for (is_pixel, x0, y0, x1, y1) in cells {
-        let (ca, cb) = (cell(a, x0, y0, x1, y1), cell(b, x0, y0, x1, y1));
+        let (ca, cb) = (cell(a, scale, x0, y0, x1, y1), cell(b, 1.0, x0, y0, x1, y1));
         for c in 0..3 {
             let zc = z(ca[c], cb[c]);
             if is_pixel {
