@@ -41,7 +41,7 @@ fn loop_cost(
         1
     };
     let light_search = 2 + (scene.lights.len().max(1) as u64).ilog2() as u64;
-    let bound = |per_trace: u64| {
+    let bound = |per_trace: u64, rays_per_trace: u64| {
         let trace = rays_per_trace * per_trace;
         let per_segment = if features.nee {
             5 + 2 * trace + light_search
@@ -50,13 +50,19 @@ fn loop_cost(
         };
         2 + (max_depth as u64 + 1) * per_segment
     };
-    let fixed = bound(1);
+    // A BVH kernel's traces count their own iterations, one traversal per boundary crossed,
+    // so its fixed part counts each trace once, however many boundaries the scene has (a
+    // bound of every invisible primitive refused 1 000 smoke boxes that a ray crosses a few
+    // of); for sizing dispatches, a ray is guessed to cross at most SIZING_CROSSINGS.
+    const SIZING_CROSSINGS: u64 = 16;
+    let fixed = bound(1, if features.bvh { 1 } else { rays_per_trace });
     let per_sample = if features.bvh {
         // Kernels count against half the budget (see shaders/accel.wgsl): doubled here.
         // An instanced mesh's levels below the top level's (each leaf reached may enter one).
         let depth = scene.bvh.depth as u64 + scene.instance_depth as u64;
         let traversal = 4 * (depth + crate::accel::MAX_LEAF as u64);
-        2 * bound(1 + traversal_weight * traversal)
+        let rays = rays_per_trace.min(2 + SIZING_CROSSINGS);
+        2 * bound(1 + traversal_weight * traversal, rays)
     } else {
         fixed
     };
