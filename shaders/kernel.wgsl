@@ -2,8 +2,8 @@
 
 // Per pixel of the tile, ACCUM_WORDS u32s: a running f32 mean (only for Welford's M2) and the
 // count of samples taken (so the host can prove no loop was cut short), M2 and the count of
-// invalid samples, the exponent of the first non-zero sample (mean and M2 are of samples scaled
-// by its power of two, so f32 squares stay in range at any radiance scale), then the exact sums (film.wgsl) of the even-index and of the
+// invalid samples, each channel's exponent that its mean and M2 are scaled by (8 bits each: see
+// the sample loop), then the exact sums (film.wgsl) of the even-index and of the
 // odd-index samples (the replicas of a stratified sampler, see src/film.rs; renders without
 // them put every sample in the first). Updated sample by sample in sample order, so the result
 // does not depend on how a render is sliced into dispatches.
@@ -39,13 +39,17 @@ fn store_wide(at: u32, f: Wide) {
     store3(at + 27u, f.w9);
 }
 
-// 1 / m2_scale(exponent) of src/gpu/renderer.rs: the power of two that brings a sample whose
-// exponent bits are `exponent` near 1 (1 while there is none), a normal f32 however bright or dim.
-fn inverse_m2_scale(exponent: u32) -> f32 {
-    if exponent == 0u {
-        return 1.0;
-    }
-    return bitcast<f32>((254u - clamp(exponent, 1u, 253u)) << 23u);
+// 1 / m2_scale(exponent) of src/gpu/renderer.rs, per channel: the power of two that brings a
+// sample whose exponent bits are `exponent` near 1 (1 while there is none), a normal f32 however
+// bright or dim.
+fn inverse_m2_scale(exponent: vec3u) -> vec3f {
+    let scale = bitcast<vec3f>((vec3u(254u) - clamp(exponent, vec3u(1u), vec3u(253u))) << vec3u(23u));
+    return select(scale, vec3f(1.0), exponent == vec3u(0u));
+}
+
+// 2^-k, exactly (0 from k = 127 on).
+fn power_of_two_below(k: vec3u) -> vec3f {
+    return bitcast<vec3f>((vec3u(127u) - min(k, vec3u(127u))) << vec3u(23u));
 }
 
 // Workgroups overhang the tile's edges; those invocations do nothing.
@@ -69,8 +73,8 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var count = accum[slot + ACCUM_COUNT];
     var m2 = bitcast<vec3f>(load3(slot + ACCUM_M2));
     var invalid = accum[slot + ACCUM_INVALID];
-    var m2_exponent = accum[slot + ACCUM_M2_EXPONENT];
-    var m2_inverse = inverse_m2_scale(m2_exponent);
+    let packed_exponents = accum[slot + ACCUM_M2_EXPONENT];
+    var m2_exponent = (vec3u(packed_exponents) >> vec3u(0u, 8u, 16u)) & vec3u(0xffu);
     var even_sum = load_wide(slot + ACCUM_EVEN_SUM);
 //#if SOBOL
     var odd_sum = load_wide(slot + ACCUM_ODD_SUM);
@@ -116,12 +120,18 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
                 l = vec3f(0.0);
                 invalid += 1u;
             }
-            if m2_exponent == 0u {
-                // Samples before this one were zero: any scale holds them.
-                m2_exponent = bitcast<u32>(max(l.x, max(l.y, l.z))) >> 23u;
-                m2_inverse = inverse_m2_scale(m2_exponent);
-            }
-            let scaled = l * m2_inverse;
+            // Each channel's mean and M2 are of samples scaled by a power of two: set at its
+            // first non-zero sample, raised when a sample is 2^32 brighter (mean and M2 scaled
+            // down exactly, in sample order), so f32 squares stay in range at any radiance.
+            let exponent = (bitcast<vec3u>(l) & vec3u(0x7fffffffu)) >> vec3u(23u);
+            let raise = (exponent > m2_exponent + vec3u(32u))
+                | ((m2_exponent == vec3u(0u)) & (exponent != vec3u(0u)));
+            let raised = select(m2_exponent, exponent, raise);
+            let down = power_of_two_below(raised - m2_exponent);
+            mean *= down;
+            m2 *= down * down;
+            m2_exponent = raised;
+            let scaled = l * inverse_m2_scale(m2_exponent);
             let delta = scaled - mean;
             mean += delta / f32(count + 1u);
             m2 += delta * (scaled - mean);
@@ -151,7 +161,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     accum[slot + ACCUM_COUNT] = count;
     store3(slot + ACCUM_M2, bitcast<vec3u>(m2));
     accum[slot + ACCUM_INVALID] = invalid;
-    accum[slot + ACCUM_M2_EXPONENT] = m2_exponent;
+    accum[slot + ACCUM_M2_EXPONENT] = m2_exponent.x | (m2_exponent.y << 8u) | (m2_exponent.z << 16u);
     store_wide(slot + ACCUM_EVEN_SUM, even_sum);
 //#if SOBOL
     store_wide(slot + ACCUM_ODD_SUM, odd_sum);

@@ -8,7 +8,8 @@ use glam::{Vec3, Vec3A};
 
 /// Most primitives a leaf holds, except at the depth limit.
 pub const MAX_LEAF: usize = 4;
-/// Most levels: the traversal stacks (on the GPU a private array) hold this many entries.
+/// Most levels: the CPU's traversal stack holds this many entries (the kernel's is sized to the
+/// scene's hierarchy: `BVH_STACK` in src/gpu/shader.rs).
 pub const MAX_DEPTH: usize = 48;
 /// `count` of an interior node: this bit, and the split axis in the low two bits.
 pub const INTERIOR: u32 = 1 << 31;

@@ -273,6 +273,13 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
     };
     let (n, odd_n, invalid) = (count("spp")?, count("odd")?, count("invalid")?);
     let stratified = count_fields.get("stratified") == Some(&"true");
+    // Older films' samples were rounded to 2^-32 (and those above 2^32 dropped): they merge
+    // and resume only with each other, not with exact ones (see `identity_difference`).
+    let identity = if format == 1 {
+        format!("{identity} {LEGACY_SUMS}")
+    } else {
+        identity
+    };
     let meta = FilmMeta {
         identity,
         samples,
@@ -289,9 +296,16 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
         .iter()
         .map(|r| (r.end as u64 / 2) - (r.start as u64 / 2))
         .sum();
-    if odd_n != odd_in_ranges && odd_n != 0 {
+    // Stratified films keep their odd-index samples' statistics, others none.
+    let expected_odd = if stratified { odd_in_ranges } else { 0 };
+    if odd_n != expected_odd {
         bail!(
-            "{shown}: bad {FIELD_COUNTS}: odd={odd_n}, but its sample ranges hold {odd_in_ranges} odd samples"
+            "{shown}: bad {FIELD_COUNTS}: odd={odd_n}, but a {} film of its sample ranges holds {expected_odd}",
+            if stratified {
+                "stratified"
+            } else {
+                "non-stratified"
+            }
         );
     }
 
@@ -443,10 +457,20 @@ pub fn identity(
     )
 }
 
+/// What the identity of a film of format 1 (sums rounded to 2^-32) says of it when read.
+const LEGACY_SUMS: &str = "sums=rounded";
+
 /// Why two identities differ, naming the first setting that does ("seed 0 here, 7 there").
 pub fn identity_difference(ours: &str, theirs: &str) -> Option<String> {
     if ours == theirs {
         return None;
+    }
+    let legacy = |s: &str| s.split_whitespace().any(|f| f == LEGACY_SUMS);
+    if legacy(ours) != legacy(theirs) {
+        return Some(
+            "one was written by an older rt-gpu, whose sums were rounded (it merges only with films of that version: render the rest again)"
+                .to_string(),
+        );
     }
     let fields = |s: &str| -> Vec<(String, String)> {
         s.split_whitespace()
@@ -532,6 +556,12 @@ pub fn combine(mut films: Vec<NamedFilm>) -> anyhow::Result<Combined> {
             _ => samples.push(r.clone()),
         }
     }
+    if samples.len() > MAX_RANGES {
+        bail!(
+            "the merged film would hold {} separate sample ranges, more than the {MAX_RANGES} a film may: merge shards of adjacent samples",
+            samples.len()
+        );
+    }
     let mut missing = Vec::new();
     let mut next = 0;
     for r in &samples {
@@ -565,7 +595,7 @@ pub fn combine(mut films: Vec<NamedFilm>) -> anyhow::Result<Combined> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
+    use glam::{DVec3, Vec3};
 
     #[test]
     fn a_film_file_reads_back_exactly_and_an_image_without_metadata_is_refused() {
@@ -680,6 +710,64 @@ mod tests {
         }
         let err = format!("{:#}", read(&path).expect_err("a FIFO"));
         assert!(err.contains("not a regular file"), "{err}");
+    }
+
+    /// A film file as rt-gpu wrote them before format 2: four words per sum in units of 2^-32,
+    /// metadata in four attributes. One pixel of 2 samples summing to 1.5 in every channel.
+    fn format_1_film(path: &Path) {
+        let words = |w: u32| FlatSamples::U32(vec![w]);
+        let mut channels = Vec::new();
+        for c in CHANNELS {
+            channels.push(AnyChannel::new(c, FlatSamples::F32(vec![0.75])));
+            let fixed = 3u128 << 31; // 1.5
+            for w in 0..4 {
+                let word = (fixed >> (32 * w)) as u32;
+                channels.push(AnyChannel::new(
+                    format!("sum.{c}.{w}").as_str(),
+                    words(word),
+                ));
+                channels.push(AnyChannel::new(
+                    format!("odd_sum.{c}.{w}").as_str(),
+                    words(0),
+                ));
+            }
+            channels.push(AnyChannel::new(format!("m2.{c}.lo").as_str(), words(0)));
+            channels.push(AnyChannel::new(format!("m2.{c}.hi").as_str(), words(0)));
+        }
+        let mut attributes = LayerAttributes::default();
+        for (key, value) in [
+            (LEGACY_IDENTITY, "scene=0123 size=1x1 seed=0"),
+            (LEGACY_SAMPLES, "0..2"),
+            (LEGACY_COUNTS, "spp=2 odd=0 invalid=0 stratified=false"),
+            (LEGACY_DEVICE, "old"),
+        ] {
+            attributes
+                .other
+                .insert(Text::from(key), AttributeValue::Text(Text::from(value)));
+        }
+        let layer = Layer::new(
+            (1, 1),
+            attributes,
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels.into()),
+        );
+        Image::from_layer(layer)
+            .write()
+            .to_file(path)
+            .expect("writes");
+    }
+
+    #[test]
+    fn older_films_read_exactly_and_merge_only_with_their_own() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("old.exr");
+        format_1_film(&path);
+        let (film, meta) = read(&path).expect("reads a format 1 film");
+        assert_eq!(film.pixels[0].mean(), DVec3::splat(0.75));
+        let ours = "scene=0123 size=1x1 seed=0";
+        let why = identity_difference(ours, &meta.identity).expect("differs");
+        assert!(why.contains("older rt-gpu"), "{why}");
+        assert_eq!(identity_difference(&meta.identity, &meta.identity), None);
     }
 
     #[test]

@@ -888,7 +888,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
         String::new()
     };
     // Held until the render ends: a second render checkpointing to the same file is refused.
-    let _checkpoint_lock = match &checkpoint {
+    let checkpoint_lock = match &checkpoint {
         Some(c) => Some(rt_gpu::output::FileLock::acquire(c)?),
         None => None,
     };
@@ -1044,6 +1044,8 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
                 c.display()
             );
         }
+        // Exiting runs no destructors: the lock file goes now.
+        drop(checkpoint_lock);
         std::process::exit(128 + signal);
     }
     Ok(())

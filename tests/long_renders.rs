@@ -229,6 +229,10 @@ fn interrupted_renders_resume_bit_identically() {
         );
         ok(rt_gpu(&resumed, d));
         assert_eq!(read(d, "whole.pfm"), read(d, "part.pfm"), "{backend}");
+        assert!(
+            !d.join(".ck.exr.rt-gpu-lock").exists(),
+            "{backend}: a lock file stays"
+        );
 
         let other_seed = [
             &base[..],
@@ -328,7 +332,7 @@ fn checkpoints_are_never_replaced_by_accident() {
             &base[..5],
             &[
                 "--time",
-                "4",
+                "6",
                 "--checkpoint",
                 "sub/ck.exr",
                 "--checkpoint-every",
@@ -341,7 +345,12 @@ fn checkpoints_are_never_replaced_by_accident() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("starts");
-    std::thread::sleep(Duration::from_millis(1500));
+    // Once the render holds its checkpoint (its lock file is there), and a pass later.
+    let start = Instant::now();
+    while !d.join("sub/.ck.exr.rt-gpu-lock").exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(300));
     std::fs::remove_dir_all(d.join("sub")).expect("removes");
     let out = child.wait_with_output().expect("exits");
     let err = one_line_error(&out);

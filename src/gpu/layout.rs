@@ -456,9 +456,10 @@ pub const ACCUM_MEAN: u32 = 0;
 pub const ACCUM_COUNT: u32 = 3;
 pub const ACCUM_M2: u32 = 4;
 pub const ACCUM_INVALID: u32 = 7;
-/// The exponent bits of the pixel's first non-zero sample (0 until there is one): its mean and
-/// M2 are kept of samples scaled by the power of two that brings that sample near 1, so that
-/// f32 squares neither overflow nor underflow at any radiance scale.
+/// Per channel (8 bits each), the exponent bits its mean and M2 are scaled by (0 until a
+/// non-zero sample; raised with much brighter ones): they are kept of samples scaled by the
+/// power of two that brings that exponent near 1, so that f32 squares neither overflow nor
+/// underflow at any radiance scale.
 pub const ACCUM_M2_EXPONENT: u32 = 8;
 pub const ACCUM_EVEN_SUM: u32 = 9;
 pub const ACCUM_ODD_SUM: u32 = ACCUM_EVEN_SUM + 3 * SUM_WORDS as u32;

@@ -4,9 +4,9 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_M2_EXPONENT,
-    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_OFFSET_LIMIT, GpuDispatch, GpuFirstBounce, GpuParams,
-    ImageArray, SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params, texel_rows,
-    whole_image_dispatch,
+    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_COUNT_SHIFT, BVH_LEAF_OFFSET_LIMIT, GpuDispatch,
+    GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params,
+    texel_rows, whole_image_dispatch,
 };
 use super::shader::{Features, compose, validate};
 use crate::exact_sum::{ExactSum, SUM_WORDS};
@@ -224,12 +224,31 @@ impl GpuRenderer {
             label: Some("rt-gpu kernel"),
             source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
         };
-        // SAFETY: every index the kernel uses is in range by construction. Sphere and quad loops
-        // run to counts equal to the uploaded array lengths (arrays are never shorter: empty ones
-        // hold one dummy element); material indices are checked by `Scene::validate`; the
-        // accumulator slot is bounded by the tile size the accumulator was allocated for. Every
-        // loop is bounded by a uniform (max depth, sample count, primitive counts). So wgpu's
-        // injected bounds checks and loop guards, a large cost in these hot loops, are dropped.
+        // SAFETY: `source` was composed (`shader::compose`) for the scene whose buffers
+        // `scene_buffers` binds, with its `Features::of`; every dynamic index is then in range:
+        // - BVH stack (`traverse`): entering a top-level node at depth k, the stack holds <= k
+        //   entries; a top-level leaf pushes <= L = `largest_instance_leaf` instances; inside an
+        //   instance a mesh node j levels down holds <= depth + L - 1 + j. So every write is
+        //   below BVH_STACK = max(bvh.depth, 1) + L + instance_depth (`compose`, `build_bvh`).
+        // - Node references (`gpu_bvh`): interior ones < the interior-node count; a leaf's
+        //   first + count <= bvh.primitives.len() <= BVH_LEAF_OFFSET_LIMIT, and its count fits
+        //   its bits (both checked in `scene_buffers`). Packed primitive indices are < their
+        //   kind's length; instance roots are references of their mesh's root.
+        // - Texels: node texels 4i..4i+3 and image texels lie below `texel_rows` rows x TEXEL_ROW
+        //   (`scene_buffers`); image x and y are clamped to the image (`wrap`, `alias_pick`,
+        //   `environment_pdf_at`) at the offsets `ImageArray` placed it.
+        // - Uniform arrays hold their capacities (SCENE_CAPACITY, BVH_CAPACITY,
+        //   BVH_PRIMITIVE_CAPACITY) >= the counts (`Features::of`); storage arrays are exact, and
+        //   empty ones hold one element that is never read.
+        // - Materials are renumbered below materials.len() (`FlatScene::with_instancing`); a
+        //   medium is its material + 1 and a light 1 + its index, read only when non-zero; NEE
+        //   implies light_count >= 1 (checked in `render`).
+        // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on.
+        // - accum: gid < tile_size <= (width, tile_rows), and the buffer holds tile_rows x width
+        //   x ACCUM_WORDS words (below 2^32: `max_tile_pixels`); debug outputs hold a slot per
+        //   invocation (`run_debug`).
+        // So wgpu's injected bounds checks and loop guards, a large cost in these hot loops,
+        // are dropped.
         let module = unsafe {
             device.create_shader_module_trusted(descriptor, wgpu::ShaderRuntimeChecks::unchecked())
         };
@@ -262,7 +281,8 @@ impl GpuRenderer {
             .limits
             .max_storage_buffer_binding_size
             .min(self.ctx.limits.max_buffer_size);
-        binding / ACCUM_BYTES_PER_PIXEL
+        // The kernel's accumulator index (ACCUM_WORDS x pixel) is a u32.
+        (binding / ACCUM_BYTES_PER_PIXEL).min(u32::MAX as u64 / ACCUM_WORDS as u64)
     }
 
     /// The scene arrays as buffers of the kind `features` asks for: uniform arrays padded to
@@ -300,6 +320,19 @@ impl GpuRenderer {
         }
         let max_rows = self.ctx.limits.max_texture_dimension_2d as u64;
         let node_rows = texel_rows(4 * buffers.bvh_nodes.len() as u64);
+        let largest_leaf = scene
+            .bvh
+            .nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(|n| n.count)
+            .max()
+            .unwrap_or(0);
+        if largest_leaf >= 1 << (31 - BVH_LEAF_COUNT_SHIFT) {
+            return Err(GpuError::TooLarge(format!(
+                "the scene's BVH has a leaf of {largest_leaf} primitives at its depth limit, more than the kernel's leaves hold: use --backend cpu"
+            )));
+        }
         if buffers.bvh_primitives.len() as u64 > BVH_LEAF_OFFSET_LIMIT as u64 {
             return Err(GpuError::TooLarge(format!(
                 "the scene's BVH has {} primitive references, more than the kernel can address ({BVH_LEAF_OFFSET_LIMIT}): use fewer triangles, or --backend cpu",
@@ -764,7 +797,8 @@ impl GpuRenderer {
                         } else {
                             f32::MAX as f64
                         };
-                        let scale = m2_scale(px[ACCUM_M2_EXPONENT as usize]);
+                        let exponent = (px[ACCUM_M2_EXPONENT as usize] >> (8 * c)) & 0xff;
+                        let scale = m2_scale(exponent);
                         m2 * scale * scale
                     })),
                     odd_n,
@@ -817,6 +851,16 @@ impl GpuRenderer {
         scene: &FlatScene,
         lookups: &[(u32, glam::Vec3, glam::Vec2)],
     ) -> Result<Vec<glam::Vec3>, GpuError> {
+        // The kernel reads the material unchecked.
+        if let Some((bad, _, _)) = lookups
+            .iter()
+            .find(|(m, _, _)| *m as usize >= scene.materials.len())
+        {
+            return Err(GpuError::Runtime(format!(
+                "material {bad} does not exist (the scene has {})",
+                scene.materials.len()
+            )));
+        }
         let slots: Vec<GpuFirstBounce> = lookups
             .iter()
             .map(|(material, point, uv)| GpuFirstBounce {
@@ -980,9 +1024,9 @@ impl DispatchTimer {
     }
 }
 
-/// What the kernel divided a pixel's samples by for its mean and M2: the power of two of the
-/// exponent bits `exponent` of its first non-zero sample (1 before there is one). Twin of
-/// `m2_scale` in shaders/kernel.wgsl.
+/// What the kernel divided a pixel channel's samples by for its mean and M2: the power of two of
+/// the exponent bits `exponent` it keeps (1 before there is one). Twin of `inverse_m2_scale` in
+/// shaders/kernel.wgsl.
 fn m2_scale(exponent: u32) -> f64 {
     match exponent {
         0 => 1.0,
