@@ -231,6 +231,19 @@ fn invalid_shaders_and_scenes_are_clear_errors() {
         Err(e) => panic!("wrong error: {e}"),
         Ok(_) => panic!("an invalid shader compiled"),
     }
+    // A kernel composed for one scene is not run on another: its unchecked indices (stack
+    // depth, capacities, inlined primitives) hold only for its own.
+    let opts = common::opts(8, 8, 1, 4, 0);
+    let kernel = gpu
+        .kernel(&flat, features.for_render(&flat, &opts), "render")
+        .expect("compiles");
+    let mut moved = scene.clone();
+    moved.objects[0].transform.translate.x += 1.0;
+    let other = FlatScene::new(&moved, 8, 8).expect("valid");
+    let err = gpu
+        .render(&kernel, &other, &opts, &Default::default(), &|_| {})
+        .expect_err("another scene");
+    assert!(err.to_string().contains("another scene"), "{err}");
     let mut bad = scene.clone();
     bad.objects[0].material = 99;
     let err = FlatScene::new(&bad, 8, 8).expect_err("invalid material index");

@@ -131,6 +131,18 @@ fn malformed_gltf_files_are_one_line_errors_naming_the_problem() {
     short["buffers"][0]["byteLength"] = json!(1000);
     refused(d, &short, None, "fewer than its byteLength 1000");
 
+    // A binary container whose header's length is below its own size (the gltf crate
+    // subtracted unchecked: found by the coverage-guided fuzzer), or another version.
+    for (name, bytes) in [
+        ("short.gltf", b"glTF\x02\0\0\0\x04\0\0\0".to_vec()),
+        ("v1.glb", b"glTF\x01\0\0\0\x0c\0\0\0".to_vec()),
+        ("cut.glb", b"glTF\x02\0".to_vec()),
+    ] {
+        std::fs::write(d.join(name), &bytes).expect("writes");
+        let err = load(&d.join(name), name, None).expect_err("bad container");
+        assert!(err.contains(name) && err.contains("binary glTF"), "{err}");
+        assert!(!err.contains("reader failed"), "{err}");
+    }
     // A .glb whose magic is wrong says so, not "JSON error at 1:1".
     std::fs::write(d.join("bad.glb"), b"glTX\x02\0\0\0 not a glb").expect("writes");
     let err = load(&d.join("bad.glb"), "bad.glb", None).expect_err("bad magic");

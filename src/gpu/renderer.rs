@@ -565,6 +565,14 @@ impl GpuRenderer {
                 opts.sampler.name()
             )));
         }
+        // The unchecked kernel's indices are in range only for the scene it was composed for
+        // (its stack depth, capacities and inlined primitives): see the SAFETY note in
+        // `kernel_from_source`.
+        if compose(&kernel.features, scene).map_err(GpuError::Shader)? != kernel.source {
+            return Err(GpuError::Runtime(
+                "this kernel was composed for another scene: compile one for this scene".into(),
+            ));
+        }
         let (width, height) = (opts.width, opts.height);
         let max_tile_pixels = self.max_tile_pixels();
         if (width as u64) > max_tile_pixels {

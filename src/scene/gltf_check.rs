@@ -14,23 +14,39 @@ pub const MAX_BUFFER_BYTES: u64 = 1 << 31;
 /// The first bytes of a binary glTF (`.glb`) file.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 
-/// Checks what can be checked before parsing: a `.glb` starts with its magic.
-pub fn check_container(path: &Path, source: &str) -> Result<(), String> {
+/// Checks what can be checked before parsing: a `.glb` starts with its magic, and a binary
+/// container's header is whole and its length within the file (the crate subtracts the
+/// header's size from it unchecked).
+pub fn check_container(bytes: &[u8], path: &Path, source: &str) -> Result<(), String> {
     let is_glb = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    if !is_glb {
-        return Ok(());
-    }
-    use std::io::Read;
-    let mut magic = [0u8; 4];
-    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
-    if read.is_err() || &magic != GLB_MAGIC {
+    if is_glb && !bytes.starts_with(GLB_MAGIC) {
         return Err(format!(
             "cannot read mesh {source}: not a binary glTF file (it does not start with \"glTF\")"
         ));
     }
-    Ok(())
+    if !bytes.starts_with(GLB_MAGIC) {
+        return Ok(());
+    }
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+    };
+    match (word(4), word(8)) {
+        (Some(2), Some(length)) if (12..=bytes.len() as u64).contains(&(length as u64)) => Ok(()),
+        (Some(2), Some(length)) => Err(format!(
+            "cannot read mesh {source}: its binary glTF header gives a length of {length} bytes, but the file has {}",
+            bytes.len()
+        )),
+        (Some(version), Some(_)) => Err(format!(
+            "cannot read mesh {source}: binary glTF version {version}; rt-gpu reads version 2"
+        )),
+        _ => Err(format!(
+            "cannot read mesh {source}: its binary glTF header is cut short"
+        )),
+    }
 }
 
 /// Checks what the `gltf` crate's validation indexes without checking: every primitive's

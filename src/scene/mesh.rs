@@ -389,8 +389,8 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
 fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
     use super::gltf_check;
     let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
-    gltf_check::check_container(path, source)?;
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
+    gltf_check::check_container(&bytes, path, source)?;
     // The crate's own validation indexes some references before checking them.
     let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
         .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
