@@ -254,6 +254,7 @@ fn reference(
     sessions: &[(Backend, Session)],
     series: &[(usize, SamplerKind)],
     rate: &[f64],
+    progress: &dyn Progress,
 ) -> anyhow::Result<Reference> {
     if let Some(path) = &o.reference {
         return load_reference(o, path);
@@ -300,7 +301,7 @@ fn reference(
     });
     let (backend, session) = &sessions[session_index];
     let integrator = session.integrator();
-    let bar = progress_bar(&format!(
+    progress.start(&format!(
         "reference: {spp} spp on {}-{}-{}",
         backend.name(),
         integrator.name(),
@@ -308,9 +309,9 @@ fn reference(
     ));
     let opts = options(o, spp, 0x5EED_0000, integrator, sampler);
     let film = session
-        .render(&o.scene, &opts, &|f| bar.set_position((f * 1000.0) as u64))?
+        .render(&o.scene, &opts, &|f| progress.advance(f))?
         .film;
-    bar.finish_and_clear();
+    progress.finish();
     let noise = estimated_rmse(&film);
     write_image(&mean_path, &film)?;
     write_atomically(&noise_path, |out| Ok(writeln!(out, "{noise} {spp}")?))?;
@@ -327,34 +328,31 @@ fn reference(
     })
 }
 
-#[cfg(feature = "cli")]
-fn progress_bar(message: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(1000).with_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {percent}% {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    bar.set_message(message.to_string());
-    bar
+/// Where a convergence run reports how far it is: each task (the reference, then each series'
+/// ladder) starts with its name, advances by the fraction done, and finishes. The library
+/// draws nothing; the CLI draws bars. Renders may report from their worker threads.
+pub trait Progress: Sync {
+    fn start(&self, task: &str);
+    fn advance(&self, fraction: f64);
+    fn finish(&self);
 }
 
-/// Without the `cli` feature, progress goes nowhere.
-#[cfg(not(feature = "cli"))]
-fn progress_bar(_message: &str) -> NoProgress {
-    NoProgress
+/// Progress that goes nowhere.
+pub struct Silent;
+
+impl Progress for Silent {
+    fn start(&self, _task: &str) {}
+    fn advance(&self, _fraction: f64) {}
+    fn finish(&self) {}
 }
 
-#[cfg(not(feature = "cli"))]
-struct NoProgress;
-
-#[cfg(not(feature = "cli"))]
-impl NoProgress {
-    fn set_position(&self, _position: u64) {}
-    fn finish_and_clear(&self) {}
-}
-
-/// Runs every series' ladder and fits.
+/// Runs every series' ladder and fits, reporting no progress.
 pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
+    run_with(o, &Silent)
+}
+
+/// [`run`], reporting progress to `progress`.
+pub fn run_with(o: &ConvergeOptions, progress: &dyn Progress) -> anyhow::Result<Report> {
     if !(o.budget > 0.0 && o.budget.is_finite()) {
         bail!("--budget must be a positive number of seconds");
     }
@@ -398,7 +396,7 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
         session.render(&o.scene, &opts, &|_| {})?;
         rate.push(o.width as f64 * o.height as f64 / start.elapsed().as_secs_f64());
     }
-    let reference = reference(o, &sessions, &series, &rate)?;
+    let reference = reference(o, &sessions, &series, &rate, progress)?;
 
     let mut rungs = Vec::new();
     let mut fits = Vec::new();
@@ -411,7 +409,7 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
             integrator.name(),
             sampler.name()
         );
-        let bar = progress_bar(&series);
+        progress.start(&series);
         let (mut spent, mut spp, mut last) = (0.0, 1u32, 0.0);
         // Stop before a rung that would overrun the budget (each rung doubles the last).
         while spent + 2.0 * last <= o.budget && spp <= 1 << 24 {
@@ -433,9 +431,9 @@ pub fn run(o: &ConvergeOptions) -> anyhow::Result<Report> {
             spent += seconds;
             last = seconds;
             spp *= 2;
-            bar.set_position(((spent / o.budget).min(1.0) * 1000.0) as u64);
+            progress.advance((spent / o.budget).min(1.0));
         }
-        bar.finish_and_clear();
+        progress.finish();
         let own: Vec<&Rung> = rungs.iter().filter(|r| r.series == series).collect();
         let fit = fit_series(&own, reference.noise_rmse).map(|f| Fit {
             stratified: sampler == SamplerKind::Sobol,

@@ -474,6 +474,34 @@ fn shown_radiance(mean: glam::DVec3) -> String {
     format!("({}, {}, {})", one(mean.x), one(mean.y), one(mean.z))
 }
 
+/// The convergence report's progress as a bar per task on stderr.
+#[derive(Default)]
+struct ConvergeBars(std::sync::Mutex<Option<ProgressBar>>);
+
+impl rt_gpu::converge::Progress for ConvergeBars {
+    fn start(&self, task: &str) {
+        let bar = ProgressBar::new(1000).with_style(
+            ProgressStyle::with_template("{msg} [{bar:30}] {percent}% {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(task.to_string());
+        *self.0.lock().unwrap_or_else(|p| p.into_inner()) = Some(bar);
+    }
+
+    fn advance(&self, fraction: f64) {
+        if let Some(bar) = &*self.0.lock().unwrap_or_else(|p| p.into_inner()) {
+            bar.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = self.0.lock().unwrap_or_else(|p| p.into_inner()).take() {
+            bar.finish_and_clear();
+        }
+    }
+}
+
 fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
     if args.reference.is_some() && args.reference_spp.is_some() {
         bail!(
@@ -511,7 +539,7 @@ fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
             everything: false,
         },
     };
-    let report = rt_gpu::converge::run(&options)?;
+    let report = rt_gpu::converge::run_with(&options, &ConvergeBars::default())?;
     let target = report.target_rmse(args.target_rmse);
     write!(std::io::stdout().lock(), "{}", report.table(target))?;
     let csv = args.output.join("converge.csv");
@@ -669,12 +697,7 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
         rebuilt.build_bvh();
         let seconds = start.elapsed().as_secs_f64();
         let bvh = rebuilt.bvh;
-        let buffers = rt_gpu::gpu::layout::SceneBuffers::new(flat);
-        let geometry = std::mem::size_of_val(&buffers.triangles[..])
-            + std::mem::size_of_val(&buffers.triangle_normals[..])
-            + std::mem::size_of_val(&buffers.bvh_nodes[..])
-            + std::mem::size_of_val(&buffers.bvh_primitives[..])
-            + std::mem::size_of_val(&buffers.instances[..]);
+        let geometry = rt_gpu::gpu::layout::geometry_bytes(flat);
         let per_triangle = if placed != triangles {
             format!(
                 ", {:.1} bytes per triangle stored, {:.2} per triangle placed",

@@ -720,6 +720,17 @@ impl ImageArray {
     }
 }
 
+/// GPU memory a scene's meshes and hierarchy take: triangles, their corner normals, BVH nodes and
+/// primitive references, and instances (what `rt-gpu bench` reports per triangle).
+pub fn geometry_bytes(scene: &FlatScene) -> usize {
+    let buffers = SceneBuffers::new(scene);
+    std::mem::size_of_val(&buffers.triangles[..])
+        + std::mem::size_of_val(&buffers.triangle_normals[..])
+        + std::mem::size_of_val(&buffers.bvh_nodes[..])
+        + std::mem::size_of_val(&buffers.bvh_primitives[..])
+        + std::mem::size_of_val(&buffers.instances[..])
+}
+
 impl SceneBuffers {
     pub fn new(scene: &FlatScene) -> Self {
         let mut spheres: Vec<GpuSphere> = scene
