@@ -91,8 +91,26 @@ pub const MAX_INLINE_PRIMITIVES: usize = 64;
 
 /// The largest uniform binding every WebGPU device offers.
 pub const MAX_UNIFORM_BYTES: u64 = 64 * 1024;
-/// The largest scene-array element: a material.
-pub const LARGEST_ELEMENT_BYTES: u64 = 96;
+/// The largest element of the scene arrays that go into uniform buffers together.
+pub const LARGEST_ELEMENT_BYTES: u64 = {
+    use crate::gpu::layout::{GpuLight, GpuMaterial, GpuQuad, GpuSphere};
+    use std::mem::size_of;
+    let sizes = [
+        size_of::<GpuSphere>(),
+        size_of::<GpuQuad>(),
+        size_of::<GpuMaterial>(),
+        size_of::<GpuLight>(),
+    ];
+    let mut largest = 0;
+    let mut i = 0;
+    while i < sizes.len() {
+        if sizes[i] > largest {
+            largest = sizes[i];
+        }
+        i += 1;
+    }
+    largest as u64
+};
 /// A BVH node as the kernel reads it (`layout::GpuBvhNode`).
 const NODE_BYTES: u64 = std::mem::size_of::<crate::gpu::layout::GpuBvhNode>() as u64;
 
