@@ -7,7 +7,7 @@
 //!
 //! Passing means: no panic, every error one line, every render finite. Seeded, so a failure
 //! reproduces; `RT_GPU_FUZZ_EXECUTIONS` (default 20 000) and `RT_GPU_FUZZ_SEED` (default 1) set
-//! the run. The long run reported in the README:
+//! the run. The long run reported in docs/testing.md:
 //! `RT_GPU_FUZZ_EXECUTIONS=1000000 cargo test --release --test fuzz_scene_files -- --nocapture`.
 //! Coverage-guided fuzzing with cargo-fuzz lives in `fuzz/` (see its README).
 
