@@ -216,13 +216,16 @@ gpu_struct! {
     }
 }
 
-/// A child reference of `GpuBvhNode`: a leaf's has this bit, its primitive count (at most 7;
-/// `accel::MAX_LEAF`) in the bits `BVH_LEAF_COUNT_SHIFT` up and where its primitives start in
-/// the reference array below; an interior node's is its index among the kernel's nodes.
+/// A child reference of `GpuBvhNode`: a leaf's has this bit, its primitive count (below
+/// `BVH_LEAF_COUNT_LIMIT`) in the bits `BVH_LEAF_COUNT_SHIFT` up and where its primitives
+/// start in the reference array below; an interior node's is its index among the kernel's
+/// nodes.
 pub const BVH_LEAF: u32 = 1 << 31;
 pub const BVH_LEAF_COUNT_SHIFT: u32 = 28;
 /// Where a leaf's primitives may start: below 2^28 (a quarter of a billion references).
 pub const BVH_LEAF_OFFSET_LIMIT: u32 = 1 << BVH_LEAF_COUNT_SHIFT;
+/// Leaves of this many primitives or more do not fit a reference's count bits.
+pub const BVH_LEAF_COUNT_LIMIT: u32 = 1 << (31 - BVH_LEAF_COUNT_SHIFT);
 
 /// The kernel's BVH: the host's interior nodes, in their order (the root's first), each with
 /// its two children's boxes and references (`GpuBvhNode`); the same hierarchy the CPU
@@ -265,7 +268,7 @@ pub fn gpu_bvh(bvh: &crate::accel::Bvh) -> (Vec<GpuBvhNode>, Vec<u32>) {
 }
 
 fn leaf_reference(leaf: &crate::accel::Node) -> u32 {
-    const _: () = assert!(crate::accel::MAX_LEAF < 8);
+    const _: () = assert!((crate::accel::MAX_LEAF as u32) < BVH_LEAF_COUNT_LIMIT);
     BVH_LEAF | (leaf.count << BVH_LEAF_COUNT_SHIFT) | leaf.offset
 }
 

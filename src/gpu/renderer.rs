@@ -4,7 +4,7 @@ use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{
     ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_M2_EXPONENT,
-    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_COUNT_SHIFT, BVH_LEAF_OFFSET_LIMIT, GpuDispatch,
+    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_COUNT_LIMIT, BVH_LEAF_OFFSET_LIMIT, GpuDispatch,
     GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params,
     texel_rows, whole_image_dispatch,
 };
@@ -51,9 +51,9 @@ fn loop_cost(
         2 + (max_depth as u64 + 1) * per_segment
     };
     // A BVH kernel's traces count their own iterations, one traversal per boundary crossed,
-    // so its fixed part counts each trace once, however many boundaries the scene has (a
-    // bound of every invisible primitive refused 1 000 smoke boxes that a ray crosses a few
-    // of); for sizing dispatches, a ray is guessed to cross at most SIZING_CROSSINGS.
+    // so its fixed part counts each trace once, however many boundaries the scene has (a ray
+    // crosses a few of them, not all); for sizing dispatches, a ray is guessed to cross at
+    // most SIZING_CROSSINGS.
     const SIZING_CROSSINGS: u64 = 16;
     let fixed = bound(1, if features.bvh { 1 } else { rays_per_trace });
     let per_sample = if features.bvh {
@@ -328,7 +328,7 @@ impl GpuRenderer {
             .map(|n| n.count)
             .max()
             .unwrap_or(0);
-        if largest_leaf >= 1 << (31 - BVH_LEAF_COUNT_SHIFT) {
+        if largest_leaf >= BVH_LEAF_COUNT_LIMIT {
             return Err(GpuError::TooLarge(format!(
                 "the scene's BVH has a leaf of {largest_leaf} primitives at its depth limit, more than the kernel's leaves hold: use --backend cpu"
             )));
@@ -796,8 +796,7 @@ impl GpuRenderer {
                     n: opts.spp as u64,
                     sum: std::array::from_fn(|c| even_sum[c].plus(&odd_sum[c])),
                     // The kernel's M2 is f32 of samples scaled by 1 / scale: a spread too
-                    // wide even for that (1e19 between samples of one pixel) reads as the
-                    // largest f32, not as an infinity.
+                    // wide even for that reads as the largest f32, not as an infinity.
                     m2: DVec3::from_array(std::array::from_fn(|c| {
                         let m2 = f(px[ACCUM_M2 as usize + c]);
                         let m2 = if m2.is_finite() {

@@ -184,13 +184,7 @@ fn radiance_hdr(path: &Path, source: &str) -> Result<Option<Vec<u8>>, String> {
 }
 
 /// Refuses an image whose header says it is too large for this machine's memory.
-fn check_size_before_decoding(
-    dimensions: image::ImageResult<(u32, u32)>,
-    source: &str,
-) -> Result<(), String> {
-    let Ok((width, height)) = dimensions else {
-        return Ok(()); // The decoder names what is wrong.
-    };
+fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Result<(), String> {
     if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(format!(
             "image {source} is {width}x{height}: each side must be at most {MAX_IMAGE_SIDE} pixels"
@@ -216,52 +210,57 @@ fn check_size_before_decoding(
 }
 
 fn decode(path: &Path, source: &str) -> Result<Image, String> {
-    let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
-    let reader = match radiance_hdr(path, source)? {
-        Some(bytes) => {
-            let header = image::ImageReader::with_format(
-                std::io::Cursor::new(&bytes[..]),
-                image::ImageFormat::Hdr,
-            );
-            check_size_before_decoding(header.into_dimensions(), source)?;
-            let cursor = std::io::Cursor::new(bytes);
-            image::ImageReader::with_format(
-                std::io::BufReader::new(Box::new(cursor) as Box<dyn ReadSeek>),
-                image::ImageFormat::Hdr,
-            )
-        }
+    let decoded = match radiance_hdr(path, source)? {
+        Some(bytes) => decode_from(
+            image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Hdr),
+            source,
+        )?,
         None => {
-            let open = || {
-                image::ImageReader::open(path)
-                    .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?
-                    .with_guessed_format()
-                    .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))
-            };
-            check_size_before_decoding(open()?.into_dimensions(), source)?;
-            let reader = open()?;
-            let format = reader.format();
-            let inner = reader.into_inner();
-            let mut boxed = image::ImageReader::new(std::io::BufReader::new(
-                Box::new(inner) as Box<dyn ReadSeek>
-            ));
-            if let Some(f) = format {
-                boxed.set_format(f);
-            }
-            boxed
+            let reader = image::ImageReader::open(path)
+                .and_then(|r| r.with_guessed_format())
+                .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;
+            decode_from(reader, source)?
         }
     };
+    let float = matches!(
+        decoded.color(),
+        image::ColorType::Rgb32F | image::ColorType::Rgba32F
+    );
+    let (width, height) = (decoded.width(), decoded.height());
+    let mut texels = decoded.into_rgb32f().into_raw();
+    if !float {
+        for x in &mut texels {
+            *x = srgb_to_linear(*x);
+        }
+    }
+    Image::from_linear(source, width, height, texels)
+}
+
+fn one_line(e: &dyn std::fmt::Display) -> String {
+    e.to_string().replace('\n', " ")
+}
+
+/// Decodes what `reader` reads, within the decoder's limits, once its header has been checked
+/// (`check_size_before_decoding`).
+fn decode_from<R: std::io::BufRead + std::io::Seek>(
+    mut reader: image::ImageReader<R>,
+    source: &str,
+) -> Result<image::DynamicImage, String> {
+    use image::ImageDecoder;
     if reader.format().is_none() {
         return Err(format!(
             "image {source}: unknown format (rt-gpu reads PNG, JPEG, OpenEXR and Radiance HDR)"
         ));
     }
-    let mut reader = reader;
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_IMAGE_SIDE);
-    limits.max_image_height = Some(MAX_IMAGE_SIDE);
-    limits.max_alloc = Some(MAX_DECODE_BYTES);
-    reader.limits(limits);
-    let decoded = reader.decode().map_err(|e| match e {
+    let limits = || {
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_IMAGE_SIDE);
+        limits.max_image_height = Some(MAX_IMAGE_SIDE);
+        limits.max_alloc = Some(MAX_DECODE_BYTES);
+        limits
+    };
+    reader.limits(limits());
+    let error = |e: image::ImageError| match e {
         image::ImageError::Unsupported(u) => format!(
             "image {source}: unsupported ({}; rt-gpu reads PNG, JPEG, OpenEXR and Radiance HDR)",
             one_line(&u)
@@ -278,19 +277,12 @@ fn decode(path: &Path, source: &str) -> Result<Image, String> {
             MAX_DECODE_BYTES >> 20
         ),
         other => format!("cannot decode image {source}: {}", one_line(&other)),
-    })?;
-    let float = matches!(
-        decoded.color(),
-        image::ColorType::Rgb32F | image::ColorType::Rgba32F
-    );
-    let (width, height) = (decoded.width(), decoded.height());
-    let mut texels = decoded.into_rgb32f().into_raw();
-    if !float {
-        for x in &mut texels {
-            *x = srgb_to_linear(*x);
-        }
-    }
-    Image::from_linear(source, width, height, texels)
+    };
+    let decoder = reader.into_decoder().map_err(error)?;
+    check_size_before_decoding(decoder.dimensions(), source)?;
+    // As `ImageReader::decode` does: the decoded buffer must fit the allocation limit.
+    limits().reserve(decoder.total_bytes()).map_err(error)?;
+    image::DynamicImage::from_decoder(decoder).map_err(error)
 }
 
 thread_local! {
@@ -327,10 +319,6 @@ pub fn resolve(source: &str) -> PathBuf {
         _ => path.to_path_buf(),
     })
 }
-
-/// What an image reader reads from: a file or bytes in memory.
-trait ReadSeek: std::io::Read + std::io::Seek {}
-impl<T: std::io::Read + std::io::Seek> ReadSeek for T {}
 
 #[cfg(test)]
 mod tests {
