@@ -12,7 +12,7 @@
 // traversal as long as its slowest lane, so its count is at most the sum of its lanes'); a
 // traversal that would pass `loop_budget` (half lavapipe's limit: the group's samples may be
 // as many as its busiest lane's) stops and marks the sample spent, and the render loop leaves
-// that sample to the next dispatch (see kernel.wgsl and GpuParams in src/gpu/layout.rs).
+// that sample to the next dispatch (see kernel.wgsl and GpuParams in src/shared/layout.rs).
 
 //#if BVH
 var<private> loop_iterations: u32;

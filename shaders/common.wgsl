@@ -1,18 +1,14 @@
 // Data shared by every kernel module: the scene buffers and the per-dispatch parameters. Their
-// structs (Sphere, Quad, Light, Material, Params, FirstBounce) and the constants both sides share
-// are generated from src/gpu/layout.rs ahead of this file.
-
-struct Ray {
-    origin: vec3f,
-    dir: vec3f,
-}
+// structs (Ray, Hit, Sphere, Quad, Light, Material, Params, FirstBounce) and the constants both sides share
+// are generated from src/shared/layout.rs and src/gpu/layout.rs ahead of this file, the binding
+// numbers (BINDING_*) from src/gpu/bindings.rs.
 
 // Per render: uniform, which lavapipe folds into the kernel (constant loop bounds).
-@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(BINDING_PARAMS) var<uniform> params: Params;
 // Per dispatch: storage, since lavapipe compiles (and keeps) a kernel variant for every new
-// uniform value it folds (see GpuDispatch in src/gpu/layout.rs).
-@group(0) @binding(7) var<storage, read> dispatch: Dispatch;
-// Texel i of an array kept as a texture (TEXEL_ROW in src/gpu/layout.rs says why and how).
+// uniform value it folds (see GpuDispatch in src/shared/layout.rs).
+@group(0) @binding(BINDING_DISPATCH) var<storage, read> dispatch: Dispatch;
+// Texel i of an array kept as a texture (TEXEL_ROW in src/shared/layout.rs says why and how).
 fn texel_at(t: texture_2d<u32>, i: u32) -> vec4u {
     return textureLoad(t, vec2u(i % TEXEL_ROW, i / TEXEL_ROW), 0);
 }
@@ -20,7 +16,7 @@ fn texel_at(t: texture_2d<u32>, i: u32) -> vec4u {
 // Every image the scene reads (a texel per vec4f), and the environment's alias table
 // (ImageArray in src/gpu/layout.rs).
 //#if IMAGE_TEXTURE || ENVIRONMENT
-@group(0) @binding(8) var image_texels: texture_2d<u32>;
+@group(0) @binding(BINDING_IMAGE_TEXELS) var image_texels: texture_2d<u32>;
 
 fn image_value(i: u32) -> vec4f {
     return bitcast<vec4f>(texel_at(image_texels, i));
@@ -30,44 +26,44 @@ fn image_value(i: u32) -> vec4f {
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
 //#if UNIFORM_SCENE
 //#if SPHERES
-@group(0) @binding(1) var<uniform> spheres: array<Sphere, SCENE_CAPACITY>;
+@group(0) @binding(BINDING_SPHERES) var<uniform> spheres: array<Sphere, SCENE_CAPACITY>;
 //#endif
 //#if QUADS
-@group(0) @binding(2) var<uniform> quads: array<Quad, SCENE_CAPACITY>;
+@group(0) @binding(BINDING_QUADS) var<uniform> quads: array<Quad, SCENE_CAPACITY>;
 //#endif
-@group(0) @binding(3) var<uniform> materials: array<Material, SCENE_CAPACITY>;
+@group(0) @binding(BINDING_MATERIALS) var<uniform> materials: array<Material, SCENE_CAPACITY>;
 //#if NEE
-@group(0) @binding(6) var<uniform> lights: array<Light, SCENE_CAPACITY>;
+@group(0) @binding(BINDING_LIGHTS) var<uniform> lights: array<Light, SCENE_CAPACITY>;
 //#endif
 //#else
 //#if SPHERES
-@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
+@group(0) @binding(BINDING_SPHERES) var<storage, read> spheres: array<Sphere>;
 //#endif
 //#if QUADS
-@group(0) @binding(2) var<storage, read> quads: array<Quad>;
+@group(0) @binding(BINDING_QUADS) var<storage, read> quads: array<Quad>;
 //#endif
-@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(BINDING_MATERIALS) var<storage, read> materials: array<Material>;
 //#if NEE
-@group(0) @binding(6) var<storage, read> lights: array<Light>;
+@group(0) @binding(BINDING_LIGHTS) var<storage, read> lights: array<Light>;
 //#endif
 //#endif
 // Meshes: never uniform (they may be large); the BVH where it fits (UNIFORM_BVH).
 //#if TRIANGLES
-@group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(BINDING_TRIANGLES) var<storage, read> triangles: array<Triangle>;
 //#endif
 //#if SHADING_NORMALS
 // Per triangle its three corner normals, nine floats (SceneBuffers::triangle_normals).
-@group(0) @binding(12) var<storage, read> triangle_normals: array<f32>;
+@group(0) @binding(BINDING_TRIANGLE_NORMALS) var<storage, read> triangle_normals: array<f32>;
 //#endif
 //#if INSTANCES
-@group(0) @binding(13) var<storage, read> instances: array<Instance>;
+@group(0) @binding(BINDING_INSTANCES) var<storage, read> instances: array<Instance>;
 //#endif
 //#if BVH
 //#if UNIFORM_BVH
 // Small hierarchies: nodes and primitive references (four to a vec4u, the stride uniform
 // arrays need) read from uniform arrays (see uniform_bvh in src/gpu/shader.rs).
-@group(0) @binding(10) var<uniform> bvh_nodes: array<BvhNode, BVH_CAPACITY>;
-@group(0) @binding(11) var<uniform> bvh_primitive_words: array<vec4u, BVH_PRIMITIVE_CAPACITY>;
+@group(0) @binding(BINDING_BVH_NODES) var<uniform> bvh_nodes: array<BvhNode, BVH_CAPACITY>;
+@group(0) @binding(BINDING_BVH_PRIMITIVES) var<uniform> bvh_primitive_words: array<vec4u, BVH_PRIMITIVE_CAPACITY>;
 
 fn bvh_primitive(i: u32) -> u32 {
     return bvh_primitive_words[i / 4u][i % 4u];
@@ -77,9 +73,9 @@ fn bvh_node(i: u32) -> BvhNode {
     return bvh_nodes[i];
 }
 //#else
-// Four texels per node (TEXEL_ROW and GpuBvhNode in src/gpu/layout.rs).
-@group(0) @binding(10) var bvh_node_texels: texture_2d<u32>;
-@group(0) @binding(11) var<storage, read> bvh_primitives: array<u32>;
+// Four texels per node (TEXEL_ROW and GpuBvhNode in src/shared/layout.rs).
+@group(0) @binding(BINDING_BVH_NODES) var bvh_node_texels: texture_2d<u32>;
+@group(0) @binding(BINDING_BVH_PRIMITIVES) var<storage, read> bvh_primitives: array<u32>;
 
 fn bvh_primitive(i: u32) -> u32 {
     return bvh_primitives[i];

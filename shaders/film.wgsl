@@ -1,4 +1,4 @@
-// The film's exact sums, twin of src/exact_sum.rs: every non-negative f32 is an integer multiple
+// The film's exact sums, twin of src/shared/exact_sum.rs: every non-negative f32 is an integer multiple
 // of 2^-149 below 2^128, so a pixel's sum of fewer than 2^32 samples is an integer below 2^309
 // in units of 2^-149: ten 32-bit words per channel, least significant first, carried by hand
 // (WGSL has no 64-bit integers). Integer addition is associative, so any split of a render's

@@ -318,7 +318,7 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
 //#endif
     (*path).ray = spawn(hit, s.dir);
     // Russian roulette (as after a scattering event in a medium above). Written out, not
-    // a function: called, it cost the Cornell box kernel 17% on lavapipe.
+    // a function: lavapipe keeps the call, a cost in this hottest loop.
     if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
         let survival = min(max((*path).throughput.x, max((*path).throughput.y, (*path).throughput.z)), MAX_SURVIVAL);
         sampler_begin(sampler);

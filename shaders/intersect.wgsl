@@ -1,16 +1,4 @@
-// Ray-shape intersection (twin: src/cpu/shapes.rs).
-
-struct Hit {
-    point: vec3f,
-    t: f32,
-    error: f32,         // bound on the distance from point to the true surface point
-    normal: vec3f,      // geometric, faces the incoming ray: decides sides and offsets
-    shading: vec3f,     // what materials shade with, on normal's side (see shading_normal)
-    material: u32,
-    front_face: bool,   // the ray hit the outward (u x v) side
-    primitive: u32,     // packed: kind << PRIMITIVE_INDEX_BITS | index among that kind
-    uv: vec2f,          // surface coordinates, for UV textures (zero without them)
-}
+// Ray-shape intersection (twin: src/cpu/shapes.rs). `Hit` is generated from src/shared/ray.rs.
 
 fn primitive_kind(primitive: u32) -> u32 {
     return primitive >> PRIMITIVE_INDEX_BITS;
@@ -70,7 +58,7 @@ fn replaces(t: f32, packed: u32, c: ptr<function, Closest>) -> bool {
 
 // `replaces` where primitives are met in that order, as in kernels with the scene inlined: the
 // closest so far is then never later than `packed`, so the same decision without comparing
-// indices (about 1% of the Cornell box's instructions on lavapipe).
+// indices.
 fn replaces_in_order(t: f32, c: ptr<function, Closest>) -> bool {
     return t > 0.0 && (t < (*c).t || (t == (*c).t && !(*c).found));
 }
@@ -172,7 +160,7 @@ fn consider_quad_at(t: f32, q: Quad, index: u32, ray: Ray, in_order: bool, c: pt
 // Where a ray first meets a box's surface: `t` (-1: nowhere ahead) and which of its six quads
 // that is (`face`, in the order of box_faces in src/scene/flat.rs: +z, +x, -z, -x, +y, -y).
 // Kernels with the scene inlined test a box's quads as one (see box_test in
-// src/gpu/shader.rs): about 60% of the work of six quad tests on lavapipe.
+// src/gpu/shader.rs): less work than six quad tests.
 struct BoxHit {
     t: f32,
     face: u32,
@@ -302,7 +290,7 @@ fn intersect(ray: Ray, hit: ptr<function, Hit>) -> bool {
 // `intersect` for a shadow ray, whose hit matters only where it is a light's: the closest
 // primitive is found tracking its distance and index alone, and only if it emits is its hit
 // worked out, from the emitting primitives alone (closest of all, it is closest of those, so
-// the hit is intersect's). The Cornell box: 3% fewer instructions on lavapipe.
+// the hit is intersect's): most shadow rays then never work out a hit.
 fn intersect_emitter(ray: Ray, hit: ptr<function, Hit>) -> bool {
     var first = NO_CLOSEST;
     inline_scene_first(ray, &first);

@@ -7,7 +7,7 @@
 // odd-index samples (the replicas of a stratified sampler, see src/film.rs; renders without
 // them put every sample in the first). Updated sample by sample in sample order, so the result
 // does not depend on how a render is sliced into dispatches.
-@group(0) @binding(4) var<storage, read_write> accum: array<u32>;
+@group(0) @binding(BINDING_ACCUM) var<storage, read_write> accum: array<u32>;
 
 fn load3(at: u32) -> vec3u {
     return vec3u(accum[at], accum[at + 1u], accum[at + 2u]);
@@ -170,7 +170,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
 
 //#if DEBUG
 // The first bounce of one sample per pixel, for comparing paths with the CPU reference.
-@group(0) @binding(5) var<storage, read_write> bounces: array<FirstBounce>;
+@group(0) @binding(BINDING_BOUNCES) var<storage, read_write> bounces: array<FirstBounce>;
 
 // The closest hit of `ray` as a FirstBounce (not yet scattered), and the hit itself.
 fn trace_debug(ray: Ray, hit: ptr<function, Hit>) -> FirstBounce {

@@ -1,4 +1,4 @@
-// Counter-based random numbers, bit for bit the same as src/rng.rs.
+// Counter-based random numbers, bit for bit the same as src/shared/rng.rs.
 
 fn pcg_hash(input: u32) -> u32 {
     let state = input * 747796405u + 2891336453u;

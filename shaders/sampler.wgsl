@@ -1,4 +1,4 @@
-// Where a sample's random numbers come from (twin: src/sampler.rs; integer arithmetic only, so
+// Where a sample's random numbers come from (twin: src/shared/sampler.rs; integer arithmetic only, so
 // both backends draw bit-identical values): independent PCG numbers, or Owen-scrambled Sobol
 // points in 2D groups, one per purpose, padded by shuffling (Burley 2020; pbrt-v4's padded
 // layout). The kernel holds one of them (feature SOBOL): on lavapipe a loop inside a
@@ -16,7 +16,7 @@ struct Sampler {
 
 //#if SOBOL
 // Dimensions 0 and 1 of Sobol point n, each bit-reversed, without a loop (see
-// sobol2_reversed in src/sampler.rs).
+// sobol2_reversed in src/shared/sampler.rs).
 fn sobol2_reversed(n: u32) -> vec2u {
     var x = n;
     x ^= (x >> 1u) & 0x55555555u;

@@ -1,4 +1,4 @@
-// Warps from uniform numbers (twin: src/cpu/sampling.rs). Angles stay in [-pi, pi), where
+// Warps from uniform numbers (twin: src/shared/warp.rs). Angles stay in [-pi, pi), where
 // Vulkan bounds the error of sin and cos.
 
 const PI: f32 = 3.14159265358979;

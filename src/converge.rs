@@ -561,9 +561,23 @@ impl Report {
         })
     }
 
+    /// The report as text: the reference, a row per render, the fitted exponents, what
+    /// next-event estimation gained, and the time each series takes to `target`.
     pub fn table(&self, target: Option<f64>) -> String {
+        let mut out = String::new();
+        self.write_rungs(&mut out);
+        self.write_fits(&mut out);
+        self.write_nee_speedups(&mut out);
+        if let Some(target) = target {
+            self.write_times_to(target, &mut out);
+        }
+        out
+    }
+
+    /// The reference and a row per render.
+    fn write_rungs(&self, out: &mut String) {
         let floor = self.reference.noise_rmse;
-        let mut out = format!("reference: {}\n", self.reference.description);
+        out.push_str(&format!("reference: {}\n", self.reference.description));
         match floor {
             Some(f) => out.push_str(&format!(
                 "reference noise (RMSE): {f:.3e}; '*' marks errors within 2x of it\n"
@@ -592,6 +606,10 @@ impl Report {
                 r.estimated_rmse
             ));
         }
+    }
+
+    /// Each series' fitted exponent of RMSE against seconds.
+    fn write_fits(&self, out: &mut String) {
         out.push_str(
             "fitted RMSE ~ seconds^exponent (Monte Carlo: -0.5; stratified samples may fall faster):\n",
         );
@@ -616,6 +634,10 @@ impl Report {
                 )),
             }
         }
+    }
+
+    /// Per backend, how much sooner next-event estimation reaches naive's final error.
+    fn write_nee_speedups(&self, out: &mut String) {
         for n in self.nee_speedups() {
             out.push_str(&format!(
                 "{}: naive reached RMSE {:.4e} at its largest spp in {:.3} s; nee ",
@@ -636,39 +658,41 @@ impl Report {
                 None => out.push('\n'),
             }
         }
-        if let Some(target) = target {
-            out.push_str(&format!(
-                "time to reach RMSE {target:.4e} (on the fitted lines):\n"
-            ));
-            let times: Vec<(&String, Option<f64>)> = self
-                .fits
-                .iter()
-                .map(|(s, f)| (s, f.map(|f| f.seconds_to(target))))
-                .collect();
-            // Ratios against the CPU naive series (the original estimator on the reference
-            // renderer), else a CPU series, else the first.
-            let (base_name, base) = times
-                .iter()
-                .find(|(s, t)| s.starts_with("cpu-naive") && t.is_some())
-                .or_else(|| {
-                    times
-                        .iter()
-                        .find(|(s, t)| s.starts_with("cpu") && t.is_some())
-                })
-                .or_else(|| times.iter().find(|(_, t)| t.is_some()))
-                .map(|(s, t)| (s.as_str(), *t))
-                .unwrap_or(("", None));
-            for (series, t) in &times {
-                match (t, base) {
-                    (Some(t), Some(b)) => out.push_str(&format!(
-                        "  {series:<22} {t:9.3} s   {:.2}x the speed of {base_name}\n",
-                        b / t
-                    )),
-                    _ => out.push_str(&format!("  {series:<22} no fit\n")),
-                }
+    }
+
+    /// The time each series takes to reach RMSE `target` on its fitted line, and its speed
+    /// against the CPU's naive series.
+    fn write_times_to(&self, target: f64, out: &mut String) {
+        out.push_str(&format!(
+            "time to reach RMSE {target:.4e} (on the fitted lines):\n"
+        ));
+        let times: Vec<(&String, Option<f64>)> = self
+            .fits
+            .iter()
+            .map(|(s, f)| (s, f.map(|f| f.seconds_to(target))))
+            .collect();
+        // Ratios against the CPU naive series (the original estimator on the reference
+        // renderer), else a CPU series, else the first.
+        let (base_name, base) = times
+            .iter()
+            .find(|(s, t)| s.starts_with("cpu-naive") && t.is_some())
+            .or_else(|| {
+                times
+                    .iter()
+                    .find(|(s, t)| s.starts_with("cpu") && t.is_some())
+            })
+            .or_else(|| times.iter().find(|(_, t)| t.is_some()))
+            .map(|(s, t)| (s.as_str(), *t))
+            .unwrap_or(("", None));
+        for (series, t) in &times {
+            match (t, base) {
+                (Some(t), Some(b)) => out.push_str(&format!(
+                    "  {series:<22} {t:9.3} s   {:.2}x the speed of {base_name}\n",
+                    b / t
+                )),
+                _ => out.push_str(&format!("  {series:<22} no fit\n")),
             }
         }
-        out
     }
 }
 

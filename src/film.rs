@@ -1,7 +1,7 @@
 //! The film: every pixel's samples summed exactly, so each render knows its own noise and any
 //! split of a render's samples (dispatches, passes, checkpoints, shards) adds up to the same bits.
 //!
-//! A sample is added exactly to a wide integer (`crate::exact_sum`): integer addition is
+//! A sample is added exactly to a wide integer (`crate::shared::exact_sum`): integer addition is
 //! associative, so the mean of samples 0..N is bit-identical however they were grouped, and no
 //! finite sample is rounded away or dropped, whatever the scene's radiance scale. The
 //! spread of the samples (Welford's M2, for the noise of independent samples) is kept in floating
@@ -10,10 +10,10 @@
 //! With independent samples the variance of a pixel's mean is its sample variance over n. With
 //! a stratified sampler it is far lower, and the sample variance says nothing about it; there
 //! the estimate comes from two independent randomisations, the replicas the sampler deals even
-//! and odd sample indices into (`crate::sampler::REPLICAS`): the film keeps the odd samples'
+//! and odd sample indices into (`crate::shared::sampler::REPLICAS`): the film keeps the odd samples'
 //! sum beside the overall one.
 
-use crate::exact_sum::ExactSum;
+use crate::shared::exact_sum::ExactSum;
 use glam::{DVec3, Vec3};
 
 /// The f32 bits of +infinity: a channel whose bits (sign cleared) reach it is not finite.

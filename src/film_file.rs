@@ -4,14 +4,14 @@
 //!
 //! Channels: `R`, `G`, `B` the mean radiance (f32); `variance.R/G/B` the variance of each mean
 //! (f32, for the user); and the exact state as u32 words: `sum.<c>.<w>` and `odd_sum.<c>.<w>`
-//! the words of the exact sums (`crate::exact_sum`) that some pixel uses, `m2.<c>.lo/hi` the
+//! the words of the exact sums (`crate::shared::exact_sum`) that some pixel uses, `m2.<c>.lo/hi` the
 //! bits of the f64 M2. The header attribute `rtgpu.film` says which render it is (scene digest
 //! and every option that changes the image), which sample indices it holds, and the counts.
 //! The sums, and so the mean, are bit-identical however a render was split; M2 (the variance of
 //! independent samples) is merged in floating point and agrees to about 1e-12, not bit for bit.
 
-use crate::exact_sum::{ExactSum, SUM_WORDS};
 use crate::film::{Film, PixelStats};
+use crate::shared::exact_sum::{ExactSum, SUM_WORDS};
 use anyhow::{Context, bail};
 use exr::prelude::*;
 use std::collections::HashMap;
@@ -235,6 +235,26 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
         _ => bail!("{shown} is not an rt-gpu film file: it has several layers"),
     };
     let fields = metadata_fields(&shown, &layer.attributes)?;
+    let (meta, counts) = read_metadata(&shown, &fields)?;
+    let film = read_pixels(&shown, layer, &fields, &meta, &counts)?;
+    Ok((film, meta))
+}
+
+/// A film file's format and what its counts say.
+struct Counts {
+    format: u32,
+    /// Samples per pixel, and of those the odd-index ones.
+    n: u64,
+    odd_n: u64,
+    invalid: u64,
+    stratified: bool,
+}
+
+/// A film file's metadata fields, each checked, and checked against each other.
+fn read_metadata(
+    shown: &std::path::Display,
+    fields: &HashMap<String, String>,
+) -> anyhow::Result<(FilmMeta, Counts)> {
     let field = |key: &str| -> anyhow::Result<&str> {
         fields
             .get(key)
@@ -308,7 +328,38 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
             }
         );
     }
+    let counts = Counts {
+        format,
+        n,
+        odd_n,
+        invalid,
+        stratified,
+    };
+    Ok((meta, counts))
+}
 
+/// A film file's pixels: their exact sums (of the words `fields` says it holds) and M2, each
+/// checked against the counts.
+fn read_pixels(
+    shown: &std::path::Display,
+    layer: &Layer<AnyChannels<FlatSamples>>,
+    fields: &HashMap<String, String>,
+    meta: &FilmMeta,
+    counts: &Counts,
+) -> anyhow::Result<Film> {
+    let Counts {
+        format,
+        n,
+        odd_n,
+        invalid,
+        stratified,
+    } = *counts;
+    let field = |key: &str| -> anyhow::Result<&str> {
+        fields
+            .get(key)
+            .map(String::as_str)
+            .with_context(|| format!("{shown}: its film metadata lacks {key}"))
+    };
     let size = layer.size;
     let (width, height) = (size.0 as u32, size.1 as u32);
     crate::film::check_image_size(width, height).map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
@@ -397,7 +448,7 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
             }
         }
     }
-    Ok((film, meta))
+    Ok(film)
 }
 
 /// The value of `key=` in an identity, if it has one.

@@ -8,9 +8,9 @@ pub mod accel;
 pub mod backend;
 pub mod converge;
 pub mod cpu;
-pub mod exact_sum;
 pub mod film;
 pub mod film_file;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod material;
 pub mod options;
@@ -19,9 +19,8 @@ pub mod output;
 pub mod plot;
 pub mod progressive;
 pub mod render;
-pub mod rng;
-pub mod sampler;
 pub mod scene;
+pub mod shared;
 
 thread_local! {
     static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };

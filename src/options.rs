@@ -21,10 +21,9 @@ pub struct RenderOptions {
 
 /// Where Russian roulette starts when the user does not say: from the fifth segment, as in
 /// Mitsuba 3 and pbrt-v4. Paths that can carry little end early, and the time they would have
-/// taken goes to new samples: on `cornell` (nee, Sobol, max depth 10) 1.3-1.5x fewer seconds for
-/// the same error on lavapipe (1.15x fewer instructions: 16.1e9 -> 11.5e9 for an estimated RMSE
-/// 1.117e-2 -> 1.236e-2). Media need it most (`cornell-sss`'s jade sphere is 9 free paths
-/// across). The statistical tests set their own depth (`RenderOptions::new`: off).
+/// taken goes to new samples, which lowers the error for the time (docs/convergence.md). Media
+/// need it most (`cornell-sss`'s jade sphere is 9 free paths across). The statistical tests set
+/// their own depth (`RenderOptions::new`: off).
 pub const DEFAULT_ROULETTE_DEPTH: u32 = 5;
 
 impl RenderOptions {
@@ -66,7 +65,7 @@ impl Integrator {
     }
 }
 
-/// Where a sample's random numbers come from (see `crate::sampler`).
+/// Where a sample's random numbers come from (see `crate::shared::sampler`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SamplerKind {
     /// Independent uniform numbers: plain Monte Carlo, error falling as 1/sqrt(spp).

@@ -3,6 +3,7 @@
 
 pub use crate::backend::{RenderBackend, Rendered};
 use crate::cpu::CpuBackend;
+#[cfg(feature = "gpu")]
 use crate::gpu::{Features, GpuBackend};
 pub use crate::options::{Backend, Integrator, RenderOptions};
 use crate::scene::flat::FlatScene;
@@ -16,6 +17,7 @@ pub struct GpuChoice {
     pub everything: bool,
 }
 
+#[cfg(feature = "gpu")]
 impl GpuChoice {
     /// The kernel features this choice runs `scene` with under `integrator`.
     pub fn features(&self, scene: &FlatScene, integrator: Integrator) -> Features {
@@ -41,12 +43,18 @@ impl Session {
     ) -> anyhow::Result<Self> {
         Ok(Session(match backend {
             Backend::Cpu => Box::new(CpuBackend::new(integrator)),
+            #[cfg(feature = "gpu")]
             Backend::Gpu => Box::new(GpuBackend::new(
                 gpu.adapter.as_deref(),
                 scene,
                 gpu.features(scene, integrator),
                 integrator,
             )?),
+            #[cfg(not(feature = "gpu"))]
+            Backend::Gpu => {
+                let _ = (gpu, scene);
+                anyhow::bail!("this rt-gpu was built without the gpu feature: use --backend cpu")
+            }
         }))
     }
 

@@ -1,5 +1,6 @@
 //! The command line: renders in every format, and every bad input exits non-zero with one clear
 //! line, leaving an existing output file untouched.
+#![cfg(feature = "cli")]
 
 mod common;
 

@@ -1,9 +1,11 @@
 //! The convergence report: its error figures, its fits, its self-estimate of error, and its files.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
 use glam::Vec3;
 use rt_gpu::converge::{ConvergeOptions, errors, estimated_rmse, fit_loglog, run};
+#[cfg(feature = "gpu")]
 use rt_gpu::render::{Backend, GpuChoice, Integrator};
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Background, Material, Shape};
@@ -81,6 +83,7 @@ fn self_estimated_error_tracks_the_true_error() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// A ladder on a plain lambertian scene falls as spp^-0.5 (so time^-0.5 at a steady rate), and
 /// the report files are written.
 #[test]

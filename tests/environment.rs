@@ -3,13 +3,16 @@
 //! nee and CPU vs GPU images (Welch z + Sidak, tests/common/stats.rs, family-wise 0.01), each
 //! with a negative control, the syntax, bad image files, and kernels that leave images out.
 //! `cargo test --test environment -- --nocapture` prints the figures.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use glam::{Vec2, Vec3};
 use rt_gpu::cpu::environment;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::scene::environment::Environment;
 use rt_gpu::scene::file::{load, parse, to_toml};
@@ -92,7 +95,7 @@ fn chi_square_p(env: &Environment, sample: impl Fn(f32, f32) -> Option<(Vec3, f3
     let samples = 1_000_000u32;
     let mut observed = vec![0.0f64; w * h];
     for k in 0..samples {
-        let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 17);
+        let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 17);
         let (u1, u2) = (rng.next_f32(), rng.next_f32());
         let Some((dir, pdf)) = sample(u1, u2) else {
             continue;
@@ -121,6 +124,7 @@ fn environment_sampling_follows_its_pdf() {
     assert!(p < 0.001, "a 3% brighter half went undetected (p = {p})");
 }
 
+#[cfg(feature = "gpu")]
 /// The kernel's environment (radiance, pdf, sampled direction and its pdf) equals the CPU's
 /// at 20 000 random directions and number pairs, within what WGSL's trigonometry may differ:
 /// atan2 (and acos) within 4096 ulp, sin and cos within 2^-11 absolute, moving image
@@ -138,10 +142,10 @@ fn gpu_environment_matches_the_cpu() {
     let mut scene = common::furnace_scene();
     scene.background = Background::Environment(env);
     let flat = FlatScene::new(&scene, 8, 8).expect("valid");
-    let mut rng = rt_gpu::rng::Rng::for_sample(0, 0, 3);
+    let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 3);
     let lookups: Vec<(Vec3, f32, f32)> = (0..20_000)
         .map(|_| {
-            let dir = rt_gpu::cpu::sampling::unit_vector(rng.next_f32(), rng.next_f32());
+            let dir = rt_gpu::shared::warp::unit_vector(rng.next_f32(), rng.next_f32());
             (dir, rng.next_f32(), rng.next_f32())
         })
         .collect();
@@ -200,6 +204,7 @@ fn gpu_environment_matches_the_cpu() {
     );
 }
 
+#[cfg(feature = "gpu")]
 /// A sphere of albedo 1 under a white environment of radiance 1 is invisible: every path
 /// escapes after at most one bounce, naive paths carry exactly 1, and nee's weighted sum has
 /// mean 1 (the whole-image mean within 4 standard errors, on both backends). Albedo 0.98 is
@@ -333,6 +338,7 @@ fn nee_and_naive_agree_under_an_environment() {
     assert!(!verdict.passed(), "a 3% brighter sky went undetected");
 }
 
+#[cfg(feature = "gpu")]
 /// CPU and GPU render the same image of the textured scene, naive under the soft sky and nee
 /// under the shipped one; the sky 3% brighter is told apart (negative control).
 #[test]
@@ -376,6 +382,7 @@ fn gpu_matches_cpu_under_an_environment() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// The kernel's image-texture lookups equal the CPU's at 20 000 random UVs to 1e-5 (bilinear
 /// filtering, wrapping); the CPU's lookup a texel away differs in more than 10% of them
 /// (negative control: much of the tiles is flat).
@@ -397,7 +404,7 @@ fn gpu_image_lookups_match_the_cpu() {
         })
         .collect();
     assert_eq!(textured.len(), 2);
-    let mut rng = rt_gpu::rng::Rng::for_sample(0, 0, 8);
+    let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 8);
     let lookups: Vec<(u32, Vec3, Vec2)> = (0..20_000)
         .map(|k| {
             // UVs a little beyond [0, 1] too: the image wraps.
@@ -409,7 +416,7 @@ fn gpu_image_lookups_match_the_cpu() {
     let (mut worst, mut shifted_differ) = (0.0f32, 0);
     for ((material, _, uv), g) in lookups.iter().zip(found) {
         let (_, texture) = textured.iter().find(|(m, _)| m == material).unwrap();
-        let hit = |uv: Vec2| rt_gpu::cpu::shapes::Hit {
+        let hit = |uv: Vec2| rt_gpu::shared::ray::Hit {
             t: 1.0,
             point: Vec3::ZERO,
             error: 0.0,
@@ -417,13 +424,13 @@ fn gpu_image_lookups_match_the_cpu() {
             shading: Vec3::Y,
             front_face: true,
             material: *material,
-            primitive: rt_gpu::scene::flat::PrimitiveRef::Quad(0),
+            primitive: rt_gpu::shared::primitive::PrimitiveRef::Quad(0),
             uv,
         };
-        let cpu = rt_gpu::cpu::texture::value(texture, &hit(*uv));
+        let cpu = rt_gpu::material::texture::value(texture, &hit(*uv));
         worst = worst.max((cpu - g).abs().max_element());
         let texel = Vec2::new(1.0 / 128.0, 1.0 / 128.0);
-        let moved = rt_gpu::cpu::texture::value(texture, &hit(*uv + texel));
+        let moved = rt_gpu::material::texture::value(texture, &hit(*uv + texel));
         shifted_differ += ((moved - g).abs().max_element() > 1e-5) as usize;
     }
     eprintln!("worst difference {worst:.2e}; a texel away: {shifted_differ} of 20000 differ");
@@ -431,6 +438,7 @@ fn gpu_image_lookups_match_the_cpu() {
     assert!(shifted_differ > 2_000, "the negative control passed");
 }
 
+#[cfg(feature = "gpu")]
 /// The syntax round-trips (paths as written, relative to the scene file); the kernel holds
 /// image and environment code only for scenes that use them.
 #[test]

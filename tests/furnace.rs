@@ -7,10 +7,11 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use rt_gpu::cpu::shapes::{Ray, hit_sphere};
+use rt_gpu::cpu::shapes::hit_sphere;
 use rt_gpu::film::PixelStats;
 use rt_gpu::scene::flat::{FlatScene, Sphere};
 use rt_gpu::scene::{Background, Material, Shape};
+use rt_gpu::shared::ray::Ray;
 
 fn assert_close(stats: &PixelStats, expected: DVec3, what: &str) {
     let tolerance = 5.0 * stats.variance_of_mean().map(f64::sqrt) + 1e-5 * expected.abs();

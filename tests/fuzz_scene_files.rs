@@ -10,10 +10,12 @@
 //! the run. The long run reported in docs/testing.md:
 //! `RT_GPU_FUZZ_EXECUTIONS=1000000 cargo test --release --test fuzz_scene_files -- --nocapture`.
 //! Coverage-guided fuzzing with cargo-fuzz lives in `fuzz/` (see its README).
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
 use common::mutate::Mutator;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Features;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::file::{parse, to_toml};
@@ -98,6 +100,7 @@ fn corpus() -> Vec<Vec<u8>> {
     corpus
 }
 
+#[cfg(feature = "gpu")]
 /// What must hold for any input; `Err` says what did not.
 fn check(text: &str) -> Result<(), String> {
     let scene = match parse(text, "fuzz.toml", "fuzz") {
@@ -131,6 +134,7 @@ fn check(text: &str) -> Result<(), String> {
     Ok(())
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn mutated_scene_files_never_panic() {
     let (executions, seed) = common::mutate::run_settings(20_000);

@@ -1,5 +1,6 @@
 //! The GPU kernel computes the CPU reference's estimator: the same first bounces, statistically
 //! the same images, deterministic across dispatch slicing and tiling.
+#![cfg(feature = "gpu")]
 
 mod common;
 
@@ -10,10 +11,10 @@ use rt_gpu::cpu::camera::generate_ray;
 use rt_gpu::cpu::shapes::intersect;
 use rt_gpu::gpu::{GpuError, Tuning};
 use rt_gpu::options::SamplerKind;
-use rt_gpu::sampler::Sampler;
 use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
+use rt_gpu::shared::sampler::Sampler;
 
 /// Tolerances for one bounce computed in f32 on both sides (the GPU's sin/cos and fused
 /// multiply-adds round differently): positions to 1e-4 of the scene's size, unit vectors to 1e-3.

@@ -1,5 +1,6 @@
 //! The Rust structs uploaded to the GPU agree with their WGSL twins, and every kernel variant is
 //! valid WGSL. Runs without a GPU: naga does the checking.
+#![cfg(feature = "gpu")]
 
 use rt_gpu::gpu::shader::{Features, compose, validate};
 use rt_gpu::render::Integrator;
@@ -37,7 +38,7 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     let source = compose(&all_features(), &small_scene()).expect("composes");
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
     // The declarations are generated from the Rust structs; naga lays them out independently.
-    let layouts = rt_gpu::gpu::layout::shared_layouts();
+    let layouts = rt_gpu::shared::layout::shared_layouts();
     assert_eq!(layouts.len(), 10);
     for (name, rust_size, rust_fields) in layouts {
         let ty = module

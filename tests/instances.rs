@@ -4,19 +4,24 @@
 //! are compared by Welch z + Sidak at family-wise 0.01 (tests/common/stats.rs), each test with
 //! a negative control (2% brighter white) that it detects. The shipped `scenes/knots.toml` is
 //! instanced.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use glam::Vec3;
 use rt_gpu::accel::Bvh;
-use rt_gpu::cpu::shapes::{Ray, intersect};
+use rt_gpu::cpu::shapes::intersect;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
-use rt_gpu::scene::flat::{FlatScene, PrimitiveRef};
+use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Scene, Shape};
+use rt_gpu::shared::primitive::PrimitiveRef;
+use rt_gpu::shared::ray::Ray;
 
 fn instanced_scene() -> Scene {
     common::with_instanced_meshes(builtin("cornell").expect("built-in"))
@@ -214,6 +219,7 @@ fn instanced_meshes_render_as_their_copies() {
     assert!(!verdict.passed(), "a 2% brighter white went undetected");
 }
 
+#[cfg(feature = "gpu")]
 /// CPU and GPU render the instanced scene alike (nee); the GPU with 2% brighter white is caught.
 #[test]
 fn gpu_instances_match_cpu() {

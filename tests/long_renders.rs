@@ -1,6 +1,7 @@
 //! Long renders through the command line: checkpoints that resume bit-identically after a
 //! signal at any point, shards that merge bit-identically into one render, and the one-line
 //! refusals of what cannot be combined.
+#![cfg(feature = "cli")]
 
 mod common;
 

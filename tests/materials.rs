@@ -2,11 +2,11 @@
 //! scattering is cosine-distributed.
 
 use glam::Vec3;
-use rt_gpu::cpu::shapes::Hit;
 use rt_gpu::material::dielectric::{fresnel, refract_cos};
 use rt_gpu::material::reflect;
-use rt_gpu::sampler::Sampler;
 use rt_gpu::scene::Material;
+use rt_gpu::shared::ray::Hit;
+use rt_gpu::shared::sampler::Sampler;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
@@ -18,7 +18,7 @@ fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
         shading: normal,
         front_face,
         material: 0,
-        primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
+        primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
         uv: glam::Vec2::ZERO,
     }
 }
@@ -136,7 +136,7 @@ fn lambertian_scattering_is_cosine_distributed() {
 
     let p_uniform = chi_square_p_value(normal, |i| {
         let mut rng = Sampler::independent(i, 0, 42);
-        let d = rt_gpu::cpu::sampling::unit_vector(rng.next_f32(), rng.next_f32());
+        let d = rt_gpu::shared::warp::unit_vector(rng.next_f32(), rng.next_f32());
         if d.dot(normal) < 0.0 { -d } else { d }
     });
     assert!(p_uniform < 1e-6, "negative control passed: p = {p_uniform}");

@@ -6,15 +6,18 @@
 //! four asymmetries tested (family-wise 0.004); image comparisons use tests/common/stats.rs
 //! (Welch z per pixel and block, Sidak-corrected, family-wise 0.01). Each has a negative
 //! control that must be detected.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use glam::{DVec3, Vec3};
 use rt_gpu::cpu::integrator::light_arriving;
 use rt_gpu::cpu::medium::{hg_pdf, sample_hg};
 use rt_gpu::film::Film;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::material::{Dielectric, Medium};
 use rt_gpu::render::RenderOptions;
@@ -114,6 +117,7 @@ fn transmittance_through_slabs_is_exponential() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// A camera ray through a slab of albedo 0 (a pure absorber) in front of a white background
 /// reaches it with probability exp(-sigma_t d): the image is that value, within 5 standard
 /// errors of the film's own variance; a density 3% off is caught.
@@ -159,6 +163,7 @@ fn an_absorbing_medium_shows_beer_lambert() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Inside a closed emitter of radiance E that reflects nothing, a lossless medium (albedo 1)
 /// changes nothing: every path ends on the wall with weight 1, so every pixel is E. Smoke and
 /// glass filled with it alike, naive and nee, CPU and GPU; a path cut short shows as a darker
@@ -238,7 +243,7 @@ fn an_albedo_one_medium_in_an_emitting_furnace_is_invisible() {
 fn hg_chi_square_p(g: f32, sample: impl Fn(Vec3, f32, f32) -> Vec3) -> f64 {
     use std::f64::consts::PI;
     let dir = Vec3::new(0.3, -0.5, 0.8).normalize();
-    let (t, b) = rt_gpu::cpu::sampling::basis(dir);
+    let (t, b) = rt_gpu::shared::warp::basis(dir);
     let (n_cos, n_phi, sub) = (32usize, 8usize, 16usize);
     let mut expected = vec![0.0f64; n_cos * n_phi];
     for i in 0..n_cos {
@@ -261,7 +266,7 @@ fn hg_chi_square_p(g: f32, sample: impl Fn(Vec3, f32, f32) -> Vec3) -> f64 {
     let samples = 1_000_000u32;
     let mut observed = vec![0.0f64; n_cos * n_phi];
     for k in 0..samples {
-        let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 91);
+        let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 91);
         let out = sample(dir, rng.next_f32(), rng.next_f32());
         assert!((out.length() - 1.0).abs() < 1e-5, "not unit: {out}");
         let c = out.dot(dir).clamp(-1.0, 1.0) as f64;
@@ -359,6 +364,7 @@ fn nee_and_naive_agree_with_media() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// The GPU kernel's media match the CPU's, naive and nee, with roulette in the random walk.
 #[test]
 fn gpu_media_match_cpu_media() {
@@ -502,6 +508,7 @@ fn media_scene_checks() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// The kernel leaves media out of scenes without them; scenes with media get them, and with
 /// nee a medium alone (no diffuse surface) is reason enough to sample lights.
 #[test]
@@ -556,6 +563,7 @@ fn only_scenes_with_media_get_media_code() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// A smoke box resting on the floor of a closed emitting box (its invisible bottom in the
 /// floor's plane, turned 15 degrees) loses no ray: with naive paths every sample is the walls'
 /// emission exactly, on both backends. (Mitsuba 3's image of cornell-smoke, whose boxes rest on

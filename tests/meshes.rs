@@ -4,13 +4,16 @@
 //! tests/common/stats.rs), on the CPU and on the GPU against the CPU, each with a negative
 //! control (2% brighter white walls) that the same test detects; vertex normals: read, placed
 //! by the inverse transpose, shading on both backends alike.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::triangulated;
 use glam::Vec3;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
@@ -287,6 +290,7 @@ fn triangles_render_as_the_quads_they_replace() {
     assert!(!verdict.passed(), "a 2% brighter white went undetected");
 }
 
+#[cfg(feature = "gpu")]
 /// CPU and GPU render the triangulated Cornell box (BVH, watertight triangles, emissive
 /// triangles) alike, naive and nee; the GPU with 2% brighter white walls is caught.
 #[test]
@@ -318,6 +322,7 @@ fn gpu_meshes_match_cpu_meshes() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// The shipped mesh scene (an OBJ knot of 11 520 triangles in fuzzy metal, a glTF lamp whose
 /// 320 emitting triangles join the light list beside the ceiling's quad, glass): CPU and GPU
 /// agree with nee, and with white walls 2.7% brighter (albedo 0.75, not 0.73) the same test
@@ -369,7 +374,8 @@ fn smooth_sphere_obj(rings: u32, segments: u32) -> String {
 /// normals go through a non-uniform node scale by the inverse transpose too.
 #[test]
 fn vertex_normals_shade_and_transform() {
-    use rt_gpu::cpu::shapes::{Ray, intersect};
+    use rt_gpu::cpu::shapes::intersect;
+    use rt_gpu::shared::ray::Ray;
     let dir = tempfile::tempdir().expect("temp dir");
     write(
         dir.path(),
@@ -458,6 +464,7 @@ fn vertex_normals_shade_and_transform() {
     assert!((n[1] - Vec3::Z).length() < 1e-6, "{:?}", n[1]);
 }
 
+#[cfg(feature = "gpu")]
 /// CPU and GPU shade smooth meshes alike (`common::with_smooth_spheres`: lambertian, dielectric
 /// and metal through interpolated normals), with nee; the GPU with 2% brighter white is caught.
 /// The images cannot tell smooth from flat shading at this size (a GPU ignoring the normals

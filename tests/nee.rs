@@ -4,20 +4,24 @@
 //!
 //! Image comparisons use the equivalence test of tests/common/stats.rs (family-wise alpha 0.01,
 //! Sidak-corrected over every pixel, block and channel); each assertion below is one such test.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, opts, render_cpu};
 use glam::Vec3;
 use rt_gpu::cpu::lights;
-use rt_gpu::cpu::shapes::{Ray, hit_quad, hit_sphere, hit_triangle};
+use rt_gpu::cpu::shapes::{hit_quad, hit_sphere, hit_triangle};
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::{Light, LightShape, Quad, Sphere, Triangle};
 use rt_gpu::scene::{Material, Scene, Shape};
+use rt_gpu::shared::ray::Ray;
 
 fn add_material(scene: &mut Scene, name: &str, material: Material) -> u32 {
     scene.materials.push(material);
@@ -191,6 +195,7 @@ fn russian_roulette_keeps_the_image() {
     assert!(verdict.passed(), "roulette changes the image: {verdict:?}");
 }
 
+#[cfg(feature = "gpu")]
 /// The GPU kernel's nee (with and without roulette) matches the CPU's.
 #[test]
 fn gpu_nee_matches_cpu_nee() {
@@ -236,6 +241,7 @@ fn gpu_nee_matches_cpu_nee() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// The GPU's nee images do not depend on dispatch slicing either.
 #[test]
 fn gpu_nee_does_not_depend_on_slicing() {
@@ -350,7 +356,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
         LightShape::Environment(_) => unreachable!("tests/environment.rs"),
     };
     let axis = (centre - X).normalize();
-    let (t, b) = rt_gpu::cpu::sampling::basis(axis);
+    let (t, b) = rt_gpu::shared::warp::basis(axis);
     let c_max = 1.2
         * match light.shape {
             LightShape::Sphere { center, radius } => {
@@ -394,7 +400,7 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
     let samples = 1_000_000u32;
     let mut observed = vec![0.0f64; n_theta * n_phi];
     for k in 0..samples {
-        let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 77);
+        let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 77);
         let dir = sample(rng.next_f32(), rng.next_f32());
         let a = (1.0 - axis.dot(dir) as f64).max(0.0); // rounding at the axis
         let phi = (dir.dot(b) as f64).atan2(dir.dot(t) as f64);

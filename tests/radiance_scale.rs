@@ -1,4 +1,4 @@
-//! The film sums every finite sample exactly (src/exact_sum.rs), whatever the scene's radiance
+//! The film sums every finite sample exactly (src/shared/exact_sum.rs), whatever the scene's radiance
 //! scale: the Cornell box with its light scaled from 1e-12 to 1e30 renders the shipped image
 //! times that scale on both backends, and its films resume and merge bit-identically.
 //!
@@ -6,14 +6,18 @@
 //! Sidak-corrected over every pixel, block and channel of one comparison; each scale and backend
 //! is its own comparison, as in tests/stability.rs). The negative control: the light 2% dimmer
 //! at a scale of 1e-12 is detected.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare_scaled;
 use common::{nee_opts, render_cpu};
 use rt_gpu::film::Film;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::{GpuRenderer, Tuning};
+#[cfg(feature = "gpu")]
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::texture::Texture;
@@ -43,6 +47,7 @@ fn finite(name: &str, film: &Film) {
     );
 }
 
+#[cfg(feature = "gpu")]
 fn render(backend: &str, gpu: Option<&GpuRenderer>, scene: &Scene, opts: &RenderOptions) -> Film {
     match (backend, gpu) {
         ("gpu", Some(g)) => render_gpu(g, scene, opts, &Tuning::default()),
@@ -50,6 +55,7 @@ fn render(backend: &str, gpu: Option<&GpuRenderer>, scene: &Scene, opts: &Render
     }
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn the_cornell_box_renders_alike_at_any_radiance_scale() {
     let gpu = renderer();
@@ -82,6 +88,7 @@ fn the_cornell_box_renders_alike_at_any_radiance_scale() {
     assert!(!verdict.passed(), "a 2% dimmer light went unnoticed");
 }
 
+#[cfg(feature = "gpu")]
 /// Renders of samples 0..5 and 5..13 (a resumed render, or two shards) merge into exactly the
 /// sums of one render of 0..13, at every scale and on both backends, also through film files.
 #[test]
@@ -137,6 +144,7 @@ fn films_of_any_radiance_scale_resume_and_merge_bit_identically() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// An environment whose one sun texel is 1e30 (and a light image as bright) loads and lights
 /// the scene on both backends: before the film summed every finite sample, such a texel
 /// blacked the image out.

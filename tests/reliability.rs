@@ -4,13 +4,16 @@
 //! Image comparisons use the equivalence test of tests/common/stats.rs (family-wise alpha 0.01,
 //! Sidak-corrected over every pixel, block and channel; its negative controls are in
 //! tests/gpu_equivalence.rs and tests/nee.rs).
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, render_cpu};
 use glam::Vec3;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::{Features, Tuning};
 use rt_gpu::scene::Material;
 use rt_gpu::scene::builtin::builtin;
@@ -35,6 +38,7 @@ fn with_unused_materials(name: &str, extra: usize) -> rt_gpu::scene::Scene {
     scene
 }
 
+#[cfg(feature = "gpu")]
 /// Unused materials do not reach the kernel: the kernel built for the Cornell box with 100 000
 /// extra materials is the very kernel built without them (it once grew to 11.5 MB and compiled
 /// for minutes; with ~600 it rendered black on lavapipe).
@@ -63,6 +67,7 @@ fn unused_materials_do_not_change_the_kernel() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// The Cornell box with 3000 unused materials renders on the GPU what it renders on the CPU.
 #[test]
 fn thousands_of_materials_render_right_on_the_gpu() {
@@ -81,6 +86,7 @@ fn thousands_of_materials_render_right_on_the_gpu() {
     assert!(film.image_mean().min_element() > 0.05, "the image is dark");
 }
 
+#[cfg(feature = "gpu")]
 /// A scene too long for lavapipe's loop budget is refused before rendering, with the limit
 /// rt-gpu applies (60 000) and lavapipe's own (65 535) both named (it once said 65 535 only):
 /// paths of 10 000 segments through 300 smoke balls. (Thousands of primitives alone no longer
@@ -167,6 +173,7 @@ fn grass(count: u32) -> rt_gpu::scene::Scene {
     )
 }
 
+#[cfg(feature = "gpu")]
 /// BVH traversals count their loop iterations (shaders/accel.wgsl): with 400 triangles in every
 /// ray's way and eight samples per dispatch, pixels run out of lavapipe's loop budget within a
 /// dispatch; the kernel stops them short, the renderer dispatches again, and the image is
@@ -260,6 +267,7 @@ fn smoke_grid(count: u32) -> rt_gpu::scene::Scene {
     scene
 }
 
+#[cfg(feature = "gpu")]
 /// 1 000 smoke boxes: a ray crosses a few of their 6 000 invisible faces, but the kernel's loop
 /// bound once counted them all (2 + 6 002 rays per trace: 84 000 iterations a sample at max
 /// depth 6, over lavapipe's budget) and refused a scene the CPU renders in a fraction of a second. Its

@@ -1,15 +1,17 @@
 //! The samplers: the kernel draws exactly the CPU's numbers, and the Sobol sampler is unbiased.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::renderer;
 use common::stats::{ALPHA, compare};
 use rt_gpu::film::Film;
 use rt_gpu::options::SamplerKind;
 use rt_gpu::render::RenderOptions;
-use rt_gpu::sampler::Sampler;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
+use rt_gpu::shared::sampler::Sampler;
 
 /// The CPU twin of `draw_samples` in shaders/kernel.wgsl.
 fn draw_samples(kind: SamplerKind, pixel: u32, sample: u32, seed: u32) -> [u32; 12] {
@@ -24,6 +26,7 @@ fn draw_samples(kind: SamplerKind, pixel: u32, sample: u32, seed: u32) -> [u32; 
     out
 }
 
+#[cfg(feature = "gpu")]
 /// Bit for bit: every sampler, several seeds and sample indices (both replicas, large indices),
 /// every number of the first groups, including a group's wrap-around.
 #[test]
@@ -128,6 +131,7 @@ fn mean_squared_difference(a: &Film, b: &Film) -> f64 {
     sum / (a.pixels.len() * 3) as f64
 }
 
+#[cfg(feature = "gpu")]
 /// Under the Sobol sampler a render's own error estimate (from its two replicas) tracks its true
 /// error within 1.5x, on both backends. The true error is measured without a reference: two
 /// renders with independent seeds differ by E|A - B|^2 = MSE(A) + MSE(B). The Cornell box's

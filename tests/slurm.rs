@@ -3,6 +3,7 @@
 //! asking for --gres=gpu:1 and a merge job after them, and the merged image equals a
 //! single-process render byte for byte. CI sets RT_GPU_REQUIRE_SLURM=1 (it installs slurm-wlm
 //! and munge, and runs as root); elsewhere the test is skipped without them.
+#![cfg(feature = "cli")]
 
 mod common;
 

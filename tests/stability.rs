@@ -6,20 +6,24 @@
 //! Image comparisons use the equivalence test of tests/common/stats.rs (family-wise alpha 0.01,
 //! Sidak-corrected over every pixel, block and channel; its negative controls are in
 //! tests/gpu_equivalence.rs and tests/nee.rs).
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, render_cpu, scene, triangulated};
 use glam::Vec3;
-use rt_gpu::cpu::shapes::{Ray, intersect};
+use rt_gpu::cpu::shapes::intersect;
 use rt_gpu::film::Film;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::{GpuRenderer, Tuning};
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Background, Material, Scene, Shape, Transform};
+use rt_gpu::shared::ray::Ray;
 
 fn assert_finite(name: &str, film: &Film) {
     assert_eq!(film.invalid_samples, 0, "{name}: NaN or infinite samples");
@@ -31,6 +35,7 @@ fn assert_finite(name: &str, film: &Film) {
     );
 }
 
+#[cfg(feature = "gpu")]
 /// CPU and GPU renders (independent seeds) are finite and statistically equal.
 fn cpu_matches_gpu(name: &str, gpu: Option<&GpuRenderer>, scene: &Scene, opts: &RenderOptions) {
     let cpu = render_cpu(scene, opts);
@@ -48,6 +53,7 @@ fn cpu_matches_gpu(name: &str, gpu: Option<&GpuRenderer>, scene: &Scene, opts: &
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Closest hits of `rays` on both backends: (hit, point) per ray, CPU first.
 fn trace_both(
     gpu: Option<&GpuRenderer>,
@@ -90,6 +96,7 @@ fn unit_box(rotate_y_degrees: f32, translate: Vec3) -> Scene {
     s
 }
 
+#[cfg(feature = "gpu")]
 /// Rays exactly parallel to box faces (direction components +0 and -0), rays in a face's plane,
 /// tangent to a sphere, and through box edges and corners: no NaN, no invented hits, and the
 /// same answers on both backends.
@@ -189,6 +196,7 @@ fn parallel_tangent_and_edge_rays() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Rays from inside closed boxes (axis-aligned, and rotated and moved far away) aimed at their
 /// edges and corners, and a hair to either side, never escape: boxes of six quads, and the same
 /// boxes as 12-triangle meshes (watertight triangles, through the BVH), whose every face
@@ -334,6 +342,7 @@ fn scaled(scene: &Scene, s: f32, offset: Vec3) -> Scene {
     out
 }
 
+#[cfg(feature = "gpu")]
 /// The Cornell box (and the spheres scene, with its huge ground sphere) scaled by 1e-4, 1 and
 /// 1e4, and moved 1e5 from the origin, renders the image of the unscaled scene up to noise on
 /// both backends: ray origins leave surfaces by an offset that scales with their coordinates,
@@ -346,6 +355,7 @@ fn cornell_box_renders_the_same_at_every_scale() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Moving far only for the Cornell box, whose coordinates are integers that f32 still holds
 /// exactly 1e7 away (and, scaled by 8, 9.9e7 away, where f32 steps are 8): the spheres scene's
 /// coordinates cannot even be written there. Rendering is camera-relative (FlatScene::origin),
@@ -405,6 +415,7 @@ fn with_glass_ior(scene: &Scene, ior: f32) -> Scene {
     out
 }
 
+#[cfg(feature = "gpu")]
 /// A glass sphere of ior 1.0 bends nothing and reflects nothing: the Cornell box renders as if it
 /// were not there, on both backends.
 #[test]
@@ -443,6 +454,7 @@ fn glass_of_index_one_vanishes() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Glass of ior 1.0001 (nearly invisible), 2.42 (diamond) and 10 (almost a mirror, strong total
 /// internal reflection); a camera inside a glass sphere; a hollow air bubble inside glass: finite,
 /// and the same on both backends.
@@ -498,7 +510,7 @@ fn extreme_glass_is_finite_and_agrees() {
 /// incidence from inside reflects totally.
 #[test]
 fn scattering_keeps_throughput_finite_and_non_negative() {
-    use rt_gpu::cpu::shapes::Hit;
+    use rt_gpu::shared::ray::Hit;
     let materials = [
         Material::lambertian(Vec3::ONE),
         Material::Metal(rt_gpu::material::Metal {
@@ -520,7 +532,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
         Material::Dielectric(rt_gpu::material::Dielectric::clear(10.0)),
     ];
     let normal = Vec3::new(0.3, 0.8, -0.52).normalize();
-    let (t, _) = rt_gpu::cpu::sampling::basis(normal);
+    let (t, _) = rt_gpu::shared::warp::basis(normal);
     let mut checked = 0;
     for m in &materials {
         for front_face in [true, false] {
@@ -535,11 +547,11 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                     shading: normal,
                     front_face,
                     material: 0,
-                    primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
+                    primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
                     uv: glam::Vec2::ZERO,
                 };
                 for k in 0..200 {
-                    let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 5);
+                    let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 5);
                     if let Some((attenuation, dir)) = m.scatter(dir_in, &hit, &mut rng) {
                         assert!(
                             attenuation.is_finite()
@@ -567,12 +579,12 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
         shading: Vec3::Y,
         front_face: false,
         material: 0,
-        primitive: rt_gpu::scene::flat::PrimitiveRef::Sphere(0),
+        primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
         uv: glam::Vec2::ZERO,
     };
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
-        let mut rng = rt_gpu::sampler::Sampler::independent(k, 0, 6);
+        let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 6);
         let (_, dir) = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
             .scatter(dir_in, &hit, &mut rng)
             .expect("glass always scatters");
@@ -583,6 +595,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// Closed furnaces never gain energy. Inside a closed sphere that is lambertian with albedo 1 and
 /// emits E, every path segment adds exactly E: naive samples are exactly depth * E, and nee's
 /// means are depth * E within their noise. Inside a closed mirror-like metal sphere (albedo 1,
@@ -663,6 +676,7 @@ fn closed_furnaces_never_gain_energy() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// A tiny, very bright light (area 1e-6, radiance 1e8) one unit above a lambertian floor: finite
 /// images whose mean matches the closed form, (albedo / pi) L A h^2 / d^4 averaged over the floor
 /// each pixel sees, within 4 standard errors (plus 0.2% for the quadrature); and a quad light seen
@@ -763,6 +777,7 @@ fn tiny_bright_lights_and_edge_on_lights() {
     );
 }
 
+#[cfg(feature = "gpu")]
 /// Fields of view of 0.01 and 179 degrees, and 1x4096 and 4096x1 images: finite and equal on
 /// both backends. A camera with no direction, or with `up` along it, is a clear error.
 #[test]
@@ -800,6 +815,7 @@ fn extreme_cameras_and_image_shapes() {
     assert!(err.to_string().contains("parallel"), "{err}");
 }
 
+#[cfg(feature = "gpu")]
 /// A million samples per pixel accumulate on the GPU as accurately as in the CPU's f64 film.
 /// The scene is smooth in its random numbers (a lambertian sphere filling the view under a sky,
 /// max depth 2), so each sample agrees between backends to ~1e-6 relative and nearly all of that

@@ -1,12 +1,15 @@
 //! Textured albedos: the scene-file syntax and its errors, CPU and GPU images of a textured
 //! scene (Welch z + Sidak, tests/common/stats.rs, family-wise 0.01) with a negative control,
 //! and kernels that leave texture code out of scenes without textures.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 mod common;
 
+#[cfg(feature = "gpu")]
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use glam::Vec3;
+#[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::scene::Scene;
 use rt_gpu::scene::file::{parse, to_toml};
@@ -89,6 +92,7 @@ fn texture_syntax_round_trips_and_errors_are_one_line() {
     }
 }
 
+#[cfg(feature = "gpu")]
 /// CPU and GPU render the textured scene alike (solid and UV checkers on spheres, a quad and a
 /// box, lambertian and metal); the same test catches the GPU with one checker colour 3%
 /// brighter.
@@ -116,6 +120,7 @@ fn gpu_textures_match_cpu_textures() {
     assert!(!verdict.passed(), "a 3% brighter checker went undetected");
 }
 
+#[cfg(feature = "gpu")]
 /// Only scenes with textures get texture code, and only the kind they use.
 #[test]
 fn only_textured_scenes_get_texture_code() {
@@ -173,6 +178,7 @@ fn solid_checkers_stay_put_in_the_world() {
     assert!(verdict.passed(), "the pattern moved: {verdict:?}");
 }
 
+#[cfg(feature = "gpu")]
 /// The kernel's texture lookups equal the CPU's at known points and UVs (solid and UV
 /// checkers, lambertian and metal): 20 000 random lookups, of which at most 0.1% may differ
 /// (a point within rounding of a cell boundary: GPU division may round differently), and every
@@ -194,7 +200,7 @@ fn gpu_texture_lookups_match_the_cpu() {
         })
         .collect();
     assert_eq!(textures.len(), 4);
-    let mut rng = rt_gpu::rng::Rng::for_sample(0, 0, 5);
+    let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 5);
     let lookups: Vec<(u32, Vec3, glam::Vec2)> = (0..20_000)
         .map(|k| {
             let (material, _) = textures[k % textures.len()];
@@ -210,7 +216,7 @@ fn gpu_texture_lookups_match_the_cpu() {
     let (mut differ, mut differ_from_larger) = (0, 0);
     for ((material, point, uv), gpu_value) in lookups.iter().zip(gpu_values) {
         let (_, texture) = textures.iter().find(|(m, _)| m == material).expect("known");
-        let hit = rt_gpu::cpu::shapes::Hit {
+        let hit = rt_gpu::shared::ray::Hit {
             t: 1.0,
             point: *point,
             error: 0.0,
@@ -218,10 +224,10 @@ fn gpu_texture_lookups_match_the_cpu() {
             shading: Vec3::Y,
             front_face: true,
             material: *material,
-            primitive: rt_gpu::scene::flat::PrimitiveRef::Quad(0),
+            primitive: rt_gpu::shared::primitive::PrimitiveRef::Quad(0),
             uv: *uv,
         };
-        let cpu_value = rt_gpu::cpu::texture::value(texture, &hit);
+        let cpu_value = rt_gpu::material::texture::value(texture, &hit);
         // Negative control: the same comparison against checkers 2% larger must disagree.
         let larger = match *texture {
             rt_gpu::scene::texture::Texture::Checker(c) => {
@@ -238,7 +244,8 @@ fn gpu_texture_lookups_match_the_cpu() {
             }
             other => other,
         };
-        differ_from_larger += (gpu_value != rt_gpu::cpu::texture::value(&larger, &hit)) as usize;
+        differ_from_larger +=
+            (gpu_value != rt_gpu::material::texture::value(&larger, &hit)) as usize;
         let (even, odd) = match texture {
             rt_gpu::scene::texture::Texture::Checker(c)
             | rt_gpu::scene::texture::Texture::UvChecker(c) => (c.even, c.odd),
@@ -298,6 +305,7 @@ fn textured_lights(text: &str) -> Scene {
     .unwrap_or_else(|e| panic!("{e}"))
 }
 
+#[cfg(feature = "gpu")]
 /// Textured emitters: naive and nee agree (MIS with light sampling by area, whatever the
 /// texture), and CPU and GPU agree; the panel 3% brighter is told apart (negative control).
 #[test]

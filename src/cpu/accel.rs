@@ -3,8 +3,8 @@
 //! other with its entry distance; a popped child whose box now lies beyond the closest hit is
 //! skipped without being read.
 
-use super::shapes::Ray;
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, box_entry, inverse_direction};
+use crate::shared::ray::Ray;
 
 /// Calls `test(packed primitive, closest)` for every primitive in a leaf, below node `root`,
 /// whose box the ray meets before `closest` (and for a leaf root's, unconditionally); `test`

@@ -1,10 +1,8 @@
 //! What escaped rays see (twin: `shaders/background.wgsl`).
 
 use crate::scene::Background;
+use crate::shared::constants::SKY_ZENITH;
 use glam::Vec3;
-
-/// The sky background's colour straight up (white at the horizon).
-pub const SKY_ZENITH: [f32; 3] = [0.5, 0.7, 1.0];
 
 /// Radiance arriving from the environment along unit direction `dir`.
 #[inline]

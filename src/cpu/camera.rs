@@ -1,10 +1,10 @@
 //! Primary rays (twin: `shaders/camera.wgsl`).
 
-use super::sampling::unit_disk;
-use super::shapes::Ray;
 use crate::options::RenderOptions;
-use crate::sampler::Sampler;
 use crate::scene::flat::CameraFrame;
+use crate::shared::ray::Ray;
+use crate::shared::sampler::Sampler;
+use crate::shared::warp::unit_disk;
 
 /// A ray through a uniformly jittered point of pixel (x, y): pixel x covers [x, x+1)/width of the
 /// film, row 0 is the top. Draws 2 random numbers, plus 2 for the lens when it has an aperture.

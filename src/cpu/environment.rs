@@ -2,7 +2,7 @@
 //! directions sampled in proportion to luminance x sin(theta) (see `scene::environment`), with
 //! their solid-angle pdf.
 
-use super::texture::bilinear;
+use crate::material::texture::bilinear;
 use crate::scene::environment::Environment;
 use glam::Vec3;
 use std::f32::consts::PI;

@@ -18,17 +18,15 @@
 use super::background::background;
 use super::lights;
 use super::medium::{free_flight, hg_pdf, sample_hg, transmittance};
-use super::shapes::{Hit, Ray, intersect, leave, spawn};
+use super::shapes::intersect;
 use crate::material::Medium;
 use crate::options::{Integrator, RenderOptions};
-use crate::sampler::Sampler;
 use crate::scene::Material;
 use crate::scene::flat::{FlatScene, LightShape};
+use crate::shared::constants::MAX_SURVIVAL;
+use crate::shared::ray::{Hit, Ray, leave, spawn};
+use crate::shared::sampler::Sampler;
 use glam::Vec3;
-
-/// Roulette keeps a path with the probability of its largest throughput component, capped here
-/// so bright paths still end eventually.
-pub const MAX_SURVIVAL: f32 = 0.95;
 
 /// Whether light sampling runs: asked for, and the scene has a light to sample.
 pub fn uses_nee(scene: &FlatScene, opts: &RenderOptions) -> bool {
@@ -53,8 +51,8 @@ enum Event {
 #[inline(always)]
 fn next_event(scene: &FlatScene, ray: &mut Ray, medium: &mut u32, sampler: &mut Sampler) -> Event {
     if *medium == 0 && scene.medium_crossings == 0 {
-        // Nothing to step through or sample on the way (what the kernel's loop below does
-        // then, without its cost: 7% of the Cornell box on the CPU).
+        // Nothing to step through or sample on the way: what the loop below does then, without
+        // its cost.
         return intersect(scene, ray).map_or(Event::Escaped, Event::Surface);
     }
     for _ in 0..=scene.medium_crossings {

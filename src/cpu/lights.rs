@@ -3,15 +3,13 @@
 //! multiple importance sampling also needs for directions BSDF sampling found.
 
 use super::environment;
-use super::sampling::basis;
-use super::shapes::{Ray, hit_sphere};
+use super::shapes::hit_sphere;
 use crate::scene::flat::{FlatScene, Light, LightShape, Sphere};
+use crate::shared::constants::MIN_LIGHT_COSINE;
+use crate::shared::ray::Ray;
+use crate::shared::warp::basis;
 use glam::Vec3;
 use std::f32::consts::PI;
-
-/// Quad points seen this close to edge-on are not light-sampled (their solid-angle pdf would
-/// overflow); BSDF sampling alone covers them, with full weight.
-pub const MIN_LIGHT_COSINE: f32 = 1e-7;
 
 /// The light whose cumulative share first exceeds `u` in [0, 1), by binary search (scenes may
 /// have thousands of emitting triangles); the last light when none does.

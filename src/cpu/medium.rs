@@ -3,7 +3,7 @@
 //! transmittance. Extinction is one number for all channels, so a sampled free path needs no
 //! spectral weighting: scattering multiplies the throughput by the albedo and nothing else.
 
-use super::sampling::basis;
+use crate::shared::warp::basis;
 use glam::Vec3;
 use std::f32::consts::PI;
 

@@ -9,15 +9,13 @@ pub mod environment;
 pub mod integrator;
 pub mod lights;
 pub mod medium;
-pub mod sampling;
 pub mod shapes;
-pub mod texture;
 
 use crate::backend::{RenderBackend, Rendered};
 use crate::film::{Film, PixelStats, is_valid_sample};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
-use crate::sampler::Sampler;
 use crate::scene::flat::FlatScene;
+use crate::shared::sampler::Sampler;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 

@@ -1,44 +1,9 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
-use crate::scene::flat::{
-    FlatScene, Instance, PRIMITIVE_INDEX_BITS, PrimitiveRef, Quad, Sphere, Triangle,
-};
+use crate::scene::flat::{FlatScene, Instance, Quad, Sphere, Triangle};
+use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
+use crate::shared::ray::{Hit, POINT_ERROR, Ray};
 use glam::{Vec2, Vec3};
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ray {
-    pub origin: Vec3,
-    /// Always unit length.
-    pub dir: Vec3,
-}
-
-impl Ray {
-    pub fn at(&self, t: f32) -> Vec3 {
-        self.origin + t * self.dir
-    }
-}
-
-/// What a ray hit: `normal` faces the incoming ray; `front_face` says whether that is the shape's
-/// outward (or `u x v`) side.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    pub t: f32,
-    pub point: Vec3,
-    /// A bound on the distance from `point` to the true surface point.
-    pub error: f32,
-    /// The geometric normal, facing the incoming ray: it decides sides and offsets.
-    pub normal: Vec3,
-    /// The normal materials shade with, on `normal`'s side: a mesh's interpolated vertex
-    /// normals (see [`shading_normal`]), else `normal` itself.
-    pub shading: Vec3,
-    pub front_face: bool,
-    pub material: u32,
-    /// Which primitive was hit.
-    pub primitive: PrimitiveRef,
-    /// Surface coordinates, for textures (zero unless the scene's textures need them): a
-    /// sphere's longitude and latitude (`texture::sphere_uv`), a quad's (a, b).
-    pub uv: Vec2,
-}
 
 /// Distance along the ray to `sphere` within (t_min, t_max), if any.
 #[inline]
@@ -134,6 +99,107 @@ pub fn hit_triangle(
     Some((t, e1 / det, e2 / det))
 }
 
+/// What the closest-hit search needs of each shape (instances aside, which hold triangles):
+/// its intersection, its outward normal, and its surface at the hit. Twins: the shape's
+/// functions in `shaders/intersect.wgsl`.
+trait SurfaceShape {
+    /// Distance along the ray within (0, t_max) and the surface weights there (a triangle's
+    /// barycentric weights of its second and third corners; zero for other shapes), if hit.
+    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)>;
+    /// The outward normal at distance `t` along the ray, not yet of unit length.
+    fn outward(&self, ray: &Ray, t: f32) -> Vec3;
+    fn material(&self) -> u32;
+    /// The hit `along_ray` (= o + t d) put back onto the surface, and a bound on its error.
+    fn surface(&self, along_ray: Vec3, weights: Vec2) -> (Vec3, f32);
+    /// Surface coordinates for textures at `point` (on the surface) or `along_ray`.
+    fn uv(&self, point: Vec3, along_ray: Vec3, weights: Vec2) -> Vec2;
+}
+
+impl SurfaceShape for Sphere {
+    #[inline]
+    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
+        hit_sphere(self, ray, 0.0, t_max).map(|t| (t, Vec2::ZERO))
+    }
+    #[inline]
+    fn outward(&self, ray: &Ray, t: f32) -> Vec3 {
+        (ray.at(t) - self.center) / self.radius
+    }
+    fn material(&self) -> u32 {
+        self.material
+    }
+    fn surface(&self, along_ray: Vec3, _weights: Vec2) -> (Vec3, f32) {
+        sphere_surface(self, along_ray)
+    }
+    fn uv(&self, point: Vec3, _along_ray: Vec3, _weights: Vec2) -> Vec2 {
+        crate::material::texture::sphere_uv((point - self.center) / self.radius.abs())
+    }
+}
+
+impl SurfaceShape for Quad {
+    #[inline]
+    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
+        hit_quad(self, ray, 0.0, t_max).map(|t| (t, Vec2::ZERO))
+    }
+    #[inline]
+    fn outward(&self, _ray: &Ray, _t: f32) -> Vec3 {
+        self.normal
+    }
+    fn material(&self) -> u32 {
+        self.material
+    }
+    fn surface(&self, along_ray: Vec3, _weights: Vec2) -> (Vec3, f32) {
+        quad_surface(self, along_ray)
+    }
+    fn uv(&self, _point: Vec3, along_ray: Vec3, _weights: Vec2) -> Vec2 {
+        let d = along_ray - self.q;
+        Vec2::new(d.dot(self.alpha_axis), d.dot(self.beta_axis))
+    }
+}
+
+impl SurfaceShape for Triangle {
+    #[inline]
+    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
+        hit_triangle(self, ray, 0.0, t_max).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
+    }
+    #[inline]
+    fn outward(&self, _ray: &Ray, _t: f32) -> Vec3 {
+        (self.p1 - self.p0).cross(self.p2 - self.p0)
+    }
+    fn material(&self) -> u32 {
+        self.material
+    }
+    fn surface(&self, _along_ray: Vec3, weights: Vec2) -> (Vec3, f32) {
+        triangle_surface(self, weights)
+    }
+    fn uv(&self, _point: Vec3, _along_ray: Vec3, weights: Vec2) -> Vec2 {
+        weights
+    }
+}
+
+/// `shape`'s hit within (0, t_max): its distance, outward normal (not unit) and weights.
+#[inline]
+fn test<S: SurfaceShape>(shape: &S, ray: &Ray, t_max: f32) -> Option<(f32, Vec3, Vec2)> {
+    let (t, weights) = shape.hit(ray, t_max)?;
+    Some((t, shape.outward(ray, t), weights))
+}
+
+/// The closest hit's material, point and error bound, and surface coordinates (zero unless
+/// the scene's textures need them).
+fn complete<S: SurfaceShape>(
+    shape: &S,
+    scene: &FlatScene,
+    along_ray: Vec3,
+    weights: Vec2,
+) -> (u32, (Vec3, f32), Vec2) {
+    let (point, error) = shape.surface(along_ray, weights);
+    let uv = if scene.uv_textures {
+        shape.uv(point, along_ray, weights)
+    } else {
+        Vec2::ZERO
+    };
+    (shape.material(), (point, error), uv)
+}
+
 /// What the closest-hit search keeps of the best primitive so far.
 #[derive(Clone, Copy)]
 struct Candidate {
@@ -183,33 +249,14 @@ fn consider(
     found: &mut Option<Candidate>,
 ) {
     let t_max = reach(*closest);
-    let (t, outward, weights) = match p {
-        PrimitiveRef::Sphere(i) => {
-            let sphere = &scene.spheres[i as usize];
-            let Some(t) = hit_sphere(sphere, ray, 0.0, t_max) else {
-                return;
-            };
-            (t, (ray.at(t) - sphere.center) / sphere.radius, Vec2::ZERO)
-        }
-        PrimitiveRef::Quad(i) => {
-            let quad = &scene.quads[i as usize];
-            let Some(t) = hit_quad(quad, ray, 0.0, t_max) else {
-                return;
-            };
-            (t, quad.normal, Vec2::ZERO)
-        }
-        PrimitiveRef::Triangle(i) => {
-            let tri = &scene.triangles[i as usize];
-            let Some((t, b1, b2)) = hit_triangle(tri, ray, 0.0, t_max) else {
-                return;
-            };
-            (
-                t,
-                (tri.p1 - tri.p0).cross(tri.p2 - tri.p0),
-                Vec2::new(b1, b2),
-            )
-        }
+    let tested = match p {
+        PrimitiveRef::Sphere(i) => test(&scene.spheres[i as usize], ray, t_max),
+        PrimitiveRef::Quad(i) => test(&scene.quads[i as usize], ray, t_max),
+        PrimitiveRef::Triangle(i) => test(&scene.triangles[i as usize], ray, t_max),
         PrimitiveRef::Instance(i) => return consider_instance(scene, i, ray, closest, found),
+    };
+    let Some((t, outward, weights)) = tested else {
+        return;
     };
     if !replaces(t, (p.packed(), 0), *closest, found) {
         return;
@@ -302,44 +349,24 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     // t (which cancels in the sphere's near root), and that can dwarf the point's own
     // coordinates (a floor at y = 0 seen from 1e6 away), so the point is put back onto the
     // surface, whose own rounding follows the shape's coordinates.
-    let (material, (point, error)) = match primitive {
-        PrimitiveRef::Sphere(i) => {
-            let s = &scene.spheres[i as usize];
-            (s.material, sphere_surface(s, along_ray))
-        }
-        PrimitiveRef::Quad(i) => {
-            let q = &scene.quads[i as usize];
-            (q.material, quad_surface(q, along_ray))
-        }
-        PrimitiveRef::Triangle(i) => {
-            let t = &scene.triangles[i as usize];
-            (t.material, triangle_surface(t, weights))
-        }
+    let (material, (point, error), uv) = match primitive {
         PrimitiveRef::Instance(i) => {
             let (instance, tri) = instanced(i);
-            (
-                instance.material,
-                instanced_triangle_surface(instance, tri, weights),
-            )
+            let surface = instanced_triangle_surface(instance, tri, weights);
+            let uv = if scene.uv_textures {
+                weights
+            } else {
+                Vec2::ZERO
+            };
+            (instance.material, surface, uv)
+        }
+        PrimitiveRef::Sphere(i) => complete(&scene.spheres[i as usize], scene, along_ray, weights),
+        PrimitiveRef::Quad(i) => complete(&scene.quads[i as usize], scene, along_ray, weights),
+        PrimitiveRef::Triangle(i) => {
+            complete(&scene.triangles[i as usize], scene, along_ray, weights)
         }
     };
     let front_face = ray.dir.dot(outward) < 0.0;
-    let uv = if scene.uv_textures {
-        match primitive {
-            PrimitiveRef::Sphere(i) => {
-                let s = &scene.spheres[i as usize];
-                super::texture::sphere_uv((point - s.center) / s.radius.abs())
-            }
-            PrimitiveRef::Quad(i) => {
-                let q = &scene.quads[i as usize];
-                let d = along_ray - q.q;
-                Vec2::new(d.dot(q.alpha_axis), d.dot(q.beta_axis))
-            }
-            PrimitiveRef::Triangle(_) | PrimitiveRef::Instance(_) => weights,
-        }
-    } else {
-        Vec2::ZERO
-    };
     let shading = match primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
             shading_normal(&scene.triangle_normals[i as usize], weights, outward)
@@ -386,13 +413,6 @@ pub fn shading_normal(normals: &[Vec3; 3], weights: Vec2, outward: Vec3) -> Vec3
     if n.dot(outward) < 0.0 { -n } else { n }
 }
 
-/// Whether unit `dir` leaves `hit` below its geometric surface although the shading normal
-/// allowed it: such a scattered path ends (shading normals only; see the materials).
-#[inline]
-pub fn below_surface(hit: &Hit, dir: Vec3) -> bool {
-    hit.shading != hit.normal && dir.dot(hit.normal) <= 0.0
-}
-
 /// A point near `sphere`'s surface put back onto it, and a bound on the result's error.
 #[inline]
 pub fn sphere_surface(sphere: &Sphere, along_ray: Vec3) -> (Vec3, f32) {
@@ -435,52 +455,4 @@ pub fn instanced_triangle_surface(instance: &Instance, t: &Triangle, weights: Ve
     let [m0, m1, m2] = [t.p0, t.p1, t.p2].map(|p| instance.magnitude_to_world(p));
     let scale = (b0.abs() * m0 + b1.abs() * m1 + b2.abs() * m2).max_element();
     (point, 2.0 * POINT_ERROR * scale)
-}
-
-/// Relative bound on a hit point's error: eight roundings of the coordinates it came from.
-pub const POINT_ERROR: f32 = 8.0 * f32::EPSILON;
-
-/// Below this magnitude a coordinate is moved by a fixed amount (`OFFSET_FLOAT_SCALE`), above
-/// it by `OFFSET_INT_SCALE` units in its last place (see `offset_origin`).
-pub const OFFSET_NEAR_ORIGIN: f32 = 1.0 / 32.0;
-pub const OFFSET_FLOAT_SCALE: f32 = 1.0 / 4294967296.0;
-pub const OFFSET_INT_SCALE: f32 = 32.0;
-
-/// A ray origin moved off the surface at `p` along `n` by a few units in the last place of each
-/// coordinate (Wächter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection",
-/// Ray Tracing Gems ch. 6); callers first move it by the point's error bound (see `leave`).
-#[inline]
-pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
-    let offset = |p: f32, n: f32| -> f32 {
-        if p.abs() < OFFSET_NEAR_ORIGIN {
-            p + OFFSET_FLOAT_SCALE * n
-        } else {
-            let of_i = (OFFSET_INT_SCALE * n) as i32;
-            let of_i = if p < 0.0 { -of_i } else { of_i };
-            f32::from_bits((p.to_bits() as i32).wrapping_add(of_i) as u32)
-        }
-    };
-    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
-}
-
-/// The origin of a ray leaving `hit` on the side of unit `side` (its normal or the opposite):
-/// past the point's error bound, then a few units in the last place further, so it cannot
-/// re-hit the surface it leaves, at any scale.
-#[inline]
-pub fn leave(hit: &Hit, side: Vec3) -> Vec3 {
-    offset_origin(hit.point + hit.error * side, side)
-}
-
-/// A ray leaving a hit in direction `dir` (unit), started on the side `dir` points to.
-#[inline]
-pub fn spawn(hit: &Hit, dir: Vec3) -> Ray {
-    let side = if dir.dot(hit.normal) >= 0.0 {
-        hit.normal
-    } else {
-        -hit.normal
-    };
-    Ray {
-        origin: leave(hit, side),
-        dir,
-    }
 }

@@ -8,8 +8,7 @@ pub const TARGET_DISPATCH_SECONDS: f64 = 0.04;
 
 /// Samples per pixel that a tile's dispatches grow to within the target time: tiles are sized
 /// for this many, not one, because a dispatch reads and writes each pixel's accumulator once
-/// (26 words, which lavapipe moves lane by lane: about a fifth of the Cornell box's instructions
-/// at one sample per dispatch), however many samples it takes.
+/// (which lavapipe moves lane by lane), however many samples it takes.
 pub const TILE_SAMPLES: u32 = 8;
 
 /// Rows of the first tile, before any dispatch has been timed.

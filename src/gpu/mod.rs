@@ -4,6 +4,7 @@
 //! itself lives in `shaders/`.
 
 pub mod backend;
+pub mod bindings;
 pub mod context;
 pub mod dispatch;
 pub mod layout;

@@ -1,18 +1,19 @@
 //! Dispatching the kernel: buffers, tiles, sample slices, timing and readback into a [`Film`].
 
+use super::bindings::{BINDINGS, Binding, layout_entries};
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
-use super::layout::{
-    ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_M2_EXPONENT,
-    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_COUNT_LIMIT, BVH_LEAF_OFFSET_LIMIT, GpuDispatch,
-    GpuFirstBounce, GpuParams, ImageArray, SceneBuffers, TEXEL_ROW, WORKGROUP_SIZE, base_params,
-    texel_rows, whole_image_dispatch,
-};
+use super::layout::{ImageArray, SceneBuffers, base_params, whole_image_dispatch};
 use super::shader::{Features, compose, validate};
-use crate::exact_sum::{ExactSum, SUM_WORDS};
 use crate::film::{Film, PixelStats};
 use crate::options::{RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
+use crate::shared::exact_sum::{ExactSum, SUM_WORDS};
+use crate::shared::layout::{
+    ACCUM_BYTES_PER_PIXEL, ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_INVALID, ACCUM_M2, ACCUM_M2_EXPONENT,
+    ACCUM_ODD_SUM, ACCUM_WORDS, BVH_LEAF_COUNT_LIMIT, BVH_LEAF_OFFSET_LIMIT, GpuDispatch,
+    GpuFirstBounce, GpuParams, TEXEL_ROW, WORKGROUP_SIZE, texel_rows,
+};
 use glam::DVec3;
 use std::io::Write;
 use std::time::Instant;
@@ -108,11 +109,18 @@ pub struct Timings {
     pub longest_dispatch_seconds: f64,
 }
 
-/// What a scene binds: its buffers (spheres, quads, materials, lights, triangles, BVH
-/// primitives, vertex normals, instances), its BVH's nodes (a texture, or a uniform buffer
-/// for small hierarchies) and its images (a texture).
+/// What a scene binds: its arrays as buffers (uniform or storage, as the kernel's features
+/// say), its BVH's nodes (a texture, or a uniform buffer for small hierarchies) and its images
+/// (a texture).
 struct SceneBindings {
-    buffers: [wgpu::Buffer; 8],
+    spheres: wgpu::Buffer,
+    quads: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    triangles: wgpu::Buffer,
+    bvh_primitives: wgpu::Buffer,
+    triangle_normals: wgpu::Buffer,
+    instances: wgpu::Buffer,
     bvh_nodes: NodeBinding,
     images: wgpu::TextureView,
 }
@@ -125,32 +133,6 @@ enum NodeBinding {
 
 pub struct GpuRenderer {
     pub ctx: GpuContext,
-}
-
-fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Uint,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    }
 }
 
 impl GpuRenderer {
@@ -178,41 +160,9 @@ impl GpuRenderer {
     ) -> Result<Kernel, GpuError> {
         validate(&source).map_err(GpuError::Shader)?;
         let device = &self.ctx.device;
-        let scene_ty = if features.uniform_scene {
-            wgpu::BufferBindingType::Uniform
-        } else {
-            wgpu::BufferBindingType::Storage { read_only: true }
-        };
-        let read_write = wgpu::BufferBindingType::Storage { read_only: false };
         let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
-            entries: &[
-                buffer_entry(0, wgpu::BufferBindingType::Uniform),
-                buffer_entry(1, scene_ty),
-                buffer_entry(2, scene_ty),
-                buffer_entry(3, scene_ty),
-                buffer_entry(4, read_write),
-                buffer_entry(5, read_write),
-                buffer_entry(6, scene_ty),
-                buffer_entry(7, wgpu::BufferBindingType::Storage { read_only: true }),
-                texture_entry(8),
-                buffer_entry(9, wgpu::BufferBindingType::Storage { read_only: true }),
-                if features.uniform_bvh {
-                    buffer_entry(10, wgpu::BufferBindingType::Uniform)
-                } else {
-                    texture_entry(10)
-                },
-                buffer_entry(
-                    11,
-                    if features.uniform_bvh {
-                        wgpu::BufferBindingType::Uniform
-                    } else {
-                        wgpu::BufferBindingType::Storage { read_only: true }
-                    },
-                ),
-                buffer_entry(12, wgpu::BufferBindingType::Storage { read_only: true }),
-                buffer_entry(13, wgpu::BufferBindingType::Storage { read_only: true }),
-            ],
+            entries: &layout_entries(&features),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scene"),
@@ -232,17 +182,18 @@ impl GpuRenderer {
         //   below BVH_STACK = max(bvh.depth, 1) + L + instance_depth (`compose`, `build_bvh`).
         // - Node references (`gpu_bvh`): interior ones < the interior-node count; a leaf's
         //   first + count <= bvh.primitives.len() <= BVH_LEAF_OFFSET_LIMIT, and its count fits
-        //   its bits (both checked in `scene_buffers`). Packed primitive indices are < their
+        //   its bits (both checked in `check_fits`). Packed primitive indices are < their
         //   kind's length; instance roots are references of their mesh's root.
         // - Texels: node texels 4i..4i+3 and image texels lie below `texel_rows` rows x TEXEL_ROW
-        //   (`scene_buffers`); image x and y are clamped to the image (`wrap`, `alias_pick`,
+        //   (`check_fits`); image x and y are clamped to the image (`wrap`, `alias_pick`,
         //   `environment_pdf_at`) at the offsets `ImageArray` placed it.
         // - Uniform arrays hold their capacities (SCENE_CAPACITY, BVH_CAPACITY,
         //   BVH_PRIMITIVE_CAPACITY) >= the counts (`Features::of`); storage arrays are exact, and
         //   empty ones hold one element that is never read.
         // - Materials are renumbered below materials.len() (`FlatScene::with_instancing`); a
         //   medium is its material + 1 and a light 1 + its index, read only when non-zero; NEE
-        //   implies light_count >= 1 (checked in `render`).
+        //   code is composed only for scenes with a light (`Features::with_integrator`), and
+        //   `check_kernel` refuses a kernel whose features or source are not this render's.
         // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on.
         // - accum: gid < tile_size <= (width, tile_rows), and the buffer holds tile_rows x width
         //   x ACCUM_WORDS words (below 2^32: `max_tile_pixels`); debug outputs hold a slot per
@@ -293,6 +244,76 @@ impl GpuRenderer {
         features: &Features,
     ) -> Result<SceneBindings, GpuError> {
         let mut buffers = SceneBuffers::new(scene);
+        let (node_rows, image_rows) = self.check_fits(scene, &buffers)?;
+        let usage = if features.uniform_scene {
+            let capacity = features.scene_capacity.max(1) as usize;
+            buffers.spheres.resize(capacity, Default::default());
+            buffers.quads.resize(capacity, Default::default());
+            buffers.materials.resize(capacity, Default::default());
+            buffers.lights.resize(capacity, Default::default());
+            wgpu::BufferUsages::UNIFORM
+        } else {
+            wgpu::BufferUsages::STORAGE
+        };
+        let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
+        let primitives_usage = if features.uniform_bvh {
+            let words = 4 * features.bvh_primitive_capacity.max(1) as usize;
+            buffers.bvh_primitives.resize(words, 0);
+            wgpu::BufferUsages::UNIFORM
+        } else {
+            wgpu::BufferUsages::STORAGE
+        };
+        let bvh_nodes = if features.uniform_bvh {
+            buffers
+                .bvh_nodes
+                .resize(features.bvh_capacity.max(1) as usize, Default::default());
+            NodeBinding::Uniform(self.buffer_with(
+                "bvh nodes",
+                bytemuck::cast_slice(&buffers.bvh_nodes),
+                wgpu::BufferUsages::UNIFORM,
+            ))
+        } else {
+            NodeBinding::Texture(self.texel_texture(
+                "bvh nodes",
+                bytemuck::cast_slice(&buffers.bvh_nodes),
+                node_rows as u32,
+            ))
+        };
+        let images = self.texel_texture(
+            "images",
+            bytemuck::cast_slice(&ImageArray::new(scene).values),
+            image_rows as u32,
+        );
+        let storage =
+            |label, contents: &[u8]| self.buffer_with(label, contents, wgpu::BufferUsages::STORAGE);
+        Ok(SceneBindings {
+            spheres: make("spheres", bytemuck::cast_slice(&buffers.spheres)),
+            quads: make("quads", bytemuck::cast_slice(&buffers.quads)),
+            materials: make("materials", bytemuck::cast_slice(&buffers.materials)),
+            lights: make("lights", bytemuck::cast_slice(&buffers.lights)),
+            triangles: storage("triangles", bytemuck::cast_slice(&buffers.triangles)),
+            bvh_primitives: self.buffer_with(
+                "bvh primitives",
+                bytemuck::cast_slice(&buffers.bvh_primitives),
+                primitives_usage,
+            ),
+            triangle_normals: storage(
+                "triangle normals",
+                bytemuck::cast_slice(&buffers.triangle_normals),
+            ),
+            instances: storage("instances", bytemuck::cast_slice(&buffers.instances)),
+            bvh_nodes,
+            images,
+        })
+    }
+
+    /// Refuses a scene whose buffers or textures exceed this device's limits or the kernel's
+    /// encodings; the rows of texels its BVH's nodes and its images take.
+    fn check_fits(
+        &self,
+        scene: &FlatScene,
+        buffers: &SceneBuffers,
+    ) -> Result<(u64, u64), GpuError> {
         let limit = self
             .ctx
             .limits
@@ -352,76 +373,7 @@ impl GpuRenderer {
                 (max_rows * TEXEL_ROW as u64 * 16) >> 20
             )));
         }
-        let usage = if features.uniform_scene {
-            let capacity = features.scene_capacity.max(1) as usize;
-            buffers.spheres.resize(capacity, Default::default());
-            buffers.quads.resize(capacity, Default::default());
-            buffers.materials.resize(capacity, Default::default());
-            buffers.lights.resize(capacity, Default::default());
-            wgpu::BufferUsages::UNIFORM
-        } else {
-            wgpu::BufferUsages::STORAGE
-        };
-        let make = |label, contents: &[u8]| self.buffer_with(label, contents, usage);
-        let primitives_usage = if features.uniform_bvh {
-            let words = 4 * features.bvh_primitive_capacity.max(1) as usize;
-            buffers.bvh_primitives.resize(words, 0);
-            wgpu::BufferUsages::UNIFORM
-        } else {
-            wgpu::BufferUsages::STORAGE
-        };
-        let bvh_nodes = if features.uniform_bvh {
-            buffers
-                .bvh_nodes
-                .resize(features.bvh_capacity.max(1) as usize, Default::default());
-            NodeBinding::Uniform(self.buffer_with(
-                "bvh nodes",
-                bytemuck::cast_slice(&buffers.bvh_nodes),
-                wgpu::BufferUsages::UNIFORM,
-            ))
-        } else {
-            NodeBinding::Texture(self.texel_texture(
-                "bvh nodes",
-                bytemuck::cast_slice(&buffers.bvh_nodes),
-                node_rows as u32,
-            ))
-        };
-        let images = self.texel_texture(
-            "images",
-            bytemuck::cast_slice(&ImageArray::new(scene).values),
-            image_rows as u32,
-        );
-        let buffers = [
-            make("spheres", bytemuck::cast_slice(&buffers.spheres)),
-            make("quads", bytemuck::cast_slice(&buffers.quads)),
-            make("materials", bytemuck::cast_slice(&buffers.materials)),
-            make("lights", bytemuck::cast_slice(&buffers.lights)),
-            self.buffer_with(
-                "triangles",
-                bytemuck::cast_slice(&buffers.triangles),
-                wgpu::BufferUsages::STORAGE,
-            ),
-            self.buffer_with(
-                "bvh primitives",
-                bytemuck::cast_slice(&buffers.bvh_primitives),
-                primitives_usage,
-            ),
-            self.buffer_with(
-                "triangle normals",
-                bytemuck::cast_slice(&buffers.triangle_normals),
-                wgpu::BufferUsages::STORAGE,
-            ),
-            self.buffer_with(
-                "instances",
-                bytemuck::cast_slice(&buffers.instances),
-                wgpu::BufferUsages::STORAGE,
-            ),
-        ];
-        Ok(SceneBindings {
-            buffers,
-            bvh_nodes,
-            images,
-        })
+        Ok((node_rows, image_rows))
     }
 
     /// `bytes` as the `Rgba32Uint` texels of a texture `TEXEL_ROW` wide and `rows` high.
@@ -458,47 +410,38 @@ impl GpuRenderer {
         accum: &wgpu::Buffer,
         debug: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
-        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
-        }
-        let SceneBindings {
-            buffers,
-            bvh_nodes,
-            images,
-        } = scene;
+        let resource = |binding: Binding| match binding {
+            Binding::Params => params.as_entire_binding(),
+            Binding::Spheres => scene.spheres.as_entire_binding(),
+            Binding::Quads => scene.quads.as_entire_binding(),
+            Binding::Materials => scene.materials.as_entire_binding(),
+            Binding::Accum => accum.as_entire_binding(),
+            Binding::Bounces => debug.as_entire_binding(),
+            Binding::Lights => scene.lights.as_entire_binding(),
+            Binding::Dispatch => dispatch.as_entire_binding(),
+            Binding::ImageTexels => wgpu::BindingResource::TextureView(&scene.images),
+            Binding::Triangles => scene.triangles.as_entire_binding(),
+            Binding::BvhNodes => match &scene.bvh_nodes {
+                NodeBinding::Texture(view) => wgpu::BindingResource::TextureView(view),
+                NodeBinding::Uniform(buffer) => buffer.as_entire_binding(),
+            },
+            Binding::BvhPrimitives => scene.bvh_primitives.as_entire_binding(),
+            Binding::TriangleNormals => scene.triangle_normals.as_entire_binding(),
+            Binding::Instances => scene.instances.as_entire_binding(),
+        };
+        let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
+            .iter()
+            .map(|&b| wgpu::BindGroupEntry {
+                binding: b.number(),
+                resource: resource(b),
+            })
+            .collect();
         self.ctx
             .device
             .create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene"),
                 layout: &kernel.bind_group_layout,
-                entries: &[
-                    entry(0, params),
-                    entry(1, &buffers[0]),
-                    entry(2, &buffers[1]),
-                    entry(3, &buffers[2]),
-                    entry(4, accum),
-                    entry(5, debug),
-                    entry(6, &buffers[3]),
-                    entry(7, dispatch),
-                    wgpu::BindGroupEntry {
-                        binding: 8,
-                        resource: wgpu::BindingResource::TextureView(images),
-                    },
-                    entry(9, &buffers[4]),
-                    wgpu::BindGroupEntry {
-                        binding: 10,
-                        resource: match bvh_nodes {
-                            NodeBinding::Texture(view) => wgpu::BindingResource::TextureView(view),
-                            NodeBinding::Uniform(buffer) => buffer.as_entire_binding(),
-                        },
-                    },
-                    entry(11, &buffers[5]),
-                    entry(12, &buffers[6]),
-                    entry(13, &buffers[7]),
-                ],
+                entries: &entries,
             })
     }
 
@@ -558,6 +501,41 @@ impl GpuRenderer {
         tuning: &Tuning,
         on_progress: &dyn Fn(f64),
     ) -> Result<(Film, Timings), GpuError> {
+        self.check_kernel(kernel, scene, opts)?;
+        let (width, height) = (opts.width, opts.height);
+        let plan = self.plan_dispatches(kernel, scene, opts, tuning)?;
+        let mut sizer = plan.sizer;
+        let tile_rows = sizer.max_tile_rows().min(height);
+        let scene_buffers = self.scene_buffers(scene, &kernel.features)?;
+        let tiles = TileRenderer::new(self, kernel, opts, &plan.params, &scene_buffers, tile_rows);
+        tiles.warm_up()?;
+        let mut film = Film::new(width, height);
+        film.stratified = opts.sampler == SamplerKind::Sobol;
+        let mut timings = Timings::default();
+        let mut gpu_seconds = 0.0;
+        let mut y0 = 0;
+        while y0 < height {
+            let rows = sizer.next_tile_rows(height - y0);
+            tiles.clear();
+            gpu_seconds += tiles.sample(y0, rows, &mut sizer, &mut timings, on_progress)?;
+            if kernel.features.bvh {
+                gpu_seconds += tiles.finish_short_pixels(y0, rows, &mut timings)?;
+            }
+            tiles.read_into(&mut film, y0, rows)?;
+            y0 += rows;
+        }
+        // Some backends (OpenGL) accept timestamp queries and return zeros.
+        timings.gpu_seconds = (tiles.timer.is_some() && gpu_seconds > 0.0).then_some(gpu_seconds);
+        Ok((film, timings))
+    }
+
+    /// Refuses a kernel built for another integrator, sampler or scene.
+    fn check_kernel(
+        &self,
+        kernel: &Kernel,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+    ) -> Result<(), GpuError> {
         if kernel.features.for_render(scene, opts) != kernel.features {
             return Err(GpuError::Runtime(format!(
                 "this kernel was not built for the {} integrator and the {} sampler",
@@ -573,7 +551,19 @@ impl GpuRenderer {
                 "this kernel was composed for another scene: compile one for this scene".into(),
             ));
         }
-        let (width, height) = (opts.width, opts.height);
+        Ok(())
+    }
+
+    /// How the render's dispatches are sized: the loop budget on lavapipe, the most samples one
+    /// dispatch may take, and the render's parameters.
+    fn plan_dispatches(
+        &self,
+        kernel: &Kernel,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+        tuning: &Tuning,
+    ) -> Result<DispatchPlan, GpuError> {
+        let width = opts.width;
         let max_tile_pixels = self.max_tile_pixels();
         if (width as u64) > max_tile_pixels {
             return Err(GpuError::TooLarge(format!(
@@ -606,218 +596,15 @@ impl GpuRenderer {
             }
             None => 1,
         };
-        let mut sizer = DispatchSizer::new(width, max_tile_pixels, max_slice, *tuning);
-        let tile_rows = sizer.max_tile_rows().min(height);
-        let scene_buffers = self.scene_buffers(scene, &kernel.features)?;
-        // Per-render params are uniform (lavapipe folds them into the kernel: one variant per
-        // render); what changes every dispatch is in storage (folded, each new value compiled
-        // and kept a variant: ~1 MB per dispatch).
-        let params_buffer = self.buffer_with(
-            "params",
-            bytemuck::bytes_of(&GpuParams {
+        Ok(DispatchPlan {
+            sizer: DispatchSizer::new(width, max_tile_pixels, max_slice, *tuning),
+            params: GpuParams {
                 sample_loop_cost: sample_loop_cost.min(u32::MAX as u64) as u32,
                 traversal_weight: budget.map_or(1, |(_, lanes)| lanes),
                 loop_budget: budget.map_or(u32::MAX, |(b, _)| b as u32),
                 ..base_params(scene, opts)
-            }),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let dispatch_buffer = self.buffer(
-            "dispatch",
-            std::mem::size_of::<GpuDispatch>() as u64,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        );
-        let debug = self.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
-        let accum_size = tile_rows as u64 * width as u64 * ACCUM_BYTES_PER_PIXEL;
-        let accum = self.buffer(
-            "accumulator",
-            accum_size,
-            wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-        );
-        let bind_group = self.bind_group(
-            kernel,
-            [&params_buffer, &dispatch_buffer],
-            &scene_buffers,
-            &accum,
-            &debug,
-        );
-        let timer = self.ctx.timestamps.then(|| DispatchTimer::new(self));
-
-        // Drivers such as lavapipe compile a pipeline at its first dispatch: run one empty
-        // dispatch (zero samples) first so compilation is not timed as, or inside, a slice.
-        {
-            let mut dispatch = whole_image_dispatch(opts);
-            dispatch.tile_size = [width, 1];
-            self.ctx
-                .queue
-                .write_buffer(&dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
-            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&kernel.pipeline);
-                pass.set_bind_group(0, &bind_group, &[]);
-                pass.dispatch_workgroups(width.div_ceil(WORKGROUP_SIZE), 1, 1);
-            }
-            self.ctx.queue.submit([encoder.finish()]);
-            self.ctx.wait()?;
-        }
-
-        let trace = std::env::var_os("RT_GPU_TRACE").is_some();
-        let mut film = Film::new(width, height);
-        film.stratified = opts.sampler == SamplerKind::Sobol;
-        let mut timings = Timings::default();
-        let mut gpu_seconds = 0.0;
-        // Tiles and slices are sized by `sizer` from each dispatch's measured time.
-        let mut y0 = 0;
-        while y0 < height {
-            let rows = sizer.next_tile_rows(height - y0);
-            let tile_pixels = rows as u64 * width as u64;
-            let mut slice = sizer.first_slice();
-            let tile_bytes = tile_pixels * ACCUM_BYTES_PER_PIXEL;
-            {
-                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                encoder.clear_buffer(&accum, 0, None);
-                self.ctx.queue.submit([encoder.finish()]);
-            }
-            // One dispatch over the tile, until each pixel holds `target` samples; its time.
-            let run = |samples_before: u32, count: u32| -> Result<(f64, f64), GpuError> {
-                // Each pixel takes samples first_sample + (its count so far) onward, so a
-                // pixel the kernel left short (see shaders/accel.wgsl) continues where it
-                // stopped.
-                let dispatch = GpuDispatch {
-                    tile_origin: [0, y0],
-                    tile_size: [width, rows],
-                    first_sample: opts.first_sample,
-                    samples_before,
-                    sample_count: count,
-                    ..whole_image_dispatch(opts)
-                };
-                self.ctx
-                    .queue
-                    .write_buffer(&dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
-                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("render"),
-                        timestamp_writes: timer.as_ref().map(|t| t.writes()),
-                    });
-                    pass.set_pipeline(&kernel.pipeline);
-                    pass.set_bind_group(0, &bind_group, &[]);
-                    pass.dispatch_workgroups(
-                        width.div_ceil(WORKGROUP_SIZE),
-                        rows.div_ceil(WORKGROUP_SIZE),
-                        1,
-                    );
-                }
-                if let Some(t) = &timer {
-                    t.resolve(&mut encoder);
-                }
-                let start = Instant::now();
-                self.ctx.queue.submit([encoder.finish()]);
-                self.ctx.wait()?;
-                let wall = start.elapsed().as_secs_f64();
-                let gpu = match &timer {
-                    Some(t) => t.read(self)?,
-                    None => 0.0,
-                };
-                Ok((if gpu > 0.0 { gpu } else { wall }, gpu))
-            };
-            let mut done = 0;
-            while done < opts.spp {
-                let count = slice.min(opts.spp - done);
-                let (seconds, gpu) = run(done, count)?;
-                gpu_seconds += gpu;
-                timings.dispatches += 1;
-                timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
-                done += count;
-                on_progress(
-                    (y0 as f64 + rows as f64 * done as f64 / opts.spp as f64) / height as f64,
-                );
-                if trace {
-                    // RT_GPU_TRACE=1: one line per dispatch, for tuning the sizing.
-                    let _ = writeln!(
-                        std::io::stderr().lock(),
-                        "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4}"
-                    );
-                }
-                slice = sizer.record(count, tile_pixels, seconds);
-            }
-            // A BVH kernel stops a pixel's samples short when its traversals near the loop
-            // budget (each dispatch gives every pixel at least one sample): dispatch again
-            // until every pixel has them all.
-            if kernel.features.bvh {
-                for _ in 0..opts.spp {
-                    let bytes = self.read_back(&accum, tile_bytes)?;
-                    let words: &[u32] = bytemuck::cast_slice(&bytes);
-                    let short = words
-                        .chunks_exact(ACCUM_WORDS as usize)
-                        .filter(|px| px[ACCUM_COUNT as usize] < opts.spp)
-                        .count();
-                    if short == 0 {
-                        break;
-                    }
-                    if trace {
-                        let _ = writeln!(
-                            std::io::stderr().lock(),
-                            "tile y0 {y0}: {short} pixels short of {} samples, dispatching again",
-                            opts.spp
-                        );
-                    }
-                    let (seconds, gpu) = run(opts.spp, 0)?;
-                    gpu_seconds += gpu;
-                    timings.dispatches += 1;
-                    timings.longest_dispatch_seconds =
-                        timings.longest_dispatch_seconds.max(seconds);
-                }
-            }
-            let bytes = self.read_back(&accum, tile_bytes)?;
-            let words: &[u32] = bytemuck::cast_slice(&bytes);
-            // The kernel keeps the odd samples' sum only for stratified renders.
-            let odd_n = if kernel.features.sobol {
-                (opts.first_sample as u64 + opts.spp as u64) / 2 - opts.first_sample as u64 / 2
-            } else {
-                0
-            };
-            for (i, px) in words.chunks_exact(ACCUM_WORDS as usize).enumerate() {
-                let taken = px[ACCUM_COUNT as usize];
-                if taken != opts.spp {
-                    return Err(GpuError::Runtime(format!(
-                        "the device ended the kernel early: a pixel got {taken} of {} samples",
-                        opts.spp
-                    )));
-                }
-                let f = |w: u32| f32::from_bits(w) as f64;
-                let stats = &mut film.pixels[y0 as usize * width as usize + i];
-                let even_sum = fixed_sums(&px[ACCUM_EVEN_SUM as usize..]);
-                let odd_sum = fixed_sums(&px[ACCUM_ODD_SUM as usize..]);
-                *stats = PixelStats {
-                    n: opts.spp as u64,
-                    sum: std::array::from_fn(|c| even_sum[c].plus(&odd_sum[c])),
-                    // The kernel's M2 is f32 of samples scaled by 1 / scale: a spread too
-                    // wide even for that reads as the largest f32, not as an infinity.
-                    m2: DVec3::from_array(std::array::from_fn(|c| {
-                        let m2 = f(px[ACCUM_M2 as usize + c]);
-                        let m2 = if m2.is_finite() {
-                            m2.max(0.0)
-                        } else {
-                            f32::MAX as f64
-                        };
-                        let exponent = (px[ACCUM_M2_EXPONENT as usize] >> (8 * c)) & 0xff;
-                        let scale = m2_scale(exponent);
-                        m2 * scale * scale
-                    })),
-                    odd_n,
-                    odd_sum,
-                };
-                film.invalid_samples += px[ACCUM_INVALID as usize] as u64;
-            }
-            y0 += rows;
-        }
-        // Some backends (OpenGL) accept timestamp queries and return zeros.
-        timings.gpu_seconds = (timer.is_some() && gpu_seconds > 0.0).then_some(gpu_seconds);
-        Ok((film, timings))
+            },
+        })
     }
 
     /// The first bounce of sample `opts.first_sample` of every pixel, from the debug kernel.
@@ -985,6 +772,286 @@ impl GpuRenderer {
         let mut result: Vec<GpuFirstBounce> = bytemuck::cast_slice(&bytes).to_vec();
         result.truncate(slots.len());
         Ok(result)
+    }
+}
+/// How a render's dispatches are sized, and its parameters.
+struct DispatchPlan {
+    sizer: DispatchSizer,
+    params: GpuParams,
+}
+
+/// One render's buffers and bind group, and the dispatches over a tile of image rows: its
+/// samples in slices, the pixels a BVH kernel left short, and the tile read into the film.
+struct TileRenderer<'a> {
+    renderer: &'a GpuRenderer,
+    kernel: &'a Kernel,
+    opts: &'a RenderOptions,
+    dispatch_buffer: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    timer: Option<DispatchTimer>,
+    trace: bool,
+}
+
+impl<'a> TileRenderer<'a> {
+    fn new(
+        renderer: &'a GpuRenderer,
+        kernel: &'a Kernel,
+        opts: &'a RenderOptions,
+        params: &GpuParams,
+        scene_buffers: &SceneBindings,
+        tile_rows: u32,
+    ) -> Self {
+        // Per-render params are uniform (lavapipe folds them into the kernel: one variant per
+        // render); what changes every dispatch is in storage (folded, each new value compiled
+        // and kept a variant).
+        let params_buffer = renderer.buffer_with(
+            "params",
+            bytemuck::bytes_of(params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let dispatch_buffer = renderer.buffer(
+            "dispatch",
+            std::mem::size_of::<GpuDispatch>() as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let debug = renderer.buffer("unused", 16, wgpu::BufferUsages::STORAGE);
+        let accum_size = tile_rows as u64 * opts.width as u64 * ACCUM_BYTES_PER_PIXEL;
+        let accum = renderer.buffer(
+            "accumulator",
+            accum_size,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        );
+        let bind_group = renderer.bind_group(
+            kernel,
+            [&params_buffer, &dispatch_buffer],
+            scene_buffers,
+            &accum,
+            &debug,
+        );
+        TileRenderer {
+            renderer,
+            kernel,
+            opts,
+            dispatch_buffer,
+            accum,
+            bind_group,
+            timer: renderer
+                .ctx
+                .timestamps
+                .then(|| DispatchTimer::new(renderer)),
+            trace: std::env::var_os("RT_GPU_TRACE").is_some(),
+        }
+    }
+
+    /// Drivers such as lavapipe compile a pipeline at its first dispatch: one empty dispatch
+    /// (zero samples) first, so that compilation is not timed as, or inside, a slice.
+    fn warm_up(&self) -> Result<(), GpuError> {
+        let ctx = &self.renderer.ctx;
+        let mut dispatch = whole_image_dispatch(self.opts);
+        dispatch.tile_size = [self.opts.width, 1];
+        ctx.queue
+            .write_buffer(&self.dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.kernel.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(self.opts.width.div_ceil(WORKGROUP_SIZE), 1, 1);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        ctx.wait()
+    }
+
+    /// Empties the accumulator for the next tile.
+    fn clear(&self) {
+        let ctx = &self.renderer.ctx;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.accum, 0, None);
+        ctx.queue.submit([encoder.finish()]);
+    }
+
+    /// The tile's `opts.spp` samples per pixel in slices sized by `sizer` from each dispatch's
+    /// measured time; returns their GPU seconds.
+    fn sample(
+        &self,
+        y0: u32,
+        rows: u32,
+        sizer: &mut DispatchSizer,
+        timings: &mut Timings,
+        on_progress: &dyn Fn(f64),
+    ) -> Result<f64, GpuError> {
+        let (opts, width) = (self.opts, self.opts.width);
+        let tile_pixels = rows as u64 * width as u64;
+        let mut slice = sizer.first_slice();
+        let mut gpu_seconds = 0.0;
+        let mut done = 0;
+        while done < opts.spp {
+            let count = slice.min(opts.spp - done);
+            let (seconds, gpu) = self.dispatch(y0, rows, done, count)?;
+            gpu_seconds += gpu;
+            timings.dispatches += 1;
+            timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
+            done += count;
+            on_progress(
+                (y0 as f64 + rows as f64 * done as f64 / opts.spp as f64) / opts.height as f64,
+            );
+            if self.trace {
+                // RT_GPU_TRACE=1: one line per dispatch, for tuning the sizing.
+                let _ = writeln!(
+                    std::io::stderr().lock(),
+                    "tile y0 {y0} rows {rows} count {count} seconds {seconds:.4}"
+                );
+            }
+            slice = sizer.record(count, tile_pixels, seconds);
+        }
+        Ok(gpu_seconds)
+    }
+
+    /// A BVH kernel stops a pixel's samples short when its traversals near the loop budget
+    /// (each dispatch gives every pixel at least one sample): dispatches again until every
+    /// pixel of the tile has them all; returns their GPU seconds.
+    fn finish_short_pixels(
+        &self,
+        y0: u32,
+        rows: u32,
+        timings: &mut Timings,
+    ) -> Result<f64, GpuError> {
+        let spp = self.opts.spp;
+        let mut gpu_seconds = 0.0;
+        for _ in 0..spp {
+            let bytes = self.read_tile(rows)?;
+            let words: &[u32] = bytemuck::cast_slice(&bytes);
+            let short = words
+                .chunks_exact(ACCUM_WORDS as usize)
+                .filter(|px| px[ACCUM_COUNT as usize] < spp)
+                .count();
+            if short == 0 {
+                break;
+            }
+            if self.trace {
+                let _ = writeln!(
+                    std::io::stderr().lock(),
+                    "tile y0 {y0}: {short} pixels short of {spp} samples, dispatching again"
+                );
+            }
+            let (seconds, gpu) = self.dispatch(y0, rows, spp, 0)?;
+            gpu_seconds += gpu;
+            timings.dispatches += 1;
+            timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
+        }
+        Ok(gpu_seconds)
+    }
+
+    /// One dispatch over the tile's `rows` rows from `y0`, until each pixel holds
+    /// `samples_before + count` samples; its seconds (GPU time where known, else wall time) and
+    /// its GPU seconds.
+    fn dispatch(
+        &self,
+        y0: u32,
+        rows: u32,
+        samples_before: u32,
+        count: u32,
+    ) -> Result<(f64, f64), GpuError> {
+        let ctx = &self.renderer.ctx;
+        let width = self.opts.width;
+        // Each pixel takes samples first_sample + (its count so far) onward, so a pixel the
+        // kernel left short (see shaders/accel.wgsl) continues where it stopped.
+        let dispatch = GpuDispatch {
+            tile_origin: [0, y0],
+            tile_size: [width, rows],
+            first_sample: self.opts.first_sample,
+            samples_before,
+            sample_count: count,
+            ..whole_image_dispatch(self.opts)
+        };
+        ctx.queue
+            .write_buffer(&self.dispatch_buffer, 0, bytemuck::bytes_of(&dispatch));
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render"),
+                timestamp_writes: self.timer.as_ref().map(|t| t.writes()),
+            });
+            pass.set_pipeline(&self.kernel.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(
+                width.div_ceil(WORKGROUP_SIZE),
+                rows.div_ceil(WORKGROUP_SIZE),
+                1,
+            );
+        }
+        if let Some(t) = &self.timer {
+            t.resolve(&mut encoder);
+        }
+        let start = Instant::now();
+        ctx.queue.submit([encoder.finish()]);
+        ctx.wait()?;
+        let wall = start.elapsed().as_secs_f64();
+        let gpu = match &self.timer {
+            Some(t) => t.read(self.renderer)?,
+            None => 0.0,
+        };
+        Ok((if gpu > 0.0 { gpu } else { wall }, gpu))
+    }
+
+    /// The accumulator of the tile's `rows` rows, as bytes.
+    fn read_tile(&self, rows: u32) -> Result<Vec<u8>, GpuError> {
+        let tile_bytes = rows as u64 * self.opts.width as u64 * ACCUM_BYTES_PER_PIXEL;
+        self.renderer.read_back(&self.accum, tile_bytes)
+    }
+
+    /// Reads the tile's pixels into `film` from row `y0`.
+    fn read_into(&self, film: &mut Film, y0: u32, rows: u32) -> Result<(), GpuError> {
+        let opts = self.opts;
+        let bytes = self.read_tile(rows)?;
+        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        // The kernel keeps the odd samples' sum only for stratified renders.
+        let odd_n = if self.kernel.features.sobol {
+            (opts.first_sample as u64 + opts.spp as u64) / 2 - opts.first_sample as u64 / 2
+        } else {
+            0
+        };
+        for (i, px) in words.chunks_exact(ACCUM_WORDS as usize).enumerate() {
+            let taken = px[ACCUM_COUNT as usize];
+            if taken != opts.spp {
+                return Err(GpuError::Runtime(format!(
+                    "the device ended the kernel early: a pixel got {taken} of {} samples",
+                    opts.spp
+                )));
+            }
+            film.pixels[y0 as usize * opts.width as usize + i] = pixel_stats(px, opts.spp, odd_n);
+            film.invalid_samples += px[ACCUM_INVALID as usize] as u64;
+        }
+        Ok(())
+    }
+}
+
+/// A pixel's statistics from its accumulator words.
+fn pixel_stats(px: &[u32], spp: u32, odd_n: u64) -> PixelStats {
+    let f = |w: u32| f32::from_bits(w) as f64;
+    let even_sum = fixed_sums(&px[ACCUM_EVEN_SUM as usize..]);
+    let odd_sum = fixed_sums(&px[ACCUM_ODD_SUM as usize..]);
+    PixelStats {
+        n: spp as u64,
+        sum: std::array::from_fn(|c| even_sum[c].plus(&odd_sum[c])),
+        // The kernel's M2 is f32 of samples scaled by 1 / scale: a spread too wide even for
+        // that reads as the largest f32, not as an infinity.
+        m2: DVec3::from_array(std::array::from_fn(|c| {
+            let m2 = f(px[ACCUM_M2 as usize + c]);
+            let m2 = if m2.is_finite() {
+                m2.max(0.0)
+            } else {
+                f32::MAX as f64
+            };
+            let exponent = (px[ACCUM_M2_EXPONENT as usize] >> (8 * c)) & 0xff;
+            let scale = m2_scale(exponent);
+            m2 * scale * scale
+        })),
+        odd_n,
+        odd_sum,
     }
 }
 

@@ -3,11 +3,12 @@
 //! only when the scene needs that feature: a scene without spheres gets no sphere code, one
 //! without glass no dielectric branch.
 
-use crate::gpu::layout::{GpuQuad, GpuSphere, SceneBuffers, WgslStruct, WgslType, float_literal};
+use crate::gpu::layout::SceneBuffers;
 use crate::material::{self, KINDS, MaterialKind};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
 use crate::scene::flat::FlatScene;
+use crate::shared::layout::{GpuQuad, GpuSphere, WgslStruct, WgslType, float_literal};
 
 /// The kernel's modules, in dependency order.
 const MODULES: &[(&str, &str)] = &[
@@ -86,6 +87,30 @@ pub struct Features {
     pub inline_scene: bool,
 }
 
+/// A boolean switch of [`Features`]: its name (what `//#if` blocks test) and its field.
+type Switch = (&'static str, fn(&mut Features) -> &mut bool);
+
+/// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
+const SWITCHES: [Switch; 15] = [
+    ("SPHERES", |f| &mut f.spheres),
+    ("QUADS", |f| &mut f.quads),
+    ("TRIANGLES", |f| &mut f.triangles),
+    ("SHADING_NORMALS", |f| &mut f.shading_normals),
+    ("INSTANCES", |f| &mut f.instances),
+    ("BVH", |f| &mut f.bvh),
+    ("LENS", |f| &mut f.lens),
+    ("SOBOL", |f| &mut f.sobol),
+    ("SKY", |f| &mut f.sky),
+    ("ENVIRONMENT", |f| &mut f.environment),
+    ("DEBUG", |f| &mut f.debug),
+    ("NEE", |f| &mut f.nee),
+    ("UNIFORM_SCENE", |f| &mut f.uniform_scene),
+    ("UNIFORM_BVH", |f| &mut f.uniform_bvh),
+    ("INLINE_SCENE", |f| &mut f.inline_scene),
+];
+/// How many of [`SWITCHES`] come before the material features in [`Features::flags`].
+const GEOMETRY_SWITCHES: usize = 6;
+
 /// Most spheres plus quads a kernel takes as constants.
 pub const MAX_INLINE_PRIMITIVES: usize = 64;
 
@@ -93,7 +118,7 @@ pub const MAX_INLINE_PRIMITIVES: usize = 64;
 pub const MAX_UNIFORM_BYTES: u64 = 64 * 1024;
 /// The largest element of the scene arrays that go into uniform buffers together.
 pub const LARGEST_ELEMENT_BYTES: u64 = {
-    use crate::gpu::layout::{GpuLight, GpuMaterial, GpuQuad, GpuSphere};
+    use crate::shared::layout::{GpuLight, GpuMaterial, GpuQuad, GpuSphere};
     use std::mem::size_of;
     let sizes = [
         size_of::<GpuSphere>(),
@@ -112,7 +137,7 @@ pub const LARGEST_ELEMENT_BYTES: u64 = {
     largest as u64
 };
 /// A BVH node as the kernel reads it (`layout::GpuBvhNode`).
-const NODE_BYTES: u64 = std::mem::size_of::<crate::gpu::layout::GpuBvhNode>() as u64;
+const NODE_BYTES: u64 = std::mem::size_of::<crate::shared::layout::GpuBvhNode>() as u64;
 
 impl Features {
     pub fn of(scene: &FlatScene) -> Self {
@@ -152,8 +177,8 @@ impl Features {
             && scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES
             && scene.materials.len() <= MAX_INLINE_PRIMITIVES
             && scene.lights.len() <= MAX_INLINE_PRIMITIVES;
-        // Any other scene goes through its BVH: on lavapipe even 322 primitives (`showcase`)
-        // render 2x faster through it than in a loop over all of them.
+        // Any other scene goes through its BVH, faster even on lavapipe than a loop over a few
+        // hundred primitives.
         let bvh = !inline_scene;
         Features {
             spheres: !scene.spheres.is_empty(),
@@ -169,13 +194,11 @@ impl Features {
             environment: matches!(scene.background, Background::Environment(_)),
             debug: false,
             nee: false,
-            // BVH kernels too: a scene's spheres, quads, materials and lights as uniforms took
-            // lavapipe 8% fewer instructions on `showcase` (5% with a million triangles).
+            // BVH kernels too: lavapipe reads uniform arrays in straight-line code.
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
             // Lavapipe gathers a uniform array's words lane by lane in straight-line code, where
-            // a texel fetch is a call of ~150 instructions: `showcase` took 13% fewer (the
-            // references, read from storage one lane at a time otherwise: 3% fewer again).
+            // a texel fetch is a function call (and storage is read one lane at a time).
             uniform_bvh: bvh
                 && bvh_capacity * NODE_BYTES <= MAX_UNIFORM_BYTES
                 && bvh_primitive_capacity * 16 <= MAX_UNIFORM_BYTES,
@@ -230,67 +253,37 @@ impl Features {
             .filter(|k| self.materials & material_bit(k.feature) != 0)
     }
 
-    /// Every switch by name, in a fixed order: what `//#if` blocks test.
+    /// Every switch by name, in a fixed order: what `//#if` blocks test. The material
+    /// features come after the geometry's switches (the first `GEOMETRY_SWITCHES` of
+    /// [`SWITCHES`]).
     pub fn flags(&self) -> Vec<(&'static str, bool)> {
-        let mut flags = vec![
-            ("SPHERES", self.spheres),
-            ("QUADS", self.quads),
-            ("TRIANGLES", self.triangles),
-            ("SHADING_NORMALS", self.shading_normals),
-            ("INSTANCES", self.instances),
-            ("BVH", self.bvh),
-        ];
-        flags.extend(
-            material::features()
-                .into_iter()
-                .map(|name| (name, self.materials & material_bit(name) != 0)),
-        );
-        flags.extend([
-            ("LENS", self.lens),
-            ("SOBOL", self.sobol),
-            ("SKY", self.sky),
-            ("ENVIRONMENT", self.environment),
-            ("DEBUG", self.debug),
-            ("NEE", self.nee),
-            ("UNIFORM_SCENE", self.uniform_scene),
-            ("UNIFORM_BVH", self.uniform_bvh),
-            ("INLINE_SCENE", self.inline_scene),
-        ]);
+        let mut copy = *self;
+        let mut flags: Vec<(&'static str, bool)> = SWITCHES
+            .iter()
+            .map(|(name, switch)| (*name, *switch(&mut copy)))
+            .collect();
+        let materials = material::features()
+            .into_iter()
+            .map(|name| (name, self.materials & material_bit(name) != 0));
+        flags.splice(GEOMETRY_SWITCHES..GEOMETRY_SWITCHES, materials);
         flags
     }
 
     /// Turns the switch `name` (one of [`Features::flags`]) on or off.
     pub fn set(&mut self, name: &str, on: bool) -> Result<(), String> {
-        let switch = match name {
-            "SPHERES" => &mut self.spheres,
-            "QUADS" => &mut self.quads,
-            "TRIANGLES" => &mut self.triangles,
-            "SHADING_NORMALS" => &mut self.shading_normals,
-            "INSTANCES" => &mut self.instances,
-            "BVH" => &mut self.bvh,
-            "LENS" => &mut self.lens,
-            "SOBOL" => &mut self.sobol,
-            "SKY" => &mut self.sky,
-            "ENVIRONMENT" => &mut self.environment,
-            "DEBUG" => &mut self.debug,
-            "NEE" => &mut self.nee,
-            "UNIFORM_SCENE" => &mut self.uniform_scene,
-            "UNIFORM_BVH" => &mut self.uniform_bvh,
-            "INLINE_SCENE" => &mut self.inline_scene,
-            _ => {
-                let bit = material_bit(name);
-                if bit == 0 {
-                    return Err(format!("unknown shader feature {name}"));
-                }
-                self.materials = if on {
-                    self.materials | bit
-                } else {
-                    self.materials & !bit
-                };
-                return Ok(());
-            }
+        if let Some((_, switch)) = SWITCHES.iter().find(|(n, _)| *n == name) {
+            *switch(self) = on;
+            return Ok(());
+        }
+        let bit = material_bit(name);
+        if bit == 0 {
+            return Err(format!("unknown shader feature {name}"));
+        }
+        self.materials = if on {
+            self.materials | bit
+        } else {
+            self.materials & !bit
         };
-        *switch = on;
         Ok(())
     }
 
@@ -384,7 +377,7 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
 /// `emitted`, `scatter`, and with nee `samples_lights` and `bsdf`.
 fn material_dispatch(features: &Features) -> String {
     // Assignments, not early returns: under divergent control flow lavapipe runs returns with a
-    // mask, which cost the naive Cornell box kernel 13%.
+    // mask, a cost in every lane.
     let mut out = String::from("\n// ---- the material interface, generated ----\n");
     let case = |kind: &MaterialKind, call: &str| {
         format!(
@@ -530,9 +523,8 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
 /// shaders/intersect.wgsl): where the ray crosses each face's plane, as quad_distance finds it
 /// (the same arithmetic, so a face coincident with another quad, a box's bottom on a floor,
 /// resolves as between quads), then the closest so far updated once, with the constants of
-/// the face hit. On lavapipe the Cornell box's two boxes cost about 60% of the instructions
-/// they did as twelve quads (`rt-gpu cornell --backend gpu --spp 64 --size 256x256`, whole
-/// process: 11.2-11.3e9, 9.9-10.0e9 with boxes as slabs, 7.9e9 with the boxes left out).
+/// the face hit: less work than six quad tests, since opposite faces share a plane's
+/// normal.
 fn box_test(b: usize, first: usize, faces: &[GpuQuad]) -> String {
     // box_faces' order: +z, +x, -z, -x, +y, -y; the pairs by axis, low (-) and high (+).
     let (low, high) = ([3, 5, 2], [1, 4, 0]);

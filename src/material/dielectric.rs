@@ -3,9 +3,9 @@
 //! `medium`, the glass is filled with it: subsurface scattering by a volumetric random walk.
 
 use super::{MaterialModel, Medium, reflect};
-use crate::cpu::shapes::Hit;
-use crate::gpu::layout::GpuMaterial;
-use crate::sampler::Sampler;
+use crate::shared::ray::Hit;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

@@ -2,12 +2,12 @@
 //! scatter: 2.
 
 use super::MaterialModel;
-use crate::cpu::sampling::unit_vector;
-use crate::cpu::shapes::{Hit, below_surface};
-use crate::cpu::texture;
+use crate::shared::warp::unit_vector;
+use crate::shared::ray::{Hit, below_surface};
+use crate::material::texture;
 use crate::scene::texture::Texture;
-use crate::gpu::layout::GpuMaterial;
-use crate::sampler::Sampler;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

@@ -2,10 +2,10 @@
 //! (along the shape's normal) unless `two_sided`, and reflects nothing. Random numbers: 0.
 
 use super::MaterialModel;
-use crate::cpu::shapes::Hit;
-use crate::cpu::texture;
-use crate::gpu::layout::GpuMaterial;
-use crate::sampler::Sampler;
+use crate::shared::ray::Hit;
+use crate::material::texture;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::sampler::Sampler;
 use crate::scene::texture::{self as textures, Texture};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

@@ -5,9 +5,9 @@
 //! counting a segment) and scatter inside it. A dielectric's `medium` fills the glass instead.
 
 use super::MaterialModel;
-use crate::cpu::shapes::Hit;
-use crate::gpu::layout::GpuMaterial;
-use crate::sampler::Sampler;
+use crate::shared::ray::Hit;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

@@ -2,12 +2,12 @@
 //! project's metal; rays fuzzed below the surface are absorbed. Random numbers per scatter: 2.
 
 use super::{MaterialModel, reflect};
-use crate::cpu::sampling::unit_vector;
-use crate::cpu::shapes::Hit;
-use crate::cpu::texture;
+use crate::shared::warp::unit_vector;
+use crate::shared::ray::Hit;
+use crate::material::texture;
 use crate::scene::texture::Texture;
-use crate::gpu::layout::GpuMaterial;
-use crate::sampler::Sampler;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

@@ -7,10 +7,10 @@
 //! (which gives it its scene-file `type` name, kernel kind and feature), document it in
 //! `scenes/README.md`.
 
-use crate::cpu::shapes::Hit;
-use crate::gpu::layout::GpuMaterial;
-use crate::sampler::Sampler;
 use crate::scene::texture::Texture;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::ray::Hit;
+use crate::shared::sampler::Sampler;
 use glam::Vec3;
 
 /// What each material provides. The CPU methods are the reference twins of the WGSL functions
@@ -173,6 +173,8 @@ macro_rules! registry {
         }
     };
 }
+
+pub mod texture;
 
 registry! {
     lambertian::Lambertian,

@@ -576,241 +576,26 @@ fn lookup_material(index: &BTreeMap<String, u32>, name: &str) -> Result<u32, Str
 
 impl SceneDoc {
     fn into_scene(self, name: &str) -> Result<Scene, Located> {
-        let render = self.render.as_ref();
-        let setting = |field: Option<&Spanned<u32>>, what: &str, default: u32, max: u32| {
-            let Some(field) = field else {
-                return Ok(default);
-            };
-            let value = *field.get_ref();
-            if value == 0 || value > max {
-                return Err((
-                    Some(field.span()),
-                    format!("{what} must be in 1..={max}, got {value}"),
-                ));
-            }
-            Ok(value)
-        };
-        let defaults = RenderDefaults {
-            width: setting(
-                render.and_then(|r| r.width.as_ref()),
-                "render.width",
-                512,
-                MAX_IMAGE_SIDE,
-            )?,
-            height: setting(
-                render.and_then(|r| r.height.as_ref()),
-                "render.height",
-                512,
-                MAX_IMAGE_SIDE,
-            )?,
-            max_depth: setting(
-                render.and_then(|r| r.max_depth.as_ref()),
-                "render.max_depth",
-                10,
-                MAX_DEPTH_LIMIT,
-            )?,
-        };
-        let background_doc = self.render.and_then(|r| r.background);
-        let background_span = background_doc.as_ref().map(|b| b.span());
-        let background = match background_doc.map(Spanned::into_inner) {
-            None => Background::Constant(Vec3::ZERO),
-            Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
-            Some(BackgroundDoc::Named(n)) if n == "sky" => Background::Sky,
-            Some(BackgroundDoc::Environment(e)) => {
-                let image = super::image::load_named(&e.image)
-                    .map_err(|m| (background_span.clone(), format!("background: {m}")))?;
-                let env = super::environment::Environment::new(
-                    image,
-                    e.strength.map_or(1.0, |s| s.0),
-                    e.rotate_y.map_or(0.0, |r| r.0),
-                )
-                .map_err(|m| (background_span.clone(), m))?;
-                Background::Environment(env)
-            }
-            Some(BackgroundDoc::Named(n)) => {
-                return Err((
-                    background_span,
-                    format!(
-                        "background must be a colour [r, g, b], \"sky\" or {{ image = \"file\", strength, rotate_y }}, got \"{}\"",
-                        quoted(&n)
-                    ),
-                ));
-            }
-        };
-
-        let camera_span = self.camera.span();
-        let c = self.camera.into_inner();
-        let camera = Camera {
-            look_from: c.look_from.vec(),
-            look_at: c.look_at.vec(),
-            up: c.up.map(V3::vec).unwrap_or(Vec3::Y),
-            vfov_degrees: c.vfov.0,
-            aperture: c.aperture.map(|a| a.0).unwrap_or(0.0),
-            focus_distance: c.focus_distance.map(|f| f.0),
-        };
-        camera
-            .validate()
-            .map_err(|e| (Some(camera_span.clone()), e.to_string()))?;
-
-        let mut material_index = BTreeMap::new();
-        let mut materials = Vec::new();
-        let mut material_names = Vec::new();
-        for (name, doc) in self.materials {
-            // Material tables are internally tagged, where serde cannot track spans of their
-            // fields: errors point at the material.
-            let span = Some(doc.span());
-            let material = doc.into_inner();
-            material
-                .validate()
-                .map_err(|message| (span, format!("material \"{}\": {message}", quoted(&name))))?;
-            material_index.insert(name.clone(), materials.len() as u32);
-            materials.push(material);
-            material_names.push(name);
-        }
-
+        let defaults = render_defaults(self.render.as_ref())?;
+        let background = background(self.render.and_then(|r| r.background))?;
+        let camera = camera(self.camera)?;
+        let mut materials = SceneMaterials::new(self.materials)?;
         let mut objects = Vec::new();
         let mut object_spans = Vec::new();
         for spanned in self.objects {
             let span = Some(spanned.span());
-            object_spans.push(span.clone());
-            let o = spanned.into_inner();
-            let mut shapes = Vec::new();
-            if let Some(s) = o.sphere {
-                shapes.push(Shape::Sphere {
-                    center: s.center.vec(),
-                    radius: s.radius.0,
-                });
-            }
-            if let Some(q) = o.quad {
-                shapes.push(Shape::Quad {
-                    q: q.q.vec(),
-                    u: q.u.vec(),
-                    v: q.v.vec(),
-                });
-            }
-            if let Some(b) = o.cuboid {
-                shapes.push(Shape::Cuboid {
-                    min: b.min.vec(),
-                    max: b.max.vec(),
-                });
-            }
-            let one_kind = shapes.len() + o.mesh.is_some() as usize;
-            // A mesh file gives one shape per part (material), each its own object.
-            let mut parts: Vec<(Shape, Option<&'static super::mesh::Mesh>)> =
-                shapes.into_iter().map(|s| (s, None)).collect();
-            if let Some(m) = &o.mesh {
-                let meshes = super::mesh::load_named(&m.file, m.node.as_deref())
-                    .map_err(|e| (span.clone(), e))?;
-                let meshes = match m.part {
-                    None => meshes,
-                    Some(p) => match meshes.get(p as usize) {
-                        Some(mesh) => vec![*mesh],
-                        None => {
-                            return Err((
-                                span,
-                                format!("mesh {} has {} parts, no part {p}", m.file, meshes.len()),
-                            ));
-                        }
-                    },
-                };
-                let scale = o.scale.map_or(Vec3::ONE, ScaleDoc::vec);
-                parts.extend(
-                    meshes
-                        .into_iter()
-                        .map(|mesh| (Shape::Mesh { mesh, scale }, Some(mesh))),
-                );
-            } else if o.scale.is_some() {
-                return Err((span, "`scale` applies to meshes only".into()));
-            }
-            if one_kind != 1 {
-                return Err((
-                    span,
-                    format!(
-                        "an [[object]] needs exactly one of `sphere`, `quad`, `box` or `mesh`, found {one_kind}"
-                    ),
-                ));
-            }
-            let mut placed = Vec::new();
-            for (shape, mesh) in parts {
-                shape.validate().map_err(|e| (span.clone(), e))?;
-                let material = match (&o.material, mesh.and_then(|m| m.material.map(|x| (m, x)))) {
-                    (Some(name), _) => {
-                        lookup_material(&material_index, name).map_err(|e| (span.clone(), e))?
-                    }
-                    (None, Some((mesh, own))) => {
-                        // The file's material, added to the scene once under "file#name".
-                        let name = format!("{}#{}", mesh.source, mesh.material_name);
-                        match material_index.get(&name) {
-                            Some(&i) => i,
-                            None => {
-                                own.validate().map_err(|e| {
-                                    (
-                                        span.clone(),
-                                        format!(
-                                            "mesh {} material \"{}\": {e}",
-                                            mesh.source, mesh.material_name
-                                        ),
-                                    )
-                                })?;
-                                let i = materials.len() as u32;
-                                material_index.insert(name.clone(), i);
-                                materials.push(own);
-                                material_names.push(name);
-                                i
-                            }
-                        }
-                    }
-                    (None, None) => {
-                        let what = match mesh {
-                            Some(m) => format!(
-                                "mesh {} part \"{}\" has no material of its own",
-                                m.source, m.material_name
-                            ),
-                            None => "an [[object]] needs a `material`".to_string(),
-                        };
-                        return Err((span, format!("{what}: name one with `material = \"...\"`")));
-                    }
-                };
-                placed.push((shape, material));
-            }
-            let translate = match o.translate {
-                None => Vec3::ZERO,
-                Some(t) => {
-                    let span = t.span();
-                    let v = t.into_inner().vec();
-                    if v.abs().max_element() > super::MAX_EXTENT {
-                        return Err((
-                            Some(span),
-                            format!(
-                                "translate {v} reaches beyond {:e} from the origin: f32 geometry there is too coarse",
-                                super::MAX_EXTENT
-                            ),
-                        ));
-                    }
-                    v
-                }
-            };
-            let transform = Transform {
-                rotate_y_degrees: o.rotate_y.map(|r| r.0).unwrap_or(0.0),
-                translate,
-            };
-            for (i, (shape, material)) in placed.into_iter().enumerate() {
-                if i > 0 {
-                    object_spans.push(span.clone());
-                }
-                objects.push(Object {
-                    shape,
-                    material,
-                    transform,
-                });
+            // A mesh file gives one object per part (material).
+            for object in object(spanned.into_inner(), &span, &mut materials)? {
+                object_spans.push(span.clone());
+                objects.push(object);
             }
         }
         let scene = Scene {
             name: name.to_string(),
             camera,
             background,
-            materials,
-            material_names,
+            materials: materials.materials,
+            material_names: materials.names,
             objects,
             defaults,
         };
@@ -917,4 +702,279 @@ impl SceneDoc {
             objects,
         }
     }
+}
+
+/// The scene's materials as they are numbered: `[materials]` in name order, then the mesh
+/// files' own as objects first use them.
+struct SceneMaterials {
+    index: BTreeMap<String, u32>,
+    materials: Vec<Material>,
+    names: Vec<String>,
+}
+
+impl SceneMaterials {
+    /// `[materials]`, each validated.
+    fn new(docs: BTreeMap<String, Spanned<Material>>) -> Result<Self, Located> {
+        let mut out = SceneMaterials {
+            index: BTreeMap::new(),
+            materials: Vec::new(),
+            names: Vec::new(),
+        };
+        for (name, doc) in docs {
+            // Material tables are internally tagged, where serde cannot track spans of their
+            // fields: errors point at the material.
+            let span = Some(doc.span());
+            let material = doc.into_inner();
+            material
+                .validate()
+                .map_err(|message| (span, format!("material \"{}\": {message}", quoted(&name))))?;
+            out.add(name, material);
+        }
+        Ok(out)
+    }
+
+    fn add(&mut self, name: String, material: Material) -> u32 {
+        let i = self.materials.len() as u32;
+        self.index.insert(name.clone(), i);
+        self.materials.push(material);
+        self.names.push(name);
+        i
+    }
+
+    /// The material of an object's shape: the one it names, else its mesh part's own (added to
+    /// the scene once, as "file#name").
+    fn of_part(
+        &mut self,
+        named: Option<&str>,
+        mesh: Option<&'static super::mesh::Mesh>,
+        span: &Option<Range<usize>>,
+    ) -> Result<u32, Located> {
+        if let Some(name) = named {
+            return lookup_material(&self.index, name).map_err(|e| (span.clone(), e));
+        }
+        let Some((mesh, own)) = mesh.and_then(|m| m.material.map(|x| (m, x))) else {
+            let what = match mesh {
+                Some(m) => format!(
+                    "mesh {} part \"{}\" has no material of its own",
+                    m.source, m.material_name
+                ),
+                None => "an [[object]] needs a `material`".to_string(),
+            };
+            return Err((
+                span.clone(),
+                format!("{what}: name one with `material = \"...\"`"),
+            ));
+        };
+        let name = format!("{}#{}", mesh.source, mesh.material_name);
+        if let Some(&i) = self.index.get(&name) {
+            return Ok(i);
+        }
+        own.validate().map_err(|e| {
+            (
+                span.clone(),
+                format!(
+                    "mesh {} material \"{}\": {e}",
+                    mesh.source, mesh.material_name
+                ),
+            )
+        })?;
+        Ok(self.add(name, own))
+    }
+}
+
+/// The objects one `[[object]]` places: one, or one per part of its mesh file.
+fn object(
+    o: ObjectDoc,
+    span: &Option<Range<usize>>,
+    materials: &mut SceneMaterials,
+) -> Result<Vec<Object>, Located> {
+    let parts = object_shapes(&o, span)?;
+    let mut placed = Vec::new();
+    for (shape, mesh) in parts {
+        shape.validate().map_err(|e| (span.clone(), e))?;
+        let material = materials.of_part(o.material.as_deref(), mesh, span)?;
+        placed.push((shape, material));
+    }
+    let transform = object_transform(&o)?;
+    Ok(placed
+        .into_iter()
+        .map(|(shape, material)| Object {
+            shape,
+            material,
+            transform,
+        })
+        .collect())
+}
+
+/// An `[[object]]`'s shape: its sphere, quad or box, or its mesh's parts (with the mesh, whose
+/// own material it may take).
+fn object_shapes(
+    o: &ObjectDoc,
+    span: &Option<Range<usize>>,
+) -> Result<Vec<(Shape, Option<&'static super::mesh::Mesh>)>, Located> {
+    let mut shapes = Vec::new();
+    if let Some(s) = &o.sphere {
+        shapes.push(Shape::Sphere {
+            center: s.center.vec(),
+            radius: s.radius.0,
+        });
+    }
+    if let Some(q) = &o.quad {
+        shapes.push(Shape::Quad {
+            q: q.q.vec(),
+            u: q.u.vec(),
+            v: q.v.vec(),
+        });
+    }
+    if let Some(b) = &o.cuboid {
+        shapes.push(Shape::Cuboid {
+            min: b.min.vec(),
+            max: b.max.vec(),
+        });
+    }
+    let one_kind = shapes.len() + o.mesh.is_some() as usize;
+    let mut parts: Vec<(Shape, Option<&'static super::mesh::Mesh>)> =
+        shapes.into_iter().map(|s| (s, None)).collect();
+    if let Some(m) = &o.mesh {
+        let meshes =
+            super::mesh::load_named(&m.file, m.node.as_deref()).map_err(|e| (span.clone(), e))?;
+        let meshes = match m.part {
+            None => meshes,
+            Some(p) => match meshes.get(p as usize) {
+                Some(mesh) => vec![*mesh],
+                None => {
+                    return Err((
+                        span.clone(),
+                        format!("mesh {} has {} parts, no part {p}", m.file, meshes.len()),
+                    ));
+                }
+            },
+        };
+        let scale = o.scale.map_or(Vec3::ONE, ScaleDoc::vec);
+        parts.extend(
+            meshes
+                .into_iter()
+                .map(|mesh| (Shape::Mesh { mesh, scale }, Some(mesh))),
+        );
+    } else if o.scale.is_some() {
+        return Err((span.clone(), "`scale` applies to meshes only".into()));
+    }
+    if one_kind != 1 {
+        return Err((
+            span.clone(),
+            format!(
+                "an [[object]] needs exactly one of `sphere`, `quad`, `box` or `mesh`, found {one_kind}"
+            ),
+        ));
+    }
+    Ok(parts)
+}
+
+/// An `[[object]]`'s rotation about y and translation (within the scene's extent).
+fn object_transform(o: &ObjectDoc) -> Result<Transform, Located> {
+    let translate = match &o.translate {
+        None => Vec3::ZERO,
+        Some(t) => {
+            let v = t.get_ref().vec();
+            if v.abs().max_element() > super::MAX_EXTENT {
+                return Err((
+                    Some(t.span()),
+                    format!(
+                        "translate {v} reaches beyond {:e} from the origin: f32 geometry there is too coarse",
+                        super::MAX_EXTENT
+                    ),
+                ));
+            }
+            v
+        }
+    };
+    Ok(Transform {
+        rotate_y_degrees: o.rotate_y.map(|r| r.0).unwrap_or(0.0),
+        translate,
+    })
+}
+
+/// `[render]`'s width, height and max depth, each in range, or its default.
+fn render_defaults(render: Option<&RenderDoc>) -> Result<RenderDefaults, Located> {
+    let setting = |field: Option<&Spanned<u32>>, what: &str, default: u32, max: u32| {
+        let Some(field) = field else {
+            return Ok(default);
+        };
+        let value = *field.get_ref();
+        if value == 0 || value > max {
+            return Err((
+                Some(field.span()),
+                format!("{what} must be in 1..={max}, got {value}"),
+            ));
+        }
+        Ok(value)
+    };
+    Ok(RenderDefaults {
+        width: setting(
+            render.and_then(|r| r.width.as_ref()),
+            "render.width",
+            512,
+            MAX_IMAGE_SIDE,
+        )?,
+        height: setting(
+            render.and_then(|r| r.height.as_ref()),
+            "render.height",
+            512,
+            MAX_IMAGE_SIDE,
+        )?,
+        max_depth: setting(
+            render.and_then(|r| r.max_depth.as_ref()),
+            "render.max_depth",
+            10,
+            MAX_DEPTH_LIMIT,
+        )?,
+    })
+}
+
+/// `[render] background`: a colour, the sky or an environment image (loaded here).
+fn background(background_doc: Option<Spanned<BackgroundDoc>>) -> Result<Background, Located> {
+    let background_span = background_doc.as_ref().map(|b| b.span());
+    Ok(match background_doc.map(Spanned::into_inner) {
+        None => Background::Constant(Vec3::ZERO),
+        Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
+        Some(BackgroundDoc::Named(n)) if n == "sky" => Background::Sky,
+        Some(BackgroundDoc::Environment(e)) => {
+            let image = super::image::load_named(&e.image)
+                .map_err(|m| (background_span.clone(), format!("background: {m}")))?;
+            let env = super::environment::Environment::new(
+                image,
+                e.strength.map_or(1.0, |s| s.0),
+                e.rotate_y.map_or(0.0, |r| r.0),
+            )
+            .map_err(|m| (background_span.clone(), m))?;
+            Background::Environment(env)
+        }
+        Some(BackgroundDoc::Named(n)) => {
+            return Err((
+                background_span,
+                format!(
+                    "background must be a colour [r, g, b], \"sky\" or {{ image = \"file\", strength, rotate_y }}, got \"{}\"",
+                    quoted(&n)
+                ),
+            ));
+        }
+    })
+}
+
+/// `[camera]`, validated.
+fn camera(camera: Spanned<CameraDoc>) -> Result<Camera, Located> {
+    let camera_span = camera.span();
+    let c = camera.into_inner();
+    let camera = Camera {
+        look_from: c.look_from.vec(),
+        look_at: c.look_at.vec(),
+        up: c.up.map(V3::vec).unwrap_or(Vec3::Y),
+        vfov_degrees: c.vfov.0,
+        aperture: c.aperture.map(|a| a.0).unwrap_or(0.0),
+        focus_distance: c.focus_distance.map(|f| f.0),
+    };
+    camera
+        .validate()
+        .map_err(|e| (Some(camera_span.clone()), e.to_string()))?;
+    Ok(camera)
 }

@@ -4,8 +4,10 @@
 //! transforms rays per hit; only a mesh placed more than once is kept in its own coordinates
 //! and instanced (see [`Instance`]), its rays transformed into them.
 
+use super::mesh::Mesh;
 use super::texture::Texture;
 use super::{Background, Material, Scene, SceneError, Shape};
+use crate::shared::primitive::{MAX_PRIMITIVES_PER_KIND, PrimitiveRef};
 use glam::{DVec3, Vec3, Vec4};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -165,51 +167,6 @@ fn affine_point(rows: &[Vec4; 3], p: Vec3) -> Vec3 {
     Vec3::new(a, b, c)
 }
 
-/// A primitive of a flat scene: its kind and its index among the primitives of that kind.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum PrimitiveRef {
-    Sphere(u32),
-    Quad(u32),
-    Triangle(u32),
-    /// A placed mesh (in the top level of the BVH; a hit on one of its triangles is reported as
-    /// a hit on the instance).
-    Instance(u32),
-}
-
-/// A packed [`PrimitiveRef`] (as the kernel passes it) holds the kind above this many bits of
-/// index.
-pub const PRIMITIVE_INDEX_BITS: u32 = 28;
-/// Most primitives of one kind a scene may have.
-pub const MAX_PRIMITIVES_PER_KIND: usize = 1 << PRIMITIVE_INDEX_BITS;
-pub const KIND_SPHERE: u32 = 0;
-pub const KIND_QUAD: u32 = 1;
-pub const KIND_TRIANGLE: u32 = 2;
-pub const KIND_INSTANCE: u32 = 3;
-
-impl PrimitiveRef {
-    /// One number for both backends: kind << PRIMITIVE_INDEX_BITS | index.
-    pub fn packed(self) -> u32 {
-        match self {
-            PrimitiveRef::Sphere(i) => KIND_SPHERE << PRIMITIVE_INDEX_BITS | i,
-            PrimitiveRef::Quad(i) => KIND_QUAD << PRIMITIVE_INDEX_BITS | i,
-            PrimitiveRef::Triangle(i) => KIND_TRIANGLE << PRIMITIVE_INDEX_BITS | i,
-            PrimitiveRef::Instance(i) => KIND_INSTANCE << PRIMITIVE_INDEX_BITS | i,
-        }
-    }
-
-    /// The reference `packed` came from, if it is one.
-    pub fn unpacked(packed: u32) -> Option<Self> {
-        let index = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
-        match packed >> PRIMITIVE_INDEX_BITS {
-            KIND_SPHERE => Some(PrimitiveRef::Sphere(index)),
-            KIND_QUAD => Some(PrimitiveRef::Quad(index)),
-            KIND_TRIANGLE => Some(PrimitiveRef::Triangle(index)),
-            KIND_INSTANCE => Some(PrimitiveRef::Instance(index)),
-            _ => None,
-        }
-    }
-}
-
 /// Flat scenes are re-centred near the camera in steps of this size (a power of two, so the
 /// shift is exact): a scene whose camera is within this distance of the origin is not moved.
 pub const RECENTRE_STEP: f64 = 1024.0;
@@ -247,8 +204,8 @@ pub struct FlatScene {
     /// descends the top level and then that many levels more.
     pub instance_depth: u32,
     /// Over every primitive and instance, and after it each instanced mesh's own (see
-    /// [`Instance::root`]). The CPU always traverses it (even the Cornell box's 18 primitives
-    /// are found 1.3-1.7x faster through it than one by one); GPU kernels of small scenes test
+    /// [`Instance::root`]). The CPU always traverses it (faster even for the Cornell box's 18
+    /// primitives than testing each); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
     pub bvh: crate::accel::Bvh,
     /// Every emitting sphere, quad and triangle, and last an environment background, for next-event
@@ -264,7 +221,7 @@ pub struct FlatScene {
     pub uv_textures: bool,
     /// Where each box's six quads begin in `quads` (in the order of [`box_faces`]): kernels
     /// with the scene inlined test the six as one, as the slabs between opposite faces (see
-    /// `box_test` in src/gpu/shader.rs: about 60% of the work of six quad tests on lavapipe).
+    /// `box_test` in src/gpu/shader.rs: less work than six quad tests).
     /// The quads stay what the CPU, the BVH, lights and hits use.
     pub boxes: Vec<u32>,
 }
@@ -326,180 +283,22 @@ impl FlatScene {
     ) -> Result<Self, SceneError> {
         scene.validate()?;
         crate::film::check_image_size(width, height).map_err(SceneError::Invalid)?;
-        let mut spheres = Vec::new();
-        let mut quads = Vec::new();
-        let mut boxes = Vec::new();
-        let mut triangles = Vec::new();
-        let mut triangle_normals: Vec<[Vec3; 3]> = Vec::new();
-        // With vertex normals anywhere, every triangle gets corner normals (its face's if none).
-        let smooth = scene
-            .objects
-            .iter()
-            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
-        // Meshes placed more than once with one material: (mesh, material) -> placements.
-        let instancing_key = |object: &super::Object| match object.shape {
-            Shape::Mesh { mesh, .. } if instancing => {
-                let m = &scene.materials[object.material as usize];
-                (m.area_light().is_none() && !m.is_invisible())
-                    .then_some((std::ptr::from_ref(mesh) as usize, object.material))
-            }
-            _ => None,
-        };
-        let mut placements = std::collections::HashMap::new();
-        for key in scene.objects.iter().filter_map(instancing_key) {
-            *placements.entry(key).or_insert(0usize) += 1;
-        }
-        // Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
-        let mut local_triangles: Vec<Triangle> = Vec::new();
-        let mut local_normals: Vec<[Vec3; 3]> = Vec::new();
-        let mut meshes: Vec<std::ops::Range<usize>> = Vec::new();
-        let mut mesh_of = std::collections::HashMap::new();
-        let mut instances: Vec<Instance> = Vec::new();
+        let origin = (scene.camera.look_from.as_dvec3() / RECENTRE_STEP).trunc() * RECENTRE_STEP;
+        let mut primitives = Flattener::new(scene, instancing);
         // Only the materials some object uses, numbered in order of first use: a scene may
         // define thousands it never places, and the kernel holds every material it is given.
         let mut materials = Vec::new();
         let mut renumbered = vec![u32::MAX; scene.materials.len()];
-        let origin = (scene.camera.look_from.as_dvec3() / RECENTRE_STEP).trunc() * RECENTRE_STEP;
         for object in &scene.objects {
-            let t = object.transform;
-            let place = |p: Vec3| t.apply_point_relative(p, origin);
             let slot = &mut renumbered[object.material as usize];
             if *slot == u32::MAX {
                 *slot = materials.len() as u32;
                 materials.push(scene.materials[object.material as usize].relocated(origin));
             }
-            let material = *slot;
-            match object.shape {
-                Shape::Sphere { center, radius } => spheres.push(Sphere {
-                    center: place(center),
-                    radius,
-                    material,
-                    light: 0,
-                }),
-                Shape::Quad { q, u, v } => quads.push(Quad::new(
-                    place(q),
-                    t.rotate_vector(u),
-                    t.rotate_vector(v),
-                    material,
-                )),
-                Shape::Cuboid { min, max } => {
-                    boxes.push(quads.len() as u32);
-                    for [q, u, v] in box_faces(min, max) {
-                        quads.push(Quad::new(
-                            place(q),
-                            t.rotate_vector(u),
-                            t.rotate_vector(v),
-                            material,
-                        ));
-                    }
-                }
-                Shape::Mesh { mesh, scale }
-                    if instancing_key(object).is_some_and(|k| placements[&k] > 1) =>
-                {
-                    let key = instancing_key(object).expect("instanced");
-                    let mesh_index = *mesh_of.entry(key).or_insert_with(|| {
-                        let first = local_triangles.len();
-                        for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
-                            let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
-                            let n = (p1 - p0).cross(p2 - p0);
-                            if !(n.length_squared() > 0.0 && n.is_finite()) {
-                                continue;
-                            }
-                            local_triangles.push(Triangle {
-                                p0,
-                                p1,
-                                p2,
-                                material,
-                                light: 0,
-                            });
-                            local_normals.push(match mesh.normals.get(i) {
-                                Some(&normals) => normals,
-                                None => [n.normalize(); 3],
-                            });
-                        }
-                        meshes.push(first..local_triangles.len());
-                        meshes.len() as u32 - 1
-                    });
-                    instances.push(instance_of(&t, scale, origin, material, mesh_index));
-                }
-                Shape::Mesh { mesh, scale } => {
-                    // A mirroring scale turns the winding around: swap two corners so the
-                    // front face stays the same side of the surface.
-                    let mirrored = scale.x * scale.y * scale.z < 0.0;
-                    let placed: Vec<Vec3> =
-                        mesh.positions.iter().map(|&p| place(p * scale)).collect();
-                    // Normals by the inverse transpose: divided by the scale, then rotated.
-                    let shading = |n: Vec3| t.rotate_vector(n / scale).normalize_or_zero();
-                    for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
-                        let [b, c] = if mirrored { [c, b] } else { [b, c] };
-                        let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
-                        // Triangles that f32 coordinates here flatten to a line are left out.
-                        let n = (p1 - p0).cross(p2 - p0);
-                        if !(n.length_squared() > 0.0 && n.is_finite()) {
-                            continue;
-                        }
-                        let triangle = Triangle {
-                            p0,
-                            p1,
-                            p2,
-                            material,
-                            light: 0,
-                        };
-                        if smooth {
-                            let face = n.normalize();
-                            triangle_normals.push(match mesh.normals.get(i) {
-                                Some(&[n0, n1, n2]) => {
-                                    let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
-                                    [n0, n1, n2].map(|n| match shading(n) {
-                                        Vec3::ZERO => face,
-                                        n => n,
-                                    })
-                                }
-                                None => [face; 3],
-                            });
-                        }
-                        triangles.push(triangle);
-                    }
-                }
-            }
+            primitives.add(object, origin, *slot);
         }
-        let instanced_triangles = triangles.len();
-        let instanced_meshes = meshes
-            .iter()
-            .map(|r| r.start + instanced_triangles..r.end + instanced_triangles)
-            .collect();
-        triangles.extend(local_triangles);
-        if smooth {
-            triangle_normals.extend(local_normals);
-        }
-        if spheres.len() > MAX_PRIMITIVES_PER_KIND
-            || quads.len() > MAX_PRIMITIVES_PER_KIND
-            || triangles.len() > MAX_PRIMITIVES_PER_KIND
-            || instances.len() > MAX_PRIMITIVES_PER_KIND
-        {
-            return Err(SceneError::Invalid(format!(
-                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads, triangles and mesh placements"
-            )));
-        }
-        let mut flat = FlatScene {
-            origin,
-            camera: camera_frame(scene, origin, width, height),
-            background: scene.background,
-            materials,
-            spheres,
-            quads,
-            triangles,
-            triangle_normals,
-            instanced_triangles,
-            instanced_meshes,
-            instances,
-            instance_depth: 0,
-            bvh: crate::accel::Bvh::default(),
-            lights: Vec::new(),
-            medium_crossings: 0,
-            uv_textures: false,
-            boxes,
-        };
+        let camera = camera_frame(scene, origin, width, height);
+        let mut flat = primitives.finish(materials, origin, camera)?;
         flat.uv_textures = flat.materials.iter().any(|m| {
             let features = m.extra_features();
             features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
@@ -729,71 +528,11 @@ impl FlatScene {
     pub fn collect_lights(&mut self) {
         let mut lights = Vec::new();
         let mut powers = Vec::new();
-        let luminance = |c: Vec3| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64;
-        for sphere in &mut self.spheres {
-            sphere.light = 0;
-            if let Some((radiance, two_sided)) =
-                self.materials[sphere.material as usize].area_light()
-            {
-                let r = sphere.radius.abs();
-                let area = 4.0 * std::f64::consts::PI * (r as f64).powi(2);
-                let sides = if two_sided { 2.0 } else { 1.0 };
-                powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
-                lights.push(Light {
-                    shape: LightShape::Sphere {
-                        center: sphere.center,
-                        radius: r,
-                    },
-                    cdf: 0.0,
-                    pick: 0.0,
-                });
-                sphere.light = lights.len() as u32;
-            }
-        }
-        for quad in &mut self.quads {
-            quad.light = 0;
-            if let Some((radiance, two_sided)) = self.materials[quad.material as usize].area_light()
-            {
-                let area = quad.u.cross(quad.v).length();
-                let sides = if two_sided { 2.0 } else { 1.0 };
-                powers.push(std::f64::consts::PI * luminance(radiance) * area as f64 * sides);
-                lights.push(Light {
-                    shape: LightShape::Quad {
-                        corner: quad.q,
-                        u: quad.u,
-                        v: quad.v,
-                        normal: quad.normal,
-                        inv_area: 1.0 / area,
-                    },
-                    cdf: 0.0,
-                    pick: 0.0,
-                });
-                quad.light = lights.len() as u32;
-            }
-        }
-        for triangle in &mut self.triangles[..self.instanced_triangles] {
-            triangle.light = 0;
-            if let Some((radiance, two_sided)) =
-                self.materials[triangle.material as usize].area_light()
-            {
-                let area = triangle.area();
-                let sides = if two_sided { 2.0 } else { 1.0 };
-                powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
-                let (u, v) = (triangle.p1 - triangle.p0, triangle.p2 - triangle.p0);
-                lights.push(Light {
-                    shape: LightShape::Triangle {
-                        corner: triangle.p0,
-                        u,
-                        v,
-                        normal: u.cross(v).normalize(),
-                        inv_area: (1.0 / area) as f32,
-                    },
-                    cdf: 0.0,
-                    pick: 0.0,
-                });
-                triangle.light = lights.len() as u32;
-            }
-        }
+        let materials = &self.materials;
+        add_area_lights(&mut self.spheres, materials, &mut lights, &mut powers);
+        add_area_lights(&mut self.quads, materials, &mut lights, &mut powers);
+        let placed_triangles = &mut self.triangles[..self.instanced_triangles];
+        add_area_lights(placed_triangles, materials, &mut lights, &mut powers);
         if let Background::Environment(env) = self.background {
             powers.push(env.power(self.bounding_radius()));
             lights.push(Light {
@@ -819,6 +558,102 @@ impl FlatScene {
     }
 }
 
+/// A primitive that is an area light when its material emits: one light-building path for
+/// every shape (`add_area_lights`).
+trait AreaLight {
+    fn material(&self) -> u32;
+    /// 1 + its index in the light list; 0 when it does not emit.
+    fn light_mut(&mut self) -> &mut u32;
+    /// Its area, and its shape as a light.
+    fn light_shape(&self) -> (f64, LightShape);
+}
+
+impl AreaLight for Sphere {
+    fn material(&self) -> u32 {
+        self.material
+    }
+    fn light_mut(&mut self) -> &mut u32 {
+        &mut self.light
+    }
+    fn light_shape(&self) -> (f64, LightShape) {
+        let r = self.radius.abs();
+        let area = 4.0 * std::f64::consts::PI * (r as f64).powi(2);
+        let shape = LightShape::Sphere {
+            center: self.center,
+            radius: r,
+        };
+        (area, shape)
+    }
+}
+
+impl AreaLight for Quad {
+    fn material(&self) -> u32 {
+        self.material
+    }
+    fn light_mut(&mut self) -> &mut u32 {
+        &mut self.light
+    }
+    fn light_shape(&self) -> (f64, LightShape) {
+        let area = self.u.cross(self.v).length();
+        let shape = LightShape::Quad {
+            corner: self.q,
+            u: self.u,
+            v: self.v,
+            normal: self.normal,
+            inv_area: 1.0 / area,
+        };
+        (area as f64, shape)
+    }
+}
+
+impl AreaLight for Triangle {
+    fn material(&self) -> u32 {
+        self.material
+    }
+    fn light_mut(&mut self) -> &mut u32 {
+        &mut self.light
+    }
+    fn light_shape(&self) -> (f64, LightShape) {
+        let area = self.area();
+        let (u, v) = (self.p1 - self.p0, self.p2 - self.p0);
+        let shape = LightShape::Triangle {
+            corner: self.p0,
+            u,
+            v,
+            normal: u.cross(v).normalize(),
+            inv_area: (1.0 / area) as f32,
+        };
+        (area, shape)
+    }
+}
+
+/// Appends the primitives whose material emits to `lights`, with their power (pi x luminance x
+/// area x emitting sides) in `powers`, and records each one's light index.
+fn add_area_lights<P: AreaLight>(
+    primitives: &mut [P],
+    materials: &[Material],
+    lights: &mut Vec<Light>,
+    powers: &mut Vec<f64>,
+) {
+    let luminance = |c: Vec3| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64;
+    for primitive in primitives {
+        *primitive.light_mut() = 0;
+        let Some((radiance, two_sided)) = materials[primitive.material() as usize].area_light()
+        else {
+            continue;
+        };
+        let (area, shape) = primitive.light_shape();
+        let sides = if two_sided { 2.0 } else { 1.0 };
+        powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
+        lights.push(Light {
+            shape,
+            cdf: 0.0,
+            pick: 0.0,
+        });
+        *primitive.light_mut() = lights.len() as u32;
+    }
+}
+
 /// A box padded by a few ulps of its largest coordinate (spheres' bounds are rounded) and by
 /// `extra` (quads count as hit a little past their edges).
 fn pad(min: Vec3, max: Vec3, extra: f32) -> (Vec3, Vec3) {
@@ -838,6 +673,247 @@ fn triangle_items(triangles: &[Triangle], first: u32) -> Vec<crate::accel::Item>
         }
     };
     triangles.iter().enumerate().map(item).collect()
+}
+
+/// Meshes placed more than once with one material, as (mesh address, material).
+type InstancingKey = (usize, u32);
+
+/// A scene's objects turned into primitives, one object at a time: spheres, quads (a box is
+/// six), the triangles of meshes placed once (copied into the scene) and the placements of
+/// meshes placed more than once (instanced: their triangles kept once, in mesh coordinates).
+struct Flattener<'a> {
+    scene: &'a Scene,
+    instancing: bool,
+    /// How many objects place each instancing key.
+    placements: std::collections::HashMap<InstancingKey, usize>,
+    /// Whether every triangle gets corner normals: the scene has vertex normals somewhere.
+    smooth: bool,
+    spheres: Vec<Sphere>,
+    quads: Vec<Quad>,
+    boxes: Vec<u32>,
+    triangles: Vec<Triangle>,
+    triangle_normals: Vec<[Vec3; 3]>,
+    /// Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
+    local_triangles: Vec<Triangle>,
+    local_normals: Vec<[Vec3; 3]>,
+    meshes: Vec<std::ops::Range<usize>>,
+    mesh_of: std::collections::HashMap<InstancingKey, u32>,
+    instances: Vec<Instance>,
+}
+
+impl<'a> Flattener<'a> {
+    fn new(scene: &'a Scene, instancing: bool) -> Self {
+        let smooth = scene
+            .objects
+            .iter()
+            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
+        let mut flattener = Flattener {
+            scene,
+            instancing,
+            placements: Default::default(),
+            smooth,
+            spheres: Vec::new(),
+            quads: Vec::new(),
+            boxes: Vec::new(),
+            triangles: Vec::new(),
+            triangle_normals: Vec::new(),
+            local_triangles: Vec::new(),
+            local_normals: Vec::new(),
+            meshes: Vec::new(),
+            mesh_of: Default::default(),
+            instances: Vec::new(),
+        };
+        for object in &scene.objects {
+            if let Some(key) = flattener.instancing_key(object) {
+                *flattener.placements.entry(key).or_insert(0) += 1;
+            }
+        }
+        flattener
+    }
+
+    /// The key under which `object` could be instanced: a mesh whose material neither emits
+    /// nor bounds a medium.
+    fn instancing_key(&self, object: &super::Object) -> Option<InstancingKey> {
+        match object.shape {
+            Shape::Mesh { mesh, .. } if self.instancing => {
+                let m = &self.scene.materials[object.material as usize];
+                (m.area_light().is_none() && !m.is_invisible())
+                    .then_some((std::ptr::from_ref(mesh) as usize, object.material))
+            }
+            _ => None,
+        }
+    }
+
+    /// Adds `object`'s primitives, in a scene whose coordinates start at `origin`, with
+    /// `material` (its index among the flat scene's materials).
+    fn add(&mut self, object: &super::Object, origin: DVec3, material: u32) {
+        let t = object.transform;
+        let place = |p: Vec3| t.apply_point_relative(p, origin);
+        match object.shape {
+            Shape::Sphere { center, radius } => self.spheres.push(Sphere {
+                center: place(center),
+                radius,
+                material,
+                light: 0,
+            }),
+            Shape::Quad { q, u, v } => self.quads.push(Quad::new(
+                place(q),
+                t.rotate_vector(u),
+                t.rotate_vector(v),
+                material,
+            )),
+            Shape::Cuboid { min, max } => {
+                self.boxes.push(self.quads.len() as u32);
+                for [q, u, v] in box_faces(min, max) {
+                    self.quads.push(Quad::new(
+                        place(q),
+                        t.rotate_vector(u),
+                        t.rotate_vector(v),
+                        material,
+                    ));
+                }
+            }
+            Shape::Mesh { mesh, scale } => match self.instancing_key(object) {
+                Some(key) if self.placements[&key] > 1 => {
+                    let mesh_index = self.instanced_mesh(key, mesh, material);
+                    let instance = instance_of(&t, scale, origin, material, mesh_index);
+                    self.instances.push(instance);
+                }
+                _ => self.copy_mesh(mesh, scale, &t, origin, material),
+            },
+        }
+    }
+
+    /// The index of `mesh`'s triangles among the instanced meshes', stored at its first
+    /// placement (in mesh coordinates; degenerate triangles left out).
+    fn instanced_mesh(&mut self, key: InstancingKey, mesh: &Mesh, material: u32) -> u32 {
+        if let Some(&index) = self.mesh_of.get(&key) {
+            return index;
+        }
+        let first = self.local_triangles.len();
+        for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+            let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
+            let n = (p1 - p0).cross(p2 - p0);
+            if !(n.length_squared() > 0.0 && n.is_finite()) {
+                continue;
+            }
+            self.local_triangles.push(Triangle {
+                p0,
+                p1,
+                p2,
+                material,
+                light: 0,
+            });
+            self.local_normals.push(match mesh.normals.get(i) {
+                Some(&normals) => normals,
+                None => [n.normalize(); 3],
+            });
+        }
+        self.meshes.push(first..self.local_triangles.len());
+        let index = self.meshes.len() as u32 - 1;
+        self.mesh_of.insert(key, index);
+        index
+    }
+
+    /// Copies `mesh`'s triangles, scaled by `scale` and placed by `t`, into the scene.
+    fn copy_mesh(
+        &mut self,
+        mesh: &Mesh,
+        scale: Vec3,
+        t: &super::Transform,
+        origin: DVec3,
+        material: u32,
+    ) {
+        // A mirroring scale turns the winding around: swap two corners so the front face stays
+        // the same side of the surface.
+        let mirrored = scale.x * scale.y * scale.z < 0.0;
+        let placed: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|&p| t.apply_point_relative(p * scale, origin))
+            .collect();
+        // Normals by the inverse transpose: divided by the scale, then rotated.
+        let shading = |n: Vec3| t.rotate_vector(n / scale).normalize_or_zero();
+        for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+            let [b, c] = if mirrored { [c, b] } else { [b, c] };
+            let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
+            // Triangles that f32 coordinates here flatten to a line are left out.
+            let n = (p1 - p0).cross(p2 - p0);
+            if !(n.length_squared() > 0.0 && n.is_finite()) {
+                continue;
+            }
+            if self.smooth {
+                let face = n.normalize();
+                self.triangle_normals.push(match mesh.normals.get(i) {
+                    Some(&[n0, n1, n2]) => {
+                        let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
+                        [n0, n1, n2].map(|n| match shading(n) {
+                            Vec3::ZERO => face,
+                            n => n,
+                        })
+                    }
+                    None => [face; 3],
+                });
+            }
+            self.triangles.push(Triangle {
+                p0,
+                p1,
+                p2,
+                material,
+                light: 0,
+            });
+        }
+    }
+
+    /// The flat scene of these primitives and `materials`, instanced meshes' triangles after the
+    /// copied ones (lights and BVH still to be found).
+    fn finish(
+        self,
+        materials: Vec<Material>,
+        origin: DVec3,
+        camera: CameraFrame,
+    ) -> Result<FlatScene, SceneError> {
+        let mut triangles = self.triangles;
+        let mut triangle_normals = self.triangle_normals;
+        let instanced_triangles = triangles.len();
+        let instanced_meshes = self
+            .meshes
+            .iter()
+            .map(|r| r.start + instanced_triangles..r.end + instanced_triangles)
+            .collect();
+        triangles.extend(self.local_triangles);
+        if self.smooth {
+            triangle_normals.extend(self.local_normals);
+        }
+        if self.spheres.len() > MAX_PRIMITIVES_PER_KIND
+            || self.quads.len() > MAX_PRIMITIVES_PER_KIND
+            || triangles.len() > MAX_PRIMITIVES_PER_KIND
+            || self.instances.len() > MAX_PRIMITIVES_PER_KIND
+        {
+            return Err(SceneError::Invalid(format!(
+                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads, triangles and mesh placements"
+            )));
+        }
+        Ok(FlatScene {
+            origin,
+            camera,
+            background: self.scene.background,
+            materials,
+            spheres: self.spheres,
+            quads: self.quads,
+            triangles,
+            triangle_normals,
+            instanced_triangles,
+            instanced_meshes,
+            instances: self.instances,
+            instance_depth: 0,
+            bvh: crate::accel::Bvh::default(),
+            lights: Vec::new(),
+            medium_crossings: 0,
+            uv_textures: false,
+            boxes: self.boxes,
+        })
+    }
 }
 
 /// A placement of instanced mesh `mesh` scaled by `scale` and then moved by `t`, in a scene

@@ -1,5 +1,5 @@
 //! Images that textures and environment lights read: decoded once per file into linear RGB f32
-//! (looked up by `src/cpu/texture.rs` and `src/cpu/environment.rs`, twins in `shaders/`).
+//! (looked up by `src/material/texture.rs` and `src/cpu/environment.rs`, twins in `shaders/`).
 //!
 //! A decoded image lives for the rest of the process and is shared: materials and backgrounds
 //! are small `Copy` data that hold a `&'static Image`, so the same file loaded twice (the same

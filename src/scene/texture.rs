@@ -1,5 +1,5 @@
 //! Textures: what a material's albedo may be besides one colour (evaluated by
-//! `src/cpu/texture.rs`, twin `shaders/texture.wgsl`). Plain data, and with serde its
+//! `src/material/texture.rs`, twin `shaders/texture.wgsl`). Plain data, and with serde its
 //! scene-file syntax: `[r, g, b]`, `{ checker = { scale, even, odd } }` (a solid checker in
 //! space, as in Ray Tracing: The Next Week) or `{ uv_checker = { scale, even, odd } }` (a
 //! checker in the surface's UV coordinates) or `{ image = "file.png" }` (an image in UV

@@ -1,7 +1,9 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+#[cfg(feature = "cli")]
 pub mod cli;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod mutate;
 pub mod stats;

@@ -1,8 +1,9 @@
 //! Texture lookups (twin: `shaders/texture.wgsl`) and the surface coordinates they use.
 
-use super::shapes::Hit;
 use crate::scene::image::Image;
 use crate::scene::texture::Texture;
+use crate::shared::layout::{GpuMaterial, TEXTURE_CHECKER, TEXTURE_IMAGE, TEXTURE_UV_CHECKER};
+use crate::shared::ray::Hit;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -69,11 +70,43 @@ pub fn sphere_uv(n: Vec3) -> Vec2 {
     Vec2::new(u, v)
 }
 
+impl GpuMaterial {
+    /// A material whose albedo is `texture`.
+    pub fn with_albedo(texture: &Texture) -> Self {
+        let (texture, checker) = match texture {
+            Texture::Colour(c) => {
+                return GpuMaterial {
+                    albedo: c.to_array(),
+                    ..Default::default()
+                };
+            }
+            Texture::Image(image) => {
+                // `texture_image` is set where the scene's images are laid out (SceneBuffers).
+                return GpuMaterial {
+                    texture: TEXTURE_IMAGE,
+                    texture_odd: [image.width as f32, image.height as f32, 0.0],
+                    ..Default::default()
+                };
+            }
+            Texture::Checker(c) => (TEXTURE_CHECKER, c),
+            Texture::UvChecker(c) => (TEXTURE_UV_CHECKER, c),
+        };
+        GpuMaterial {
+            albedo: checker.even.to_array(),
+            texture,
+            texture_scale: checker.scale,
+            texture_odd: checker.odd.to_array(),
+            texture_shift: checker.shift.to_array(),
+            ..Default::default()
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::flat::PrimitiveRef;
     use crate::scene::texture::Checker;
+    use crate::shared::primitive::PrimitiveRef;
 
     fn hit_at(point: Vec3, uv: Vec2) -> Hit {
         Hit {

@@ -19,7 +19,7 @@
 //! measures the error (see `film::PixelStats`).
 
 use crate::options::SamplerKind;
-use crate::rng::{Rng, pcg_hash};
+use crate::shared::rng::{Rng, pcg_hash};
 
 /// Independently scrambled sequences a pixel's samples are dealt into, in turn.
 pub const REPLICAS: u32 = 2;

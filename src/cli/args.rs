@@ -1,0 +1,315 @@
+//! The command line's syntax: the subcommands and their options (clap), and how option values
+//! are parsed. What each subcommand does is in its own file beside this one.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use rt_gpu::film::check_image_size;
+use rt_gpu::film_file;
+use rt_gpu::options::SamplerKind;
+use rt_gpu::output::Transfer;
+use rt_gpu::render::{Backend, Integrator};
+use rt_gpu::scene::file::MAX_DEPTH_LIMIT;
+use std::path::PathBuf;
+
+/// Where to render (the CLI's names for [`Backend`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The WGSL compute kernel through wgpu (any Vulkan, Metal or DX12 device, or Mesa lavapipe).
+    Gpu,
+    /// The CPU reference renderer (rayon over all cores).
+    Cpu,
+}
+
+impl From<BackendArg> for Backend {
+    fn from(arg: BackendArg) -> Self {
+        match arg {
+            BackendArg::Gpu => Backend::Gpu,
+            BackendArg::Cpu => Backend::Cpu,
+        }
+    }
+}
+
+/// How paths find light (the CLI's names for [`Integrator`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// Paths find light only by hitting it (the original project's estimator).
+    Naive,
+    /// Next-event estimation: each diffuse hit and each scattering event in a medium also
+    /// samples a light with a shadow ray, combined with BSDF (or phase function) sampling by
+    /// multiple importance sampling (power heuristic).
+    Nee,
+}
+
+/// Where a sample's random numbers come from (the CLI's names for [`SamplerKind`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SamplerArg {
+    /// Independent uniform numbers: plain Monte Carlo, error falling as 1/sqrt(spp).
+    Independent,
+    /// Owen-scrambled Sobol points (Burley 2020), stratified in every 2D projection a path
+    /// uses: edges, soft shadows and glossy reflections converge faster.
+    Sobol,
+}
+
+impl From<SamplerArg> for SamplerKind {
+    fn from(arg: SamplerArg) -> Self {
+        match arg {
+            SamplerArg::Independent => SamplerKind::Independent,
+            SamplerArg::Sobol => SamplerKind::Sobol,
+        }
+    }
+}
+
+impl From<IntegratorArg> for Integrator {
+    fn from(arg: IntegratorArg) -> Self {
+        match arg {
+            IntegratorArg::Naive => Integrator::Naive,
+            IntegratorArg::Nee => Integrator::Nee,
+        }
+    }
+}
+
+/// The subcommands, for a hint when one is given where a scene was expected.
+pub const SUBCOMMANDS: &[&str] = &["scenes", "devices", "bench", "converge", "merge"];
+
+pub const EXAMPLES: &str = "\
+Examples:
+  rt-gpu cornell --spp 1000              render the Cornell box to cornell.png
+  rt-gpu scenes/showcase.toml -o a.exr   render a scene file to linear EXR
+  rt-gpu spheres --size 800x450 --backend cpu --seed 7 -o spheres.ppm
+  rt-gpu cornell --print-shader          show the GPU kernel built for a scene
+  rt-gpu scenes                          list the built-in scenes
+  rt-gpu devices                         list GPU adapters
+  rt-gpu bench                           compare backends' speed on the Cornell box
+  rt-gpu converge cornell --budget 20    error against time for each backend
+  rt-gpu cornell --spp 100000 --checkpoint c.exr     a long render, saved every minute
+  rt-gpu cornell --spp 100000 --resume c.exr         ... continued after a stop
+  rt-gpu cornell --spp 4096 --shard 0/4 -o s0.exr    a quarter of the samples (one job of four)
+  rt-gpu merge s0.exr s1.exr s2.exr s3.exr -o c.png  the four quarters as one image";
+
+/// A physically based path tracer: a WGSL compute kernel via wgpu, and a CPU reference
+/// renderer that computes the same estimator.
+#[derive(Parser)]
+#[command(
+    name = "rt-gpu",
+    version,
+    args_conflicts_with_subcommands = true,
+    args_override_self = true,
+    after_help = EXAMPLES
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// List the built-in scenes (each also exists as a file in scenes/).
+    Scenes {
+        /// Write every built-in scene as DIR/<name>.toml, a starting point for your own.
+        #[arg(long, value_name = "DIR")]
+        export: Option<PathBuf>,
+        /// With --export: overwrite scene files that already exist in DIR.
+        #[arg(long, requires = "export")]
+        force: bool,
+    },
+    /// List the GPU adapters wgpu can see (pick one with --adapter).
+    Devices,
+    /// Measure million samples per second of each backend, side by side in one run.
+    Bench(BenchArgs),
+    /// Combine film files (from --shard, --samples or --checkpoint) of one scene and options into
+    /// one image, or one film file with -o FILE.exr: bit-identical to rendering all their samples
+    /// at once.
+    Merge(MergeArgs),
+    /// Error against run time: ladders of renders at 1, 2, 4, ... spp per backend, compared with
+    /// a reference; writes a table, DIR/converge.csv and a log-log plot (DIR/converge.svg, .png).
+    Converge(ConvergeArgs),
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// Film files to combine: disjoint sample ranges of the same render.
+    #[arg(required = true, value_name = "FILM")]
+    pub films: Vec<PathBuf>,
+    /// Output image or film file (.exr); the extension picks the format, as for a render.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// How .png and .ppm encode light: `srgb`, or a gamma such as 2 [default: srgb for .png, 2
+    /// for .ppm].
+    #[arg(long, value_name = "srgb|G", value_parser = Transfer::parse)]
+    pub gamma: Option<Transfer>,
+}
+
+#[derive(Args)]
+pub struct ConvergeArgs {
+    /// A built-in scene name or a scene file.
+    pub scene: String,
+    /// Reference image (.exr or .pfm, same size) [default: render one at high spp on the
+    /// fastest backend and cache it in DIR].
+    #[arg(long, value_name = "FILE")]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of a rendered reference [default: 8x what the fastest series reaches].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub reference_spp: Option<u32>,
+    /// Backends to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "gpu,cpu")]
+    pub backends: Vec<BackendArg>,
+    /// Integrators to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "naive,nee")]
+    pub integrators: Vec<IntegratorArg>,
+    /// Samplers to compare, comma-separated: a series per backend, integrator and sampler.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "sobol")]
+    pub samplers: Vec<SamplerArg>,
+    /// Russian roulette from this many path segments on (0: off).
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    pub roulette_depth: u32,
+    /// Seconds each series may spend on its ladder.
+    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
+    pub budget: f64,
+    /// Image size WIDTHxHEIGHT [default: the scene's].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Path segments per sample [default: the scene's].
+    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: Option<u32>,
+    /// RMSE the time-to-error comparison aims at [default: the CPU series' error at its largest spp].
+    #[arg(long, value_name = "RMSE")]
+    pub target_rmse: Option<f64>,
+    /// GPU adapter (part of its name).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Output directory.
+    #[arg(short, long, value_name = "DIR", default_value = "converge")]
+    pub output: PathBuf,
+}
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// A built-in scene name or a scene file.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Samples per pixel of each measured render.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: u32,
+    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    #[arg(long, value_name = "D", default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: u32,
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
+    pub integrator: IntegratorArg,
+    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
+    pub sampler: SamplerArg,
+    /// Russian roulette from this many path segments on, as a render's (0: off).
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    pub roulette_depth: u32,
+    /// GPU adapter (part of its name).
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// A built-in scene name (see `rt-gpu scenes`) or a scene file (.toml).
+    pub scene: Option<String>,
+    /// Samples per pixel [default: 64, or unlimited with --time].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Render until this many seconds are spent, in whole passes over the image, then write the
+    /// image; with --spp too, whichever comes first. The summary says how many samples per pixel
+    /// were reached.
+    #[arg(long, value_name = "SECONDS")]
+    pub time: Option<f64>,
+    /// Write the render's state to FILE (a film file, .exr) every --checkpoint-every seconds, at
+    /// the end, and when interrupted (Ctrl-C or SIGTERM finish the pass in flight, write it and
+    /// the image so far, and exit non-zero); --resume FILE continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints [default: 60].
+    #[arg(long, value_name = "SECONDS")]
+    pub checkpoint_every: Option<f64>,
+    /// Continue the render saved in FILE by --checkpoint (same scene and options; --spp or
+    /// --time may grow), checkpointing to FILE again [default: where --checkpoint says]. The
+    /// image is bit-identical to one uninterrupted render.
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+    /// Start over although the --checkpoint FILE exists, replacing its samples (without it,
+    /// an existing checkpoint is refused: continue it with --resume FILE).
+    #[arg(long)]
+    pub force: bool,
+    /// Render only sample indices FIRST..END of every pixel (END exclusive) and write a film
+    /// file (-o FILE.exr) for `rt-gpu merge`.
+    #[arg(long, value_name = "FIRST..END", value_parser = film_file::parse_range, conflicts_with_all = ["shard", "spp", "time"])]
+    pub samples: Option<std::ops::Range<u32>>,
+    /// Render the K-th of N equal parts of --spp's samples (K from 0, as Slurm's
+    /// $SLURM_ARRAY_TASK_ID) and write a film file for `rt-gpu merge`.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "spp", conflicts_with = "time")]
+    pub shard: Option<(u32, u32)>,
+    /// Image size WIDTHxHEIGHT [default: the scene's].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Random seed: the same scene, seed and backend give the same image.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Path segments per sample [default: the scene's].
+    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: Option<u32>,
+    /// Where to render.
+    #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
+    pub backend: BackendArg,
+    /// How paths find light: nee samples lights directly at diffuse hits (with multiple
+    /// importance sampling); naive waits for paths to hit them (the original project's way).
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
+    pub integrator: IntegratorArg,
+    /// Where each sample's random numbers come from: sobol stratifies them (lower error for
+    /// the same samples); independent is plain Monte Carlo.
+    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
+    pub sampler: SamplerArg,
+    /// Russian roulette from this many path segments on: paths end at random, in proportion to
+    /// how little they can still carry, and survivors are reweighted (unbiased), as in Mitsuba 3
+    /// and pbrt-v4; 0: off.
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    pub roulette_depth: u32,
+    /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
+    /// Print the WGSL kernel built for this scene and exit.
+    #[arg(long)]
+    pub print_shader: bool,
+    /// Run the general everything-enabled GPU kernel instead of the scene's specialised one.
+    #[arg(long, hide = true)]
+    pub unspecialised: bool,
+    /// Output image; the extension picks the format: .png (8-bit sRGB) and .ppm (8-bit, gamma 2,
+    /// as the original project), .exr and .pfm (linear radiance) [default: <scene>.png].
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// How .png and .ppm encode light: `srgb`, or a gamma such as 2 (the original project's
+    /// look) [default: srgb for .png, 2 for .ppm].
+    #[arg(long, value_name = "srgb|G", value_parser = Transfer::parse)]
+    pub gamma: Option<Transfer>,
+}
+
+pub fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected K/N such as 0/4 (the first of 4 shards), got '{s}'");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if n == 0 || k >= n {
+        return Err(format!(
+            "shard {k}/{n} does not exist: K counts from 0 to N-1"
+        ));
+    }
+    Ok((k, n))
+}
+
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected WIDTHxHEIGHT such as 512x512, got '{s}'");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    );
+    check_image_size(w, h)?;
+    Ok((w, h))
+}

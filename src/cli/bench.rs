@@ -1,0 +1,176 @@
+//! `rt-gpu bench`: million samples per second of each backend, side by side in one run.
+
+use super::args::BenchArgs;
+use super::one_line;
+use super::scenes::resolve_scene;
+use anyhow::{Context, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use rt_gpu::film::check_memory;
+use rt_gpu::options::SamplerKind;
+use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
+use rt_gpu::scene::flat::FlatScene;
+use std::io::Write;
+use std::time::Instant;
+
+/// Renders the same scene on each backend (and the GPU with both kernels) in one run.
+pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let (scene, _) = resolve_scene(&args.scene)?;
+    let loading = start.elapsed().as_secs_f64();
+    let (width, height) = args.size;
+    let start = Instant::now();
+    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    let flattening = start.elapsed().as_secs_f64();
+    describe_geometry(&flat, loading, flattening)?;
+    check_memory(width, height).map_err(anyhow::Error::msg)?;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: args.spp,
+        first_sample: 0,
+        seed: 1,
+        max_depth: args.max_depth,
+        integrator: args.integrator.into(),
+        sampler: args.sampler.into(),
+        roulette_depth: args.roulette_depth,
+    };
+    let samples = width as f64 * height as f64 * args.spp as f64;
+    say!(
+        "{}: {width}x{height}, {} spp, max depth {}, {} integrator, {} sampler, roulette depth {}",
+        scene.name,
+        args.spp,
+        args.max_depth,
+        Integrator::from(args.integrator).name(),
+        SamplerKind::from(args.sampler).name(),
+        opts.roulette_depth
+    )?;
+    let mut rates = Vec::new();
+    let mut failed = Vec::new();
+    let runs = [
+        ("cpu", Backend::Cpu, false),
+        ("gpu specialised kernel", Backend::Gpu, false),
+        ("gpu everything-enabled kernel", Backend::Gpu, true),
+    ];
+    for (label, backend, everything) in runs {
+        let gpu = GpuChoice {
+            adapter: args.adapter.clone(),
+            everything,
+        };
+        match timed_render(backend, &gpu, &flat, &opts) {
+            Ok((rendered, seconds)) => {
+                let rate = samples / seconds / 1e6;
+                let gpu_time = rendered
+                    .gpu_seconds
+                    .map(|s| format!(", {:.3} Msamples/s by GPU time", samples / s / 1e6))
+                    .unwrap_or_default();
+                let longest = rendered
+                    .longest_dispatch_seconds
+                    .map(|d| format!(", longest dispatch {:.0} ms", d * 1e3))
+                    .unwrap_or_default();
+                say!(
+                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{gpu_time}{longest}",
+                    rendered.device
+                )?;
+                rates.push((label, rate));
+            }
+            Err(e) => {
+                say!("  {label:<30} failed: {}", one_line(&format!("{e:#}")))?;
+                failed.push(label);
+            }
+        }
+    }
+    let rate = |name: &str| rates.iter().find(|(l, _)| *l == name).map(|(_, r)| *r);
+    if let (Some(gpu), Some(cpu)) = (rate(runs[1].0), rate(runs[0].0)) {
+        say!("  gpu / cpu speed: {:.2}x", gpu / cpu)?;
+    }
+    if let (Some(special), Some(general)) = (rate(runs[1].0), rate(runs[2].0)) {
+        say!(
+            "  specialised / everything-enabled kernel speed: {:.2}x",
+            special / general
+        )?;
+    }
+    if !failed.is_empty() {
+        bail!(
+            "{} of {} runs failed ({})",
+            failed.len(),
+            runs.len(),
+            failed.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// The scene's geometry and what preparing it cost: reading it (mesh files included), flattening
+/// it, building its BVH (timed again on its own), and its size on the GPU.
+fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow::Result<()> {
+    let (triangles, primitives) = (flat.triangles.len(), flat.primitive_count());
+    let placed = flat.placed_triangles();
+    let instances = if flat.instances.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; {} mesh placements instanced, {placed} triangles placed",
+            flat.instances.len()
+        )
+    };
+    say!(
+        "  scene: {primitives} primitives ({triangles} triangles, {} lights{instances}); read in {loading:.3} s, flattened in {flattening:.3} s",
+        flat.lights.len()
+    )?;
+    if !flat.bvh.nodes.is_empty() {
+        // Both levels, as flattening builds them: every primitive stored, and the instances.
+        let mut rebuilt = flat.clone();
+        let built = primitives + flat.instances.len();
+        let start = Instant::now();
+        rebuilt.build_bvh();
+        let seconds = start.elapsed().as_secs_f64();
+        let bvh = rebuilt.bvh;
+        let geometry = rt_gpu::gpu::layout::geometry_bytes(flat);
+        let per_triangle = if placed != triangles {
+            format!(
+                ", {:.1} bytes per triangle stored, {:.2} per triangle placed",
+                geometry as f64 / triangles as f64,
+                geometry as f64 / placed as f64
+            )
+        } else if triangles > 0 {
+            format!(
+                ", {:.1} bytes per triangle",
+                geometry as f64 / triangles as f64
+            )
+        } else {
+            String::new()
+        };
+        say!(
+            "  bvh: built in {seconds:.3} s ({:.2} M primitives/s on {} threads), {} nodes, depth {}; GPU geometry {:.1} MB{per_triangle}",
+            built as f64 / seconds / 1e6,
+            rayon::current_num_threads(),
+            bvh.nodes.len(),
+            bvh.depth,
+            geometry as f64 / 1e6
+        )?;
+    }
+    Ok(())
+}
+
+/// Renders with a progress bar on stderr; returns the result and wall seconds.
+fn timed_render(
+    backend: Backend,
+    gpu: &GpuChoice,
+    flat: &FlatScene,
+    opts: &RenderOptions,
+) -> anyhow::Result<(Rendered, f64)> {
+    let progress = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template(
+            "{spinner} {elapsed_precise} [{bar:40}] {percent}%, eta {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let start = Instant::now();
+    let result = render(backend, gpu, flat, opts, &|f| {
+        progress.set_position((f * 1000.0) as u64)
+    });
+    let seconds = start.elapsed().as_secs_f64();
+    progress.finish_and_clear();
+    Ok((result?, seconds))
+}

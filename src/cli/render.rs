@@ -1,0 +1,426 @@
+//! Rendering a scene to an image, the default subcommand: the options checked into a [`Plan`]
+//! before anything is opened, the outputs claimed, the passes run with a progress bar (and
+//! checkpoints), the outputs written, and a one-line summary.
+
+use super::args::RenderArgs;
+use super::checkpoint::{CheckpointWriter, pass_seconds, resume_from};
+use super::scenes::resolve_scene;
+use super::shown_radiance;
+use super::signals::{GRACEFUL, STOP_SIGNAL};
+use anyhow::{Context, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use rt_gpu::film::{Film, check_memory};
+use rt_gpu::film_file::{self, FilmMeta};
+use rt_gpu::output::{FileLock, ImageFormat, PendingOutput};
+use rt_gpu::progressive::{Job, Outcome, Progress};
+use rt_gpu::render::{Backend, GpuChoice, RenderOptions, Rendered, Session};
+use rt_gpu::scene::flat::FlatScene;
+use rt_gpu::scene::{Scene, file};
+use std::io::Write;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// A render as the command line asks for it, every option checked.
+struct Plan {
+    scene: Scene,
+    scene_file: Option<PathBuf>,
+    backend: Backend,
+    /// The sample indices rendered.
+    range: Range<u32>,
+    /// Only some of the render's samples (--samples, --shard): a film file for `rt-gpu merge`.
+    partial: bool,
+    output: PathBuf,
+    format: ImageFormat,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: f64,
+    flat: FlatScene,
+    opts: RenderOptions,
+    gpu: GpuChoice,
+}
+
+pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
+    let plan = plan(args)?;
+    if args.print_shader {
+        return print_shader(&plan);
+    }
+    check_memory(plan.opts.width, plan.opts.height).map_err(anyhow::Error::msg)?;
+    // Only film files carry the identity (digesting a scene of many objects takes a while).
+    let writes_film = plan.checkpoint.is_some() || plan.format == ImageFormat::Exr;
+    let identity = if writes_film {
+        let digest = file::digest(&plan.scene);
+        film_file::identity(digest, plan.backend, &plan.opts, args.unspecialised)
+    } else {
+        String::new()
+    };
+    // Held until the render ends: a second render checkpointing to the same file is refused.
+    let checkpoint_lock = match &plan.checkpoint {
+        Some(c) => Some(FileLock::acquire(c)?),
+        None => None,
+    };
+    let resume = match &args.resume {
+        Some(path) => Some(resume_from(path, &identity, &plan.range)?),
+        None => None,
+    };
+    let pending = claim_outputs(&plan)?;
+
+    let resumed_at = resume.as_ref().map_or(plan.range.start, |(_, done)| *done);
+    let session = Session::new(plan.backend, &plan.gpu, &plan.flat, plan.opts.integrator)?;
+    let device = session.device();
+    let meta = |done: u32| FilmMeta {
+        identity: identity.clone(),
+        samples: std::iter::once(plan.range.start..done).collect(),
+        device: device.clone(),
+    };
+    let start = Instant::now();
+    let mut passes = run_passes(args, &plan, &session, resume, &meta)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let done = plan.range.start + passes.rendered.film.pixels.first().map_or(0, |p| p.n) as u32;
+    write_outputs(args, &plan, pending, &mut passes, &meta(done))?;
+    print_summary(&plan, &passes.rendered, seconds, resumed_at, done);
+    if passes.outcome == Outcome::Stopped {
+        let signal = STOP_SIGNAL.load(Ordering::SeqCst);
+        if let Some(c) = &plan.checkpoint {
+            note!(
+                "stopped at sample {done}: continue with the same command and --resume {}",
+                c.display()
+            );
+        }
+        // Exiting runs no destructors: the lock file goes now.
+        drop(checkpoint_lock);
+        std::process::exit(128 + signal);
+    }
+    Ok(())
+}
+
+/// The render the options ask for, or the first problem with them.
+fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
+    let Some(scene_arg) = &args.scene else {
+        bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
+    };
+    let backend = Backend::from(args.backend);
+    if args.adapter.is_some() && backend == Backend::Cpu {
+        bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
+    }
+    let (scene, scene_file) = resolve_scene(scene_arg)?;
+    let range = sample_range(args)?;
+    let partial = args.samples.is_some() || args.shard.is_some();
+    let (output, format) = output_path(args, &scene, &range, partial)?;
+    let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
+    let (width, height) = args
+        .size
+        .unwrap_or((scene.defaults.width, scene.defaults.height));
+    if let Some(t) = args.time
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--time must be a positive number of seconds, got {t}");
+    }
+    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: range.end - range.start,
+        first_sample: range.start,
+        seed: args.seed,
+        max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
+        integrator: args.integrator.into(),
+        sampler: args.sampler.into(),
+        roulette_depth: args.roulette_depth,
+    };
+    let gpu = GpuChoice {
+        adapter: args.adapter.clone(),
+        everything: args.unspecialised,
+    };
+    Ok(Plan {
+        scene,
+        scene_file,
+        backend,
+        range,
+        partial,
+        output,
+        format,
+        checkpoint,
+        checkpoint_every,
+        flat,
+        opts,
+        gpu,
+    })
+}
+
+/// The sample indices a render covers: FIRST..END, or 0..spp.
+fn sample_range(args: &RenderArgs) -> anyhow::Result<Range<u32>> {
+    if let Some(range) = &args.samples {
+        return Ok(range.clone());
+    }
+    let spp = match (args.spp, args.time) {
+        (Some(spp), _) => spp,
+        // Unlimited: the budget ends it.
+        (None, Some(_)) => u32::MAX,
+        (None, None) => 64,
+    };
+    Ok(match args.shard {
+        Some((k, n)) => {
+            let bound = |i: u32| (spp as u64 * i as u64 / n as u64) as u32;
+            let range = bound(k)..bound(k + 1);
+            if range.is_empty() {
+                bail!("shard {k}/{n} of {spp} spp has no samples: use fewer shards");
+            }
+            range
+        }
+        None => 0..spp,
+    })
+}
+
+/// Where the image goes (-o, or named after the scene) and its format.
+fn output_path(
+    args: &RenderArgs,
+    scene: &Scene,
+    range: &Range<u32>,
+    partial: bool,
+) -> anyhow::Result<(PathBuf, ImageFormat)> {
+    let output = args.output.clone().unwrap_or_else(|| {
+        PathBuf::from(if partial {
+            format!("{}-samples-{}-{}.exr", scene.name, range.start, range.end)
+        } else {
+            format!("{}.png", scene.name)
+        })
+    });
+    let format = ImageFormat::from_path(&output)?;
+    if partial && format != ImageFormat::Exr {
+        bail!(
+            "--shard and --samples write a film file for `rt-gpu merge`: name an .exr output, not {}",
+            output.display()
+        );
+    }
+    Ok((output, format))
+}
+
+/// Where checkpoints go, if anywhere (--checkpoint, or --resume's file), and how often.
+fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<(Option<PathBuf>, f64)> {
+    let checkpoint = args.checkpoint.clone().or_else(|| args.resume.clone());
+    if let Some(c) = &checkpoint
+        && ImageFormat::from_path(c).ok() != Some(ImageFormat::Exr)
+    {
+        bail!(
+            "a checkpoint is a film file: name it .exr, not {}",
+            c.display()
+        );
+    }
+    if let Some(c) = &checkpoint
+        && rt_gpu::output::resolved(c) == rt_gpu::output::resolved(output)
+    {
+        bail!(
+            "the checkpoint {} and the output {} are the same file: name them apart",
+            c.display(),
+            output.display()
+        );
+    }
+    if let Some(c) = &args.checkpoint
+        && args.resume.is_none()
+        && !args.force
+        && std::fs::symlink_metadata(c).is_ok()
+    {
+        bail!(
+            "{} exists: continue that render with --resume {0}, or add --force to start over and replace it",
+            c.display()
+        );
+    }
+    let checkpoint_every = args.checkpoint_every.unwrap_or(60.0);
+    if !(checkpoint_every > 0.0 && checkpoint_every.is_finite()) {
+        bail!("--checkpoint-every must be a positive number of seconds, got {checkpoint_every}");
+    }
+    if args.checkpoint_every.is_some() && checkpoint.is_none() {
+        bail!("--checkpoint-every needs --checkpoint FILE (or --resume FILE)");
+    }
+    Ok((checkpoint, checkpoint_every))
+}
+
+/// --print-shader: the kernel this render would run, on stdout.
+fn print_shader(plan: &Plan) -> anyhow::Result<()> {
+    let features = plan
+        .gpu
+        .features(&plan.flat, plan.opts.integrator)
+        .for_render(&plan.flat, &plan.opts);
+    let source = rt_gpu::gpu::shader::compose(&features, &plan.flat).map_err(anyhow::Error::msg)?;
+    std::io::stdout().lock().write_all(source.as_bytes())?;
+    Ok(())
+}
+
+/// Claims the output (and checks the checkpoint can be claimed) now, so that an unwritable
+/// destination fails before a long render, not after it.
+fn claim_outputs(plan: &Plan) -> anyhow::Result<PendingOutput> {
+    let inputs: Vec<&Path> = plan.scene_file.iter().map(|p| p.as_path()).collect();
+    let pending = PendingOutput::claim(&plan.output, &inputs)?;
+    if let Some(c) = &plan.checkpoint {
+        // Fail now, not at the first checkpoint a minute in.
+        drop(PendingOutput::claim(c, &inputs)?);
+    }
+    Ok(pending)
+}
+
+/// What the passes left: the render, why they ended, the checkpoints still to finish and the
+/// first checkpoint that could not be written.
+struct Passes {
+    rendered: Rendered,
+    outcome: Outcome,
+    checkpoints: CheckpointWriter,
+    checkpoint_failure: Option<anyhow::Error>,
+}
+
+/// Runs the render's passes with a progress bar, writing a checkpoint every
+/// `plan.checkpoint_every` seconds, until its samples or time are done or a signal stops it.
+fn run_passes(
+    args: &RenderArgs,
+    plan: &Plan,
+    session: &Session,
+    resume: Option<(Film, u32)>,
+    meta: &dyn Fn(u32) -> FilmMeta,
+) -> anyhow::Result<Passes> {
+    let progress = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let checkpointing = plan.checkpoint.is_some();
+    let job = Job {
+        session,
+        scene: &plan.flat,
+        opts: plan.opts,
+        budget: args.time,
+        pass_seconds: pass_seconds(checkpointing.then_some(plan.checkpoint_every), args.time),
+    };
+    let mut last_checkpoint = Instant::now();
+    let checkpoint_failure: std::cell::RefCell<Option<anyhow::Error>> = Default::default();
+    let mut checkpoints = CheckpointWriter {
+        path: plan.checkpoint.clone(),
+        writing: None,
+    };
+    GRACEFUL.store(checkpointing, Ordering::SeqCst);
+    let (rendered, outcome) = job.run(
+        resume,
+        &mut |film, done| {
+            // A checkpoint that cannot be written stops the render; the image so far is still
+            // written before the error is reported.
+            if last_checkpoint.elapsed().as_secs_f64() >= plan.checkpoint_every
+                && checkpoint_failure.borrow().is_none()
+            {
+                if let Err(e) = checkpoints.write(film, meta(done)) {
+                    *checkpoint_failure.borrow_mut() = Some(e);
+                }
+                last_checkpoint = Instant::now();
+            }
+            Ok(())
+        },
+        &|p| show_progress(&progress, args.time, &p),
+        &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0 || checkpoint_failure.borrow().is_some(),
+    )?;
+    progress.finish_and_clear();
+    Ok(Passes {
+        rendered,
+        outcome,
+        checkpoints,
+        checkpoint_failure: checkpoint_failure.into_inner(),
+    })
+}
+
+/// The progress bar at `p`: samples per pixel reached, of how many, and the time left.
+fn show_progress(progress: &ProgressBar, budget: Option<f64>, p: &Progress) {
+    let fraction = match (budget, p.total_spp) {
+        (Some(budget), u32::MAX) => p.elapsed / budget,
+        _ => p.spp / p.total_spp as f64,
+    };
+    progress.set_position((fraction.min(1.0) * 1000.0) as u64);
+    let total = if p.total_spp == u32::MAX {
+        String::new()
+    } else {
+        format!(" of {}", p.total_spp)
+    };
+    let eta = p
+        .eta
+        .map(|s| format!(", {s:.0} s left"))
+        .unwrap_or_default();
+    progress.set_message(format!("{:.0}{total} spp{eta}", p.spp.floor()));
+}
+
+/// Writes the last checkpoint and the image (the image even when the checkpoint fails, which
+/// is then the error).
+fn write_outputs(
+    args: &RenderArgs,
+    plan: &Plan,
+    pending: PendingOutput,
+    passes: &mut Passes,
+    meta: &FilmMeta,
+) -> anyhow::Result<()> {
+    let film = &passes.rendered.film;
+    // The last checkpoint and an .exr output hold the same film file: encoded once (a 512x512
+    // film takes about 0.3 s), written twice.
+    let output_is_film = plan.format == ImageFormat::Exr;
+    let encoded = if passes.checkpoints.path.is_some() || output_is_film {
+        Some(film_file::encode(film, Some(meta))?)
+    } else {
+        None
+    };
+    let checkpointed = match passes.checkpoint_failure.take() {
+        Some(e) => Err(e),
+        None => passes.checkpoints.finish(encoded.as_deref()),
+    };
+    match &encoded {
+        Some(bytes) if output_is_film => pending.commit(bytes)?,
+        _ => pending.commit_image(film, args.gamma)?,
+    }
+    checkpointed.with_context(|| {
+        format!(
+            "the image was written to {}, but not the checkpoint",
+            plan.output.display()
+        )
+    })
+}
+
+/// The summary line on stderr, and the warnings and notes the render calls for.
+fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32, done: u32) {
+    let film = &rendered.film;
+    let (width, height) = (plan.opts.width, plan.opts.height);
+    let spp = done - plan.range.start;
+    // This run's samples: a resumed render's earlier ones took no time here.
+    let samples = width as f64 * height as f64 * (done - resumed_at) as f64;
+    let gpu_time = match (rendered.gpu_seconds, rendered.longest_dispatch_seconds) {
+        (Some(s), Some(d)) => format!(" ({s:.2} s on the GPU, longest dispatch {:.0} ms)", d * 1e3),
+        (None, Some(d)) => format!(" (longest dispatch {:.0} ms)", d * 1e3),
+        _ => String::new(),
+    };
+    let mut shown_samples = if plan.range.start > 0 || plan.partial {
+        format!("samples {}..{done}", plan.range.start)
+    } else {
+        format!("{spp} spp")
+    };
+    if resumed_at > plan.range.start {
+        shown_samples += &format!(" (resumed at {resumed_at})");
+    }
+    note!(
+        "{}: {width}x{height}, {shown_samples}, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance {}, estimated RMSE {:.3e} -> {}",
+        plan.scene.name,
+        plan.backend.name(),
+        rendered.device,
+        plan.opts.integrator.name(),
+        plan.opts.sampler.name(),
+        samples / seconds / 1e6,
+        shown_radiance(film.image_mean()),
+        rt_gpu::converge::estimated_rmse(film),
+        plan.output.display()
+    );
+    if film.invalid_samples > 0 {
+        note!(
+            "warning: {} samples were NaN, infinite or negative, or on lavapipe needed more loop iterations than one dispatch allows, and were counted as black",
+            film.invalid_samples
+        );
+    }
+    if plan.backend == Backend::Gpu
+        && rendered.device.contains("llvmpipe")
+        && !rt_gpu::gpu::Features::of(&plan.flat).inline_scene
+    {
+        note!(
+            "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores"
+        );
+    }
+}
