@@ -1,11 +1,10 @@
 //! The convergence report: its error figures, its fits, its self-estimate of error, and its files.
-#![cfg_attr(not(feature = "gpu"), allow(unused))]
+#![cfg_attr(not(feature = "plot"), allow(unused))]
 
 mod common;
 
 use glam::Vec3;
 use rt_gpu::converge::{ConvergeOptions, errors, estimated_rmse, fit_loglog, run};
-#[cfg(feature = "gpu")]
 use rt_gpu::render::{Backend, GpuChoice, Integrator};
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Background, Material, Shape};
@@ -83,9 +82,9 @@ fn self_estimated_error_tracks_the_true_error() {
     }
 }
 
-#[cfg(feature = "gpu")]
 /// A ladder on a plain lambertian scene falls as spp^-0.5 (so time^-0.5 at a steady rate), and
-/// the report files are written.
+/// the report files are written (the plots need the `plot` feature).
+#[cfg(feature = "plot")]
 #[test]
 fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
     let _turn = CPU.lock().unwrap_or_else(|p| p.into_inner());

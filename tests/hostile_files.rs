@@ -259,6 +259,8 @@ fn images_are_checked_from_their_headers_and_radiance_files_of_any_writer_load()
     );
 }
 
+// Runs the command line.
+#[cfg(feature = "cli")]
 #[test]
 fn errors_say_what_to_do_with_meshes_and_incomplete_scenes() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -13,7 +13,7 @@ pub enum Binding {
     Quads,
     Materials,
     Accum,
-    /// The `first_bounce` debug entry point's output.
+    /// The debug entry points' output (`first_bounce`, `trace_rays`, `look_up_albedo`, ...).
     Bounces,
     Lights,
     Dispatch,
