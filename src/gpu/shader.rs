@@ -172,8 +172,10 @@ impl Features {
         let reference_words = scene.bvh.primitives.len().div_ceil(4);
         let bvh_primitive_capacity = (reference_words.max(1) as u64).next_power_of_two();
         // Bounded in size: a flat scene holds only the materials and lights its primitives
-        // use, so neither outnumbers them.
+        // use, so neither outnumbers them. Not under an environment: lavapipe then compiles and
+        // keeps a variant of the inlined kernel at every dispatch (see docs/benchmarks.md).
         let inline_scene = scene.triangles.is_empty()
+            && !matches!(scene.background, Background::Environment(_))
             && scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES
             && scene.materials.len() <= MAX_INLINE_PRIMITIVES
             && scene.lights.len() <= MAX_INLINE_PRIMITIVES;
