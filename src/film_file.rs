@@ -240,6 +240,18 @@ pub fn read(path: &Path) -> anyhow::Result<(Film, FilmMeta)> {
     Ok((film, meta))
 }
 
+/// Metadata field `key` of the film file shown as `shown`, or an error naming what it lacks.
+fn metadata_field<'a>(
+    shown: &std::path::Display,
+    fields: &'a HashMap<String, String>,
+    key: &str,
+) -> anyhow::Result<&'a str> {
+    fields
+        .get(key)
+        .map(String::as_str)
+        .with_context(|| format!("{shown}: its film metadata lacks {key}"))
+}
+
 /// A film file's format and what its counts say.
 struct Counts {
     format: u32,
@@ -255,12 +267,7 @@ fn read_metadata(
     shown: &std::path::Display,
     fields: &HashMap<String, String>,
 ) -> anyhow::Result<(FilmMeta, Counts)> {
-    let field = |key: &str| -> anyhow::Result<&str> {
-        fields
-            .get(key)
-            .map(String::as_str)
-            .with_context(|| format!("{shown}: its film metadata lacks {key}"))
-    };
+    let field = |key: &str| metadata_field(shown, fields, key);
     let format: u32 = field(FIELD_FORMAT)?
         .parse()
         .ok()
@@ -354,12 +361,7 @@ fn read_pixels(
         invalid,
         stratified,
     } = *counts;
-    let field = |key: &str| -> anyhow::Result<&str> {
-        fields
-            .get(key)
-            .map(String::as_str)
-            .with_context(|| format!("{shown}: its film metadata lacks {key}"))
-    };
+    let field = |key: &str| metadata_field(shown, fields, key);
     let size = layer.size;
     let (width, height) = (size.0 as u32, size.1 as u32);
     crate::film::check_image_size(width, height).map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;

@@ -10,11 +10,24 @@ use std::path::{Path, PathBuf};
 /// Writes checkpoints on a thread of their own while the next passes render (encoding a
 /// 512x512 film takes about 0.3 s); each waits for the one before, so they land in order.
 pub struct CheckpointWriter {
-    pub path: Option<PathBuf>,
-    pub writing: Option<std::thread::JoinHandle<anyhow::Result<()>>>,
+    path: Option<PathBuf>,
+    writing: Option<std::thread::JoinHandle<anyhow::Result<()>>>,
 }
 
 impl CheckpointWriter {
+    /// A writer of checkpoints to `path`; none are written without one.
+    pub fn new(path: Option<PathBuf>) -> Self {
+        CheckpointWriter {
+            path,
+            writing: None,
+        }
+    }
+
+    /// Whether it writes checkpoints anywhere.
+    pub fn writes(&self) -> bool {
+        self.path.is_some()
+    }
+
     /// Starts writing `film` where checkpoints go, if anywhere, on a thread of its own (after
     /// the one before it).
     pub fn write(&mut self, film: &Film, meta: FilmMeta) -> anyhow::Result<()> {
@@ -31,7 +44,7 @@ impl CheckpointWriter {
     }
 
     /// Waits for the checkpoint in flight, if any, and reports how its writing went.
-    pub fn wait(&mut self) -> anyhow::Result<()> {
+    fn wait(&mut self) -> anyhow::Result<()> {
         match self.writing.take() {
             Some(writing) => writing
                 .join()

@@ -292,10 +292,7 @@ fn run_passes(
     };
     let mut last_checkpoint = Instant::now();
     let checkpoint_failure: std::cell::RefCell<Option<anyhow::Error>> = Default::default();
-    let mut checkpoints = CheckpointWriter {
-        path: plan.checkpoint.clone(),
-        writing: None,
-    };
+    let mut checkpoints = CheckpointWriter::new(plan.checkpoint.clone());
     GRACEFUL.store(checkpointing, Ordering::SeqCst);
     let (rendered, outcome) = job.run(
         resume,
@@ -356,7 +353,7 @@ fn write_outputs(
     // The last checkpoint and an .exr output hold the same film file: encoded once (a 512x512
     // film takes about 0.3 s), written twice.
     let output_is_film = plan.format == ImageFormat::Exr;
-    let encoded = if passes.checkpoints.path.is_some() || output_is_film {
+    let encoded = if passes.checkpoints.writes() || output_is_film {
         Some(film_file::encode(film, Some(meta))?)
     } else {
         None

@@ -5,67 +5,50 @@
 
 use super::shader::Features;
 
-/// Every resource the kernel binds, in group 0, numbered by its position.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Binding {
-    Params,
-    Spheres,
-    Quads,
-    Materials,
-    Accum,
-    /// The debug entry points' output (`first_bounce`, `trace_rays`, `look_up_albedo`, ...).
-    Bounces,
-    Lights,
-    Dispatch,
-    ImageTexels,
-    Triangles,
-    BvhNodes,
-    BvhPrimitives,
-    TriangleNormals,
-    Instances,
+/// Defines [`Binding`], [`BINDINGS`] and each binding's WGSL constant from one list.
+macro_rules! bindings {
+    ($($(#[$meta:meta])* $name:ident => $wgsl:literal,)+) => {
+        /// Every resource the kernel binds, in group 0, numbered by its position.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum Binding {
+            $($(#[$meta])* $name,)+
+        }
+
+        /// Every binding, in number order.
+        pub const BINDINGS: &[Binding] = &[$(Binding::$name,)+];
+
+        impl Binding {
+            /// The WGSL constant holding its number.
+            pub fn wgsl_name(self) -> &'static str {
+                match self {
+                    $(Binding::$name => $wgsl,)+
+                }
+            }
+        }
+    };
 }
 
-/// Every binding, in number order.
-pub const BINDINGS: [Binding; 14] = [
-    Binding::Params,
-    Binding::Spheres,
-    Binding::Quads,
-    Binding::Materials,
-    Binding::Accum,
-    Binding::Bounces,
-    Binding::Lights,
-    Binding::Dispatch,
-    Binding::ImageTexels,
-    Binding::Triangles,
-    Binding::BvhNodes,
-    Binding::BvhPrimitives,
-    Binding::TriangleNormals,
-    Binding::Instances,
-];
+bindings! {
+    Params => "BINDING_PARAMS",
+    Spheres => "BINDING_SPHERES",
+    Quads => "BINDING_QUADS",
+    Materials => "BINDING_MATERIALS",
+    Accum => "BINDING_ACCUM",
+    /// The debug entry points' output (`first_bounce`, `trace_rays`, `look_up_albedo`, ...).
+    Bounces => "BINDING_BOUNCES",
+    Lights => "BINDING_LIGHTS",
+    Dispatch => "BINDING_DISPATCH",
+    ImageTexels => "BINDING_IMAGE_TEXELS",
+    Triangles => "BINDING_TRIANGLES",
+    BvhNodes => "BINDING_BVH_NODES",
+    BvhPrimitives => "BINDING_BVH_PRIMITIVES",
+    TriangleNormals => "BINDING_TRIANGLE_NORMALS",
+    Instances => "BINDING_INSTANCES",
+}
 
 impl Binding {
     pub fn number(self) -> u32 {
         self as u32
-    }
-
-    /// The WGSL constant holding its number.
-    pub fn wgsl_name(self) -> &'static str {
-        match self {
-            Binding::Params => "BINDING_PARAMS",
-            Binding::Spheres => "BINDING_SPHERES",
-            Binding::Quads => "BINDING_QUADS",
-            Binding::Materials => "BINDING_MATERIALS",
-            Binding::Accum => "BINDING_ACCUM",
-            Binding::Bounces => "BINDING_BOUNCES",
-            Binding::Lights => "BINDING_LIGHTS",
-            Binding::Dispatch => "BINDING_DISPATCH",
-            Binding::ImageTexels => "BINDING_IMAGE_TEXELS",
-            Binding::Triangles => "BINDING_TRIANGLES",
-            Binding::BvhNodes => "BINDING_BVH_NODES",
-            Binding::BvhPrimitives => "BINDING_BVH_PRIMITIVES",
-            Binding::TriangleNormals => "BINDING_TRIANGLE_NORMALS",
-            Binding::Instances => "BINDING_INSTANCES",
-        }
     }
 
     /// What the kernel composed with `features` declares it as: small scenes' arrays and

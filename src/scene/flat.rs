@@ -793,10 +793,9 @@ impl<'a> Flattener<'a> {
         let first = self.local_triangles.len();
         for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
             let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
-            let n = (p1 - p0).cross(p2 - p0);
-            if !(n.length_squared() > 0.0 && n.is_finite()) {
+            let Some(n) = face_normal(p0, p1, p2) else {
                 continue;
-            }
+            };
             self.local_triangles.push(Triangle {
                 p0,
                 p1,
@@ -838,10 +837,9 @@ impl<'a> Flattener<'a> {
             let [b, c] = if mirrored { [c, b] } else { [b, c] };
             let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
             // Triangles that f32 coordinates here flatten to a line are left out.
-            let n = (p1 - p0).cross(p2 - p0);
-            if !(n.length_squared() > 0.0 && n.is_finite()) {
+            let Some(n) = face_normal(p0, p1, p2) else {
                 continue;
-            }
+            };
             if self.smooth {
                 let face = n.normalize();
                 self.triangle_normals.push(match mesh.normals.get(i) {
@@ -914,6 +912,13 @@ impl<'a> Flattener<'a> {
             boxes: self.boxes,
         })
     }
+}
+
+/// The (not unit) normal of triangle p0 p1 p2 by its winding; `None` for one that f32 flattens
+/// to a line or a point.
+fn face_normal(p0: Vec3, p1: Vec3, p2: Vec3) -> Option<Vec3> {
+    let n = (p1 - p0).cross(p2 - p0);
+    (n.length_squared() > 0.0 && n.is_finite()).then_some(n)
 }
 
 /// A placement of instanced mesh `mesh` scaled by `scale` and then moved by `t`, in a scene
