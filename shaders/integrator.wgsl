@@ -111,25 +111,19 @@ fn medium_direct_light(point: vec3f, dir: vec3f, g: f32, medium: u32, u0: f32, u
 }
 //#endif
 
-// One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
-// arriving times the MIS weight and the BSDF pdf over the light pdf; their product is the
-// sample's contribution (zero if the light is below the surface or occluded).
-struct DirectLight {
-    weight: vec3f,
-    light: vec3f,
-}
-
-fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -> DirectLight {
-    let none = DirectLight(vec3f(0.0), vec3f(0.0));
+// One light sample at `hit`, reached along `dir`: the light arriving times BSDF x cos and the
+// MIS weight over the light pdf (zero if the BSDF is zero toward it or the light is occluded).
+fn direct_light(m: Material, hit: Hit, dir: vec3f, medium: u32, u0: f32, u1: f32, u2: f32) -> vec3f {
     let index = pick_light(u0);
     let s = sample_light(light_at(index), hit.point, u1, u2);
     if !(s.pdf > 0.0) {
-        return none;
+        return vec3f(0.0);
     }
-    let b = bsdf(m, hit, s.dir);
-    if !(b.pdf > 0.0) {
-        return none;
+    let f = bsdf_eval(m, -dir, s.dir, hit);
+    if all(f == vec3f(0.0)) {
+        return vec3f(0.0);
     }
+    let weight = light_sample_weight(s.pdf, bsdf_pdf(m, -dir, s.dir, hit));
     // The shadow ray leaves the offset origin aimed at the sampled point itself (a tiny light
     // is not missed by the width of the offset); whatever it hits first must be that light.
     let origin = leave(hit, hit.normal);
@@ -140,22 +134,22 @@ fn direct_light(m: Material, hit: Hit, medium: u32, u0: f32, u1: f32, u2: f32) -
     if index + 1u == params.light_count {
         var blocker: Hit;
         if intersect(Ray(origin, s.dir), &blocker) {
-            return none;
+            return vec3f(0.0);
         }
-        return DirectLight(b.weight, environment_radiance(s.dir) * light_sample_factor(s.pdf, b.pdf));
+        return f * (environment_radiance(s.dir) * weight);
     }
 //#endif
     let to_light = s.point - origin;
     if !(dot(to_light, to_light) > 0.0) {
-        return none;
+        return vec3f(0.0);
     }
     var shadow: Hit;
     if !intersect_emitter(Ray(origin, normalize(to_light)), &shadow) || light_of(shadow.primitive) != index + 1u {
-        return none;
+        return vec3f(0.0);
     }
     let le = emitted(material_at(shadow.material), shadow);
 //#endif
-    return DirectLight(b.weight, le * light_sample_factor(s.pdf, b.pdf));
+    return f * (le * weight);
 }
 //#endif
 
@@ -295,28 +289,27 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
         sampler_begin(sampler);
         let u1 = sampler_next(sampler);
         let u2 = sampler_next(sampler);
-        let d = direct_light(m, hit, (*path).medium, u0, u1, u2);
-        (*path).total += (*path).throughput * d.weight * d.light;
+        (*path).total += (*path).throughput * direct_light(m, hit, (*path).ray.dir, (*path).medium, u0, u1, u2);
     }
 //#endif
     sampler_begin(sampler);
-    let s = scatter(m, (*path).ray.dir, hit, sampler);
-    if !s.ok {
+    let s = bsdf_sample(m, -(*path).ray.dir, hit, sampler);
+    if s.lobe == 0u {
         return false;
     }
-    (*path).throughput *= s.attenuation;
+    (*path).throughput *= s.weight;
 //#if NEE
-    if light_sampled {
-        (*path).bsdf_pdf = bsdf(m, hit, s.dir).pdf;
+    if light_sampled && (s.lobe & LOBE_DELTA) == 0u {
+        (*path).bsdf_pdf = s.pdf;
     }
     (*path).origin = hit.point;
 //#endif
 //#if MEDIA
-    if m.medium_density > 0.0 && dot(s.dir, hit.normal) < 0.0 {
+    if m.medium_density > 0.0 && dot(s.wi, hit.normal) < 0.0 {
         (*path).medium = entered(hit); // refracted through a surface filled with a medium
     }
 //#endif
-    (*path).ray = spawn(hit, s.dir);
+    (*path).ray = spawn(hit, s.wi);
     // Russian roulette (as after a scattering event in a medium above). Written out, not
     // a function: lavapipe keeps the call, a cost in this hottest loop.
     if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {

@@ -198,9 +198,9 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     var out = trace_debug(ray, &hit);
     out.dir = vec3f(0.0);
     if out.hit == 1u {
-        let s = scatter(material_at(hit.material), ray.dir, hit, &sampler);
-        out.dir = s.dir;
-        out.scattered = select(0u, 1u, s.ok);
+        let s = bsdf_sample(material_at(hit.material), -ray.dir, hit, &sampler);
+        out.dir = s.wi;
+        out.scattered = select(0u, 1u, s.lobe != 0u);
     }
     bounces[gid.y * dispatch.tile_size.x + gid.x] = out;
 }
@@ -262,6 +262,38 @@ fn look_up_environment(@builtin(global_invocation_id) gid: vec3u) {
         environment_radiance(s.point), bitcast<u32>(environment_pdf(s.point)),
         e.dir, bitcast<u32>(e.pdf),
         vec3f(0.0), 0u,
+    );
+}
+//#endif
+
+//#if NEE
+// The BSDF interface, for comparing materials with the CPU: each slot holds wo (`point`), a
+// material index (`primitive`), the shading and geometric normal (`normal`) and a direction wi
+// (`dir`) on input; on output bsdf_sample's weight (`point`), pdf (`primitive`, as bits), wi
+// (`normal`) and lobe (`hit`), and bsdf_eval (`dir`) and bsdf_pdf (`scattered`, as bits) at
+// the input's wo and wi. The sample's numbers are sample dispatch.first_sample's, after one
+// sampler_begin.
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
+fn sample_bsdf(@builtin(global_invocation_id) gid: vec3u) {
+    if !in_tile(gid, dispatch.tile_size) {
+        return;
+    }
+    let slot = gid.y * dispatch.tile_size.x + gid.x;
+    let pixel = (dispatch.tile_origin.y + gid.y) * params.width + dispatch.tile_origin.x + gid.x;
+    let input = bounces[slot];
+    var hit: Hit;
+    hit.normal = input.normal;
+    hit.shading = input.normal;
+    hit.front_face = true;
+    hit.material = input.primitive;
+    let m = material_at(input.primitive);
+    var sampler = sampler_for_sample(pixel, dispatch.first_sample, dispatch.seed);
+    sampler_begin(&sampler);
+    let s = bsdf_sample(m, input.point, hit, &sampler);
+    bounces[slot] = FirstBounce(
+        s.weight, bitcast<u32>(s.pdf),
+        s.wi, s.lobe,
+        bsdf_eval(m, input.point, input.dir, hit), bitcast<u32>(bsdf_pdf(m, input.point, input.dir, hit)),
     );
 }
 //#endif

@@ -166,7 +166,20 @@ fn power_heuristic(own: f32, other: f32) -> f32 {
     return a * a / (a * a + b * b);
 }
 
-// (cos / pi) / light_pdf times the light sample's MIS weight: ab / (a^2 + b^2), at most 1/2.
+// The light sample's power-heuristic weight over its pdf: a / (a^2 + b^2) / m for a, b the two
+// pdfs scaled by their maximum m.
+fn light_sample_weight(light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    let m = max(light_pdf, bsdf_pdf);
+    if !(m > 0.0) {
+        return 0.0;
+    }
+    let a = light_pdf / m;
+    let b = bsdf_pdf / m;
+    return a / (a * a + b * b) / m;
+}
+
+// In a medium: phase_pdf / light_pdf times the light sample's MIS weight: ab / (a^2 + b^2), at
+// most 1/2.
 fn light_sample_factor(light_pdf: f32, bsdf_pdf: f32) -> f32 {
     let m = max(light_pdf, bsdf_pdf);
     if !(m > 0.0) {

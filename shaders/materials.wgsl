@@ -1,20 +1,10 @@
-// The material interface (twin: src/material/mod.rs). Each material's functions are in
-// shaders/materials/<name>.wgsl, included when the scene uses it; `emitted`, `samples_lights`,
-// `bsdf` and `scatter`, which dispatch on the kind, are generated after them from the registry
-// (see material_dispatch in src/gpu/shader.rs). The path loop never names a material.
-
-struct Scattered {
-    attenuation: vec3f,
-    ok: bool,            // false: the path ends here
-    dir: vec3f,
-}
-
-// The BSDF toward unit `dir`: weight = BSDF x cos / pdf, and the solid-angle pdf with which
-// scatter picks `dir`; pdf 0 where scatter cannot pick it.
-struct Bsdf {
-    weight: vec3f,
-    pdf: f32,
-}
+// The material interface (twin: src/material/mod.rs): pbrt-v4's and Mitsuba 3's sample, eval
+// and pdf, with directions away from the surface (wo toward where the path came from, wi
+// toward where it goes) and BsdfSample generated from src/material/bsdf.rs. Each material's
+// functions are in shaders/materials/<name>.wgsl, included when the scene uses it;
+// `emitted`, `samples_lights`, `bsdf_sample`, `bsdf_eval` and `bsdf_pdf`, which dispatch on
+// the kind, are generated after them from the registry (see material_dispatch in
+// src/gpu/shader.rs). The path loop never names a material.
 
 //#if INLINE_SCENE
 // material_at is generated with the scene's constants (see inline_materials in

@@ -58,16 +58,16 @@ fn first_bounces_match_the_cpu() {
                         None => g.hit == 0,
                         Some(h) => {
                             let scattered = (flat.materials[h.material as usize])
-                                .scatter(ray.dir, &h, &mut rng);
+                                .sample(-ray.dir, &h, &mut rng);
                             g.hit == 1
                                 && g.primitive == h.primitive.packed()
                                 && (Vec3::from(g.point) - h.point).length() <= 1e-4 * scale
                                 && (Vec3::from(g.normal) - h.normal).length() <= 1e-3
                                 && match scattered {
                                     None => g.scattered == 0,
-                                    Some((_, dir)) => {
+                                    Some(s) => {
                                         g.scattered == 1
-                                            && (Vec3::from(g.dir) - dir).length() <= 1e-3
+                                            && (Vec3::from(g.dir) - s.wi).length() <= 1e-3
                                     }
                                 }
                         }

@@ -169,8 +169,12 @@ fn kernels_leave_out_unused_code() {
         "dielectric code in a scene without glass"
     );
     assert!(
-        !empty.contains("fn metal_scatter"),
+        !empty.contains("fn metal_sample"),
         "metal code in a scene without metal"
+    );
+    assert!(
+        !empty.contains("fn ggx_d") && !empty.contains("fn conductor_sample"),
+        "microfacet code in a scene without a rough conductor"
     );
     // Small scenes are constants in the kernel: one test per primitive, no buffer loop.
     assert_eq!(
@@ -207,7 +211,7 @@ fn kernels_leave_out_unused_code() {
         "quad code in a scene without quads"
     );
     assert_eq!(spheres.matches("    consider_sphere(Sphere(").count(), 4);
-    assert!(spheres.contains("fresnel") && spheres.contains("fn metal_scatter"));
+    assert!(spheres.contains("fresnel") && spheres.contains("fn metal_sample"));
     // A scene too large to inline goes through its BVH; no triangle code without triangles.
     let showcase = kernel("showcase");
     assert!(showcase.contains("fn traverse") && showcase.contains("spheres[index]"));

@@ -5,23 +5,12 @@ use glam::Vec3;
 use rt_gpu::material::dielectric::{fresnel, refract_cos};
 use rt_gpu::material::reflect;
 use rt_gpu::scene::Material;
-use rt_gpu::shared::ray::Hit;
 use rt_gpu::shared::sampler::Sampler;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-fn hit_with_normal(normal: Vec3, front_face: bool) -> Hit {
-    Hit {
-        t: 1.0,
-        point: Vec3::ZERO,
-        error: 0.0,
-        normal,
-        shading: normal,
-        front_face,
-        material: 0,
-        primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
-        uv: glam::Vec2::ZERO,
-    }
-}
+mod common;
+
+use common::surface_hit as hit_with_normal;
 
 #[test]
 fn fresnel_at_normal_incidence_is_four_percent_for_glass() {
@@ -48,11 +37,11 @@ fn total_internal_reflection_beyond_the_critical_angle() {
     let dir_in = Vec3::new(angle.sin(), -angle.cos(), 0.0);
     for seed in 0..64 {
         let mut rng = Sampler::independent(0, 0, seed);
-        let (att, out) = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
-            .scatter(dir_in, &hit_with_normal(n, false), &mut rng)
+        let s = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
+            .sample(-dir_in, &hit_with_normal(n, false), &mut rng)
             .expect("scatters");
-        assert_eq!(att, Vec3::ONE);
-        assert!((out - reflect(dir_in, n)).length() < 1e-6);
+        assert_eq!(s.weight, Vec3::ONE);
+        assert!((s.wi - reflect(dir_in, n)).length() < 1e-6);
     }
 }
 
@@ -65,11 +54,11 @@ fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
         fuzz: 0.0,
     });
     let mut rng = Sampler::independent(1, 2, 3);
-    let (att, out) = mirror
-        .scatter(dir_in, &hit_with_normal(n, true), &mut rng)
+    let s = mirror
+        .sample(-dir_in, &hit_with_normal(n, true), &mut rng)
         .expect("reflects");
-    assert_eq!(att, Vec3::new(0.8, 0.6, 0.2));
-    assert!((out - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
+    assert_eq!(s.weight, Vec3::new(0.8, 0.6, 0.2));
+    assert!((s.wi - Vec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-6);
 
     // At grazing incidence with full fuzz, some rays end below the surface: those are absorbed,
     // the rest leave above it.
@@ -81,8 +70,8 @@ fn smooth_metal_is_a_mirror_and_fuzz_below_the_surface_is_absorbed() {
     let mut absorbed = 0;
     for i in 0..1000 {
         let mut rng = Sampler::independent(i, 0, 9);
-        match fuzzy.scatter(grazing, &hit_with_normal(n, true), &mut rng) {
-            Some((_, out)) => assert!(out.dot(n) > 0.0),
+        match fuzzy.sample(-grazing, &hit_with_normal(n, true), &mut rng) {
+            Some(s) => assert!(s.wi.dot(n) > 0.0),
             None => absorbed += 1,
         }
     }
@@ -128,9 +117,9 @@ fn lambertian_scattering_is_cosine_distributed() {
     let p = chi_square_p_value(normal, |i| {
         let mut rng = Sampler::independent(i, 0, 42);
         lambertian
-            .scatter(-normal, &hit, &mut rng)
+            .sample(normal, &hit, &mut rng)
             .expect("scatters")
-            .1
+            .wi
     });
     assert!(p > 0.01, "cosine sampling rejected: p = {p}");
 

@@ -530,6 +530,11 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
         Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)),
         Material::Dielectric(rt_gpu::material::Dielectric::clear(2.42)),
         Material::Dielectric(rt_gpu::material::Dielectric::clear(10.0)),
+        Material::Conductor(rt_gpu::material::Conductor::metal("Au", 0.0).expect("known")),
+        Material::Conductor(rt_gpu::material::Conductor::metal("Au", 0.005).expect("known")),
+        Material::Conductor(rt_gpu::material::Conductor::metal("Au", 0.01).expect("known")),
+        Material::Conductor(rt_gpu::material::Conductor::metal("Au", 0.3).expect("known")),
+        Material::Conductor(rt_gpu::material::Conductor::metal("Au", 1.0).expect("known")),
     ];
     let normal = Vec3::new(0.3, 0.8, -0.52).normalize();
     let (t, _) = rt_gpu::shared::warp::basis(normal);
@@ -552,7 +557,9 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                 };
                 for k in 0..200 {
                     let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 5);
-                    if let Some((attenuation, dir)) = m.scatter(dir_in, &hit, &mut rng) {
+                    if let Some(s) = m.sample(-dir_in, &hit, &mut rng) {
+                        let (attenuation, dir) = (s.weight, s.wi);
+                        assert!(s.pdf.is_finite() && s.pdf >= 0.0, "{m:?}: pdf {}", s.pdf);
                         assert!(
                             attenuation.is_finite()
                                 && attenuation.min_element() >= 0.0
@@ -585,9 +592,10 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
         let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 6);
-        let (_, dir) = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
-            .scatter(dir_in, &hit, &mut rng)
-            .expect("glass always scatters");
+        let dir = (Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)))
+            .sample(-dir_in, &hit, &mut rng)
+            .expect("glass always scatters")
+            .wi;
         assert!(
             dir.y > 0.0,
             "grazing light inside glass must reflect back in: {dir}"

@@ -1,29 +1,32 @@
 // Smooth glass (twin: src/material/dielectric.rs): exact unpolarised Fresnel, refraction by
-// Snell's law, total internal reflection. Random numbers per scatter: 1. Packed: param: ior.
+// Snell's law, total internal reflection. Random numbers per sample: 1. Packed: param: ior.
 
-fn dielectric_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
+fn dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     let eta = select(m.param, 1.0 / m.param, hit.front_face);
     let n = hit.shading;
-    let cos_i = clamp(dot(-dir_in, n), 0.0, 1.0);
+    let dir_in = -wo;
+    let cos_i = clamp(dot(wo, n), 0.0, 1.0);
     let u = sampler_next(sampler);
-    var dir = reflect_dir(dir_in, n);
+    var wi = reflect_dir(dir_in, n);
     var reflected = true;
     let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
     if sin2_t < 1.0 {
         let cos_t = sqrt(1.0 - sin2_t);
         if u >= fresnel(cos_i, cos_t, eta) {
-            dir = eta * dir_in + (eta * cos_i - cos_t) * n;
+            wi = eta * dir_in + (eta * cos_i - cos_t) * n;
             reflected = false;
         }
     }
-    dir = normalize(dir);
+    wi = normalize(wi);
+    var lobe = select(LOBE_TRANSMISSION | LOBE_DELTA, LOBE_REFLECTION | LOBE_DELTA, reflected);
     // A shading normal can send a reflection into the surface or a refraction out of it:
     // absorbed (the geometric normal decides sides, as for the medium inside).
-    var ok = true;
 //#if SHADING_NORMALS
-    ok = all(hit.shading == hit.normal) || (dot(dir, hit.normal) > 0.0) == reflected;
+    if !(all(hit.shading == hit.normal) || (dot(wi, hit.normal) > 0.0) == reflected) {
+        lobe = 0u;
+    }
 //#endif
-    return Scattered(vec3f(1.0), ok, dir);
+    return BsdfSample(vec3f(1.0), wi, 0.0, lobe);
 }
 
 // Exact unpolarised Fresnel reflectance; eta = n_incident / n_transmitted.

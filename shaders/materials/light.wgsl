@@ -6,6 +6,6 @@ fn light_emitted(m: Material, hit: Hit) -> vec3f {
     return select(vec3f(0.0), albedo_at(m, hit) * m.emission, hit.front_face || m.param > 0.5);
 }
 
-fn light_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
-    return Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));
+fn light_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    return BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
 }

@@ -2,6 +2,6 @@
 // through it before it would scatter here; this passes the ray on unchanged. Random numbers: 0.
 // Packed: medium_*: the medium inside.
 
-fn medium_scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {
-    return Scattered(vec3f(1.0), true, dir_in);
+fn medium_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    return BsdfSample(vec3f(1.0), -wo, 0.0, LOBE_TRANSMISSION | LOBE_DELTA);
 }

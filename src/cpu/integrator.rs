@@ -3,7 +3,7 @@
 //! it escapes to, for k <= max_depth.
 //!
 //! With next-event estimation (`Integrator::Nee`), each hit on a material that samples lights (a
-//! non-delta BSDF: lambertian) and each scattering event in a medium also samples a light
+//! BSDF with a non-delta lobe: lambertian, a rough conductor) and each scattering event in a medium also samples a light
 //! directly with a shadow ray, and light found both ways is weighted by the power heuristic.
 //! A light sample taken at the k-th vertex forms a path of k + 1 segments, so it is taken only
 //! when k + 1 <= max_depth: both integrators sum over exactly the same paths.
@@ -148,23 +148,23 @@ pub fn radiance(
             let u0 = sampler.next_f32();
             sampler.begin();
             let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
-            if let Some((weight, light)) = direct_light(scene, material, &hit, medium, u0, u1, u2) {
-                total += throughput * weight * light;
+            if let Some(light) = direct_light(scene, material, &hit, ray.dir, medium, u0, u1, u2) {
+                total += throughput * light;
             }
         }
         sampler.begin();
-        let Some((attenuation, dir)) = material.scatter(ray.dir, &hit, sampler) else {
+        let Some(bounce) = material.sample(-ray.dir, &hit, sampler) else {
             break;
         };
-        throughput *= attenuation;
-        if light_sampled {
-            bsdf_pdf = material.bsdf(&hit, dir).map_or(0.0, |(_, pdf)| pdf);
+        throughput *= bounce.weight;
+        if light_sampled && !bounce.lobe.is_delta() {
+            bsdf_pdf = bounce.pdf;
         }
-        if material.interior().is_some() && dir.dot(hit.normal) < 0.0 {
+        if material.interior().is_some() && bounce.wi.dot(hit.normal) < 0.0 {
             medium = entered(&hit); // refracted through a surface filled with a medium
         }
         origin = hit.point;
-        ray = spawn(&hit, dir);
+        ray = spawn(&hit, bounce.wi);
         if !survives_roulette(opts, segment, &mut throughput, sampler) {
             break;
         }
@@ -246,29 +246,32 @@ fn survives_roulette(
     true
 }
 
-/// One light sample at `hit`: the BSDF's weight toward it (BSDF x cos / BSDF pdf) and the light
-/// arriving, times the MIS weight and the BSDF pdf over the light pdf, so that their product is
-/// the sample's contribution; `None` if the light is below the surface or occluded.
+/// One light sample at `hit`, reached along `dir`: the light arriving times BSDF x cos and the
+/// MIS weight over the light pdf; `None` if the BSDF is zero toward it (below the surface) or
+/// the light is occluded.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn direct_light(
     scene: &FlatScene,
     material: &Material,
     hit: &Hit,
+    dir: Vec3,
     medium: u32,
     u0: f32,
     u1: f32,
     u2: f32,
-) -> Option<(Vec3, Vec3)> {
+) -> Option<Vec3> {
     let index = lights::pick_light(scene, u0);
     let sample = lights::sample(&scene.lights[index], hit.point, u1, u2)?;
-    let (weight, bsdf_pdf) = material.bsdf(hit, sample.dir)?;
+    let f = material.eval(-dir, sample.dir, hit);
+    if f == Vec3::ZERO {
+        return None;
+    }
+    let bsdf_pdf = material.pdf(-dir, sample.dir, hit);
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
     // light is not missed by the width of the offset.
     let le = light_arriving(scene, leave(hit, hit.normal), &sample, index, medium)?;
-    Some((
-        weight,
-        le * lights::light_sample_factor(sample.pdf, bsdf_pdf),
-    ))
+    Some(f * (le * lights::light_sample_weight(sample.pdf, bsdf_pdf)))
 }
 
 /// One light sample at a scattering event at `point` in `medium`, for a ray that travelled

@@ -179,9 +179,22 @@ pub fn power_heuristic(own: f32, other: f32) -> f32 {
     a * a / (a * a + b * b)
 }
 
-/// What a light sample contributes per unit of (albedo x radiance): (cos / pi) / light_pdf times
-/// its power-heuristic weight, i.e. bsdf_pdf / light_pdf * w = ab / (a^2 + b^2) for a, b the two
-/// pdfs scaled by their maximum. At most 1/2, whatever the pdfs' magnitudes.
+/// The light sample's power-heuristic weight over its pdf, the factor of BSDF x cos x radiance
+/// in its contribution: a / (a^2 + b^2) / m for a, b the two pdfs scaled by their maximum m.
+#[inline]
+pub fn light_sample_weight(light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    let m = light_pdf.max(bsdf_pdf);
+    if !(m > 0.0) {
+        return 0.0;
+    }
+    let (a, b) = (light_pdf / m, bsdf_pdf / m);
+    a / (a * a + b * b) / m
+}
+
+/// What a light sample at a scattering event in a medium contributes per unit of radiance (the
+/// phase function is its own pdf): phase_pdf / light_pdf times its power-heuristic weight, i.e.
+/// ab / (a^2 + b^2) for a, b the two pdfs scaled by their maximum. At most 1/2, whatever the
+/// pdfs' magnitudes.
 #[inline]
 pub fn light_sample_factor(light_pdf: f32, bsdf_pdf: f32) -> f32 {
     let m = light_pdf.max(bsdf_pdf);

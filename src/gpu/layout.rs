@@ -115,6 +115,10 @@ fn wgsl_constants() -> String {
             crate::shared::constants::MIN_LIGHT_COSINE.literal(),
         ),
         ("POINT_ERROR", POINT_ERROR.literal()),
+        (
+            "MIN_COSINE",
+            crate::material::microfacet::MIN_COSINE.literal(),
+        ),
         ("OFFSET_NEAR_ORIGIN", OFFSET_NEAR_ORIGIN.literal()),
         ("OFFSET_FLOAT_SCALE", OFFSET_FLOAT_SCALE.literal()),
         ("OFFSET_INT_SCALE", OFFSET_INT_SCALE.literal()),
@@ -129,8 +133,10 @@ fn wgsl_constants() -> String {
     let bindings = super::bindings::BINDINGS
         .iter()
         .map(|b| (b.wgsl_name().to_string(), b.number().literal()));
+    let lobes = crate::material::Lobe::wgsl_constants()
+        .map(|(name, bits)| (name.to_string(), bits.literal()));
     let mut out = String::new();
-    for (name, value) in kinds.chain(constants).chain(bindings) {
+    for (name, value) in kinds.chain(constants).chain(bindings).chain(lobes) {
         let ty = if value.starts_with("vec3f") {
             "vec3f"
         } else if value.ends_with('u') {
@@ -151,6 +157,8 @@ pub fn wgsl_shared() -> String {
     );
     out.push_str(&wgsl_constants());
     out.push_str(&wgsl_declarations());
+    out.push('\n');
+    out.push_str(&crate::material::BsdfSample::wgsl_declaration());
     out
 }
 

@@ -14,5 +14,5 @@ pub mod shader;
 pub use backend::GpuBackend;
 pub use context::{GpuContext, GpuError, list_adapters};
 pub use dispatch::Tuning;
-pub use renderer::{EnvironmentLookup, GpuRenderer, Kernel, Timings};
+pub use renderer::{BsdfAnswer, BsdfQuery, EnvironmentLookup, GpuRenderer, Kernel, Timings};
 pub use shader::Features;

@@ -83,6 +83,27 @@ fn simd_lanes(adapter_name: &str) -> u32 {
     bits.map_or(16, |b| (b / 32).max(1))
 }
 
+/// A query of the kernel's BSDF interface: `wo` and `wi` at a surface with normal `normal`
+/// (shading and geometric alike, front face) made of `material`.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfQuery {
+    pub material: u32,
+    pub wo: glam::Vec3,
+    pub wi: glam::Vec3,
+    pub normal: glam::Vec3,
+}
+
+/// The kernel's answer: its sample (`lobe` 0: none) and `eval`/`pdf` at the query's wo, wi.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfAnswer {
+    pub weight: glam::Vec3,
+    pub wi: glam::Vec3,
+    pub pdf: f32,
+    pub lobe: u32,
+    pub eval: glam::Vec3,
+    pub eval_pdf: f32,
+}
+
 /// What `GpuRenderer::look_up_environment` finds for one direction and two numbers.
 #[derive(Clone, Copy, Debug)]
 pub struct EnvironmentLookup {
@@ -669,6 +690,61 @@ impl GpuRenderer {
         Ok(out.iter().map(|b| glam::Vec3::from(b.dir)).collect())
     }
 
+    /// The kernel's BSDF interface (`sample_bsdf` in `shaders/kernel.wgsl`) at each query:
+    /// its material's `bsdf_sample` toward `wo` with sample `opts.first_sample`'s numbers of
+    /// the query's index (after one `begin`; `opts.width` must be the query count and
+    /// `opts.height` 1), and `bsdf_eval` and `bsdf_pdf` at (`wo`, `wi`). The scene must be
+    /// built with nee (`opts.integrator`) and a light, as the kernel holds `eval` and `pdf`
+    /// only then.
+    pub fn sample_bsdf(
+        &self,
+        scene: &FlatScene,
+        opts: &RenderOptions,
+        queries: &[BsdfQuery],
+    ) -> Result<Vec<BsdfAnswer>, GpuError> {
+        if let Some(bad) = queries
+            .iter()
+            .find(|q| q.material as usize >= scene.materials.len())
+        {
+            return Err(GpuError::Runtime(format!(
+                "material {} does not exist (the scene has {})",
+                bad.material,
+                scene.materials.len()
+            )));
+        }
+        if (opts.width as usize, opts.height) != (queries.len(), 1) {
+            return Err(GpuError::Runtime(format!(
+                "{} queries need a {}x1 grid, got {}x{}",
+                queries.len(),
+                queries.len(),
+                opts.width,
+                opts.height
+            )));
+        }
+        let slots: Vec<GpuFirstBounce> = queries
+            .iter()
+            .map(|q| GpuFirstBounce {
+                point: q.wo.to_array(),
+                primitive: q.material,
+                normal: q.normal.to_array(),
+                dir: q.wi.to_array(),
+                ..Default::default()
+            })
+            .collect();
+        let out = self.run_debug(scene, opts, "sample_bsdf", slots)?;
+        Ok(out
+            .iter()
+            .map(|b| BsdfAnswer {
+                weight: glam::Vec3::from(b.point),
+                pdf: f32::from_bits(b.primitive),
+                wi: glam::Vec3::from(b.normal),
+                lobe: b.hit,
+                eval: glam::Vec3::from(b.dir),
+                eval_pdf: f32::from_bits(b.scattered),
+            })
+            .collect())
+    }
+
     /// The scene's environment as the kernel sees it (`look_up_environment` in
     /// `shaders/kernel.wgsl`): for each (unit direction, u1, u2), the radiance from that
     /// direction and its pdf, and the direction sampled with (u1, u2) and its pdf (0: none).
@@ -725,7 +801,7 @@ impl GpuRenderer {
         let features = Features {
             debug: true,
             sobol: opts.sampler == SamplerKind::Sobol,
-            ..Features::of(scene)
+            ..Features::of(scene).with_integrator(scene, opts.integrator)
         };
         let kernel = self.kernel(scene, features, entry)?;
         let size = (slots.len().max(1) * std::mem::size_of::<GpuFirstBounce>()) as u64;

@@ -16,6 +16,10 @@ const MODULES: &[(&str, &str)] = &[
     ("rng.wgsl", include_str!("../../shaders/rng.wgsl")),
     ("sampler.wgsl", include_str!("../../shaders/sampler.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
+    (
+        "microfacet.wgsl",
+        include_str!("../../shaders/microfacet.wgsl"),
+    ),
     ("medium.wgsl", include_str!("../../shaders/medium.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     (
@@ -233,7 +237,8 @@ impl Features {
     /// surfaces or media to take light samples at, nee computes exactly what naive does, so
     /// the kernel leaves it out.
     pub fn with_integrator(self, scene: &FlatScene, integrator: Integrator) -> Self {
-        let samples_lights = self.kinds().any(|k| k.samples_lights) || self.has("MEDIA");
+        let samples_lights =
+            scene.materials.iter().any(|m| m.samples_lights()) || self.has("MEDIA");
         Features {
             nee: integrator == Integrator::Nee && !scene.lights.is_empty() && samples_lights,
             ..self
@@ -376,7 +381,7 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
 }
 
 /// The material interface as switches on the kind over the materials the kernel holds:
-/// `emitted`, `scatter`, and with nee `samples_lights` and `bsdf`.
+/// `emitted`, `bsdf_sample`, and with nee `samples_lights`, `bsdf_eval` and `bsdf_pdf`.
 fn material_dispatch(features: &Features) -> String {
     // Assignments, not early returns: under divergent control flow lavapipe runs returns with a
     // mask, a cost in every lane.
@@ -400,23 +405,37 @@ fn material_dispatch(features: &Features) -> String {
         let lit: Vec<String> = features
             .kinds()
             .filter(|k| k.samples_lights)
-            .map(|k| format!("m.kind == MAT_{}", k.feature))
+            .map(|k| {
+                if k.samples_lights_per_instance {
+                    format!(
+                        "(m.kind == MAT_{} && {}_samples_lights(m))",
+                        k.feature, k.name
+                    )
+                } else {
+                    format!("m.kind == MAT_{}", k.feature)
+                }
+            })
             .collect();
         out.push_str(&format!(
-            "// Whether next-event estimation samples lights here: the BSDF is neither a delta nor absent.\nfn samples_lights(m: Material) -> bool {{\n    return {};\n}}\n\n",
+            "// Whether next-event estimation samples lights here: the BSDF has a lobe that is neither a delta nor absent.\nfn samples_lights(m: Material) -> bool {{\n    return {};\n}}\n\n",
             if lit.is_empty() { "false".to_string() } else { lit.join(" || ") }
         ));
-        out.push_str("fn bsdf(m: Material, hit: Hit, dir: vec3f) -> Bsdf {\n    var out = Bsdf(vec3f(0.0), 0.0);\n");
+        out.push_str("fn bsdf_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {\n    var out = vec3f(0.0);\n");
         for kind in features.kinds().filter(|k| k.samples_lights) {
-            out.push_str(&case(kind, "bsdf(m, hit, dir)"));
+            out.push_str(&case(kind, "eval(m, wo, wi, hit)"));
+        }
+        out.push_str("    return out;\n}\n\n");
+        out.push_str("fn bsdf_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {\n    var out = 0.0;\n");
+        for kind in features.kinds().filter(|k| k.samples_lights) {
+            out.push_str(&case(kind, "pdf(m, wo, wi, hit)"));
         }
         out.push_str("    return out;\n}\n\n");
     }
     out.push_str(
-        "fn scatter(m: Material, dir_in: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> Scattered {\n    var out = Scattered(vec3f(0.0), false, vec3f(0.0, 1.0, 0.0));\n",
+        "fn bsdf_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {\n    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);\n",
     );
     for kind in features.kinds() {
-        out.push_str(&case(kind, "scatter(m, dir_in, hit, sampler)"));
+        out.push_str(&case(kind, "sample(m, wo, hit, sampler)"));
     }
     out.push_str("    return out;\n}\n");
     out

@@ -1,8 +1,8 @@
 //! Smooth glass (twin: `shaders/materials/dielectric.wgsl`): exact unpolarised Fresnel,
-//! refraction by Snell's law, total internal reflection. Random numbers per scatter: 1. With a
+//! refraction by Snell's law, total internal reflection. Random numbers per sample: 1. With a
 //! `medium`, the glass is filled with it: subsurface scattering by a volumetric random walk.
 
-use super::{MaterialModel, Medium, reflect};
+use super::{BsdfSample, Lobe, MaterialModel, Medium, reflect};
 use crate::shared::ray::Hit;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::sampler::Sampler;
@@ -52,26 +52,32 @@ impl MaterialModel for Dielectric {
         self.medium.as_ref()
     }
 
-    fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
+    fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let eta = if hit.front_face {
             1.0 / self.ior
         } else {
             self.ior
         };
         let n = hit.shading;
-        let cos_i = (-dir_in).dot(n).clamp(0.0, 1.0);
+        let dir_in = -wo;
+        let cos_i = wo.dot(n).clamp(0.0, 1.0);
         let u = sampler.next_f32();
-        let (dir, reflected) = match refract_cos(cos_i, eta) {
+        let (wi, lobe) = match refract_cos(cos_i, eta) {
             Some(cos_t) if u >= fresnel(cos_i, cos_t, eta) => {
-                (eta * dir_in + (eta * cos_i - cos_t) * n, false)
+                (eta * dir_in + (eta * cos_i - cos_t) * n, Lobe::DELTA_TRANSMISSION)
             }
-            _ => (reflect(dir_in, n), true),
+            _ => (reflect(dir_in, n), Lobe::DELTA_REFLECTION),
         };
-        let dir = dir.normalize();
+        let wi = wi.normalize();
         // A shading normal can send a reflection into the surface or a refraction out of it:
         // absorbed (the geometric normal decides sides, as for the medium inside).
-        (hit.shading == hit.normal || (dir.dot(hit.normal) > 0.0) == reflected)
-            .then_some((Vec3::ONE, dir))
+        (hit.shading == hit.normal || (wi.dot(hit.normal) > 0.0) != lobe.is_transmission())
+            .then_some(BsdfSample {
+                weight: Vec3::ONE,
+                wi,
+                pdf: 0.0,
+                lobe,
+            })
     }
 
     /// param: ior; medium_*: the medium inside, if any.

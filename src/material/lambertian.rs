@@ -1,7 +1,7 @@
 //! Ideal diffuse reflection (twin: `shaders/materials/lambertian.wgsl`). Random numbers per
-//! scatter: 2.
+//! sample: 2.
 
-use super::MaterialModel;
+use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::warp::unit_vector;
 use crate::shared::ray::{Hit, below_surface};
 use crate::material::texture;
@@ -57,27 +57,29 @@ impl MaterialModel for Lambertian {
         (self.emission != Vec3::ZERO).then_some((self.emission, true))
     }
 
-    fn bsdf(&self, hit: &Hit, dir: Vec3) -> Option<(Vec3, f32)> {
-        // Cosine-weighted about the shading normal: pdf = cos / pi, BSDF x cos / pdf = albedo.
-        let cos = hit.shading.dot(dir);
-        (cos > 0.0 && !below_surface(hit, dir)).then(|| {
-            (
-                texture::value(&self.albedo, hit),
-                cos * std::f32::consts::FRAC_1_PI,
-            )
-        })
-    }
-
-    fn scatter(&self, _dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
+    fn sample(&self, _wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         // normal + a uniform unit vector is cosine-distributed about the normal.
         let d = hit.shading + unit_vector(sampler.next_f32(), sampler.next_f32());
         let len2 = d.length_squared();
-        let dir = if len2 > 1e-12 {
+        let wi = if len2 > 1e-12 {
             d / len2.sqrt()
         } else {
             hit.shading
         };
-        (!below_surface(hit, dir)).then(|| (texture::value(&self.albedo, hit), dir))
+        (!below_surface(hit, wi)).then(|| BsdfSample {
+            weight: texture::value(&self.albedo, hit),
+            wi,
+            pdf: cosine_pdf(hit, wi),
+            lobe: Lobe::DIFFUSE_REFLECTION,
+        })
+    }
+
+    fn eval(&self, _wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+        texture::value(&self.albedo, hit) * cosine_pdf(hit, wi)
+    }
+
+    fn pdf(&self, _wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+        cosine_pdf(hit, wi)
     }
 
     /// albedo (and texture_*), emission.
@@ -86,5 +88,17 @@ impl MaterialModel for Lambertian {
             emission: self.emission.to_array(),
             ..GpuMaterial::with_albedo(&self.albedo)
         }
+    }
+}
+
+/// Cosine-weighted about the shading normal: pdf = cos / pi (so BSDF x cos = albedo x pdf),
+/// 0 below the surface.
+#[inline]
+fn cosine_pdf(hit: &Hit, wi: Vec3) -> f32 {
+    let cos = hit.shading.dot(wi);
+    if cos > 0.0 && !below_surface(hit, wi) {
+        cos * std::f32::consts::FRAC_1_PI
+    } else {
+        0.0
     }
 }

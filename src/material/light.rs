@@ -1,7 +1,7 @@
 //! A diffuse area light (twin: `shaders/materials/light.wgsl`). It emits from its front face
 //! (along the shape's normal) unless `two_sided`, and reflects nothing. Random numbers: 0.
 
-use super::MaterialModel;
+use super::{BsdfSample, MaterialModel};
 use crate::shared::ray::Hit;
 use crate::material::texture;
 use crate::shared::layout::GpuMaterial;
@@ -78,7 +78,7 @@ impl MaterialModel for Light {
         (mean != Vec3::ZERO).then_some((mean, self.two_sided))
     }
 
-    fn scatter(&self, _dir_in: Vec3, _hit: &Hit, _sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
+    fn sample(&self, _wo: Vec3, _hit: &Hit, _sampler: &mut Sampler) -> Option<BsdfSample> {
         None
     }
 

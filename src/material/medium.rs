@@ -4,7 +4,7 @@
 //! with smoke or fog: rays pass its surface unchanged (the path loop steps through it without
 //! counting a segment) and scatter inside it. A dielectric's `medium` fills the glass instead.
 
-use super::MaterialModel;
+use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::ray::Hit;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::sampler::Sampler;
@@ -78,8 +78,13 @@ impl MaterialModel for Medium {
     }
 
     /// Straight on, unchanged (the path loops step through it before they would call this).
-    fn scatter(&self, dir_in: Vec3, _hit: &Hit, _sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
-        Some((Vec3::ONE, dir_in))
+    fn sample(&self, wo: Vec3, _hit: &Hit, _sampler: &mut Sampler) -> Option<BsdfSample> {
+        Some(BsdfSample {
+            weight: Vec3::ONE,
+            wi: -wo,
+            pdf: 0.0,
+            lobe: Lobe::DELTA_TRANSMISSION,
+        })
     }
 
     /// medium_*: its own parameters.

@@ -1,7 +1,7 @@
 //! Mirror reflection perturbed by `fuzz` (twin: `shaders/materials/metal.wgsl`), as the original
-//! project's metal; rays fuzzed below the surface are absorbed. Random numbers per scatter: 2.
+//! project's metal; rays fuzzed below the surface are absorbed. Random numbers per sample: 2.
 
-use super::{MaterialModel, reflect};
+use super::{BsdfSample, Lobe, MaterialModel, reflect};
 use crate::shared::warp::unit_vector;
 use crate::shared::ray::Hit;
 use crate::material::texture;
@@ -49,16 +49,23 @@ impl MaterialModel for Metal {
         }
     }
 
-    fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
+    /// The fuzzed lobe's density is not evaluated: it counts as a delta, as light sampling
+    /// skips it.
+    fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let fuzzed =
-            reflect(dir_in, hit.shading) + self.fuzz * unit_vector(sampler.next_f32(), sampler.next_f32());
+            reflect(-wo, hit.shading) + self.fuzz * unit_vector(sampler.next_f32(), sampler.next_f32());
         let len2 = fuzzed.length_squared();
         if !(len2 > 1e-12) {
             return None;
         }
-        let dir = fuzzed / len2.sqrt();
+        let wi = fuzzed / len2.sqrt();
         // Fuzzed (or, by a shading normal, reflected) below the surface: absorbed.
-        (dir.dot(hit.normal) > 0.0).then(|| (texture::value(&self.albedo, hit), dir))
+        (wi.dot(hit.normal) > 0.0).then(|| BsdfSample {
+            weight: texture::value(&self.albedo, hit),
+            wi,
+            pdf: 0.0,
+            lobe: Lobe::DELTA_REFLECTION,
+        })
     }
 
     /// albedo (and texture_*); param: fuzz.

@@ -13,9 +13,11 @@ use crate::shared::ray::Hit;
 use crate::shared::sampler::Sampler;
 use glam::Vec3;
 
-/// What each material provides. The CPU methods are the reference twins of the WGSL functions
-/// `<name>_scatter`, `<name>_emitted` and `<name>_bsdf` in `shaders/materials/<name>.wgsl`;
-/// both draw the same random numbers in the same order.
+/// What each material provides: pbrt-v4's and Mitsuba 3's BSDF interface (`sample`, `eval`,
+/// `pdf`; see [`bsdf`]) and its emission. The CPU methods are the reference twins of the WGSL
+/// functions `<name>_sample`, `<name>_eval`, `<name>_pdf`, `<name>_samples_lights` and
+/// `<name>_emitted` in `shaders/materials/<name>.wgsl`; both draw the same random numbers in
+/// the same order.
 pub trait MaterialModel {
     /// The kernel feature that includes its WGSL twin: the file name in upper case.
     const FEATURE: &'static str;
@@ -24,9 +26,13 @@ pub trait MaterialModel {
     /// The feature under which the kernel calls its twin's `<name>_emitted`; `None`: it never
     /// emits, and its twin has no `<name>_emitted`.
     const EMITS_UNDER: Option<&'static str> = None;
-    /// Whether next-event estimation samples lights at it: its BSDF is neither a delta (a light
-    /// sample never picks a mirror's direction) nor absent. Its twin then has `<name>_bsdf`.
+    /// Whether next-event estimation may sample lights at it: its BSDF can have a lobe that is
+    /// neither a delta (a light sample never picks a mirror's direction) nor absent. Its twin
+    /// then has `<name>_eval` and `<name>_pdf`.
     const SAMPLES_LIGHTS: bool = false;
+    /// Whether that depends on the instance (a conductor's roughness 0 is a delta): its twin
+    /// then has `<name>_samples_lights`.
+    const SAMPLES_LIGHTS_PER_INSTANCE: bool = false;
     /// Whether its surface is invisible: rays pass it unchanged (it only bounds a medium), and
     /// neither a path segment nor a shadow ray ends there.
     const INVISIBLE: bool = false;
@@ -63,16 +69,24 @@ pub trait MaterialModel {
     fn area_light(&self) -> Option<(Vec3, bool)> {
         None
     }
-    /// The BSDF toward unit direction `dir`, for light sampling and multiple importance
-    /// sampling: `(weight, pdf)`, where `pdf` is the solid-angle density with which `scatter`
-    /// picks `dir` and `weight` = BSDF x cosine / pdf. `None` if `scatter` cannot pick `dir`.
-    /// Called only where [`Self::SAMPLES_LIGHTS`].
-    fn bsdf(&self, _hit: &Hit, _dir: Vec3) -> Option<(Vec3, f32)> {
-        None
+    /// Whether next-event estimation samples lights at this instance: it has a lobe that is
+    /// neither a delta nor absent (then [`Self::SAMPLES_LIGHTS`] holds for its kind).
+    fn samples_lights(&self) -> bool {
+        Self::SAMPLES_LIGHTS
     }
-    /// The throughput factor and direction of the continued path (the BSDF sampled), or `None`
-    /// if the path ends here.
-    fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)>;
+    /// Samples a direction `wi` for light leaving toward `wo` (unit, away from the surface),
+    /// or `None` if the path ends here.
+    fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample>;
+    /// BSDF x |cos(wi)| for light arriving from `wi` and leaving toward `wo`, over its non-delta
+    /// lobes. Called only where [`Self::samples_lights`].
+    fn eval(&self, _wo: Vec3, _wi: Vec3, _hit: &Hit) -> Vec3 {
+        Vec3::ZERO
+    }
+    /// The solid-angle density with which `sample` picks `wi`, over its non-delta lobes.
+    /// Called only where [`Self::samples_lights`].
+    fn pdf(&self, _wo: Vec3, _wi: Vec3, _hit: &Hit) -> f32 {
+        0.0
+    }
     /// Its GPU form; `kind` is filled in from the registry.
     fn gpu(&self) -> GpuMaterial;
 }
@@ -88,6 +102,7 @@ pub struct MaterialKind {
     pub extra_features: &'static [&'static str],
     pub emits_under: Option<&'static str>,
     pub samples_lights: bool,
+    pub samples_lights_per_instance: bool,
     pub invisible: bool,
     /// The WGSL twin.
     pub wgsl: &'static str,
@@ -117,6 +132,7 @@ macro_rules! registry {
             extra_features: <$ty as MaterialModel>::EXTRA_FEATURES,
             emits_under: <$ty as MaterialModel>::EMITS_UNDER,
             samples_lights: <$ty as MaterialModel>::SAMPLES_LIGHTS,
+            samples_lights_per_instance: <$ty as MaterialModel>::SAMPLES_LIGHTS_PER_INSTANCE,
             invisible: <$ty as MaterialModel>::INVISIBLE,
             wgsl: include_str!(concat!("../../shaders/materials/", stringify!($module), ".wgsl")),
         },)+];
@@ -127,8 +143,9 @@ macro_rules! registry {
             pub fn kind(&self) -> &'static MaterialKind {
                 match self { $(Material::$ty(_) => &KINDS[KindIndex::$ty as usize],)+ }
             }
+            #[inline]
             pub fn samples_lights(&self) -> bool {
-                self.kind().samples_lights
+                match self { $(Material::$ty(m) => m.samples_lights(),)+ }
             }
             /// Whether rays pass its surface unchanged (see [`MaterialModel::INVISIBLE`]).
             #[inline]
@@ -159,12 +176,16 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.area_light(),)+ }
             }
             #[inline]
-            pub fn bsdf(&self, hit: &Hit, dir: Vec3) -> Option<(Vec3, f32)> {
-                match self { $(Material::$ty(m) => m.bsdf(hit, dir),)+ }
+            pub fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+                match self { $(Material::$ty(m) => m.sample(wo, hit, sampler),)+ }
             }
             #[inline]
-            pub fn scatter(&self, dir_in: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<(Vec3, Vec3)> {
-                match self { $(Material::$ty(m) => m.scatter(dir_in, hit, sampler),)+ }
+            pub fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+                match self { $(Material::$ty(m) => m.eval(wo, wi, hit),)+ }
+            }
+            #[inline]
+            pub fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+                match self { $(Material::$ty(m) => m.pdf(wo, wi, hit),)+ }
             }
             pub fn gpu(&self) -> GpuMaterial {
                 let packed = match self { $(Material::$ty(m) => m.gpu(),)+ };
@@ -174,7 +195,11 @@ macro_rules! registry {
     };
 }
 
+pub mod bsdf;
+pub mod microfacet;
 pub mod texture;
+
+pub use bsdf::{BsdfSample, Lobe};
 
 registry! {
     lambertian::Lambertian,
@@ -182,6 +207,7 @@ registry! {
     dielectric::Dielectric,
     light::Light,
     medium::Medium,
+    conductor::Conductor,
 }
 
 impl Material {
@@ -221,19 +247,29 @@ mod tests {
     fn registry_names_agree() {
         for kind in KINDS {
             assert_eq!(kind.feature, kind.name.to_uppercase(), "{}", kind.name);
-            assert!(kind.wgsl.contains(&format!("fn {}_scatter(", kind.name)));
+            assert!(kind.wgsl.contains(&format!("fn {}_sample(", kind.name)));
             assert_eq!(
                 kind.emits_under.is_some(),
                 kind.wgsl.contains(&format!("fn {}_emitted(", kind.name)),
                 "{}: EMITS_UNDER and its twin's {0}_emitted",
                 kind.name
             );
+            for function in ["eval", "pdf"] {
+                assert_eq!(
+                    kind.samples_lights,
+                    kind.wgsl.contains(&format!("fn {}_{function}(", kind.name)),
+                    "{}: SAMPLES_LIGHTS and its twin's {0}_{function}",
+                    kind.name
+                );
+            }
             assert_eq!(
-                kind.samples_lights,
-                kind.wgsl.contains(&format!("fn {}_bsdf(", kind.name)),
-                "{}: SAMPLES_LIGHTS and its twin's {0}_bsdf",
+                kind.samples_lights_per_instance,
+                kind.wgsl
+                    .contains(&format!("fn {}_samples_lights(", kind.name)),
+                "{}: SAMPLES_LIGHTS_PER_INSTANCE and its twin's {0}_samples_lights",
                 kind.name
             );
+            assert!(kind.samples_lights || !kind.samples_lights_per_instance);
         }
     }
 }

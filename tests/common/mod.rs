@@ -38,6 +38,22 @@ pub fn render_cpu(scene: &Scene, opts: &RenderOptions) -> Film {
     rt_gpu::cpu::render(&flat, opts, &|| {})
 }
 
+/// A hit at the origin on a surface whose shading and geometric normal are `normal`, for
+/// testing materials.
+pub fn surface_hit(normal: Vec3, front_face: bool) -> rt_gpu::shared::ray::Hit {
+    rt_gpu::shared::ray::Hit {
+        t: 1.0,
+        point: Vec3::ZERO,
+        error: 0.0,
+        normal,
+        shading: normal,
+        front_face,
+        material: 0,
+        primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
+        uv: glam::Vec2::ZERO,
+    }
+}
+
 pub fn object(shape: Shape, material: u32) -> Object {
     Object {
         shape,
