@@ -2,12 +2,13 @@
 //! each continuing the last and added to one film. The film's sums are exact (see `film.rs`),
 //! so however the range is cut into passes, and wherever a render stops and resumes, the image
 //! is bit-identical to one pass over the whole range. Between passes the caller may write a
-//! checkpoint, and a time budget or a stop request ends the render.
+//! checkpoint, and a time budget, a target error or a stop request ends the render.
 
 use crate::backend::Rendered;
 use crate::film::Film;
 use crate::render::{RenderOptions, Session};
 use crate::scene::flat::FlatScene;
+use crate::shared::sampler::REPLICAS;
 use std::time::Instant;
 
 /// How a progressive render ended.
@@ -19,6 +20,8 @@ pub enum Outcome {
     BudgetSpent,
     /// A stop was requested (a signal): the last pass was finished first.
     Stopped,
+    /// The image's estimated relative error fell to the target.
+    TargetReached,
 }
 
 /// Where a progressive render stands, for progress bars.
@@ -42,6 +45,40 @@ pub struct Job<'a> {
     pub budget: Option<f64>,
     /// Seconds a pass should take: how often a stop is noticed and a checkpoint can be written.
     pub pass_seconds: f64,
+    /// Stop once the film's estimated relative RMSE ([`relative_error`]) is at most this.
+    pub target_error: Option<f64>,
+}
+
+/// The fewest samples per pixel before the error is estimated: two per replica, so that the
+/// replicas' spread means something.
+const MIN_ESTIMATE_SPP: u32 = 2 * REPLICAS;
+
+/// The film's estimated relative error: its self-estimated RMSE (the replicas' spread for
+/// stratified samples, see `converge::estimated_rmse`) over its mean radiance; 0 for a black
+/// image.
+pub fn relative_error(film: &Film) -> f64 {
+    let mean = film.image_mean();
+    let mean = (mean[0] + mean[1] + mean[2]) / 3.0;
+    if mean > 0.0 {
+        crate::converge::estimated_rmse(film) / mean
+    } else {
+        0.0
+    }
+}
+
+/// Samples per pixel for the next pass toward `target`, `done` spp in with estimated relative
+/// error `error`: what error ~ 1 / sqrt(spp) predicts is still needed, at most doubling the
+/// count (the estimate is noisy, and stratified samplers converge faster than that), in whole
+/// rounds of the replicas.
+fn pass_toward(target: f64, error: Option<f64>, done: u32) -> u32 {
+    let wanted = match error {
+        Some(e) if done >= MIN_ESTIMATE_SPP => {
+            let needed = done as f64 * (e / target).powi(2);
+            (needed - done as f64).clamp(1.0, done as f64) as u32
+        }
+        _ => MIN_ESTIMATE_SPP.saturating_sub(done).max(1),
+    };
+    (done + wanted).div_ceil(REPLICAS) * REPLICAS - done
 }
 
 impl Job<'_> {
@@ -87,6 +124,13 @@ impl Job<'_> {
                 Some(s) => (seconds / s).floor(),
                 None => 1.0,
             };
+            let pass = match self.target_error {
+                Some(target) => {
+                    let error = film.as_ref().map(relative_error);
+                    pass.min(pass_toward(target, error, done - opts.first_sample) as f64)
+                }
+                None => pass,
+            };
             let pass = (pass.max(1.0).min((end - done) as f64)) as u32;
             let pass_start = Instant::now();
             let spp_before = (done - opts.first_sample) as f64;
@@ -126,6 +170,12 @@ impl Job<'_> {
                 };
             if let Some(f) = &film {
                 after_pass(f, done)?;
+                if let Some(target) = self.target_error
+                    && done - opts.first_sample >= MIN_ESTIMATE_SPP
+                    && relative_error(f) <= target
+                {
+                    break Outcome::TargetReached;
+                }
             }
         };
         let rendered = Rendered {

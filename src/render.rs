@@ -30,6 +30,51 @@ impl GpuChoice {
     }
 }
 
+/// What `--backend auto` renders on, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AutoBackend {
+    pub backend: Backend,
+    pub reason: String,
+}
+
+/// `--backend auto`: a hardware GPU runs the kernel. On a software adapter (lavapipe,
+/// SwiftShader, WARP: wgpu's `DeviceType::Cpu`, the CPU's own cores) the kernel runs only a
+/// scene it holds inlined as constants, where it was measured faster than the CPU backend on
+/// the same cores; a scene traced through its BVH goes to the CPU backend, 3-8x faster there
+/// (docs/benchmarks.md, 2026-12-02). With no adapter, or no `gpu` feature, the CPU backend.
+pub fn auto_backend(gpu: &GpuChoice, scene: &FlatScene) -> AutoBackend {
+    let cpu = |reason: String| AutoBackend {
+        backend: Backend::Cpu,
+        reason,
+    };
+    #[cfg(feature = "gpu")]
+    {
+        let info = match crate::gpu::context::adapter_info(gpu.adapter.as_deref()) {
+            Ok(info) => info,
+            Err(_) => return cpu("no GPU adapter (`rt-gpu devices` lists what wgpu sees)".into()),
+        };
+        let gpu_backend = |reason: String| AutoBackend {
+            backend: Backend::Gpu,
+            reason,
+        };
+        if info.device_type != wgpu::DeviceType::Cpu {
+            return gpu_backend("a GPU".into());
+        }
+        if gpu.features(scene, Integrator::Naive).inline_scene {
+            gpu_backend(
+                "a software adapter, and the kernel holds this scene inlined: faster than the CPU backend".into(),
+            )
+        } else {
+            cpu("a software adapter, and this scene is traced through a BVH: the CPU backend is faster".into())
+        }
+    }
+    #[cfg(not(feature = "gpu"))]
+    {
+        let _ = (gpu, scene);
+        cpu("built without the gpu feature".into())
+    }
+}
+
 /// A backend made ready once (device opened, kernel compiled) for many renders of one scene.
 /// The GPU's kernel is built for one integrator, so a session is too.
 pub struct Session(Box<dyn RenderBackend>);

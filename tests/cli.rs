@@ -147,6 +147,18 @@ fn bad_inputs_fail_with_one_line_and_leave_the_output_untouched() {
         (&["broken.toml"], "broken.toml:1:"),
         (&["nan.toml"], "nan.toml:3:"),
         (&["cornell", "--spp", "0"], "--spp"),
+        (
+            &["cornell", "--target-error", "0"],
+            "--target-error must be a positive",
+        ),
+        (
+            &["cornell", "--target-error", "nan"],
+            "--target-error must be a positive",
+        ),
+        (
+            &["cornell", "--target-error", "0.1", "--shard", "1/2"],
+            "not with --samples or --shard",
+        ),
         (&["cornell", "--spp", "many"], "--spp"),
         (&["cornell", "--size", "0x10"], "1..="),
         (&["cornell", "--size", "512"], "WIDTHxHEIGHT"),
@@ -325,15 +337,32 @@ fn converge_rejects_bad_options_in_one_line() {
     }
 }
 
-/// With no Vulkan driver the GPU backend says what to install and how to render without it;
+/// With no Vulkan driver `--backend gpu` says what to install and how to render without it;
 /// with WGPU_BACKEND naming a backend that has no adapter (Metal, on Linux), it says so instead.
+/// `--backend auto` (the default) renders on the CPU then, and says why.
 #[cfg(target_os = "linux")]
 #[test]
 fn a_missing_gpu_is_one_line_that_says_what_to_do() {
     let dir = tempfile::tempdir().expect("tempdir");
+    let no_driver = "/nonexistent/icd.json";
+    let auto = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args(["cornell", "--spp", "1", "--size", "8x8"])
+        .envs([
+            ("VK_ICD_FILENAMES", no_driver),
+            ("VK_DRIVER_FILES", no_driver),
+        ])
+        .current_dir(dir.path())
+        .output()
+        .expect("runs");
+    let summary = stderr(&auto);
+    assert!(auto.status.success(), "{summary}");
+    assert!(
+        summary.contains(", cpu [") && summary.contains("(auto: no GPU adapter"),
+        "{summary}"
+    );
     let run = |env: &[(&str, &str)]| {
         let out = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
-            .args(["cornell", "--spp", "1", "--size", "8x8"])
+            .args(["cornell", "--spp", "1", "--size", "8x8", "--backend", "gpu"])
             .envs(env.iter().copied())
             .current_dir(dir.path())
             .output()
@@ -343,7 +372,6 @@ fn a_missing_gpu_is_one_line_that_says_what_to_do() {
         assert_eq!(err.lines().count(), 1, "{err}");
         err
     };
-    let no_driver = "/nonexistent/icd.json";
     let err = run(&[
         ("VK_ICD_FILENAMES", no_driver),
         ("VK_DRIVER_FILES", no_driver),
@@ -635,5 +663,127 @@ fn time_budgets_stop_the_render_and_report_the_spp_reached() {
         assert!(!out.status.success());
         let err = stderr(&out);
         assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
+
+/// `--backend auto` (the default) names what ran and why. On a software adapter (lavapipe, as
+/// in CI) it runs the kernel for a scene the kernel inlines (`cornell-empty`) and the CPU
+/// backend for one traced through a BVH (`showcase`); on a GPU, the kernel for both. `--backend
+/// gpu` and `cpu` force one, with no reason shown.
+#[test]
+fn auto_backend_picks_per_scene_and_says_why() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let summary = |scene: &str, backend: &str| {
+        let out = rt_gpu(
+            &[
+                scene,
+                "--backend",
+                backend,
+                "--spp",
+                "1",
+                "--size",
+                "16x16",
+                "-o",
+                "a.png",
+                "--force",
+            ],
+            dir.path(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        stderr(&out)
+    };
+    let inlined = summary("cornell-empty", "auto");
+    let bvh = summary("showcase", "auto");
+    if inlined.contains("(auto: a GPU)") {
+        assert!(
+            inlined.contains(", gpu [") && bvh.contains(", gpu ["),
+            "{inlined}\n{bvh}"
+        );
+    } else if inlined.contains("(auto: a software adapter") {
+        assert!(
+            inlined.contains(", gpu [") && inlined.contains("inlined"),
+            "{inlined}"
+        );
+        assert!(bvh.contains(", cpu [") && bvh.contains("BVH"), "{bvh}");
+    } else {
+        assert!(
+            inlined.contains("(auto: no GPU adapter") && inlined.contains(", cpu ["),
+            "{inlined}"
+        );
+    }
+    for backend in ["gpu", "cpu"] {
+        let forced = summary("showcase", backend);
+        assert!(
+            forced.contains(&format!(", {backend} [")) && !forced.contains("auto:"),
+            "{forced}"
+        );
+    }
+}
+
+/// `--target-error X` stops where the true relative error (RMSE against an 8 192-spp reference,
+/// its own noise removed in quadrature, over the mean radiance) is within 1.5x of X: on the
+/// Cornell box at 32x32, where Sobol stratification of the large pixels makes the error fall
+/// far faster than 1/sqrt(spp) (5% at ~500 spp; independent samples need ~12 000), and with
+/// independent samples (at 10%). The summary says the target was reached, and at how many spp.
+#[test]
+fn target_error_stops_near_the_true_error() {
+    use rt_gpu::options::SamplerKind;
+    use rt_gpu::render::{Integrator, RenderOptions};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = rt_gpu::scene::builtin::builtin("cornell").expect("built-in");
+    let reference_opts = RenderOptions {
+        integrator: Integrator::Nee,
+        sampler: SamplerKind::Sobol,
+        ..RenderOptions::new(32, 32, 8192, scene.defaults.max_depth)
+    };
+    let reference = common::render_cpu(&scene, &reference_opts);
+    let reference_noise = rt_gpu::converge::estimated_rmse(&reference);
+    let mean = reference.image_mean();
+    let mean = (mean[0] + mean[1] + mean[2]) as f64 / 3.0;
+    for (sampler, target) in [("sobol", "0.05"), ("independent", "0.1")] {
+        let out = rt_gpu(
+            &[
+                "cornell",
+                "--backend",
+                "cpu",
+                "--size",
+                "32x32",
+                "--sampler",
+                sampler,
+                "--seed",
+                "9",
+                "--target-error",
+                target,
+                "-o",
+                "t.exr",
+                "--force",
+            ],
+            dir.path(),
+        );
+        let summary = stderr(&out);
+        assert!(out.status.success(), "{summary}");
+        assert!(
+            summary.contains(&format!("target error {target} reached at")),
+            "{summary}"
+        );
+        let target: f64 = target.parse().expect("a number");
+        let (film, _) = rt_gpu::film_file::read(&dir.path().join("t.exr")).expect("film file");
+        let mse: f64 = film
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .map(|(a, b)| (a.mean() - b.mean()).length_squared())
+            .sum::<f64>()
+            / (film.pixels.len() * 3) as f64;
+        let true_error = (mse - reference_noise * reference_noise).max(0.0).sqrt() / mean;
+        eprintln!(
+            "{sampler}: {} spp, true relative error {true_error:.4} (reference noise {:.4})",
+            spp_reached(&out),
+            reference_noise / mean
+        );
+        assert!(
+            true_error <= 1.5 * target && true_error >= target / 1.5,
+            "{sampler}: true relative error {true_error} against the target {target}"
+        );
     }
 }

@@ -28,6 +28,19 @@ impl From<BackendArg> for Backend {
     }
 }
 
+/// Where a render runs: a backend, or the faster one for the scene here.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RenderBackendArg {
+    /// The faster for this scene here: a GPU runs the kernel; on a software adapter (lavapipe,
+    /// SwiftShader, WARP) the kernel only where it holds the scene inlined, else the CPU
+    /// backend; with no adapter, the CPU backend. The summary line says which ran and why.
+    Auto,
+    /// The WGSL compute kernel through wgpu (any Vulkan, Metal or DX12 device, or Mesa lavapipe).
+    Gpu,
+    /// The CPU reference renderer (rayon over all cores).
+    Cpu,
+}
+
 /// How paths find light (the CLI's names for [`Integrator`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum IntegratorArg {
@@ -211,7 +224,7 @@ pub struct BenchArgs {
 pub struct RenderArgs {
     /// A built-in scene name (see `rt-gpu scenes`) or a scene file (.toml).
     pub scene: Option<String>,
-    /// Samples per pixel [default: 64, or unlimited with --time].
+    /// Samples per pixel [default: 64, or unlimited with --time or --target-error].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// Render until this many seconds are spent, in whole passes over the image, then write the
@@ -219,6 +232,12 @@ pub struct RenderArgs {
     /// were reached.
     #[arg(long, value_name = "SECONDS")]
     pub time: Option<f64>,
+    /// Render until the image's estimated relative error (its self-estimated RMSE over its mean
+    /// radiance; with sobol, from the spread of independent replicas) falls to X, e.g. 0.01,
+    /// then write the image; with --spp or --time too, whichever comes first. The summary says
+    /// how many samples per pixel were reached.
+    #[arg(long, value_name = "X")]
+    pub target_error: Option<f64>,
     /// Write the render's state to FILE (a film file, .exr) every --checkpoint-every seconds, at
     /// the end, and when interrupted (Ctrl-C or SIGTERM finish the pass in flight, write it and
     /// the image so far, and exit non-zero); --resume FILE continues it.
@@ -254,8 +273,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     pub max_depth: Option<u32>,
     /// Where to render.
-    #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
-    pub backend: BackendArg,
+    #[arg(long, value_enum, default_value_t = RenderBackendArg::Auto)]
+    pub backend: RenderBackendArg,
     /// How paths find light: nee samples lights directly at diffuse hits (with multiple
     /// importance sampling); naive waits for paths to hit them (the original project's way).
     #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]

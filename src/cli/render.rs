@@ -2,7 +2,7 @@
 //! before anything is opened, the outputs claimed, the passes run with a progress bar (and
 //! checkpoints), the outputs written, and a one-line summary.
 
-use super::args::RenderArgs;
+use super::args::{RenderArgs, RenderBackendArg};
 use super::checkpoint::{CheckpointWriter, pass_seconds, resume_from};
 use super::scenes::resolve_scene;
 use super::shown_radiance;
@@ -27,6 +27,8 @@ struct Plan {
     scene: Scene,
     scene_file: Option<PathBuf>,
     backend: Backend,
+    /// Why `--backend auto` chose `backend`.
+    backend_reason: Option<String>,
     /// The sample indices rendered.
     range: Range<u32>,
     /// Only some of the render's samples (--samples, --shard): a film file for `rt-gpu merge`.
@@ -79,6 +81,18 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let done = plan.range.start + passes.rendered.film.pixels.first().map_or(0, |p| p.n) as u32;
     write_outputs(args, &plan, pending, &mut passes, &meta(done))?;
     print_summary(&plan, &passes.rendered, seconds, resumed_at, done);
+    if let Some(target) = args.target_error {
+        let reached = rt_gpu::progressive::relative_error(&passes.rendered.film);
+        if passes.outcome == Outcome::TargetReached {
+            note!(
+                "target error {target} reached at {done} spp (estimated relative error {reached:.3e})"
+            );
+        } else if passes.outcome != Outcome::Stopped {
+            note!(
+                "target error {target} not reached: estimated relative error {reached:.3e} at {done} spp"
+            );
+        }
+    }
     if passes.outcome == Outcome::Stopped {
         let signal = STOP_SIGNAL.load(Ordering::SeqCst);
         if let Some(c) = &plan.checkpoint {
@@ -99,13 +113,22 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
     let Some(scene_arg) = &args.scene else {
         bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
     };
-    let backend = Backend::from(args.backend);
-    if args.adapter.is_some() && backend == Backend::Cpu {
+    if args.adapter.is_some() && args.backend == RenderBackendArg::Cpu {
         bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
     }
     let (scene, scene_file) = resolve_scene(scene_arg)?;
     let range = sample_range(args)?;
     let partial = args.samples.is_some() || args.shard.is_some();
+    if let Some(x) = args.target_error {
+        if !(x > 0.0 && x.is_finite()) {
+            bail!("--target-error must be a positive relative error such as 0.01, got {x}");
+        }
+        if partial {
+            bail!(
+                "--target-error renders until the whole image reaches it: not with --samples or --shard"
+            );
+        }
+    }
     let (output, format) = output_path(args, &scene, &range, partial)?;
     let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
     let (width, height) = args
@@ -132,10 +155,21 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
         adapter: args.adapter.clone(),
         everything: args.unspecialised,
     };
+    // An adapter asked for by name is a GPU asked for.
+    let (backend, backend_reason) = match args.backend {
+        RenderBackendArg::Gpu => (Backend::Gpu, None),
+        RenderBackendArg::Cpu => (Backend::Cpu, None),
+        RenderBackendArg::Auto if args.adapter.is_some() => (Backend::Gpu, None),
+        RenderBackendArg::Auto => {
+            let auto = rt_gpu::render::auto_backend(&gpu, &flat);
+            (auto.backend, Some(auto.reason))
+        }
+    };
     Ok(Plan {
         scene,
         scene_file,
         backend,
+        backend_reason,
         range,
         partial,
         output,
@@ -153,9 +187,9 @@ fn sample_range(args: &RenderArgs) -> anyhow::Result<Range<u32>> {
     if let Some(range) = &args.samples {
         return Ok(range.clone());
     }
-    let spp = match (args.spp, args.time) {
+    let spp = match (args.spp, args.time.or(args.target_error)) {
         (Some(spp), _) => spp,
-        // Unlimited: the budget ends it.
+        // Unlimited: the budget or the target ends it.
         (None, Some(_)) => u32::MAX,
         (None, None) => 64,
     };
@@ -289,6 +323,7 @@ fn run_passes(
         opts: plan.opts,
         budget: args.time,
         pass_seconds: pass_seconds(checkpointing.then_some(plan.checkpoint_every), args.time),
+        target_error: args.target_error,
     };
     let mut last_checkpoint = Instant::now();
     let checkpoint_failure: std::cell::RefCell<Option<anyhow::Error>> = Default::default();
@@ -395,10 +430,13 @@ fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32
         shown_samples += &format!(" (resumed at {resumed_at})");
     }
     note!(
-        "{}: {width}x{height}, {shown_samples}, {} [{}], {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance {}, estimated RMSE {:.3e} -> {}",
+        "{}: {width}x{height}, {shown_samples}, {} [{}]{}, {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance {}, estimated RMSE {:.3e} -> {}",
         plan.scene.name,
         plan.backend.name(),
         rendered.device,
+        plan.backend_reason
+            .as_ref()
+            .map_or(String::new(), |why| format!(" (auto: {why})")),
         plan.opts.integrator.name(),
         plan.opts.sampler.name(),
         samples / seconds / 1e6,
@@ -417,7 +455,7 @@ fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32
         && !rt_gpu::gpu::Features::of(&plan.flat).inline_scene
     {
         note!(
-            "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores"
+            "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores (`--backend auto`, the default, picks the CPU backend for them)"
         );
     }
 }

@@ -79,42 +79,54 @@ pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
         .collect()
 }
 
+/// The adapter whose name contains `wanted` (case-insensitive), or the best available: a
+/// hardware GPU if there is one, else a software one such as lavapipe.
+fn choose_adapter(
+    instance: &wgpu::Instance,
+    wanted: Option<&str>,
+) -> Result<wgpu::Adapter, GpuError> {
+    match wanted {
+        Some(name) => {
+            let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+            let needle = name.to_lowercase();
+            let available: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+            adapters
+                .into_iter()
+                .find(|a| a.get_info().name.to_lowercase().contains(&needle))
+                .ok_or_else(|| GpuError::NoSuchAdapter {
+                    wanted: name.to_string(),
+                    available: if available.is_empty() {
+                        "none".into()
+                    } else {
+                        available.join(", ")
+                    },
+                })
+        }
+        None => {
+            let request = |fallback| {
+                pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::HighPerformance,
+                    force_fallback_adapter: fallback,
+                    ..Default::default()
+                }))
+            };
+            request(false)
+                .or_else(|_| request(true))
+                .map_err(|_| no_adapter_error())
+        }
+    }
+}
+
+/// What [`GpuContext::new`] with `wanted` would open, without opening it.
+pub fn adapter_info(wanted: Option<&str>) -> Result<wgpu::AdapterInfo, GpuError> {
+    choose_adapter(&instance(), wanted).map(|a| a.get_info())
+}
+
 impl GpuContext {
     /// Opens the adapter whose name contains `wanted` (case-insensitive), or the best available:
     /// a hardware GPU if there is one, else a software one such as lavapipe.
     pub fn new(wanted: Option<&str>) -> Result<Self, GpuError> {
-        let instance = instance();
-        let adapter = match wanted {
-            Some(name) => {
-                let adapters =
-                    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
-                let needle = name.to_lowercase();
-                let available: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
-                adapters
-                    .into_iter()
-                    .find(|a| a.get_info().name.to_lowercase().contains(&needle))
-                    .ok_or_else(|| GpuError::NoSuchAdapter {
-                        wanted: name.to_string(),
-                        available: if available.is_empty() {
-                            "none".into()
-                        } else {
-                            available.join(", ")
-                        },
-                    })?
-            }
-            None => {
-                let request = |fallback| {
-                    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-                        power_preference: wgpu::PowerPreference::HighPerformance,
-                        force_fallback_adapter: fallback,
-                        ..Default::default()
-                    }))
-                };
-                request(false)
-                    .or_else(|_| request(true))
-                    .map_err(|_| no_adapter_error())?
-            }
-        };
+        let adapter = choose_adapter(&instance(), wanted)?;
         let info = adapter.get_info();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let limits = adapter.limits();
