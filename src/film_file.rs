@@ -453,6 +453,25 @@ fn read_pixels(
     Ok(film)
 }
 
+/// The backend the film file at `path` was rendered on, from its header alone (its pixels are
+/// not read); `None` if it does not say.
+pub fn recorded_backend(path: &Path) -> anyhow::Result<Option<crate::options::Backend>> {
+    use crate::options::Backend;
+    let shown = path.display();
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .with_context(|| format!("cannot read the film file {shown}"))?;
+    let Some(header) = meta.headers.first() else {
+        return Ok(None);
+    };
+    let fields = metadata_fields(&shown, &header.own_attributes)?;
+    let identity = fields.get(FIELD_IDENTITY).map_or("", String::as_str);
+    Ok(match identity_field(identity, "backend") {
+        Some("gpu") => Some(Backend::Gpu),
+        Some("cpu") => Some(Backend::Cpu),
+        _ => None,
+    })
+}
+
 /// The value of `key=` in an identity, if it has one.
 fn identity_field<'a>(identity: &'a str, key: &str) -> Option<&'a str> {
     identity

@@ -71,14 +71,18 @@ pub fn relative_error(film: &Film) -> f64 {
 /// count (the estimate is noisy, and stratified samplers converge faster than that), in whole
 /// rounds of the replicas.
 fn pass_toward(target: f64, error: Option<f64>, done: u32) -> u32 {
+    let done = done as u64;
     let wanted = match error {
-        Some(e) if done >= MIN_ESTIMATE_SPP => {
+        // At least an eighth more: near the target the estimate wavers, and each pass costs a
+        // read-back and a merge.
+        Some(e) if done >= MIN_ESTIMATE_SPP as u64 => {
             let needed = done as f64 * (e / target).powi(2);
-            (needed - done as f64).clamp(1.0, done as f64) as u32
+            (needed - done as f64).clamp((done / 8).max(1) as f64, done as f64) as u64
         }
-        _ => MIN_ESTIMATE_SPP.saturating_sub(done).max(1),
+        _ => (MIN_ESTIMATE_SPP as u64).saturating_sub(done).max(1),
     };
-    (done + wanted).div_ceil(REPLICAS) * REPLICAS - done
+    let pass = (done + wanted).div_ceil(REPLICAS as u64) * REPLICAS as u64 - done;
+    pass.min(u32::MAX as u64) as u32
 }
 
 impl Job<'_> {
@@ -104,6 +108,17 @@ impl Job<'_> {
             (None, None);
         let mut seconds_per_spp: Option<f64> = None;
         let outcome = loop {
+            // Checked before each pass, so that a resumed film that meets it renders no more.
+            let error = match (self.target_error, &film) {
+                (Some(_), Some(f)) => Some(relative_error(f)),
+                _ => None,
+            };
+            if let (Some(target), Some(e)) = (self.target_error, error)
+                && done - opts.first_sample >= MIN_ESTIMATE_SPP
+                && e <= target
+            {
+                break Outcome::TargetReached;
+            }
             if done >= end {
                 break Outcome::Complete;
             }
@@ -126,7 +141,6 @@ impl Job<'_> {
             };
             let pass = match self.target_error {
                 Some(target) => {
-                    let error = film.as_ref().map(relative_error);
                     pass.min(pass_toward(target, error, done - opts.first_sample) as f64)
                 }
                 None => pass,
@@ -170,12 +184,6 @@ impl Job<'_> {
                 };
             if let Some(f) = &film {
                 after_pass(f, done)?;
-                if let Some(target) = self.target_error
-                    && done - opts.first_sample >= MIN_ESTIMATE_SPP
-                    && relative_error(f) <= target
-                {
-                    break Outcome::TargetReached;
-                }
             }
         };
         let rendered = Rendered {

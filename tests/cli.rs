@@ -694,12 +694,19 @@ fn auto_backend_picks_per_scene_and_says_why() {
     };
     let inlined = summary("cornell-empty", "auto");
     let bvh = summary("showcase", "auto");
-    if inlined.contains("(auto: a GPU)") {
+    // What the machine has, from `rt-gpu devices` (its device types), not from auto itself.
+    let devices = rt_gpu(&["devices"], dir.path());
+    let listed = String::from_utf8_lossy(&devices.stdout).into_owned();
+    let hardware = ["DiscreteGpu", "IntegratedGpu", "VirtualGpu"]
+        .iter()
+        .any(|kind| listed.contains(kind));
+    let software = listed.contains(" Cpu,");
+    if hardware {
         assert!(
-            inlined.contains(", gpu [") && bvh.contains(", gpu ["),
+            inlined.contains(", gpu [") && bvh.contains(", gpu [") && bvh.contains("(auto: a GPU)"),
             "{inlined}\n{bvh}"
         );
-    } else if inlined.contains("(auto: a software adapter") {
+    } else if software {
         assert!(
             inlined.contains(", gpu [") && inlined.contains("inlined"),
             "{inlined}"
@@ -711,11 +718,72 @@ fn auto_backend_picks_per_scene_and_says_why() {
             "{inlined}"
         );
     }
-    for backend in ["gpu", "cpu"] {
-        let forced = summary("showcase", backend);
+    let forced: &[&str] = if hardware || software {
+        &["gpu", "cpu"]
+    } else {
+        &["cpu"]
+    };
+    for backend in forced {
+        let summary = summary("showcase", backend);
         assert!(
-            forced.contains(&format!(", {backend} [")) && !forced.contains("auto:"),
-            "{forced}"
+            summary.contains(&format!(", {backend} [")) && !summary.contains("auto:"),
+            "{summary}"
+        );
+    }
+    // A checkpoint continues on the backend it was made on, whatever auto would pick.
+    let out = rt_gpu(
+        &[
+            "showcase",
+            "--backend",
+            "cpu",
+            "--spp",
+            "2",
+            "--size",
+            "16x16",
+            "--checkpoint",
+            "ck.exr",
+            "-o",
+            "b.png",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = rt_gpu(
+        &[
+            "showcase",
+            "--spp",
+            "4",
+            "--size",
+            "16x16",
+            "--resume",
+            "ck.exr",
+            "--checkpoint",
+            "ck.exr",
+            "-o",
+            "b.png",
+            "--force",
+        ],
+        dir.path(),
+    );
+    let resumed = stderr(&out);
+    assert!(out.status.success(), "{resumed}");
+    assert!(
+        resumed.contains(", cpu [")
+            && resumed.contains("(auto: the backend the checkpoint was rendered on)"),
+        "{resumed}"
+    );
+    // Shards render on the kernel, so that films from any machine merge.
+    if hardware || software {
+        let out = rt_gpu(
+            &[
+                "showcase", "--spp", "4", "--size", "16x16", "--shard", "0/2", "-o", "s.exr",
+            ],
+            dir.path(),
+        );
+        let shard = stderr(&out);
+        assert!(
+            out.status.success() && shard.contains(", gpu [") && shard.contains("shards"),
+            "{shard}"
         );
     }
 }
@@ -754,6 +822,9 @@ fn target_error_stops_near_the_true_error() {
                 "9",
                 "--target-error",
                 target,
+                // A bound, so that a target ignored fails rather than hangs.
+                "--spp",
+                "50000",
                 "-o",
                 "t.exr",
                 "--force",
@@ -780,6 +851,36 @@ fn target_error_stops_near_the_true_error() {
             "{sampler}: {} spp, true relative error {true_error:.4} (reference noise {:.4})",
             spp_reached(&out),
             reference_noise / mean
+        );
+        // The image is the one `--spp` of the count reached renders.
+        let spp = spp_reached(&out).to_string();
+        let plain = rt_gpu(
+            &[
+                "cornell",
+                "--backend",
+                "cpu",
+                "--size",
+                "32x32",
+                "--sampler",
+                sampler,
+                "--seed",
+                "9",
+                "--spp",
+                &spp,
+                "-o",
+                "p.exr",
+                "--force",
+            ],
+            dir.path(),
+        );
+        assert!(plain.status.success(), "{}", stderr(&plain));
+        let (plain, _) = rt_gpu::film_file::read(&dir.path().join("p.exr")).expect("film file");
+        assert!(
+            film.pixels
+                .iter()
+                .zip(&plain.pixels)
+                .all(|(a, b)| a.mean() == b.mean()),
+            "{sampler}: not the image of --spp {spp}"
         );
         assert!(
             true_error <= 1.5 * target && true_error >= target / 1.5,

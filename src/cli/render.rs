@@ -155,11 +155,27 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
         adapter: args.adapter.clone(),
         everything: args.unspecialised,
     };
-    // An adapter asked for by name is a GPU asked for.
     let (backend, backend_reason) = match args.backend {
         RenderBackendArg::Gpu => (Backend::Gpu, None),
         RenderBackendArg::Cpu => (Backend::Cpu, None),
-        RenderBackendArg::Auto if args.adapter.is_some() => (Backend::Gpu, None),
+        // An adapter asked for by name, the unspecialised kernel or its source: the GPU asked for.
+        RenderBackendArg::Auto
+            if args.adapter.is_some() || args.unspecialised || args.print_shader =>
+        {
+            (Backend::Gpu, None)
+        }
+        // Films merge only with films of one backend: shards on different machines must not
+        // choose differently.
+        RenderBackendArg::Auto if partial => (
+            Backend::Gpu,
+            Some("shards and sample ranges render on the kernel, so that every machine's films merge".into()),
+        ),
+        // A checkpoint continues on the backend it was made on.
+        RenderBackendArg::Auto
+            if let Some(Ok(Some(recorded))) = args.resume.as_deref().map(film_file::recorded_backend) =>
+        {
+            (recorded, Some("the backend the checkpoint was rendered on".into()))
+        }
         RenderBackendArg::Auto => {
             let auto = rt_gpu::render::auto_backend(&gpu, &flat);
             (auto.backend, Some(auto.reason))
@@ -455,7 +471,7 @@ fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32
         && !rt_gpu::gpu::Features::of(&plan.flat).inline_scene
     {
         note!(
-            "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores (`--backend auto`, the default, picks the CPU backend for them)"
+            "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores (`--backend cpu`, or `auto` without --adapter, runs them there)"
         );
     }
 }
