@@ -808,28 +808,31 @@ fn target_error_stops_near_the_true_error() {
     let reference_noise = rt_gpu::converge::estimated_rmse(&reference);
     let mean = reference.image_mean();
     let mean = (mean[0] + mean[1] + mean[2]) as f64 / 3.0;
+    // Cornell at 32x32 on the CPU with `sampler`, seed 9, and `limits`, into `output`.
+    let render = |sampler: &str, limits: &[&str], output: &str| {
+        let mut args = vec![
+            "cornell",
+            "--backend",
+            "cpu",
+            "--size",
+            "32x32",
+            "--sampler",
+            sampler,
+            "--seed",
+            "9",
+            "-o",
+            output,
+            "--force",
+        ];
+        args.extend_from_slice(limits);
+        rt_gpu(&args, dir.path())
+    };
     for (sampler, target) in [("sobol", "0.05"), ("independent", "0.1")] {
-        let out = rt_gpu(
-            &[
-                "cornell",
-                "--backend",
-                "cpu",
-                "--size",
-                "32x32",
-                "--sampler",
-                sampler,
-                "--seed",
-                "9",
-                "--target-error",
-                target,
-                // A bound, so that a target ignored fails rather than hangs.
-                "--spp",
-                "50000",
-                "-o",
-                "t.exr",
-                "--force",
-            ],
-            dir.path(),
+        // --spp is a bound, so that a target ignored fails rather than hangs.
+        let out = render(
+            sampler,
+            &["--target-error", target, "--spp", "50000"],
+            "t.exr",
         );
         let summary = stderr(&out);
         assert!(out.status.success(), "{summary}");
@@ -854,25 +857,7 @@ fn target_error_stops_near_the_true_error() {
         );
         // The image is the one `--spp` of the count reached renders.
         let spp = spp_reached(&out).to_string();
-        let plain = rt_gpu(
-            &[
-                "cornell",
-                "--backend",
-                "cpu",
-                "--size",
-                "32x32",
-                "--sampler",
-                sampler,
-                "--seed",
-                "9",
-                "--spp",
-                &spp,
-                "-o",
-                "p.exr",
-                "--force",
-            ],
-            dir.path(),
-        );
+        let plain = render(sampler, &["--spp", &spp], "p.exr");
         assert!(plain.status.success(), "{}", stderr(&plain));
         let (plain, _) = rt_gpu::film_file::read(&dir.path().join("p.exr")).expect("film file");
         assert!(
