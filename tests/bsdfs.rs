@@ -674,13 +674,6 @@ fn conductor_kernel_matches_cpu() {
     );
 }
 
-fn error_of(text: &str) -> String {
-    match rt_gpu::scene::file::parse(text, "bad.toml", "bad") {
-        Ok(_) => panic!("accepted:\n{text}"),
-        Err(e) => e.to_string(),
-    }
-}
-
 /// Bad conductor parameters are one-line errors at the material's line, naming the problem;
 /// an unknown metal's lists the known ones.
 #[test]
@@ -730,7 +723,7 @@ fn bad_conductors_are_located_errors() {
             "eta 1 with k 0",
         ),
     ] {
-        let message = error_of(&file(material));
+        let message = common::scene_error(&file(material));
         assert!(
             message.starts_with("bad.toml:7:"),
             "{message:?} should start with bad.toml:7:"

@@ -1,5 +1,7 @@
 //! Scene files: the files in scenes/ are the built-ins, and bad files give located errors.
 
+mod common;
+
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
 use rt_gpu::scene::file::{load, parse, to_toml};
 use rt_gpu::scene::{Material, Scene, Shape, Transform};
@@ -66,12 +68,7 @@ sphere = { center = [0, 0, 0], radius = 0.5 }
 material = "white"
 "#;
 
-fn error_of(text: &str) -> String {
-    match parse(text, "bad.toml", "bad") {
-        Ok(_) => panic!("accepted:\n{text}"),
-        Err(e) => e.to_string(),
-    }
-}
+use common::scene_error as error_of;
 
 #[test]
 fn a_minimal_file_loads_with_defaults() {

@@ -545,15 +545,8 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
                 let sin = (1.0 - cos * cos).max(0.0).sqrt();
                 let dir_in = (-cos * normal + sin * t).normalize();
                 let hit = Hit {
-                    t: 1.0,
                     point: Vec3::new(1e4, -3.0, 0.25),
-                    error: 0.0,
-                    normal,
-                    shading: normal,
-                    front_face,
-                    material: 0,
-                    primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
-                    uv: glam::Vec2::ZERO,
+                    ..common::surface_hit(normal, front_face)
                 };
                 for k in 0..200 {
                     let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 5);
@@ -578,17 +571,7 @@ fn scattering_keeps_throughput_finite_and_non_negative() {
     }
     assert!(checked > 10_000);
     // Total internal reflection: from inside glass (back face) at grazing incidence.
-    let hit = Hit {
-        t: 1.0,
-        point: Vec3::ZERO,
-        error: 0.0,
-        normal: Vec3::Y,
-        shading: Vec3::Y,
-        front_face: false,
-        material: 0,
-        primitive: rt_gpu::shared::primitive::PrimitiveRef::Sphere(0),
-        uv: glam::Vec2::ZERO,
-    };
+    let hit = common::surface_hit(Vec3::Y, false);
     let dir_in = Vec3::new(1.0, -1e-3, 0.0).normalize();
     for k in 0..100 {
         let mut rng = rt_gpu::shared::sampler::Sampler::independent(k, 0, 6);

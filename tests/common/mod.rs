@@ -38,6 +38,14 @@ pub fn render_cpu(scene: &Scene, opts: &RenderOptions) -> Film {
     rt_gpu::cpu::render(&flat, opts, &|| {})
 }
 
+/// The one-line error of scene file `text` (as bad.toml), which must be refused.
+pub fn scene_error(text: &str) -> String {
+    match rt_gpu::scene::file::parse(text, "bad.toml", "bad") {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
 /// A hit at the origin on a surface whose shading and geometric normal are `normal`, for
 /// testing materials.
 pub fn surface_hit(normal: Vec3, front_face: bool) -> rt_gpu::shared::ray::Hit {
