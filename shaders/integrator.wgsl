@@ -126,9 +126,11 @@ fn direct_light(m: Material, hit: Hit, dir: vec3f, medium: u32, u0: f32, u1: f32
     let weight = light_sample_weight(s.pdf, bsdf_pdf(m, -dir, s.dir, hit));
     // The shadow ray leaves the offset origin aimed at the sampled point itself (a tiny light
     // is not missed by the width of the offset); whatever it hits first must be that light.
-    let origin = leave(hit, hit.normal);
+    // Through the surface (rough glass), it leaves on the far side, into the medium there.
+    let through = dot(s.dir, hit.normal) < 0.0;
+    let origin = leave(hit, select(hit.normal, -hit.normal, through));
 //#if MEDIA
-    let le = light_arriving(origin, s, index, medium);
+    let le = light_arriving(origin, s, index, select(medium, entered(hit), through && m.medium_density > 0.0));
 //#else
 //#if ENVIRONMENT
     if index + 1u == params.light_count {

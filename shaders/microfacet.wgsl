@@ -1,7 +1,7 @@
 // GGX microfacets with height-correlated Smith masking-shadowing, in a local frame whose z is
 // the shading normal (twin: src/material/microfacet.rs, which says why these forms).
 
-//#if MICROFACET
+//#if MICROFACET || PLASTIC
 fn ggx_d(alpha: f32, m: vec3f) -> f32 {
     let a2 = alpha * alpha;
     let t = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
@@ -32,6 +32,11 @@ fn ggx_sample_visible(alpha: f32, wo: vec3f, u1: f32, u2: f32) -> vec3f {
     let m = vec3f(alpha * h.x, alpha * h.y, max(h.z, 0.0));
     let len2 = dot(m, m);
     return select(vec3f(0.0, 0.0, 1.0), m / sqrt(len2), len2 > 1e-30);
+}
+
+// The density of ggx_sample_visible: G1(wo) max(0, wo.m) D(m) / wo.z.
+fn ggx_visible_pdf(alpha: f32, wo: vec3f, m: vec3f) -> f32 {
+    return ggx_g1(alpha, wo) * max(dot(wo, m), 0.0) * ggx_d(alpha, m) / wo.z;
 }
 
 // The density of reflect(-wo, m) for m from ggx_sample_visible: G1(wo) D(m) / (4 wo.z).

@@ -33,3 +33,10 @@ fn unit_disk(u1: f32, u2: f32) -> vec2f {
     return vec2f(r * cos(phi), r * sin(phi));
 }
 //#endif
+
+// Cosine-weighted about a hit's shading normal: pdf = cos / pi (so a lambertian BSDF x cos =
+// albedo x pdf), 0 below the surface.
+fn cosine_pdf(hit: Hit, wi: vec3f) -> f32 {
+    let cos = dot(hit.shading, wi);
+    return select(0.0, cos / PI, cos > 0.0 && !below_surface(hit, wi));
+}

@@ -2,7 +2,7 @@
 //! scattering is cosine-distributed.
 
 use glam::Vec3;
-use rt_gpu::material::dielectric::{fresnel, refract_cos};
+use rt_gpu::material::fresnel::{fresnel, refract_cos};
 use rt_gpu::material::reflect;
 use rt_gpu::scene::Material;
 use rt_gpu::shared::sampler::Sampler;

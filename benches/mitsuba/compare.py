@@ -2,8 +2,9 @@
 """rt-gpu against Mitsuba 3 on the same scene, measured in one run.
 
 Builds the scene of an rt-gpu scene file (quads, boxes rotated about y, spheres, OBJ meshes; lambertian,
-dielectric, mirror metal (fuzz 0: a `conductor` of material `none`), conductor (`conductor`, or
-`roughconductor` with GGX and visible-normal sampling) and light materials;
+dielectric (`dielectric`, or `roughdielectric`), mirror metal (fuzz 0: a `conductor` of material
+`none`), conductor (`conductor`, or `roughconductor`), plastic (`plastic` or `roughplastic`, with
+`nonlinear`), all rough ones GGX with visible-normal sampling, and light materials;
 homogeneous media: a `medium` material becomes a `null` BSDF with a `homogeneous` interior
 medium and an `hg` phase function, a dielectric's `medium` its interior; image textures as
 `bitmap`s (bilinear, repeating), `uv_checker` as `checkerboard`, with shapes' UV frames arranged
@@ -214,9 +215,30 @@ def mitsuba_scene(path, width, height, max_depth, sampler, roulette_depth=5):
             # rt-gpu's conductors reflect on both faces.
             bsdfs[name] = {"type": "twosided", "inner": inner}
         elif kind == "dielectric":
-            bsdfs[name] = {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}
+            roughness = m.get("roughness", 0.0)
+            if roughness == 0:
+                bsdfs[name] = {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}
+            else:
+                # Mitsuba's separable masking again; its radiance is scaled by eta^2 where it
+                # refracts, rt-gpu's not, which cancels on paths through closed objects.
+                bsdfs[name] = {"type": "roughdielectric", "distribution": "ggx",
+                               "alpha": roughness ** 2, "sample_visible": True,
+                               "int_ior": m["ior"], "ext_ior": 1.0}
             if "medium" in m:
                 interiors[name] = homogeneous(m["medium"])
+        elif kind == "plastic":
+            # Mitsuba's plastic with `nonlinear` is rt-gpu's closed form; its rough one takes the
+            # base's Fresnel terms from the rough coat's tabulated transmittance, rt-gpu from
+            # the smooth coat's, and its masking is the separable form.
+            coat = {"diffuse_reflectance": texture(name, m["albedo"]), "int_ior": m.get("ior", 1.5),
+                    "ext_ior": 1.0, "nonlinear": True}
+            roughness = m.get("roughness", 0.0)
+            if roughness == 0:
+                inner = {"type": "plastic", **coat}
+            else:
+                inner = {"type": "roughplastic", "distribution": "ggx", "alpha": roughness ** 2,
+                         "sample_visible": True, **coat}
+            bsdfs[name] = {"type": "twosided", "inner": inner}
         elif kind == "medium":
             bsdfs[name] = {"type": "null"}
             interiors[name] = homogeneous(m)

@@ -1,7 +1,33 @@
-// Smooth glass (twin: src/material/dielectric.rs): exact unpolarised Fresnel, refraction by
-// Snell's law, total internal reflection. Random numbers per sample: 1. Packed: param: ior.
+// Glass (twin: src/material/dielectric.rs): exact unpolarised Fresnel, refraction by Snell's
+// law, total internal reflection; smooth (alpha 0: two delta lobes) or on GGX microfacets
+// (Walter et al. 2007) sampled by visible normals. Random numbers per sample: 1 when smooth, 3
+// when rough. Packed: param: ior; alpha: GGX alpha (0: smooth, as any alpha below MIN_ALPHA).
+
+fn dielectric_samples_lights(m: Material) -> bool {
+//#if MICROFACET
+    return m.alpha > 0.0;
+//#else
+    return false;
+//#endif
+}
+
+// Whether wi, sampled in the lobe `reflected` says, leaves on that lobe's side of the geometric
+// surface: a shading normal can send a reflection into the surface or a refraction out of it
+// (then absorbed; the geometric normal decides sides, as for the medium inside).
+fn on_its_side(hit: Hit, wi: vec3f, reflected: bool) -> bool {
+//#if SHADING_NORMALS
+    return all(hit.shading == hit.normal) || (dot(wi, hit.normal) > 0.0) == reflected;
+//#else
+    return true;
+//#endif
+}
 
 fn dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+//#if MICROFACET
+    if m.alpha > 0.0 {
+        return rough_dielectric_sample(m, wo, hit, sampler);
+    }
+//#endif
     let eta = select(m.param, 1.0 / m.param, hit.front_face);
     let n = hit.shading;
     let dir_in = -wo;
@@ -19,19 +45,135 @@ fn dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sa
     }
     wi = normalize(wi);
     var lobe = select(LOBE_TRANSMISSION | LOBE_DELTA, LOBE_REFLECTION | LOBE_DELTA, reflected);
-    // A shading normal can send a reflection into the surface or a refraction out of it:
-    // absorbed (the geometric normal decides sides, as for the medium inside).
-//#if SHADING_NORMALS
-    if !(all(hit.shading == hit.normal) || (dot(wi, hit.normal) > 0.0) == reflected) {
+    if !on_its_side(hit, wi, reflected) {
         lobe = 0u;
     }
-//#endif
     return BsdfSample(vec3f(1.0), wi, 0.0, lobe);
 }
 
-// Exact unpolarised Fresnel reflectance; eta = n_incident / n_transmitted.
-fn fresnel(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
-    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5 * (rs * rs + rp * rp);
+//#if MICROFACET
+// Fresnel reflectance at a microfacet at cosine cos_i from the incident direction (1 under total
+// internal reflection, then cos_t is 0) and the refracted direction's cosine.
+struct Interface {
+    f: f32,
+    cos_t: f32,
+}
+
+fn fresnel_and_cos_t(cos_i: f32, eta: f32) -> Interface {
+    let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
+    if sin2_t < 1.0 {
+        let cos_t = sqrt(1.0 - sin2_t);
+        return Interface(fresnel(cos_i, cos_t, eta), cos_t);
+    }
+    return Interface(1.0, 0.0);
+}
+
+// The Fresnel reflectance of a pair of directions at microfacet normal m, from their cosines to
+// it: a refraction's own cos_t, not Snell's law's, which cancels near the critical angle.
+fn pair_fresnel(cos_o: f32, cos_i: f32, eta: f32, reflected: bool) -> f32 {
+    if reflected {
+        return fresnel_and_cos_t(cos_o, eta).f;
+    }
+    return fresnel(cos_o, -cos_i, eta);
+}
+
+fn rough_dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
+    let u1 = sampler_next(sampler);
+    let u2 = sampler_next(sampler);
+    let u = sampler_next(sampler);
+    let frame = frame_of(hit.shading);
+    let wo_local = to_local(frame, wo);
+    if !(wo_local.z > MIN_COSINE) {
+        return out;
+    }
+    let eta = select(m.param, 1.0 / m.param, hit.front_face);
+    let mf = ggx_sample_visible(m.alpha, wo_local, u1, u2);
+    let cos_i = dot(wo_local, mf);
+    let fr = fresnel_and_cos_t(cos_i, eta);
+    // Reflection with probability F: the BSDF's F and the pdf's cancel in the weight.
+    var wi_local: vec3f;
+    var reflected = true;
+    if fr.f < 1.0 && u >= fr.f {
+        wi_local = (eta * cos_i - fr.cos_t) * mf - eta * wo_local;
+        let denom = dot(wi_local, mf) + eta * cos_i;
+        let jacobian = abs(dot(wi_local, mf)) / (denom * denom);
+        out.pdf = (1.0 - fr.f) * ggx_visible_pdf(m.alpha, wo_local, mf) * jacobian;
+        reflected = false;
+    } else {
+        wi_local = reflect_dir(-wo_local, mf);
+        out.pdf = fr.f * ggx_reflection_pdf(m.alpha, wo_local, mf);
+    }
+    let wi = to_world(frame, wi_local);
+    let on_side = select((wi_local.z < -MIN_COSINE), (wi_local.z > MIN_COSINE), reflected);
+    if !(on_side && on_its_side(hit, wi, reflected) && out.pdf > 0.0) {
+        out.pdf = 0.0;
+        return out;
+    }
+    // f cos / pdf = G2 / G1 for either lobe (Walter's BTDF over its pdf).
+    out.weight = vec3f(ggx_g2(m.alpha, wo_local, wi_local) / ggx_g1(m.alpha, wo_local));
+    out.wi = wi;
+    out.lobe = select(LOBE_TRANSMISSION, LOBE_REFLECTION, reflected) | LOBE_GLOSSY;
+    return out;
+}
+
+// wo and wi in the shading frame and the microfacet normal taking one to the other (the half
+// vector of a reflection, Walter's generalised one of a refraction), with the lobe; `ok` false
+// where no microfacet does.
+struct RoughPair {
+    wo: vec3f,
+    wi: vec3f,
+    m: vec3f,
+    reflected: bool,
+    ok: bool,
+}
+
+fn rough_pair(wo: vec3f, wi: vec3f, hit: Hit, eta: f32) -> RoughPair {
+    let frame = frame_of(hit.shading);
+    let wo_local = to_local(frame, wo);
+    let wi_local = to_local(frame, wi);
+    let reflected = wi_local.z > 0.0;
+    // n_i wo + n_t wi, over n_t; toward wo's side.
+    let h = select(eta * wo_local + wi_local, wo_local + wi_local, reflected);
+    let len2 = dot(h, h);
+    let mf = h / sqrt(len2) * sign(h.z);
+    let ok = wo_local.z > MIN_COSINE && abs(wi_local.z) > MIN_COSINE && on_its_side(hit, wi, reflected)
+        && len2 > 0.0 && dot(wo_local, mf) > 0.0 && (dot(wi_local, mf) > 0.0) == reflected;
+    return RoughPair(wo_local, wi_local, mf, reflected, ok);
+}
+//#endif
+
+fn dielectric_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
+//#if MICROFACET
+    let eta = select(m.param, 1.0 / m.param, hit.front_face);
+    let p = rough_pair(wo, wi, hit, eta);
+    if p.ok && m.alpha > 0.0 {
+        let cos_i = dot(p.wo, p.m);
+        let f = pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected);
+        let dg = ggx_d(m.alpha, p.m) * ggx_g2(m.alpha, p.wo, p.wi);
+        if p.reflected {
+            return vec3f(f * dg / (4.0 * p.wo.z));
+        }
+        let denom = dot(p.wi, p.m) + eta * cos_i;
+        return vec3f((1.0 - f) * dg * abs(dot(p.wi, p.m)) * cos_i / (p.wo.z * denom * denom));
+    }
+//#endif
+    return vec3f(0.0);
+}
+
+fn dielectric_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+//#if MICROFACET
+    let eta = select(m.param, 1.0 / m.param, hit.front_face);
+    let p = rough_pair(wo, wi, hit, eta);
+    if p.ok && m.alpha > 0.0 {
+        let cos_i = dot(p.wo, p.m);
+        let f = pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected);
+        if p.reflected {
+            return f * ggx_reflection_pdf(m.alpha, p.wo, p.m);
+        }
+        let denom = dot(p.wi, p.m) + eta * cos_i;
+        return (1.0 - f) * ggx_visible_pdf(m.alpha, p.wo, p.m) * abs(dot(p.wi, p.m)) / (denom * denom);
+    }
+//#endif
+    return 0.0;
 }

@@ -5,13 +5,6 @@ fn lambertian_emitted(m: Material, hit: Hit) -> vec3f {
     return m.emission;
 }
 
-// Cosine-weighted about the shading normal: pdf = cos / pi (so BSDF x cos = albedo x pdf), 0
-// below the surface.
-fn cosine_pdf(hit: Hit, wi: vec3f) -> f32 {
-    let cos = dot(hit.shading, wi);
-    return select(0.0, cos / PI, cos > 0.0 && !below_surface(hit, wi));
-}
-
 fn lambertian_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     return albedo_at(m, hit) * cosine_pdf(hit, wi);
 }

@@ -269,8 +269,16 @@ fn direct_light(
     }
     let bsdf_pdf = material.pdf(-dir, sample.dir, hit);
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
-    // light is not missed by the width of the offset.
-    let le = light_arriving(scene, leave(hit, hit.normal), &sample, index, medium)?;
+    // light is not missed by the width of the offset; through the surface (rough glass), into
+    // the medium on the other side.
+    let (side, medium) = if sample.dir.dot(hit.normal) >= 0.0 {
+        (hit.normal, medium)
+    } else if material.interior().is_some() {
+        (-hit.normal, entered(hit))
+    } else {
+        (-hit.normal, medium)
+    };
+    let le = light_arriving(scene, leave(hit, side), &sample, index, medium)?;
     Some(f * (le * lights::light_sample_weight(sample.pdf, bsdf_pdf)))
 }
 

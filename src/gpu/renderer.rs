@@ -84,13 +84,14 @@ fn simd_lanes(adapter_name: &str) -> u32 {
 }
 
 /// A query of the kernel's BSDF interface: `wo` and `wi` at a surface with normal `normal`
-/// (shading and geometric alike, front face) made of `material`.
+/// (shading and geometric alike) made of `material`, reached on its front face or its back.
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfQuery {
     pub material: u32,
     pub wo: glam::Vec3,
     pub wi: glam::Vec3,
     pub normal: glam::Vec3,
+    pub front_face: bool,
 }
 
 /// The kernel's answer: its sample (`lobe` 0: none) and `eval`/`pdf` at the query's wo, wi.
@@ -727,6 +728,7 @@ impl GpuRenderer {
                 point: q.wo.to_array(),
                 primitive: q.material,
                 normal: q.normal.to_array(),
+                hit: q.front_face as u32,
                 dir: q.wi.to_array(),
                 ..Default::default()
             })

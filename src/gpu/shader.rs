@@ -20,6 +20,7 @@ const MODULES: &[(&str, &str)] = &[
         "microfacet.wgsl",
         include_str!("../../shaders/microfacet.wgsl"),
     ),
+    ("fresnel.wgsl", include_str!("../../shaders/fresnel.wgsl")),
     ("medium.wgsl", include_str!("../../shaders/medium.wgsl")),
     ("camera.wgsl", include_str!("../../shaders/camera.wgsl")),
     (

@@ -22,6 +22,7 @@ impl Lobe {
     pub const DIFFUSE_REFLECTION: Lobe = Lobe(Self::REFLECTION | Self::DIFFUSE);
     pub const GLOSSY_REFLECTION: Lobe = Lobe(Self::REFLECTION | Self::GLOSSY);
     pub const DELTA_REFLECTION: Lobe = Lobe(Self::REFLECTION | Self::DELTA);
+    pub const GLOSSY_TRANSMISSION: Lobe = Lobe(Self::TRANSMISSION | Self::GLOSSY);
     pub const DELTA_TRANSMISSION: Lobe = Lobe(Self::TRANSMISSION | Self::DELTA);
 
     pub fn is_delta(self) -> bool {

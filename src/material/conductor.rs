@@ -208,12 +208,12 @@ impl MaterialModel for Conductor {
             .map_or(0.0, |(wo_local, _, m)| self.ggx().reflection_pdf(wo_local, m))
     }
 
-    /// albedo: eta; emission: k; param: GGX alpha (0: smooth).
+    /// albedo: eta; emission: k; alpha: GGX alpha (0: smooth).
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
             albedo: self.eta.to_array(),
             emission: self.k.to_array(),
-            param: if self.samples_lights() { self.ggx().alpha } else { 0.0 },
+            alpha: if self.samples_lights() { self.ggx().alpha } else { 0.0 },
             ..Default::default()
         }
     }

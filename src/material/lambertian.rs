@@ -2,7 +2,7 @@
 //! sample: 2.
 
 use super::{BsdfSample, Lobe, MaterialModel};
-use crate::shared::warp::unit_vector;
+use crate::shared::warp::{cosine_pdf, unit_vector};
 use crate::shared::ray::{Hit, below_surface};
 use crate::material::texture;
 use crate::scene::texture::Texture;
@@ -88,17 +88,5 @@ impl MaterialModel for Lambertian {
             emission: self.emission.to_array(),
             ..GpuMaterial::with_albedo(&self.albedo)
         }
-    }
-}
-
-/// Cosine-weighted about the shading normal: pdf = cos / pi (so BSDF x cos = albedo x pdf),
-/// 0 below the surface.
-#[inline]
-fn cosine_pdf(hit: &Hit, wi: Vec3) -> f32 {
-    let cos = hit.shading.dot(wi);
-    if cos > 0.0 && !below_surface(hit, wi) {
-        cos * std::f32::consts::FRAC_1_PI
-    } else {
-        0.0
     }
 }

@@ -196,6 +196,7 @@ macro_rules! registry {
 }
 
 pub mod bsdf;
+pub mod fresnel;
 pub mod microfacet;
 pub mod texture;
 
@@ -208,6 +209,7 @@ registry! {
     light::Light,
     medium::Medium,
     conductor::Conductor,
+    plastic::Plastic,
 }
 
 impl Material {

@@ -543,6 +543,7 @@ pub fn material_of(m: &gltf::Material) -> Material {
     {
         return Material::Dielectric(Dielectric {
             ior: m.ior().unwrap_or(1.5).clamp(1.0, 4.0),
+            roughness: 0.0,
             medium: None,
         });
     }

@@ -340,10 +340,12 @@ gpu_struct! {
         texture_scale: f32,
         texture_image: u32,
         texture_odd: [f32; 3],
-        _pad1: u32,
+        /// GGX alpha of materials on microfacets (0: smooth).
+        alpha: f32,
         /// See `scene::texture::Checker::shift`.
         texture_shift: [f32; 3],
-        _pad2: u32,
+        /// A coat's internal diffuse reflectance (`material::Plastic`).
+        internal_reflectance: f32,
     }
 }
 

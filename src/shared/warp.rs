@@ -34,3 +34,15 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
         Vec3::new(b, sign + n.y * n.y * a, -n.y),
     )
 }
+
+/// Cosine-weighted about a hit's shading normal: pdf = cos / pi (so a lambertian BSDF x cos =
+/// albedo x pdf), 0 below the surface.
+#[inline]
+pub fn cosine_pdf(hit: &super::ray::Hit, wi: Vec3) -> f32 {
+    let cos = hit.shading.dot(wi);
+    if cos > 0.0 && !super::ray::below_surface(hit, wi) {
+        cos * std::f32::consts::FRAC_1_PI
+    } else {
+        0.0
+    }
+}

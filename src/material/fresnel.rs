@@ -1,0 +1,18 @@
+//! The Fresnel reflectance of a boundary between two dielectrics (twin:
+//! `shaders/fresnel.wgsl`), shared by glass and plastic's coat.
+
+/// Cosine of the refracted angle for incidence cosine `cos_i` and relative index
+/// `eta = n_incident / n_transmitted`, or `None` under total internal reflection.
+#[inline]
+pub fn refract_cos(cos_i: f32, eta: f32) -> Option<f32> {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    (sin2_t < 1.0).then(|| (1.0 - sin2_t).sqrt())
+}
+
+/// Exact unpolarised Fresnel reflectance: the mean of the s and p reflectances.
+#[inline]
+pub fn fresnel(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
