@@ -20,6 +20,10 @@ const CHI_SQUARE_COMPARISONS: f64 = (ROUGHNESS.len() * ANGLES.len() + 4) as f64;
 /// samples each, cells expected below 5 pooled. Sampling does not depend on eta and k, so one
 /// metal stands for all.
 #[test]
+#[cfg_attr(
+    not(feature = "gpu"),
+    ignore = "CPU-only and slow: the default build runs it"
+)]
 fn conductor_sampling_follows_its_pdf() {
     let per_test = per_test_level(CHI_SQUARE_COMPARISONS);
     let mut failures = Vec::new();

@@ -51,6 +51,10 @@ fn glass_chi_square(
 /// 0.01, Sidak-corrected (each at 1 - 0.99^(1/52) = 1.9e-4). 500 000 samples each, over 1 536
 /// cells (both hemispheres) plus the draws that end the path, cells expected below 5 pooled.
 #[test]
+#[cfg_attr(
+    not(feature = "gpu"),
+    ignore = "CPU-only and slow: the default build runs it"
+)]
 fn dielectric_sampling_follows_its_pdf() {
     let per_test = per_test_level((grid().len() + 4) as f64);
     let mut failures = Vec::new();

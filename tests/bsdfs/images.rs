@@ -76,6 +76,10 @@ fn cornell_with_microfacets() -> Scene {
 /// spp, the equivalence test of tests/common/stats.rs), and the same test catches nee with the
 /// light 2% brighter.
 #[test]
+#[cfg_attr(
+    not(feature = "gpu"),
+    ignore = "CPU-only and slow: the default build runs it"
+)]
 fn microfacet_nee_and_naive_agree() {
     let scene = cornell_with_microfacets();
     let naive = render_cpu(&scene, &opts(16, 16, 20_000, 10, 1));

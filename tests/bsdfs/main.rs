@@ -3,7 +3,9 @@
 //! negative controls), `eval / pdf` is the sampled weight, `eval` is reciprocal, directional
 //! albedo stays <= 1 (the white furnace), the conductor's Fresnel term is the complex one, bad
 //! parameters are located errors, and images agree between integrators and backends. The
-//! kernel's `sample`, `eval` and `pdf` equal the CPU's at 20 000 random queries.
+//! kernel's `sample`, `eval` and `pdf` equal the CPU's at 20 000 random queries. The slowest
+//! tests use the CPU alone and run in the default build only: CI runs both builds, and the
+//! same arithmetic twice would add a minute.
 #![cfg_attr(not(feature = "gpu"), allow(unused))]
 
 #[path = "../common/mod.rs"]

@@ -37,6 +37,10 @@ fn grid() -> Vec<(Vec3, f32, f32, f32)> {
 /// The grid (40 comparisons) at family-wise significance 0.01, Sidak-corrected (each at
 /// 1 - 0.99^(1/40) = 2.5e-4), 500 000 samples each, cells expected below 5 pooled.
 #[test]
+#[cfg_attr(
+    not(feature = "gpu"),
+    ignore = "CPU-only and slow: the default build runs it"
+)]
 fn plastic_sampling_follows_its_pdf() {
     let per_test = per_test_level(grid().len() as f64);
     let mut failures = Vec::new();
@@ -147,6 +151,10 @@ fn plastic_eval_is_reciprocal() {
 /// lose, printed for the record. 200 000 samples; "<= 1" and "= 1" are within 5 standard
 /// errors of the mean, estimated from the samples.
 #[test]
+#[cfg_attr(
+    not(feature = "gpu"),
+    ignore = "CPU-only and slow: the default build runs it"
+)]
 fn plastic_white_furnace() {
     const N: u32 = 200_000;
     let h = hit(Vec3::Z);
