@@ -1,7 +1,7 @@
 // GGX microfacets with height-correlated Smith masking-shadowing, in a local frame whose z is
 // the shading normal (twin: src/material/microfacet.rs, which says why these forms).
 
-//#if MICROFACET || PLASTIC
+//#if MICROFACET || PLASTIC || PBR
 fn ggx_d(alpha: f32, m: vec3f) -> f32 {
     let a2 = alpha * alpha;
     let t = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;

@@ -226,7 +226,12 @@ fn gltf_node_transforms_selection_and_materials() {
         other => panic!("lamp: {other:?}"),
     }
     match gold.material {
-        Some(Material::Metal(m)) => assert!((m.fuzz - 0.2).abs() < 1e-6),
+        Some(Material::Pbr(m)) => {
+            assert_eq!(
+                (m.metallic, m.roughness, m.ior, m.transmission),
+                (1.0, 0.2, 1.5, 0.0)
+            );
+        }
         other => panic!("gold: {other:?}"),
     }
     // One node by name: its own transform and its children's, not its parents'.

@@ -239,6 +239,9 @@ def mitsuba_scene(path, width, height, max_depth, sampler, roulette_depth=5):
                 inner = {"type": "roughplastic", "distribution": "ggx", "alpha": roughness ** 2,
                          "sample_visible": True, **coat}
             bsdfs[name] = {"type": "twosided", "inner": inner}
+        elif kind == "pbr":
+            sys.exit("pbr has no exact Mitsuba twin: compare a scene without it "
+                     "(of scenes/materials.toml, its back row of pbr-* spheres)")
         elif kind == "medium":
             bsdfs[name] = {"type": "null"}
             interiors[name] = homogeneous(m)

@@ -29,6 +29,7 @@ const MODULES: &[(&str, &str)] = &[
     ),
     ("accel.wgsl", include_str!("../../shaders/accel.wgsl")),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
+    ("coat.wgsl", include_str!("../../shaders/coat.wgsl")),
     (
         "environment.wgsl",
         include_str!("../../shaders/environment.wgsl"),

@@ -196,6 +196,7 @@ macro_rules! registry {
 }
 
 pub mod bsdf;
+pub mod coat;
 pub mod fresnel;
 pub mod microfacet;
 pub mod texture;
@@ -210,6 +211,7 @@ registry! {
     medium::Medium,
     conductor::Conductor,
     plastic::Plastic,
+    pbr::Pbr,
 }
 
 impl Material {

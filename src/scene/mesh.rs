@@ -520,12 +520,12 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
         .collect()
 }
 
-/// A glTF metallic-roughness material as the closest rt-gpu material (textures are not read):
-/// emissive -> light (emissive factor x KHR_materials_emissive_strength, two-sided when the
-/// material is), transmission -> dielectric (KHR_materials_ior, default 1.5), metallic >= 0.5
-/// -> metal (fuzz = roughness), else lambertian with the base colour.
+/// A glTF metallic-roughness material as rt-gpu's (textures are not read): emissive -> light
+/// (emissive factor x KHR_materials_emissive_strength, two-sided when the material is), else
+/// `pbr` with the base colour, metallic and roughness factors, KHR_materials_ior (default 1.5)
+/// and KHR_materials_transmission's factor (default 0).
 pub fn material_of(m: &gltf::Material) -> Material {
-    use crate::material::{Dielectric, Lambertian, Light, Metal};
+    use crate::material::{Light, Pbr};
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
@@ -538,23 +538,21 @@ pub fn material_of(m: &gltf::Material) -> Material {
             two_sided: m.double_sided(),
         });
     }
-    if m.transmission()
-        .is_some_and(|t| t.transmission_factor() > 0.0)
-    {
-        return Material::Dielectric(Dielectric {
-            ior: m.ior().unwrap_or(1.5).clamp(1.0, 4.0),
-            roughness: 0.0,
-            medium: None,
-        });
-    }
-    if pbr.metallic_factor() >= 0.5 {
-        return Material::Metal(Metal {
-            albedo: base.into(),
-            fuzz: pbr.roughness_factor().clamp(0.0, 1.0),
-        });
-    }
-    Material::Lambertian(Lambertian {
-        albedo: base.into(),
-        emission: Vec3::ZERO,
-    })
+    let unit = |x: f32| {
+        if x.is_finite() {
+            x.clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    };
+    Material::Pbr(Pbr::new(
+        base.into(),
+        unit(pbr.metallic_factor()),
+        unit(pbr.roughness_factor()),
+        m.ior()
+            .filter(|i| i.is_finite())
+            .unwrap_or(1.5)
+            .clamp(1.0, 4.0),
+        unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
+    ))
 }

@@ -8,14 +8,15 @@ use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, opts, render_cpu};
 use rt_gpu::material::conductor::METALS;
-use rt_gpu::material::{Conductor, Dielectric, Plastic};
+use rt_gpu::material::{Conductor, Dielectric, Pbr, Plastic};
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::texture::Texture;
 use rt_gpu::scene::{Scene, Shape};
 
 /// The Cornell box with microfacet materials: the short box rough gold (0.3), its glass ball a
 /// smooth silver mirror, a rough copper sphere (0.7) in the air, a rough glass one (0.5) in the
-/// front corner by the green wall and a blue plastic one (0.2) on the floor at the front:
+/// front corner by the green wall, a blue plastic one (0.2) on the floor at the front and a
+/// half-metallic pbr one (0.4) by the red wall:
 /// smooth and rough lobes, reflected and refracted, over a diffuse base, light sampled at the
 /// rough ones only. (Glass above the short box casts a shadow there that only its caustic
 /// lights: without nee, 20 000 spp find too few of those paths, and the dim pixels fail the
@@ -37,6 +38,16 @@ fn cornell_with_microfacets() -> Scene {
         Material::Conductor(Conductor::metal("Cu", 0.7).expect("known")),
     );
     let frosted = add("frosted", Material::Dielectric(Dielectric::rough(1.5, 0.5)));
+    let brass = add(
+        "brass",
+        Material::Pbr(Pbr::new(
+            Texture::Colour(Vec3::new(0.8, 0.7, 0.2)),
+            0.5,
+            0.4,
+            1.5,
+            0.0,
+        )),
+    );
     let varnish = add(
         "varnish",
         Material::Plastic(Plastic::new(
@@ -68,6 +79,13 @@ fn cornell_with_microfacets() -> Scene {
             radius: 40.0,
         },
         varnish,
+    ));
+    scene.objects.push(object(
+        Shape::Sphere {
+            center: Vec3::new(500.0, 50.0, 200.0),
+            radius: 50.0,
+        },
+        brass,
     ));
     scene
 }
@@ -178,6 +196,14 @@ fn microfacet_kernel_matches_cpu() {
                 .material_names
                 .push(format!("plastic-{ior}-{roughness}"));
         }
+        for (metallic, transmission) in [(0.0, 0.0), (0.5, 0.0), (1.0, 0.0), (0.0, 0.5)] {
+            let base = Texture::Colour(Vec3::new(0.8, 0.7, 0.2));
+            let m = Pbr::new(base, metallic, roughness, 1.5, transmission);
+            scene.materials.push(Material::Pbr(m));
+            scene
+                .material_names
+                .push(format!("pbr-{metallic}-{transmission}-{roughness}"));
+        }
     }
     // Every material is used, so that the kernel holds them.
     for m in first..scene.materials.len() as u32 {
@@ -196,7 +222,10 @@ fn microfacet_kernel_matches_cpu() {
         .filter(|&m| {
             matches!(
                 flat.materials[m as usize],
-                Material::Conductor(_) | Material::Dielectric(_) | Material::Plastic(_)
+                Material::Conductor(_)
+                    | Material::Dielectric(_)
+                    | Material::Plastic(_)
+                    | Material::Pbr(_)
             )
         })
         .collect();

@@ -1,4 +1,4 @@
-//! Microfacet BSDFs (conductors, rough glass, plastic): `sample` draws directions with exactly the
+//! Microfacet BSDFs (conductors, rough glass, plastic, glTF's pbr): `sample` draws directions with exactly the
 //! density `pdf` reports (chi-square over a grid of roughness, indices and incident angles, with
 //! negative controls), `eval / pdf` is the sampled weight, `eval` is reciprocal, directional
 //! albedo stays <= 1 (the white furnace), the conductor's Fresnel term is the complex one, bad
@@ -15,6 +15,7 @@ mod conductor;
 mod dielectric;
 mod histogram;
 mod images;
+mod pbr;
 mod plastic;
 
 use glam::Vec3;
@@ -121,7 +122,8 @@ fn upper(i: u32, seed: u32) -> Vec3 {
     Vec3::new(v.x, v.y, v.z.abs().max(1e-3)).normalize()
 }
 
-/// The shipped scene loads: rows of seven conductors, glasses and plastics, roughness 0 to 1.
+/// The shipped scene loads: rows of seven conductors, glasses and plastics, roughness 0 to 1,
+/// and of seven pbr materials, metallic 0 to 1.
 #[test]
 fn the_materials_scene_loads() {
     let scene = rt_gpu::scene::file::load(std::path::Path::new("scenes/materials.toml"))
@@ -145,4 +147,9 @@ fn the_materials_scene_loads() {
         _ => None,
     });
     assert_eq!(plastics, glasses);
+    let metallic = roughness(|m| match m {
+        Material::Pbr(p) => Some(p.metallic),
+        _ => None,
+    });
+    assert_eq!(metallic, [0.0, 0.17, 0.33, 0.5, 0.67, 0.83, 1.0]);
 }

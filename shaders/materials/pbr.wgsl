@@ -1,0 +1,135 @@
+// glTF's metallic-roughness material (twin: src/material/pbr.rs, whose comment gives the
+// model): a mix of a coat over the base colour (shaders/coat.wgsl, not saturating), rough glass
+// whose transmission it tints (dielectric.wgsl's functions) and a GGX metal with Schlick's
+// Fresnel from F0 = base colour. Packed: albedo (and texture_*): base colour; param: ior; alpha:
+// GGX alpha (0: smooth); internal_reflectance: the coat's K; emission: metallic, transmission, 0.
+
+fn schlick(f0: vec3f, cos: f32) -> vec3f {
+    let x = pow(1.0 - clamp(cos, 0.0, 1.0), 5.0);
+    return f0 + (vec3f(1.0) - f0) * x;
+}
+
+// The glass of the mix: as dielectric.wgsl packs a dielectric (an index of 1 is smooth).
+fn pbr_glass(m: Material) -> Material {
+    var g = m;
+    if g.param == 1.0 {
+        g.alpha = 0.0;
+    }
+    return g;
+}
+
+fn pbr_samples_lights(m: Material) -> bool {
+    return (1.0 - m.emission.x) * (1.0 - m.emission.y) > 0.0 || m.alpha > 0.0;
+}
+
+// The metal's BSDF x cos (xyz) and pdf (w) at (wo, wi), rough only.
+fn pbr_metal(m: Material, base: vec3f, wo: vec3f, wi: vec3f, hit: Hit) -> vec4f {
+    let frame = frame_of(hit.shading);
+    let wo_local = to_local(frame, wo);
+    let wi_local = to_local(frame, wi);
+    if !(m.alpha > 0.0) || !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
+        return vec4f(0.0);
+    }
+    let mf = normalize(wo_local + wi_local);
+    let f = schlick(base, dot(wo_local, mf)) * (ggx_d(m.alpha, mf) * ggx_g2(m.alpha, wo_local, wi_local) / (4.0 * wo_local.z));
+    return vec4f(f, ggx_reflection_pdf(m.alpha, wo_local, mf));
+}
+
+fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
+    let w_coat = (1.0 - m.emission.x) * (1.0 - m.emission.y);
+    let w_glass = (1.0 - m.emission.x) * m.emission.y;
+    let w_metal = m.emission.x;
+    let base = albedo_at(m, hit);
+    var f = vec3f(0.0);
+    if w_coat > 0.0 {
+        f += w_coat * coat_eval(base, m.param, m.alpha, m.internal_reflectance, false, wo, wi, hit);
+    }
+//#if DIELECTRIC
+    if w_glass > 0.0 {
+        let tint = select(vec3f(1.0), base, dot(wi, hit.shading) < 0.0);
+        f += w_glass * tint * dielectric_eval(pbr_glass(m), wo, wi, hit);
+    }
+//#endif
+    if w_metal > 0.0 {
+        f += w_metal * pbr_metal(m, base, wo, wi, hit).xyz;
+    }
+    return f;
+}
+
+fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+    let w_coat = (1.0 - m.emission.x) * (1.0 - m.emission.y);
+    let w_glass = (1.0 - m.emission.x) * m.emission.y;
+    let w_metal = m.emission.x;
+    let base = albedo_at(m, hit);
+    var pdf = 0.0;
+    if w_coat > 0.0 {
+        pdf += w_coat * coat_pdf(base, m.param, m.alpha, wo, wi, hit);
+    }
+//#if DIELECTRIC
+    if w_glass > 0.0 {
+        pdf += w_glass * dielectric_pdf(pbr_glass(m), wo, wi, hit);
+    }
+//#endif
+    if w_metal > 0.0 {
+        pdf += w_metal * pbr_metal(m, base, wo, wi, hit).w;
+    }
+    return pdf;
+}
+
+fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
+    let w_coat = (1.0 - m.emission.x) * (1.0 - m.emission.y);
+    let w_glass = (1.0 - m.emission.x) * m.emission.y;
+    let base = albedo_at(m, hit);
+    let u = sampler_next(sampler);
+    if u < w_coat {
+        let v = sampler_next(sampler);
+        let u1 = sampler_next(sampler);
+        let u2 = sampler_next(sampler);
+        out = coat_sample(base, m.param, m.alpha, m.internal_reflectance, false, wo, hit, v, u1, u2);
+    } else if u < w_coat + w_glass {
+//#if DIELECTRIC
+        out = dielectric_sample(pbr_glass(m), wo, hit, sampler);
+        // A direction within rounding of where the glass's own density vanishes: not one for
+        // the other components' densities to weigh.
+        if out.lobe != 0u && (out.lobe & LOBE_DELTA) == 0u && !(dielectric_pdf(pbr_glass(m), wo, out.wi, hit) > 0.0) {
+            out.lobe = 0u;
+        }
+        out.weight *= select(vec3f(1.0), base, (out.lobe & LOBE_TRANSMISSION) != 0u);
+//#endif
+    } else {
+        let u1 = sampler_next(sampler);
+        let u2 = sampler_next(sampler);
+        let frame = frame_of(hit.shading);
+        let wo_local = to_local(frame, wo);
+        if !(wo_local.z > MIN_COSINE) {
+            return out;
+        }
+        if !(m.alpha > 0.0) {
+            out.wi = reflect_dir(-wo, hit.shading);
+            out.weight = schlick(base, wo_local.z);
+            out.lobe = select(0u, LOBE_REFLECTION | LOBE_DELTA, !below_surface(hit, out.wi));
+            return out;
+        }
+        let mf = ggx_sample_visible(m.alpha, wo_local, u1, u2);
+        let wi_local = reflect_dir(-wo_local, mf);
+        let wi = to_world(frame, wi_local);
+        // Below the surface the metal's own density is lost mass: the path ends.
+        if !(wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
+            return out;
+        }
+        out.wi = wi;
+        out.lobe = LOBE_REFLECTION | LOBE_GLOSSY;
+    }
+    if out.lobe == 0u || (out.lobe & LOBE_DELTA) != 0u {
+        return out;
+    }
+    let pdf = pbr_pdf(m, wo, out.wi, hit);
+    if !(pdf > 0.0) {
+        out.lobe = 0u;
+        return out;
+    }
+    out.weight = pbr_eval(m, wo, out.wi, hit) / pdf;
+    out.pdf = pdf;
+    return out;
+}

@@ -1,0 +1,299 @@
+//! glTF 2.0's metallic-roughness material (twin: `shaders/materials/pbr.wgsl`), as the
+//! specification's appendix B composes it: a mix by `metallic` of a dielectric and a metal, the
+//! dielectric itself a mix by `transmission` (KHR_materials_transmission) of a coat over a
+//! diffuse base and of rough glass whose transmission the base colour tints. Here the coat is
+//! [`Coat`] without saturation (the base's colour kept, as glTF viewers show it) and exact
+//! Fresnel of `ior` (KHR_materials_ior) where the appendix allows Schlick's; the metal is GGX
+//! with Schlick's Fresnel from F0 = base colour, as the appendix defines it; the glass is
+//! `dielectric`'s.
+//! One roughness for all three (alpha = roughness^2). Two-sided but for the glass.
+//!
+//! Sampling picks a component with its weight in the mix (one number), then samples it: 2
+//! more numbers for the metal, 3 for the coat, glass's own (1 smooth, 3 rough). A non-delta
+//! direction is weighed by the whole mix over the mix's density (one-sample MIS); a delta one
+//! by its component's weight alone.
+
+use super::coat::Coat;
+use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
+use super::plastic::default_ior;
+use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
+use crate::material::texture;
+use crate::scene::file::checked;
+use crate::scene::texture::Texture;
+use crate::shared::layout::GpuMaterial;
+use crate::shared::ray::{Hit, below_surface};
+use crate::shared::sampler::Sampler;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// `{ type = "pbr", base_color = [0.8, 0.7, 0.2], metallic = 1.0, roughness = 0.35, ior = 1.5,
+/// transmission = 0 }`; the defaults are glTF's (metallic 1, roughness 1, ior 1.5,
+/// transmission 0); `base_color` may be any texture.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(try_from = "PbrDoc", into = "PbrDoc")]
+pub struct Pbr {
+    pub base_color: Texture,
+    pub metallic: f32,
+    pub roughness: f32,
+    pub ior: f32,
+    pub transmission: f32,
+    coat: Coat,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct PbrDoc {
+    base_color: Texture,
+    #[serde(default = "one", with = "checked::number")]
+    metallic: f32,
+    #[serde(default = "one", with = "checked::number")]
+    roughness: f32,
+    #[serde(default = "default_ior", with = "checked::number")]
+    ior: f32,
+    #[serde(default, with = "checked::number")]
+    transmission: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl TryFrom<PbrDoc> for Pbr {
+    type Error = String;
+    fn try_from(d: PbrDoc) -> Result<Self, String> {
+        if !(d.ior > 0.0) {
+            return Err(format!("ior must be > 0, got {}", d.ior));
+        }
+        Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission))
+    }
+}
+
+impl From<Pbr> for PbrDoc {
+    fn from(p: Pbr) -> Self {
+        PbrDoc {
+            base_color: p.base_color,
+            metallic: p.metallic,
+            roughness: p.roughness,
+            ior: p.ior,
+            transmission: p.transmission,
+        }
+    }
+}
+
+/// The glass's tint: the base colour on transmission (glTF's `specular_btdf * baseColor`), none
+/// on reflection.
+#[inline]
+fn transmission_tint(base: Vec3, transmitted: bool) -> Vec3 {
+    if transmitted { base } else { Vec3::ONE }
+}
+
+/// Schlick's Fresnel from `f0` at cosine `cos`.
+#[inline]
+pub fn schlick(f0: Vec3, cos: f32) -> Vec3 {
+    let x = (1.0 - cos.clamp(0.0, 1.0)).powi(5);
+    f0 + (Vec3::ONE - f0) * x
+}
+
+impl Pbr {
+    pub fn new(base_color: Texture, metallic: f32, roughness: f32, ior: f32, transmission: f32) -> Self {
+        Pbr {
+            base_color,
+            metallic,
+            roughness,
+            ior,
+            transmission,
+            coat: Coat::new(ior, roughness, false),
+        }
+    }
+
+    /// The weights of the coat, the glass and the metal in the mix.
+    fn weights(&self) -> (f32, f32, f32) {
+        let dielectric = 1.0 - self.metallic;
+        (
+            dielectric * (1.0 - self.transmission),
+            dielectric * self.transmission,
+            self.metallic,
+        )
+    }
+
+    fn ggx(&self) -> Option<Ggx> {
+        (self.coat.alpha > 0.0).then_some(Ggx {
+            alpha: self.coat.alpha,
+        })
+    }
+
+    fn glass(&self) -> Dielectric {
+        Dielectric::rough(self.ior, self.roughness)
+    }
+
+    /// The metal's BSDF x cos and pdf at (wo, wi), rough only.
+    fn metal(&self, base: Vec3, wo: Vec3, wi: Vec3, hit: &Hit) -> (Vec3, f32) {
+        let Some(ggx) = self.ggx() else {
+            return (Vec3::ZERO, 0.0);
+        };
+        let frame = Frame::new(hit.shading);
+        let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
+        if !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
+            return (Vec3::ZERO, 0.0);
+        }
+        let m = (wo_local + wi_local).normalize();
+        let f = schlick(base, wo_local.dot(m)) * (ggx.d(m) * ggx.g2(wo_local, wi_local) / (4.0 * wo_local.z));
+        (f, ggx.reflection_pdf(wo_local, m))
+    }
+}
+
+impl MaterialModel for Pbr {
+    const FEATURE: &'static str = "PBR";
+    /// Rough; glass in the mix; textured base colours.
+    const EXTRA_FEATURES: &'static [&'static str] =
+        &["MICROFACET", "DIELECTRIC", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+    const SAMPLES_LIGHTS: bool = true;
+    const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
+
+    fn validate(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("metallic", self.metallic),
+            ("roughness", self.roughness),
+            ("transmission", self.transmission),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!("{name} must be in [0, 1], got {v}"));
+            }
+        }
+        if !(self.ior > 0.0) {
+            return Err(format!("ior must be > 0, got {}", self.ior));
+        }
+        self.base_color.validate_albedo()
+    }
+
+    fn extra_features(&self) -> Vec<&'static str> {
+        let rough = (self.roughness * self.roughness >= MIN_ALPHA).then_some("MICROFACET");
+        let glass = (self.weights().1 > 0.0).then_some("DIELECTRIC");
+        rough
+            .into_iter()
+            .chain(glass)
+            .chain(self.base_color.feature())
+            .collect()
+    }
+
+    fn relocated(self, origin: glam::DVec3) -> Self {
+        Pbr {
+            base_color: self.base_color.relocated(origin),
+            ..self
+        }
+    }
+
+    fn textures(&self) -> Vec<Texture> {
+        vec![self.base_color]
+    }
+
+    /// A lobe that is not a delta: the coat's base, or any rough one.
+    fn samples_lights(&self) -> bool {
+        self.weights().0 > 0.0 || self.ggx().is_some()
+    }
+
+    fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+        let (w_coat, w_glass, _) = self.weights();
+        let base = texture::value(&self.base_color, hit);
+        let u = sampler.next_f32();
+        let chosen = if u < w_coat {
+            let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
+            self.coat.sample(base, wo, hit, numbers)?
+        } else if u < w_coat + w_glass {
+            let s = self.glass().sample(wo, hit, sampler)?;
+            // A direction within rounding of where the glass's own density vanishes: not one
+            // for the other components' densities to weigh.
+            if !s.lobe.is_delta() && !(self.glass().pdf(wo, s.wi, hit) > 0.0) {
+                return None;
+            }
+            BsdfSample {
+                weight: s.weight * transmission_tint(base, s.lobe.is_transmission()),
+                ..s
+            }
+        } else {
+            let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+            let frame = Frame::new(hit.shading);
+            let wo_local = frame.to_local(wo);
+            if !(wo_local.z > MIN_COSINE) {
+                return None;
+            }
+            let Some(ggx) = self.ggx() else {
+                let wi = reflect(-wo, hit.shading);
+                return (!below_surface(hit, wi)).then(|| BsdfSample {
+                    weight: schlick(base, wo_local.z),
+                    wi,
+                    pdf: 0.0,
+                    lobe: Lobe::DELTA_REFLECTION,
+                });
+            };
+            let m = ggx.sample_visible(wo_local, u1, u2);
+            let wi_local = reflect(-wo_local, m);
+            let wi = frame.to_world(wi_local);
+            // Below the surface the metal's own density is lost mass: the path ends, as a
+            // conductor's does, rather than count under the other components' densities.
+            if !(wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
+                return None;
+            }
+            BsdfSample {
+                weight: Vec3::ZERO,
+                wi,
+                pdf: 0.0,
+                lobe: Lobe::GLOSSY_REFLECTION,
+            }
+        };
+        if chosen.lobe.is_delta() {
+            return Some(chosen);
+        }
+        let pdf = self.pdf(wo, chosen.wi, hit);
+        (pdf > 0.0).then(|| BsdfSample {
+            weight: self.eval(wo, chosen.wi, hit) / pdf,
+            pdf,
+            ..chosen
+        })
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+        let (w_coat, w_glass, w_metal) = self.weights();
+        let base = texture::value(&self.base_color, hit);
+        let mut f = Vec3::ZERO;
+        if w_coat > 0.0 {
+            f += w_coat * self.coat.eval(base, wo, wi, hit);
+        }
+        if w_glass > 0.0 {
+            let tint = transmission_tint(base, wi.dot(hit.shading) < 0.0);
+            f += w_glass * tint * self.glass().eval(wo, wi, hit);
+        }
+        if w_metal > 0.0 {
+            f += w_metal * self.metal(base, wo, wi, hit).0;
+        }
+        f
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+        let (w_coat, w_glass, w_metal) = self.weights();
+        let base = texture::value(&self.base_color, hit);
+        let mut pdf = 0.0;
+        if w_coat > 0.0 {
+            pdf += w_coat * self.coat.pdf(base, wo, wi, hit);
+        }
+        if w_glass > 0.0 {
+            pdf += w_glass * self.glass().pdf(wo, wi, hit);
+        }
+        if w_metal > 0.0 {
+            pdf += w_metal * self.metal(base, wo, wi, hit).1;
+        }
+        pdf
+    }
+
+    /// albedo (and texture_*): base colour; param: ior; alpha: GGX alpha (0: smooth);
+    /// internal_reflectance: the coat's K; emission: metallic, transmission, 0.
+    fn gpu(&self) -> GpuMaterial {
+        GpuMaterial {
+            param: self.ior,
+            alpha: self.coat.alpha,
+            internal_reflectance: self.coat.internal_reflectance,
+            emission: [self.metallic, self.transmission, 0.0],
+            ..GpuMaterial::with_albedo(&self.base_color)
+        }
+    }
+}
