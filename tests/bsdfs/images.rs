@@ -90,6 +90,19 @@ fn cornell_with_microfacets() -> Scene {
     scene
 }
 
+/// The CPU's films of the box with microfacets, 16x16 at 20 000 spp, naive (seed 1) and nee
+/// (seed 2): rendered once for the tests of both integrators and of both backends.
+fn cpu_films() -> &'static [rt_gpu::film::Film; 2] {
+    static FILMS: std::sync::OnceLock<[rt_gpu::film::Film; 2]> = std::sync::OnceLock::new();
+    FILMS.get_or_init(|| {
+        let scene = cornell_with_microfacets();
+        [
+            render_cpu(&scene, &opts(16, 16, 20_000, 10, 1)),
+            render_cpu(&scene, &nee_opts(16, 16, 20_000, 10, 2)),
+        ]
+    })
+}
+
 /// nee and naive converge to the same image of the box with microfacets (CPU; 16x16 at 20 000
 /// spp, the equivalence test of tests/common/stats.rs), and the same test catches nee with the
 /// light 2% brighter.
@@ -100,10 +113,9 @@ fn cornell_with_microfacets() -> Scene {
 )]
 fn microfacet_nee_and_naive_agree() {
     let scene = cornell_with_microfacets();
-    let naive = render_cpu(&scene, &opts(16, 16, 20_000, 10, 1));
-    let nee = render_cpu(&scene, &nee_opts(16, 16, 20_000, 10, 2));
+    let [naive, nee] = cpu_films();
     assert_eq!(naive.invalid_samples + nee.invalid_samples, 0);
-    let verdict = compare(&naive, &nee);
+    let verdict = compare(naive, nee);
     eprintln!("microfacets: naive vs nee: {verdict:?}");
     assert!(verdict.passed(), "naive and nee differ: {verdict:?}");
 
@@ -119,7 +131,7 @@ fn microfacet_nee_and_naive_agree() {
         two_sided: false,
     });
     let verdict = compare(
-        &naive,
+        naive,
         &render_cpu(&brighter, &nee_opts(16, 16, 20_000, 10, 2)),
     );
     eprintln!("microfacets, light +2%: {verdict:?}");
@@ -138,22 +150,14 @@ fn microfacet_gpu_matches_cpu() {
         return;
     };
     let scene = cornell_with_microfacets();
-    for (label, a, b) in [
-        (
-            "naive",
-            opts(16, 16, 20_000, 10, 1),
-            opts(16, 16, 20_000, 10, 3),
-        ),
-        (
-            "nee",
-            nee_opts(16, 16, 20_000, 10, 2),
-            nee_opts(16, 16, 20_000, 10, 4),
-        ),
+    let [naive, nee] = cpu_films();
+    for (label, cpu, b) in [
+        ("naive", naive, opts(16, 16, 20_000, 10, 3)),
+        ("nee", nee, nee_opts(16, 16, 20_000, 10, 4)),
     ] {
-        let cpu = render_cpu(&scene, &a);
         let gpu_film = render_gpu(&gpu, &scene, &b, &rt_gpu::gpu::Tuning::default());
         assert_eq!(gpu_film.invalid_samples, 0, "{label}");
-        let verdict = compare(&cpu, &gpu_film);
+        let verdict = compare(cpu, &gpu_film);
         eprintln!("microfacets, {label}: cpu vs gpu: {verdict:?}");
         assert!(verdict.passed(), "{label}: cpu and gpu differ: {verdict:?}");
     }
