@@ -12,6 +12,7 @@ pub mod film;
 pub mod film_file;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod levels;
 pub mod material;
 pub mod options;
 pub mod output;
@@ -21,6 +22,8 @@ pub mod progressive;
 pub mod render;
 pub mod scene;
 pub mod shared;
+#[cfg(feature = "viewer")]
+pub mod viewer;
 
 thread_local! {
     static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };

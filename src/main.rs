@@ -42,6 +42,8 @@ fn main() -> ExitCode {
         Some(Command::Scenes { export, force }) => {
             cli::scenes::list_scenes(export.as_deref(), force)
         }
+        #[cfg(feature = "viewer")]
+        Some(Command::View(args)) => cli::view::view(&args),
         Some(Command::Devices) => cli::devices::list_devices(),
         Some(Command::Bench(args)) => cli::bench::bench(&args),
         Some(Command::Converge(args)) => cli::converge::converge(&args),

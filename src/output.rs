@@ -3,6 +3,7 @@
 //! never clobbers an existing image.
 
 use crate::film::Film;
+use crate::levels::Levels;
 use anyhow::Context;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -70,6 +71,15 @@ impl Transfer {
         }
     }
 
+    /// The 8-bit levels of this curve, decided on a pixel's exact sum (what image files and
+    /// the viewer show).
+    pub fn levels(self) -> Levels {
+        match self {
+            Transfer::Srgb => Levels::new(|c, _| Transfer::Srgb.encode(c), 0.0),
+            Transfer::Gamma(g) => Levels::new(|c, g| Transfer::Gamma(g).encode(c), g),
+        }
+    }
+
     /// One linear value as 8 bits; negative and non-finite values are black.
     pub fn encode(self, linear: f32) -> u8 {
         let c = if linear.is_finite() {
@@ -105,29 +115,22 @@ pub fn encode_image(
     film: &Film,
     transfer: Transfer,
 ) -> anyhow::Result<Vec<u8>> {
-    let to_8bit = |c: f32| transfer.encode(c);
-    let rgb = film.mean_rgb();
     let (w, h) = (film.width, film.height);
     let mut out = std::io::Cursor::new(Vec::new());
     match format {
         ImageFormat::Png => {
-            let bytes: Vec<u8> = rgb.iter().flatten().map(|&c| to_8bit(c)).collect();
+            let levels = transfer.levels();
+            let bytes: Vec<u8> = film.pixels.iter().flat_map(|p| levels.pixel(p)).collect();
             let img = image::RgbImage::from_raw(w, h, bytes).context("image buffer size")?;
             img.write_to(&mut out, image::ImageFormat::Png)?;
         }
         ImageFormat::Ppm => {
+            let levels = transfer.levels();
             let mut text = BufWriter::new(&mut out);
             writeln!(text, "P3\n{w} {h}\n255")?;
-            for row in rgb.chunks(w as usize) {
-                for px in row {
-                    writeln!(
-                        text,
-                        "{} {} {}",
-                        to_8bit(px[0]),
-                        to_8bit(px[1]),
-                        to_8bit(px[2])
-                    )?;
-                }
+            for p in &film.pixels {
+                let [r, g, b] = levels.pixel(p);
+                writeln!(text, "{r} {g} {b}")?;
             }
             text.flush()?;
         }
@@ -136,7 +139,7 @@ pub fn encode_image(
         ImageFormat::Pfm => {
             let mut bytes = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
             // PFM stores rows bottom to top; -1.0 marks little-endian.
-            for row in rgb.chunks(w as usize).rev() {
+            for row in film.mean_rgb().chunks(w as usize).rev() {
                 for c in row.iter().flatten() {
                     bytes.extend_from_slice(&c.to_le_bytes());
                 }

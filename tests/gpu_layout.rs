@@ -295,3 +295,30 @@ fn a_broken_shader_is_a_clear_error() {
     assert!(err.contains("WGSL"), "{err}");
     assert!(!err.contains('\n'));
 }
+
+/// The display pass's struct, generated into shaders/display.wgsl, as naga lays it out there.
+#[test]
+fn the_display_struct_matches_its_wgsl() {
+    let source = rt_gpu::gpu::display::display_source();
+    let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
+    let (name, rust_size, rust_fields) = rt_gpu::shared::layout::display_layout();
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("WGSL has no struct {name}"))
+        .1;
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("{name} is not a struct");
+    };
+    assert_eq!(*span as usize, rust_size, "size of {name}");
+    let wgsl: Vec<(String, usize)> = members
+        .iter()
+        .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+        .collect();
+    let rust: Vec<(String, usize)> = rust_fields
+        .into_iter()
+        .map(|(n, o)| (n.to_string(), o))
+        .collect();
+    assert_eq!(wgsl, rust, "fields of {name}");
+}

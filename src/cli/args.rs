@@ -81,13 +81,14 @@ impl From<IntegratorArg> for Integrator {
 }
 
 /// The subcommands, for a hint when one is given where a scene was expected.
-pub const SUBCOMMANDS: &[&str] = &["scenes", "devices", "bench", "converge", "merge"];
+pub const SUBCOMMANDS: &[&str] = &["view", "scenes", "devices", "bench", "converge", "merge"];
 
 pub const EXAMPLES: &str = "\
 Examples:
   rt-gpu cornell --spp 1000              render the Cornell box to cornell.png
   rt-gpu scenes/showcase.toml -o a.exr   render a scene file to linear EXR
   rt-gpu spheres --size 800x450 --backend cpu --seed 7 -o spheres.ppm
+  rt-gpu view cornell                    watch it converge in a window; drag to orbit
   rt-gpu cornell --print-shader          show the GPU kernel built for a scene
   rt-gpu scenes                          list the built-in scenes
   rt-gpu devices                         list GPU adapters
@@ -126,6 +127,12 @@ pub enum Command {
         #[arg(long, requires = "export")]
         force: bool,
     },
+    /// Watch a scene converge in a window and move the camera: drag to orbit, right-drag or
+    /// shift-drag to pan, wheel to dolly, W A S D Q E to fly; any move starts the film again.
+    /// Ctrl+S writes the film (an .exr film file and a .png beside it), C prints the camera as
+    /// a [camera] table for the scene file, R restarts, Esc quits.
+    #[cfg(feature = "viewer")]
+    View(ViewArgs),
     /// List the GPU adapters wgpu can see (pick one with --adapter).
     Devices,
     /// Measure million samples per second of each backend, side by side in one run.
@@ -218,6 +225,56 @@ pub struct BenchArgs {
     /// GPU adapter (part of its name).
     #[arg(long)]
     pub adapter: Option<String>,
+}
+
+#[cfg(feature = "viewer")]
+#[derive(Args)]
+pub struct ViewArgs {
+    /// A built-in scene name (see `rt-gpu scenes`) or a scene file (.toml).
+    pub scene: String,
+    /// Stop adding samples at this many per pixel (the image stays shown).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Stop adding samples after this many seconds of a view (the image stays shown).
+    #[arg(long, value_name = "SECONDS")]
+    pub time: Option<f64>,
+    /// The window's first size WIDTHxHEIGHT (the film is the window's size) [default: the
+    /// scene's].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Random seed: as a render's.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Path segments per sample [default: the scene's].
+    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: Option<u32>,
+    /// Where to render: as a render's (the window is always shown by a GPU adapter).
+    #[arg(long, value_enum, default_value_t = RenderBackendArg::Auto)]
+    pub backend: RenderBackendArg,
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
+    pub integrator: IntegratorArg,
+    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
+    pub sampler: SamplerArg,
+    /// Russian roulette from this many path segments on (0: off).
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    pub roulette_depth: u32,
+    /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
+    /// Where Ctrl+S writes the film file (.exr), with a .png beside it [default:
+    /// <scene>-view.exr].
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Test aid: a scripted input (orbit:DX,DY, pan:DX,DY, dolly:N, fly:F,R,U, save, camera,
+    /// restart, quit) or a wait (spp:N), run in order; repeatable.
+    #[arg(long = "step", value_name = "STEP", hide = true, value_parser = rt_gpu::viewer::Step::parse)]
+    pub steps: Vec<rt_gpu::viewer::Step>,
+    /// Test aid: exit once the script has run and the film holds N samples per pixel.
+    #[arg(long, value_name = "N", hide = true)]
+    pub exit_after_spp: Option<u32>,
+    /// Test aid: with --exit-after-spp, write the window's last image to FILE (.png).
+    #[arg(long, value_name = "FILE", hide = true, requires = "exit_after_spp")]
+    pub screenshot: Option<PathBuf>,
 }
 
 #[derive(Args)]

@@ -1,6 +1,6 @@
 //! The `rt-gpu` command line, one file per subcommand: `render` (the default: a scene to an
-//! image, with `checkpoint` for long renders), `scenes`, `devices`, `bench`, `converge` and
-//! `merge`; `args` is the syntax of them all, `signals` how a render stops on Ctrl-C. The
+//! image, with `checkpoint` for long renders), `view` (a window), `scenes`, `devices`,
+//! `bench`, `converge` and `merge`; `args` is the syntax of them all, `signals` how a render stops on Ctrl-C. The
 //! library renders; these files parse options, draw progress bars and print summaries.
 
 pub mod args;
@@ -12,6 +12,8 @@ pub mod merge;
 pub mod render;
 pub mod scenes;
 pub mod signals;
+#[cfg(feature = "viewer")]
+pub mod view;
 
 /// Most characters of an error message: a scene can hold names megabytes long.
 pub const MAX_MESSAGE_CHARS: usize = 600;

@@ -1,7 +1,7 @@
 //! The WGSL kernel as a [`RenderBackend`]: a device opened once, and a kernel compiled for each
 //! sampler the renders ask for (the first one's up front).
 
-use super::{Features, GpuContext, GpuRenderer, Kernel, Tuning};
+use super::{Features, GpuContext, GpuRenderer, Kernel, LiveRender, Tuning};
 use crate::backend::{RenderBackend, Rendered};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
@@ -24,8 +24,19 @@ impl GpuBackend {
         features: Features,
         integrator: Integrator,
     ) -> anyhow::Result<Self> {
+        Self::with_context(GpuContext::new(adapter)?, scene, features, integrator)
+    }
+
+    /// As [`GpuBackend::new`], on a device already open (the viewer's, which shows its
+    /// window).
+    pub fn with_context(
+        ctx: GpuContext,
+        scene: &FlatScene,
+        features: Features,
+        integrator: Integrator,
+    ) -> anyhow::Result<Self> {
         let backend = GpuBackend {
-            renderer: GpuRenderer::new(GpuContext::new(adapter)?),
+            renderer: GpuRenderer::new(ctx),
             features,
             kernels: Mutex::new(Vec::new()),
             integrator,
@@ -47,6 +58,19 @@ impl GpuBackend {
         let kernel = Arc::new(self.renderer.kernel(scene, features, "render")?);
         kernels.push(kernel.clone());
         Ok(kernel)
+    }
+}
+
+impl GpuBackend {
+    /// A render of `scene` with `opts` that stays on the device (see [`LiveRender`]).
+    pub fn live(&self, scene: &FlatScene, opts: &RenderOptions) -> anyhow::Result<LiveRender> {
+        let kernel = self.kernel(scene, opts.sampler)?;
+        Ok(LiveRender::new(&self.renderer, kernel, scene, opts)?)
+    }
+
+    /// The device this backend renders on.
+    pub fn context(&self) -> &GpuContext {
+        &self.renderer.ctx
     }
 }
 

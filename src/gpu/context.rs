@@ -26,7 +26,9 @@ pub enum GpuError {
     TooLarge(String),
 }
 
-/// A device and queue, with what the renderer needs to know about them.
+/// A device and queue, with what the renderer needs to know about them (cloned, the same
+/// device).
+#[derive(Clone)]
 pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -37,7 +39,8 @@ pub struct GpuContext {
     pub failure: Arc<Mutex<Option<GpuError>>>,
 }
 
-fn instance() -> wgpu::Instance {
+/// The instance adapters are found through (`WGPU_BACKEND` may narrow it).
+pub fn instance() -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
     if wgpu::Backends::from_env().is_none() {
         desc.backends = wgpu::Backends::PRIMARY;
@@ -81,7 +84,7 @@ pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
 
 /// The adapter whose name contains `wanted` (case-insensitive), or the best available: a
 /// hardware GPU if there is one, else a software one such as lavapipe.
-fn choose_adapter(
+pub fn choose_adapter(
     instance: &wgpu::Instance,
     wanted: Option<&str>,
 ) -> Result<wgpu::Adapter, GpuError> {
@@ -126,7 +129,11 @@ impl GpuContext {
     /// Opens the adapter whose name contains `wanted` (case-insensitive), or the best available:
     /// a hardware GPU if there is one, else a software one such as lavapipe.
     pub fn new(wanted: Option<&str>) -> Result<Self, GpuError> {
-        let adapter = choose_adapter(&instance(), wanted)?;
+        Self::open(&choose_adapter(&instance(), wanted)?)
+    }
+
+    /// Opens `adapter`'s device (the viewer's, chosen to show its window).
+    pub fn open(adapter: &wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let limits = adapter.limits();

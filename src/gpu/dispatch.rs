@@ -107,6 +107,11 @@ impl DispatchSizer {
 
     /// Samples in a new tile's first dispatch: its cost is unknown, so one sample per pixel
     /// (which the tile height keeps well under the target).
+    /// The most samples one dispatch may take (the loop budget on lavapipe).
+    pub fn max_slice(&self) -> u32 {
+        self.max_slice
+    }
+
     pub fn first_slice(&self) -> u32 {
         self.tuning
             .samples_per_dispatch

@@ -310,6 +310,18 @@ impl FlatScene {
         Ok(flat)
     }
 
+    /// Points this scene's camera as `scene`'s (the scene it was flattened from, its camera
+    /// moved) for a `width` x `height` image, if the camera stays in the scene's recentring
+    /// cell; `false` (nothing changed) if it left it, when the scene must be flattened again.
+    pub fn set_camera(&mut self, scene: &Scene, width: u32, height: u32) -> bool {
+        let origin = (scene.camera.look_from.as_dvec3() / RECENTRE_STEP).trunc() * RECENTRE_STEP;
+        if origin != self.origin {
+            return false;
+        }
+        self.camera = camera_frame(scene, origin, width, height);
+        true
+    }
+
     /// Refuses checkers too fine for f32 to resolve where the scene lies: a solid checker's
     /// cubes must span at least 2^7 f32 steps at the scene's largest (camera-relative)
     /// coordinate, a UV checker at most 2^16 squares across [0, 1]; finer ones alias into

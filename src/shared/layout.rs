@@ -455,6 +455,16 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// The viewer's display pass (shaders/display.wgsl): the film's size and how many window
+    /// pixels a film pixel covers each way.
+    pub struct GpuDisplay as "Display" {
+        film_size: [u32; 2],
+        scale: u32,
+        _pad: u32,
+    }
+}
+
 /// A shared struct's WGSL name, Rust size, and the offsets of its fields other than padding.
 pub type StructLayout = (&'static str, usize, Vec<(&'static str, usize)>);
 
@@ -465,6 +475,12 @@ fn layout_of<T: WgslStruct>() -> StructLayout {
         .filter(|(name, _)| !name.starts_with("_pad"))
         .collect();
     (T::WGSL_NAME, size, fields)
+}
+
+/// Rust's layout of the display pass's struct, for checking against naga's layout of
+/// shaders/display.wgsl.
+pub fn display_layout() -> StructLayout {
+    layout_of::<GpuDisplay>()
 }
 
 /// Rust's layout of every struct the kernel shares, for checking against naga's layout of the

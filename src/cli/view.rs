@@ -1,0 +1,77 @@
+//! `rt-gpu view SCENE`: the options checked, then the window (`rt_gpu::viewer`).
+
+use super::args::{RenderBackendArg, ViewArgs};
+use super::scenes::resolve_scene;
+use anyhow::{Context, bail};
+use rt_gpu::film::check_memory;
+use rt_gpu::output::ImageFormat;
+use rt_gpu::render::{Backend, GpuChoice, RenderOptions};
+use rt_gpu::scene::flat::FlatScene;
+use rt_gpu::viewer::{ViewConfig, run};
+use std::path::PathBuf;
+
+pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
+    if args.adapter.is_some() && args.backend == RenderBackendArg::Cpu {
+        bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
+    }
+    if let Some(t) = args.time
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--time must be a positive number of seconds, got {t}");
+    }
+    let (scene, _) = resolve_scene(&args.scene)?;
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}-view.exr", scene.name)));
+    if ImageFormat::from_path(&output)? != ImageFormat::Exr {
+        bail!(
+            "the viewer writes a film file with a .png beside it: name an .exr output, not {}",
+            output.display()
+        );
+    }
+    if let Some(s) = &args.screenshot
+        && ImageFormat::from_path(s)? != ImageFormat::Png
+    {
+        bail!("--screenshot writes a .png, not {}", s.display());
+    }
+    let (width, height) = args
+        .size
+        .unwrap_or((scene.defaults.width, scene.defaults.height));
+    check_memory(width, height).map_err(anyhow::Error::msg)?;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: 0,
+        first_sample: 0,
+        seed: args.seed,
+        max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
+        integrator: args.integrator.into(),
+        sampler: args.sampler.into(),
+        roulette_depth: args.roulette_depth,
+    };
+    let gpu = GpuChoice {
+        adapter: args.adapter.clone(),
+        everything: false,
+    };
+    let backend = match args.backend {
+        RenderBackendArg::Gpu => Backend::Gpu,
+        RenderBackendArg::Cpu => Backend::Cpu,
+        RenderBackendArg::Auto => {
+            let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+            rt_gpu::render::auto_backend(&gpu, &flat).backend
+        }
+    };
+    run(ViewConfig {
+        scene,
+        opts,
+        backend,
+        gpu,
+        stop_spp: args.spp,
+        stop_seconds: args.time,
+        output,
+        script: args.steps.clone(),
+        exit_after_spp: args.exit_after_spp,
+        screenshot: args.screenshot.clone(),
+    })
+}

@@ -1,0 +1,757 @@
+//! `rt-gpu view`: a window showing the film as it accumulates, on the device that renders it.
+//! Each frame adds samples for about a frame's time (`film.rs`), then the display pass
+//! (`gpu::display`) draws the accumulator into the window's image: the film never comes back
+//! to the host to be shown. Camera moves (`controls.rs`) restart the film, so what is shown is
+//! always an unbiased render of the current view. The same backends, kernel, sampler and film
+//! as batch renders: a film saved here is the one `rt-gpu SCENE` writes for that camera.
+
+pub mod controls;
+pub mod film;
+
+use crate::film_file::{self, FilmMeta};
+use crate::gpu::display::{DisplayPass, read_texture, shows_levels_exactly};
+use crate::gpu::{Features, GpuContext};
+use crate::options::{Backend, RenderOptions};
+use crate::output::{PendingOutput, Transfer};
+use crate::render::GpuChoice;
+use crate::scene::Scene;
+use crate::scene::flat::FlatScene;
+use crate::shared::layout::ACCUM_BYTES_PER_PIXEL;
+use anyhow::{Context, anyhow, bail};
+use controls::{Input, camera_table, moved};
+use film::LiveFilm;
+use std::collections::VecDeque;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::window::{Window, WindowId};
+
+/// A step of a scripted session (tests): an input, or a wait.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Step {
+    Input(Input),
+    /// Wait until the film holds this many samples per pixel.
+    Spp(u32),
+}
+
+impl Step {
+    /// `orbit:DX,DY`, `pan:DX,DY`, `dolly:STEPS`, `fly:F,R,U`, `save`, `camera`, `restart`,
+    /// `quit` or `spp:N`.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let (verb, rest) = text.split_once(':').unwrap_or((text, ""));
+        let numbers = || -> Result<Vec<f32>, String> {
+            rest.split(',')
+                .map(|n| {
+                    n.trim()
+                        .parse::<f32>()
+                        .map_err(|_| format!("'{n}' is not a number"))
+                })
+                .collect()
+        };
+        let pair = || match numbers()?.as_slice() {
+            &[a, b] => Ok((a, b)),
+            _ => Err(format!("{verb} takes two numbers, as {verb}:10,0")),
+        };
+        Ok(Step::Input(match verb {
+            "orbit" => pair().map(|(a, b)| Input::Orbit(a, b))?,
+            "pan" => pair().map(|(a, b)| Input::Pan(a, b))?,
+            "dolly" => match numbers()?.as_slice() {
+                &[s] => Input::Dolly(s),
+                _ => return Err("dolly takes one number, as dolly:2".into()),
+            },
+            "fly" => match numbers()?.as_slice() {
+                &[f, r, u] => Input::Fly(glam::Vec3::new(f, r, u)),
+                _ => return Err("fly takes three numbers, as fly:1,0,0".into()),
+            },
+            "save" => Input::Save,
+            "camera" => Input::PrintCamera,
+            "restart" => Input::Restart,
+            "quit" => Input::Quit,
+            "spp" => {
+                return rest
+                    .trim()
+                    .parse()
+                    .map(Step::Spp)
+                    .map_err(|_| format!("spp takes a sample count, as spp:4, not '{rest}'"));
+            }
+            _ => {
+                return Err(format!(
+                    "unknown step '{verb}': expected orbit, pan, dolly, fly, save, camera, restart, quit or spp"
+                ));
+            }
+        }))
+    }
+}
+
+/// What `rt-gpu view` was asked for.
+pub struct ViewConfig {
+    pub scene: Scene,
+    /// The window's first size is `opts.width` x `opts.height`; `opts.spp` is ignored.
+    pub opts: RenderOptions,
+    pub backend: Backend,
+    pub gpu: GpuChoice,
+    /// Stop adding samples at this many per pixel, or after this many seconds of a view (the
+    /// image stays shown).
+    pub stop_spp: Option<u32>,
+    pub stop_seconds: Option<f64>,
+    /// Where Ctrl+S writes the film file (.exr), with a PNG beside it.
+    pub output: PathBuf,
+    /// Test aids: scripted steps, run in order as frames pass; exit once the film holds this
+    /// many samples (after the script), writing the window's image to `screenshot`.
+    pub script: Vec<Step>,
+    pub exit_after_spp: Option<u32>,
+    pub screenshot: Option<PathBuf>,
+}
+
+/// Opens the window and runs until it is closed (or the test aids end it).
+pub fn run(config: ViewConfig) -> anyhow::Result<()> {
+    if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
+        bail!("no display: set DISPLAY, or render to a file with rt-gpu SCENE");
+    }
+    let event_loop = EventLoop::new().map_err(|e| {
+        // winit's message starts with where in its source it failed: only the reason is kept.
+        let message = e.to_string();
+        let reason = message.rsplit(": ").next().unwrap_or(&message);
+        anyhow!(
+            "cannot open the display {} ({reason}): set DISPLAY to a running X server, or render to a file with rt-gpu SCENE",
+            std::env::var("DISPLAY").unwrap_or_default()
+        )
+    })?;
+    let mut app = App {
+        config,
+        viewer: None,
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
+    if let Some(e) = app.error {
+        return Err(e);
+    }
+    if let Some(v) = &app.viewer {
+        let seconds = v.opened.elapsed().as_secs_f64();
+        let _ = writeln!(
+            std::io::stderr().lock(),
+            "viewed {}: {} frames in {seconds:.1} s ({:.1} frames/s; {:.1} s rendering, {:.1} s displaying), {:.2} Msamples/s, {} spp at the end",
+            v.scene.name,
+            v.frames,
+            v.frames as f64 / seconds,
+            v.render_seconds,
+            v.display_seconds,
+            v.samples as f64 / seconds * 1e-6,
+            v.film.spp()
+        );
+    }
+    Ok(())
+}
+
+struct App {
+    config: ViewConfig,
+    viewer: Option<Viewer>,
+    error: Option<anyhow::Error>,
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error.get_or_insert(e);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.viewer.is_some() {
+            return;
+        }
+        match Viewer::open(event_loop, &self.config) {
+            Ok(v) => self.viewer = Some(v),
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        let result = match event {
+            // Closed by the window manager, or destroyed by another client: a normal end.
+            WindowEvent::CloseRequested | WindowEvent::Destroyed => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => viewer.frame(&self.config, event_loop),
+            event => viewer.handle(&self.config, event_loop, event),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(viewer) = &self.viewer {
+            if viewer.busy(&self.config) {
+                event_loop.set_control_flow(ControlFlow::Poll);
+                viewer.window.request_redraw();
+            } else {
+                event_loop.set_control_flow(ControlFlow::Wait);
+            }
+        }
+    }
+}
+
+/// The window, its device and the film it shows.
+struct Viewer {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    surface_config: wgpu::SurfaceConfiguration,
+    /// The format the display pass draws in (the surface's, without the sRGB curve).
+    view_format: wgpu::TextureFormat,
+    ctx: GpuContext,
+    display: DisplayPass,
+    display_group: wgpu::BindGroup,
+    /// The scene with the current camera, flattened for the current film size.
+    scene: Scene,
+    flat: FlatScene,
+    opts: RenderOptions,
+    /// Window pixels per film pixel (a window too large for one storage binding shows an
+    /// enlarged film).
+    scale: u32,
+    gpu_features: Option<Features>,
+    film: LiveFilm,
+    /// When this view's film started, and samples since then.
+    view_start: Instant,
+    status_at: Instant,
+    error_estimate: Option<(f64, Instant)>,
+    buttons: (bool, bool),
+    modifiers: ModifiersState,
+    cursor: Option<(f64, f64)>,
+    script: VecDeque<Step>,
+    /// Frames in a row whose window image could not be configured.
+    lost_frames: u32,
+    /// For the summary: when the window opened, frames drawn, samples rendered since.
+    opened: Instant,
+    frames: u64,
+    samples: u64,
+    render_seconds: f64,
+    display_seconds: f64,
+}
+
+impl Viewer {
+    fn open(event_loop: &ActiveEventLoop, config: &ViewConfig) -> anyhow::Result<Self> {
+        let opts = config.opts;
+        let window = Arc::new(
+            event_loop
+                .create_window(
+                    Window::default_attributes()
+                        .with_title(format!("rt-gpu view {}", config.scene.name))
+                        .with_inner_size(PhysicalSize::new(opts.width, opts.height)),
+                )
+                .map_err(|e| anyhow!("cannot open a window: {e}"))?,
+        );
+        let instance = crate::gpu::context::instance();
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| anyhow!("cannot draw into the window: {e}"))?;
+        let adapter =
+            crate::gpu::context::choose_adapter(&instance, config.gpu.adapter.as_deref())?;
+        if !adapter.is_surface_supported(&surface) {
+            bail!(
+                "the GPU adapter {} cannot show a window on this display: pick another with --adapter (see `rt-gpu devices`)",
+                adapter.get_info().name
+            );
+        }
+        let ctx = GpuContext::open(&adapter)?;
+        let caps = surface.get_capabilities(&adapter);
+        let exact = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| shows_levels_exactly(f.remove_srgb_suffix()));
+        let format = exact
+            .or_else(|| caps.formats.first().copied())
+            .context("the window offers no image format to draw in")?;
+        let view_format = format.remove_srgb_suffix();
+        if exact.is_none() {
+            warn(&format!(
+                "the window's image format {format:?} re-encodes what is drawn: colours are close to, not exactly, the image file's"
+            ));
+        }
+        let size = window.inner_size();
+        let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        if caps.usages.contains(wgpu::TextureUsages::COPY_SRC) {
+            usage |= wgpu::TextureUsages::COPY_SRC;
+        }
+        let surface_config = wgpu::SurfaceConfiguration {
+            usage,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::Fifo,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            color_space: wgpu::SurfaceColorSpace::Auto,
+            view_formats: if view_format != format {
+                vec![view_format]
+            } else {
+                vec![]
+            },
+        };
+        surface.configure(&ctx.device, &surface_config);
+        let display = DisplayPass::new(&ctx, view_format, &Transfer::Srgb.levels())?;
+        let scene = config.scene.clone();
+        let (opts, scale) = film_size(&ctx, &opts, size.width, size.height);
+        let flat = FlatScene::new(&scene, opts.width, opts.height).context("invalid scene")?;
+        let gpu_features = match config.backend {
+            Backend::Gpu => Some(config.gpu.features(&flat, opts.integrator)),
+            Backend::Cpu => None,
+        };
+        let film = LiveFilm::new(&ctx, gpu_features, &flat, &opts)?;
+        display.set_film(&ctx, opts.width, opts.height, scale);
+        let display_group = display.bind(&ctx, film.accumulator());
+        let now = Instant::now();
+        Ok(Viewer {
+            window,
+            surface,
+            surface_config,
+            view_format,
+            ctx,
+            display,
+            display_group,
+            scene,
+            flat,
+            opts,
+            scale,
+            gpu_features,
+            film,
+            view_start: now,
+            status_at: now,
+            error_estimate: None,
+            buttons: (false, false),
+            modifiers: ModifiersState::empty(),
+            cursor: None,
+            script: config.script.iter().copied().collect(),
+            lost_frames: 0,
+            opened: now,
+            frames: 0,
+            samples: 0,
+            render_seconds: 0.0,
+            display_seconds: 0.0,
+        })
+    }
+
+    /// Samples per pixel this view stops at.
+    fn target_spp(&self, config: &ViewConfig) -> u32 {
+        let script_waits = self.script.iter().any(|s| matches!(s, Step::Spp(_)));
+        match (config.exit_after_spp, config.stop_spp) {
+            _ if script_waits => u32::MAX,
+            (Some(n), _) | (None, Some(n)) => n,
+            (None, None) => u32::MAX,
+        }
+    }
+
+    /// Whether frames should keep coming: samples to add, or a script to run.
+    fn busy(&self, config: &ViewConfig) -> bool {
+        let time_left = config
+            .stop_seconds
+            .is_none_or(|t| self.view_start.elapsed().as_secs_f64() < t);
+        !self.script.is_empty() || (self.film.spp() < self.target_spp(config) && time_left)
+    }
+
+    /// One frame: the script's next steps, samples for about a frame's time, the display pass.
+    fn frame(&mut self, config: &ViewConfig, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        while let Some(&step) = self.script.front() {
+            match step {
+                Step::Spp(n) if self.film.spp() < n => break,
+                Step::Spp(_) => {}
+                Step::Input(input) => self.apply(config, event_loop, input)?,
+            }
+            self.script.pop_front();
+        }
+        let time_left = config
+            .stop_seconds
+            .is_none_or(|t| self.view_start.elapsed().as_secs_f64() < t);
+        let most = match self.script.front() {
+            Some(Step::Spp(n)) => *n,
+            _ => self.target_spp(config),
+        };
+        if time_left && self.film.spp() < most {
+            let start = Instant::now();
+            let added = self.film.advance(&self.flat, FRAME_SECONDS, most)?;
+            self.render_seconds += start.elapsed().as_secs_f64();
+            self.samples += added as u64 * self.opts.width as u64 * self.opts.height as u64;
+        }
+        let finished =
+            self.script.is_empty() && config.exit_after_spp.is_some_and(|n| self.film.spp() >= n);
+        if finished || !self.busy(config) {
+            // What is shown then is exactly the film of spp() samples.
+            self.film.complete()?;
+        }
+        let shot = if finished {
+            config.screenshot.as_deref()
+        } else {
+            None
+        };
+        let start = Instant::now();
+        self.draw(shot)?;
+        self.ctx.wait()?;
+        self.display_seconds += start.elapsed().as_secs_f64();
+        self.frames += 1;
+        self.update_status(false)?;
+        if finished {
+            event_loop.exit();
+        }
+        Ok(())
+    }
+
+    /// Draws the film into the window (and into `screenshot`, a PNG, if given).
+    fn draw(&mut self, screenshot: Option<&Path>) -> anyhow::Result<()> {
+        let frame = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                // A window being destroyed (its Destroyed event still to come) refuses a new
+                // configuration: a few frames are skipped, then it is an error.
+                let scope = self
+                    .ctx
+                    .device
+                    .push_error_scope(wgpu::ErrorFilter::Validation);
+                self.surface
+                    .configure(&self.ctx.device, &self.surface_config);
+                if let Some(e) = pollster::block_on(scope.pop()) {
+                    self.lost_frames += 1;
+                    if self.lost_frames > MAX_LOST_FRAMES {
+                        bail!(
+                            "the window's image was lost: {}",
+                            e.to_string().replace('\n', " ")
+                        );
+                    }
+                } else {
+                    self.lost_frames = 0;
+                }
+                return Ok(());
+            }
+            // Hidden or busy: the next frame draws.
+            _ => return Ok(()),
+        };
+        let view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(self.view_format),
+            ..Default::default()
+        });
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.display.draw(&mut encoder, &view, &self.display_group);
+        self.ctx.queue.submit([encoder.finish()]);
+        if let Some(path) = screenshot {
+            let texture = if self
+                .surface_config
+                .usage
+                .contains(wgpu::TextureUsages::COPY_SRC)
+            {
+                frame.texture.clone()
+            } else {
+                self.offscreen_copy()?
+            };
+            let rgb = read_texture(&self.ctx, &texture)?;
+            write_png(path, texture.width(), texture.height(), rgb)?;
+        }
+        self.ctx.queue.present(frame);
+        if let Some(e) = self.ctx.take_failure() {
+            return Err(e.into());
+        }
+        Ok(())
+    }
+
+    /// The display pass drawn into a texture of the window's size (for a screenshot where the
+    /// window's own image cannot be copied).
+    fn offscreen_copy(&self) -> anyhow::Result<wgpu::Texture> {
+        let texture = self.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("screenshot"),
+            size: wgpu::Extent3d {
+                width: self.surface_config.width,
+                height: self.surface_config.height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: self.view_format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.display.draw(&mut encoder, &view, &self.display_group);
+        self.ctx.queue.submit([encoder.finish()]);
+        Ok(texture)
+    }
+
+    /// The window title: spp, speed, the estimated error, and what renders.
+    fn update_status(&mut self, now: bool) -> anyhow::Result<()> {
+        if !now && self.status_at.elapsed().as_secs_f64() < STATUS_SECONDS {
+            return Ok(());
+        }
+        self.status_at = Instant::now();
+        let spp = self.film.spp();
+        let seconds = self.view_start.elapsed().as_secs_f64();
+        let rate =
+            spp as f64 * self.opts.width as f64 * self.opts.height as f64 / seconds.max(1e-9);
+        // The error needs the film on the host: estimated now and then, not every frame.
+        let stale = self
+            .error_estimate
+            .is_none_or(|(_, at)| at.elapsed().as_secs_f64() > ERROR_SECONDS);
+        if stale && spp >= 4 {
+            let film = self.film.film()?;
+            self.error_estimate = Some((crate::converge::estimated_rmse(&film), Instant::now()));
+        }
+        let error = match self.error_estimate {
+            Some((e, _)) if spp >= 4 => format!(", RMSE ~{e:.2e}"),
+            _ => String::new(),
+        };
+        let backend = if self.gpu_features.is_some() {
+            "gpu"
+        } else {
+            "cpu"
+        };
+        self.window.set_title(&format!(
+            "rt-gpu view {}: {spp} spp, {:.2} Msamples/s{error}, {backend}: {}",
+            self.scene.name,
+            rate * 1e-6,
+            self.film.device()
+        ));
+        Ok(())
+    }
+
+    /// A window event: mouse and keys become [`Input`]s.
+    fn handle(
+        &mut self,
+        config: &ViewConfig,
+        event_loop: &ActiveEventLoop,
+        event: WindowEvent,
+    ) -> anyhow::Result<()> {
+        let input = match event {
+            WindowEvent::Resized(size) => return self.resize(size.width, size.height),
+            WindowEvent::ModifiersChanged(m) => {
+                self.modifiers = m.state();
+                None
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let down = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => self.buttons.0 = down,
+                    MouseButton::Right => self.buttons.1 = down,
+                    _ => {}
+                }
+                None
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let last = self.cursor.replace((position.x, position.y));
+                match last {
+                    Some((x, y)) if self.buttons.0 || self.buttons.1 => {
+                        let (dx, dy) = ((position.x - x) as f32, (position.y - y) as f32);
+                        if self.buttons.1 || self.modifiers.shift_key() {
+                            Some(Input::Pan(dx, dy))
+                        } else {
+                            Some(Input::Orbit(dx, dy))
+                        }
+                    }
+                    _ => None,
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => Some(Input::Dolly(match delta {
+                MouseScrollDelta::LineDelta(_, y) => y,
+                MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+            })),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                key_input(&event.logical_key, self.modifiers)
+            }
+            _ => None,
+        };
+        match input {
+            Some(input) => self.apply(config, event_loop, input),
+            None => Ok(()),
+        }
+    }
+
+    /// Does what `input` asks: a camera move restarts the film.
+    fn apply(
+        &mut self,
+        config: &ViewConfig,
+        event_loop: &ActiveEventLoop,
+        input: Input,
+    ) -> anyhow::Result<()> {
+        match input {
+            Input::Save => self.save(config),
+            Input::PrintCamera => {
+                let mut out = std::io::stdout().lock();
+                let _ = writeln!(out, "{}", camera_table(&self.scene.camera));
+                let _ = out.flush();
+                Ok(())
+            }
+            Input::Restart => self.restart(),
+            Input::Quit => {
+                event_loop.exit();
+                Ok(())
+            }
+            _ => {
+                let Some(camera) = moved(&self.scene.camera, input, self.surface_config.height)
+                else {
+                    return Ok(());
+                };
+                self.scene.camera = camera;
+                if !self
+                    .flat
+                    .set_camera(&self.scene, self.opts.width, self.opts.height)
+                {
+                    // The camera left the scene's recentring cell: flattened and compiled again.
+                    return self.rebuild();
+                }
+                self.restart()
+            }
+        }
+    }
+
+    fn restart(&mut self) -> anyhow::Result<()> {
+        self.film.restart(&self.flat)?;
+        self.view_start = Instant::now();
+        self.error_estimate = None;
+        self.window.request_redraw();
+        Ok(())
+    }
+
+    /// A new film for the current window size and scene (flattened again).
+    fn rebuild(&mut self) -> anyhow::Result<()> {
+        let size = self.window.inner_size();
+        let (opts, scale) = film_size(&self.ctx, &self.opts, size.width, size.height);
+        self.flat =
+            FlatScene::new(&self.scene, opts.width, opts.height).context("invalid scene")?;
+        self.film = LiveFilm::new(&self.ctx, self.gpu_features, &self.flat, &opts)?;
+        self.opts = opts;
+        self.scale = scale;
+        self.display
+            .set_film(&self.ctx, opts.width, opts.height, scale);
+        self.display_group = self.display.bind(&self.ctx, self.film.accumulator());
+        self.restart()
+    }
+
+    fn resize(&mut self, width: u32, height: u32) -> anyhow::Result<()> {
+        if width == 0 || height == 0 {
+            return Ok(());
+        }
+        if (width, height) == (self.surface_config.width, self.surface_config.height) {
+            return Ok(());
+        }
+        self.surface_config.width = width;
+        self.surface_config.height = height;
+        self.surface
+            .configure(&self.ctx.device, &self.surface_config);
+        self.rebuild()
+    }
+
+    /// Writes the film (the film file and a PNG beside it), as `rt-gpu` writes a render of
+    /// this camera, spp and options.
+    fn save(&mut self, config: &ViewConfig) -> anyhow::Result<()> {
+        let film = self.film.film()?;
+        let spp = self.film.spp();
+        let opts = RenderOptions {
+            spp,
+            first_sample: 0,
+            ..self.opts
+        };
+        let meta = FilmMeta {
+            identity: film_file::identity(
+                crate::scene::file::digest(&self.scene),
+                config.backend,
+                &opts,
+                config.gpu.everything,
+            ),
+            samples: std::iter::once(0..spp).collect(),
+            device: self.film.device(),
+        };
+        let png = config.output.with_extension("png");
+        PendingOutput::claim(&config.output, &[])?.commit_film(&film, &meta)?;
+        PendingOutput::claim(&png, &[])?.commit_image(&film, None)?;
+        let _ = writeln!(
+            std::io::stderr().lock(),
+            "wrote {} and {} ({spp} spp)",
+            config.output.display(),
+            png.display()
+        );
+        Ok(())
+    }
+}
+
+/// Seconds of samples per frame: 30 frames a second where the device keeps up.
+const FRAME_SECONDS: f64 = 1.0 / 30.0;
+/// How often the title is updated, and the error estimated (it reads the film back).
+const STATUS_SECONDS: f64 = 0.25;
+const ERROR_SECONDS: f64 = 2.0;
+/// Frames in a row without a window image before that is an error.
+const MAX_LOST_FRAMES: u32 = 100;
+
+/// The film for a `width` x `height` window: the window's size, or a fraction of it each way
+/// where that does not fit one storage binding; and the window pixels per film pixel.
+fn film_size(
+    ctx: &GpuContext,
+    opts: &RenderOptions,
+    width: u32,
+    height: u32,
+) -> (RenderOptions, u32) {
+    let binding = ctx
+        .limits
+        .max_storage_buffer_binding_size
+        .min(ctx.limits.max_buffer_size);
+    let most = binding / ACCUM_BYTES_PER_PIXEL;
+    let (width, height) = (width.max(1), height.max(1));
+    let mut scale = 1;
+    while (width.div_ceil(scale) as u64) * (height.div_ceil(scale) as u64) > most {
+        scale += 1;
+    }
+    let opts = RenderOptions {
+        width: width.div_ceil(scale),
+        height: height.div_ceil(scale),
+        ..*opts
+    };
+    (opts, scale)
+}
+
+/// A key press as an input: WASD/QE fly, Ctrl+S saves (S alone is the backward step), C
+/// prints the camera, R restarts, Esc quits.
+fn key_input(key: &Key, modifiers: ModifiersState) -> Option<Input> {
+    use glam::Vec3;
+    match key {
+        Key::Named(NamedKey::Escape) => Some(Input::Quit),
+        Key::Character(c) => match c.to_lowercase().as_str() {
+            "s" if modifiers.control_key() => Some(Input::Save),
+            "w" => Some(Input::Fly(Vec3::X)),
+            "s" => Some(Input::Fly(-Vec3::X)),
+            "d" => Some(Input::Fly(Vec3::Y)),
+            "a" => Some(Input::Fly(-Vec3::Y)),
+            "e" => Some(Input::Fly(Vec3::Z)),
+            "q" => Some(Input::Fly(-Vec3::Z)),
+            "c" => Some(Input::PrintCamera),
+            "r" => Some(Input::Restart),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+fn write_png(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> anyhow::Result<()> {
+    let image = image::RgbImage::from_raw(width, height, rgb).context("screenshot size")?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut bytes, image::ImageFormat::Png)?;
+    PendingOutput::claim(path, &[])?.commit(&bytes.into_inner())
+}
+
+fn warn(message: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "warning: {message}");
+}
