@@ -40,26 +40,8 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     // The declarations are generated from the Rust structs; naga lays them out independently.
     let layouts = rt_gpu::shared::layout::shared_layouts();
     assert_eq!(layouts.len(), 10);
-    for (name, rust_size, rust_fields) in layouts {
-        let ty = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("WGSL has no struct {name}"))
-            .1;
-        let naga::TypeInner::Struct { members, span } = &ty.inner else {
-            panic!("{name} is not a struct");
-        };
-        assert_eq!(*span as usize, rust_size, "size of {name}");
-        let wgsl_fields: Vec<(String, usize)> = members
-            .iter()
-            .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
-            .collect();
-        let rust_fields: Vec<(String, usize)> = rust_fields
-            .into_iter()
-            .map(|(n, o)| (n.to_string(), o))
-            .collect();
-        assert_eq!(wgsl_fields, rust_fields, "fields of {name}");
+    for layout in layouts {
+        assert_layout_matches(&module, layout);
     }
 }
 
@@ -301,7 +283,12 @@ fn a_broken_shader_is_a_clear_error() {
 fn the_display_struct_matches_its_wgsl() {
     let source = rt_gpu::gpu::display::display_source();
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
-    let (name, rust_size, rust_fields) = rt_gpu::shared::layout::display_layout();
+    assert_layout_matches(&module, rt_gpu::shared::layout::display_layout());
+}
+
+/// naga's size and field offsets of the struct `layout` names in `module` are Rust's.
+fn assert_layout_matches(module: &naga::Module, layout: rt_gpu::shared::layout::StructLayout) {
+    let (name, rust_size, rust_fields) = layout;
     let ty = module
         .types
         .iter()
