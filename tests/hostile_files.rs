@@ -280,12 +280,16 @@ fn errors_say_what_to_do_with_meshes_and_incomplete_scenes() {
         );
         err
     };
-    std::fs::write(d.join("model.glb"), b"glTF").expect("writes");
-    let err = run(&["model.glb"]);
+    std::fs::write(d.join("model.obj"), b"v 0 0 0\n").expect("writes");
+    let err = run(&["model.obj"]);
     assert!(
         err.contains("is a mesh") && err.contains("[[object]]"),
         "{err}"
     );
+    // A glTF file is a scene of its own: a truncated one is an error naming it.
+    std::fs::write(d.join("model.glb"), b"glTF").expect("writes");
+    let err = run(&["model.glb"]);
+    assert!(err.contains("model.glb"), "{err}");
     std::fs::write(
         d.join("nocamera.toml"),
         "[[object]]\nsphere = { center = [0, 0, 0], radius = 1 }\nmaterial = \"m\"\n",

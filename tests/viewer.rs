@@ -77,6 +77,15 @@ fn ok(out: &std::process::Output, what: &str) {
     assert!(out.status.success(), "{what} failed: {}", stderr(out));
 }
 
+/// All a piped output of a child held, as text.
+fn drain(pipe: Option<impl Read>) -> String {
+    let mut text = String::new();
+    pipe.expect("piped")
+        .read_to_string(&mut text)
+        .expect("reads");
+    text
+}
+
 fn bytes(path: &Path) -> Vec<u8> {
     std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -246,12 +255,7 @@ fn x_input_moves_the_camera_and_closing_exits_cleanly() {
                 return id.to_string();
             }
             if let Some(status) = child.try_wait().expect("waits") {
-                let mut errors = String::new();
-                let _ = child
-                    .stderr
-                    .take()
-                    .expect("piped")
-                    .read_to_string(&mut errors);
+                let errors = drain(child.stderr.take());
                 panic!("the viewer ended before its window appeared: {status}: {errors}");
             }
             assert!(Instant::now() < deadline, "no viewer window appeared");
@@ -290,20 +294,8 @@ fn x_input_moves_the_camera_and_closing_exits_cleanly() {
     std::thread::sleep(Duration::from_millis(300));
     xdotool(&["key", "--window", &id, "Escape"]);
     let status = wait(&mut child);
-    let mut printed = String::new();
-    child
-        .stdout
-        .take()
-        .expect("piped")
-        .read_to_string(&mut printed)
-        .expect("reads");
-    let mut errors = String::new();
-    child
-        .stderr
-        .take()
-        .expect("piped")
-        .read_to_string(&mut errors)
-        .expect("reads");
+    let printed = drain(child.stdout.take());
+    let errors = drain(child.stderr.take());
     assert!(status.success(), "Escape: {status}: {errors}");
     assert!(
         printed.starts_with("[camera]\nlook_from = ["),
@@ -319,13 +311,7 @@ fn x_input_moves_the_camera_and_closing_exits_cleanly() {
     std::thread::sleep(Duration::from_millis(300));
     xdotool(&["windowclose", &id]);
     let status = wait(&mut child);
-    let mut errors = String::new();
-    child
-        .stderr
-        .take()
-        .expect("piped")
-        .read_to_string(&mut errors)
-        .expect("reads");
+    let errors = drain(child.stderr.take());
     assert!(status.success(), "a closed window: {status}: {errors}");
 }
 

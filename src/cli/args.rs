@@ -6,8 +6,10 @@ use rt_gpu::film::check_image_size;
 use rt_gpu::film_file;
 use rt_gpu::options::SamplerKind;
 use rt_gpu::output::Transfer;
-use rt_gpu::render::{Backend, Integrator};
+use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions};
+use rt_gpu::scene::Scene;
 use rt_gpu::scene::file::MAX_DEPTH_LIMIT;
+use std::ops::Range;
 use std::path::PathBuf;
 
 /// Where to render (the CLI's names for [`Backend`]).
@@ -238,29 +240,8 @@ pub struct ViewArgs {
     /// Stop adding samples after this many seconds of a view (the image stays shown).
     #[arg(long, value_name = "SECONDS")]
     pub time: Option<f64>,
-    /// The window's first size WIDTHxHEIGHT (the film is the window's size) [default: the
-    /// scene's].
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
-    pub size: Option<(u32, u32)>,
-    /// Random seed: as a render's.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
-    /// Path segments per sample [default: the scene's].
-    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
-    pub max_depth: Option<u32>,
-    /// Where to render: as a render's (the window is always shown by a GPU adapter).
-    #[arg(long, value_enum, default_value_t = RenderBackendArg::Auto)]
-    pub backend: RenderBackendArg,
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
-    pub integrator: IntegratorArg,
-    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
-    pub sampler: SamplerArg,
-    /// Russian roulette from this many path segments on (0: off).
-    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
-    pub roulette_depth: u32,
-    /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
-    #[arg(long, value_name = "NAME")]
-    pub adapter: Option<String>,
+    #[command(flatten)]
+    pub options: RenderOptionArgs,
     /// Where Ctrl+S writes the film file (.exr), with a .png beside it [default:
     /// <scene>-view.exr].
     #[arg(short, long, value_name = "FILE")]
@@ -275,6 +256,86 @@ pub struct ViewArgs {
     /// Test aid: with --exit-after-spp, write the window's last image to FILE (.png).
     #[arg(long, value_name = "FILE", hide = true, requires = "exit_after_spp")]
     pub screenshot: Option<PathBuf>,
+}
+
+/// The options that say what a render computes and where, shared by a batch render and the
+/// viewer: the same flags give both the same estimator, hence the same image.
+#[derive(Args)]
+pub struct RenderOptionArgs {
+    /// The camera of a glTF scene (.glb, .gltf) to render through, by name [default: its
+    /// first; one framing the scene if it has none].
+    #[arg(long, value_name = "NAME")]
+    pub camera: Option<String>,
+    /// Image size WIDTHxHEIGHT [default: the scene's].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Random seed: the same scene, seed and backend give the same image.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Path segments per sample [default: the scene's].
+    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: Option<u32>,
+    /// Where to render.
+    #[arg(long, value_enum, default_value_t = RenderBackendArg::Auto)]
+    pub backend: RenderBackendArg,
+    /// How paths find light: nee samples lights directly at diffuse hits (with multiple
+    /// importance sampling); naive waits for paths to hit them (the original project's way).
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
+    pub integrator: IntegratorArg,
+    /// Where each sample's random numbers come from: sobol stratifies them (lower error for
+    /// the same samples); independent is plain Monte Carlo.
+    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
+    pub sampler: SamplerArg,
+    /// Russian roulette from this many path segments on: paths end at random, in proportion to
+    /// how little they can still carry, and survivors are reweighted (unbiased), as in Mitsuba 3
+    /// and pbrt-v4; 0: off.
+    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
+    pub roulette_depth: u32,
+    /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
+}
+
+impl RenderOptionArgs {
+    /// The first contradiction among these options, if any.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if self.adapter.is_some() && self.backend == RenderBackendArg::Cpu {
+            anyhow::bail!(
+                "--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them"
+            );
+        }
+        Ok(())
+    }
+
+    /// The image size: --size, or the scene's.
+    pub fn size(&self, scene: &Scene) -> (u32, u32) {
+        self.size
+            .unwrap_or((scene.defaults.width, scene.defaults.height))
+    }
+
+    /// What rendering `scene`'s sample indices `samples` with these options computes.
+    pub fn render_options(&self, scene: &Scene, samples: Range<u32>) -> RenderOptions {
+        let (width, height) = self.size(scene);
+        RenderOptions {
+            width,
+            height,
+            spp: samples.end - samples.start,
+            first_sample: samples.start,
+            seed: self.seed,
+            max_depth: self.max_depth.unwrap_or(scene.defaults.max_depth),
+            integrator: self.integrator.into(),
+            sampler: self.sampler.into(),
+            roulette_depth: self.roulette_depth,
+        }
+    }
+
+    /// The GPU these options ask for.
+    pub fn gpu(&self, everything: bool) -> GpuChoice {
+        GpuChoice {
+            adapter: self.adapter.clone(),
+            everything,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -320,34 +381,8 @@ pub struct RenderArgs {
     /// $SLURM_ARRAY_TASK_ID) and write a film file for `rt-gpu merge`.
     #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "spp", conflicts_with = "time")]
     pub shard: Option<(u32, u32)>,
-    /// Image size WIDTHxHEIGHT [default: the scene's].
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
-    pub size: Option<(u32, u32)>,
-    /// Random seed: the same scene, seed and backend give the same image.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
-    /// Path segments per sample [default: the scene's].
-    #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
-    pub max_depth: Option<u32>,
-    /// Where to render.
-    #[arg(long, value_enum, default_value_t = RenderBackendArg::Auto)]
-    pub backend: RenderBackendArg,
-    /// How paths find light: nee samples lights directly at diffuse hits (with multiple
-    /// importance sampling); naive waits for paths to hit them (the original project's way).
-    #[arg(long, value_enum, default_value_t = IntegratorArg::Nee)]
-    pub integrator: IntegratorArg,
-    /// Where each sample's random numbers come from: sobol stratifies them (lower error for
-    /// the same samples); independent is plain Monte Carlo.
-    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
-    pub sampler: SamplerArg,
-    /// Russian roulette from this many path segments on: paths end at random, in proportion to
-    /// how little they can still carry, and survivors are reweighted (unbiased), as in Mitsuba 3
-    /// and pbrt-v4; 0: off.
-    #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
-    pub roulette_depth: u32,
-    /// GPU adapter to use: part of its name, as `rt-gpu devices` lists them.
-    #[arg(long, value_name = "NAME")]
-    pub adapter: Option<String>,
+    #[command(flatten)]
+    pub options: RenderOptionArgs,
     /// Print the WGSL kernel built for this scene and exit.
     #[arg(long)]
     pub print_shader: bool,

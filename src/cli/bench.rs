@@ -15,7 +15,7 @@ use std::time::Instant;
 /// Renders the same scene on each backend (and the GPU with both kernels) in one run.
 pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let (scene, _) = resolve_scene(&args.scene)?;
+    let (scene, _) = resolve_scene(&args.scene, None)?;
     let loading = start.elapsed().as_secs_f64();
     let (width, height) = args.size;
     let start = Instant::now();

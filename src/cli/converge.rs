@@ -45,7 +45,7 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
             "--reference-spp sets the spp of a rendered reference; it has no effect with --reference"
         );
     }
-    let (scene, _) = resolve_scene(&args.scene)?;
+    let (scene, _) = resolve_scene(&args.scene, None)?;
     let (width, height) = args
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));

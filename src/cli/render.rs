@@ -113,10 +113,8 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
     let Some(scene_arg) = &args.scene else {
         bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
     };
-    if args.adapter.is_some() && args.backend == RenderBackendArg::Cpu {
-        bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
-    }
-    let (scene, scene_file) = resolve_scene(scene_arg)?;
+    args.options.check()?;
+    let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
     let range = sample_range(args)?;
     let partial = args.samples.is_some() || args.shard.is_some();
     if let Some(x) = args.target_error {
@@ -131,36 +129,21 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
     }
     let (output, format) = output_path(args, &scene, &range, partial)?;
     let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
-    let (width, height) = args
-        .size
-        .unwrap_or((scene.defaults.width, scene.defaults.height));
+    let (width, height) = args.options.size(&scene);
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
     {
         bail!("--time must be a positive number of seconds, got {t}");
     }
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
-    let opts = RenderOptions {
-        width,
-        height,
-        spp: range.end - range.start,
-        first_sample: range.start,
-        seed: args.seed,
-        max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
-        integrator: args.integrator.into(),
-        sampler: args.sampler.into(),
-        roulette_depth: args.roulette_depth,
-    };
-    let gpu = GpuChoice {
-        adapter: args.adapter.clone(),
-        everything: args.unspecialised,
-    };
-    let (backend, backend_reason) = match args.backend {
+    let opts = args.options.render_options(&scene, range.clone());
+    let gpu = args.options.gpu(args.unspecialised);
+    let (backend, backend_reason) = match args.options.backend {
         RenderBackendArg::Gpu => (Backend::Gpu, None),
         RenderBackendArg::Cpu => (Backend::Cpu, None),
         // An adapter asked for by name, the unspecialised kernel or its source: the GPU asked for.
         RenderBackendArg::Auto
-            if args.adapter.is_some() || args.unspecialised || args.print_shader =>
+            if args.options.adapter.is_some() || args.unspecialised || args.print_shader =>
         {
             (Backend::Gpu, None)
         }

@@ -4,7 +4,7 @@
 use super::args::SUBCOMMANDS;
 use anyhow::{Context, bail};
 use rt_gpu::scene::builtin::{BUILTINS, builtin};
-use rt_gpu::scene::{Scene, file};
+use rt_gpu::scene::{Scene, file, gltf_scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -36,15 +36,26 @@ pub fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A scene file, or else a built-in scene; with the file's path when it is one.
-pub fn resolve_scene(arg: &str) -> anyhow::Result<(Scene, Option<PathBuf>)> {
+/// A scene file, a glTF file (seen by its camera named `camera`, else its first), or else a
+/// built-in scene; with the file's path when it is one.
+pub fn resolve_scene(arg: &str, camera: Option<&str>) -> anyhow::Result<(Scene, Option<PathBuf>)> {
     let path = Path::new(arg);
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if let Some(ext @ ("glb" | "gltf" | "obj")) = extension.as_deref() {
+    if let Some("glb" | "gltf") = extension.as_deref() {
+        let (scene, notes) = gltf_scene::load(path, arg, camera).map_err(anyhow::Error::msg)?;
+        for n in notes {
+            note!("{n}");
+        }
+        return Ok((scene, Some(path.to_path_buf())));
+    }
+    if camera.is_some() {
+        bail!("--camera picks a camera of a glTF file (.glb, .gltf); {arg} is not one");
+    }
+    if extension.as_deref() == Some("obj") {
         bail!(
-            "{arg} is a mesh ({ext}), not a scene: place it in a scene file as `[[object]] mesh = {{ file = \"{arg}\" }}` (see scenes/README.md, e.g. scenes/meshes.toml)"
+            "{arg} is a mesh (obj), not a scene: place it in a scene file as `[[object]] mesh = {{ file = \"{arg}\" }}` (see scenes/README.md, e.g. scenes/meshes.toml)"
         );
     }
     if path.is_file() || arg.ends_with(".toml") {

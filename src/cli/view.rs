@@ -5,21 +5,19 @@ use super::scenes::resolve_scene;
 use anyhow::{Context, bail};
 use rt_gpu::film::check_memory;
 use rt_gpu::output::ImageFormat;
-use rt_gpu::render::{Backend, GpuChoice, RenderOptions};
+use rt_gpu::render::Backend;
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::viewer::{ViewConfig, run};
 use std::path::PathBuf;
 
 pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
-    if args.adapter.is_some() && args.backend == RenderBackendArg::Cpu {
-        bail!("--adapter picks a GPU, but --backend cpu renders on the CPU: drop one of them");
-    }
+    args.options.check()?;
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
     {
         bail!("--time must be a positive number of seconds, got {t}");
     }
-    let (scene, _) = resolve_scene(&args.scene)?;
+    let (scene, _) = resolve_scene(&args.scene, args.options.camera.as_deref())?;
     let output = args
         .output
         .clone()
@@ -35,26 +33,11 @@ pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
     {
         bail!("--screenshot writes a .png, not {}", s.display());
     }
-    let (width, height) = args
-        .size
-        .unwrap_or((scene.defaults.width, scene.defaults.height));
+    let (width, height) = args.options.size(&scene);
     check_memory(width, height).map_err(anyhow::Error::msg)?;
-    let opts = RenderOptions {
-        width,
-        height,
-        spp: 0,
-        first_sample: 0,
-        seed: args.seed,
-        max_depth: args.max_depth.unwrap_or(scene.defaults.max_depth),
-        integrator: args.integrator.into(),
-        sampler: args.sampler.into(),
-        roulette_depth: args.roulette_depth,
-    };
-    let gpu = GpuChoice {
-        adapter: args.adapter.clone(),
-        everything: false,
-    };
-    let backend = match args.backend {
+    let opts = args.options.render_options(&scene, 0..0);
+    let gpu = args.options.gpu(false);
+    let backend = match args.options.backend {
         RenderBackendArg::Gpu => Backend::Gpu,
         RenderBackendArg::Cpu => Backend::Cpu,
         RenderBackendArg::Auto => {

@@ -194,4 +194,31 @@ impl GpuContext {
             None => Ok(()),
         }
     }
+
+    /// The first `size` bytes of `staging` (a MAP_READ buffer whose copies have been submitted)
+    /// once the GPU has written them; `what` names them in errors.
+    pub fn read_staging(
+        &self,
+        staging: &wgpu::Buffer,
+        size: u64,
+        what: &str,
+    ) -> Result<Vec<u8>, GpuError> {
+        let slice = staging.slice(..size);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        let cannot_read =
+            |e: &dyn std::fmt::Display| GpuError::Runtime(format!("cannot read {what}: {e}"));
+        rx.recv()
+            .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
+            .map_err(|e| cannot_read(&e))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| cannot_read(&e))?
+            .to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
 }

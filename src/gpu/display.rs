@@ -229,19 +229,7 @@ pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u8>
         texture.size(),
     );
     ctx.queue.submit([encoder.finish()]);
-    let slice = staging.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.wait()?;
-    rx.recv()
-        .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
-        .map_err(|e| GpuError::Runtime(format!("cannot read the screenshot: {e}")))?;
-    let bytes = slice
-        .get_mapped_range()
-        .map_err(|e| GpuError::Runtime(format!("cannot read the screenshot: {e}")))?
-        .to_vec();
+    let bytes = ctx.read_staging(&staging, staging.size(), "the screenshot")?;
     let bgra = matches!(
         texture.format().remove_srgb_suffix(),
         wgpu::TextureFormat::Bgra8Unorm

@@ -498,21 +498,7 @@ impl GpuRenderer {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
         self.ctx.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..size);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.ctx.wait()?;
-        rx.recv()
-            .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
-            .map_err(|e| GpuError::Runtime(format!("cannot read GPU memory: {e}")))?;
-        let bytes = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Runtime(format!("cannot read GPU memory: {e}")))?
-            .to_vec();
-        staging.unmap();
-        Ok(bytes)
+        self.ctx.read_staging(&staging, size, "GPU memory")
     }
 
     /// Renders `opts.spp` samples per pixel with `kernel`, tile by tile; `on_progress` gets the

@@ -8,6 +8,7 @@ pub mod environment;
 pub mod file;
 pub mod flat;
 pub mod gltf_check;
+pub mod gltf_scene;
 pub mod image;
 pub mod media;
 pub mod mesh;

@@ -1,0 +1,175 @@
+"""Builds rt-gpu's Blender test scenes from Blender's own primitives and writes each as Blender
+writes it (glTF 2.0 .glb, and .obj + .mtl), with a Cycles render of each as a reference.
+
+    blender -b --factory-startup -P scripts/blender/make-scenes.py -- OUT_DIR [SAMPLES]
+
+Blender 3.4 (Debian's `blender` package, with `python3-numpy` for the glTF exporter). The
+values set here are the ones tests/blender_scenes.rs expects to read back; the outputs are
+committed under scenes/blender/, so tests never need Blender.
+
+Scenes:
+- `spheres`: a floor, three spheres (rough gold, smooth chrome, glass) and a grey diffuse
+  cube, lit only by an emissive panel (the world is black): everything in it both renderers
+  model, so rt-gpu's image is compared with Cycles'.
+- `lamps`: the same objects lit by a point light, a spot light and a sun (KHR_lights_punctual),
+  with a second camera.
+"""
+
+import math
+import os
+import sys
+
+import bpy
+from mathutils import Vector
+
+argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
+OUT = os.path.abspath(argv[0] if argv else "scenes/blender")
+SAMPLES = int(argv[1]) if len(argv) > 1 else 1024
+WIDTH, HEIGHT = 160, 120
+os.makedirs(OUT, exist_ok=True)
+
+
+def reset():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    world = bpy.data.worlds.new("World")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    scene.world = world
+    return scene
+
+
+def material(name, color, metallic=0.0, roughness=0.5, transmission=0.0, ior=1.45,
+             emission=None, strength=0.0):
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    bsdf = m.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Metallic"].default_value = metallic
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Transmission"].default_value = transmission
+    bsdf.inputs["IOR"].default_value = ior
+    if emission is not None:
+        bsdf.inputs["Emission"].default_value = (*emission, 1.0)
+        bsdf.inputs["Emission Strength"].default_value = strength
+    return m
+
+
+def place(obj, mat):
+    obj.data.materials.append(mat)
+    return obj
+
+
+def sphere(name, location, radius, mat):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16, radius=radius,
+                                         location=location)
+    obj = bpy.context.active_object
+    obj.name = name
+    bpy.ops.object.shade_smooth()
+    return place(obj, mat)
+
+
+def objects():
+    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
+    floor = bpy.context.active_object
+    floor.name = "Floor"
+    place(floor, material("Floor", (0.6, 0.6, 0.6), roughness=1.0))
+    sphere("Gold", (-1.6, 0, 0.7), 0.7, material("Gold", (1.0, 0.77, 0.34), metallic=1.0,
+                                                 roughness=0.3))
+    sphere("Chrome", (0, 0.4, 0.7), 0.7, material("Chrome", (0.9, 0.9, 0.9), metallic=1.0,
+                                                  roughness=0.05))
+    sphere("Glass", (1.6, 0, 0.7), 0.7, material("Glass", (1.0, 1.0, 1.0), roughness=0.0,
+                                                 transmission=1.0, ior=1.5))
+    bpy.ops.mesh.primitive_cube_add(size=0.8, location=(0.2, -1.3, 0.4),
+                                    rotation=(0, 0, math.radians(30)))
+    cube = bpy.context.active_object
+    cube.name = "Cube"
+    place(cube, material("Clay", (0.8, 0.3, 0.2), roughness=1.0))
+
+
+def camera(name, location, target, lens_mm=35.0):
+    data = bpy.data.cameras.new(name)
+    data.lens = lens_mm
+    data.sensor_fit = "HORIZONTAL"
+    obj = bpy.data.objects.new(name, data)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.location = location
+    direction = Vector(target) - Vector(location)
+    obj.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
+    return obj
+
+
+def light(name, kind, location, energy, color=(1, 1, 1), target=None, **settings):
+    data = bpy.data.lights.new(name, kind)
+    data.energy = energy
+    data.color = color
+    for key, value in settings.items():
+        setattr(data, key, value)
+    obj = bpy.data.objects.new(name, data)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.location = location
+    if target is not None:
+        obj.rotation_euler = (Vector(target) - Vector(location)).to_track_quat("-Z", "Y").to_euler()
+    return obj
+
+
+def render_settings(scene, cam):
+    scene.camera = cam
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = SAMPLES
+    scene.cycles.use_adaptive_sampling = False
+    scene.cycles.use_denoising = False
+    scene.cycles.seed = 0
+    # rt-gpu's max_depth 10 (emission at the 10th hit counts) is Cycles' 9 bounces.
+    scene.cycles.max_bounces = 9
+    for kind in ("diffuse", "glossy", "transmission", "volume", "transparent_max"):
+        setattr(scene.cycles, kind if kind.endswith("max") else kind + "_bounces", 9)
+    scene.cycles.sample_clamp_direct = 0.0
+    scene.cycles.sample_clamp_indirect = 0.0
+    scene.cycles.blur_glossy = 0.0
+    scene.cycles.caustics_reflective = True
+    scene.cycles.caustics_refractive = True
+    scene.render.resolution_x = WIDTH
+    scene.render.resolution_y = HEIGHT
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = False
+    scene.render.filter_size = 0.01  # one pixel's box, as rt-gpu's film
+    settings = scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_mode = "RGB"
+    settings.color_depth = "16"
+    settings.exr_codec = "ZIP"
+
+
+def export(name, cycles=True):
+    path = os.path.join(OUT, name)
+    bpy.ops.export_scene.gltf(filepath=path + ".glb", export_format="GLB",
+                              export_cameras=True, export_lights=True, export_apply=True)
+    bpy.ops.wm.obj_export(filepath=path + ".obj", export_materials=True,
+                          export_triangulated_mesh=True)
+    if cycles:
+        bpy.context.scene.render.filepath = path + "-cycles.exr"
+        bpy.ops.render.render(write_still=True)
+
+
+scene = reset()
+objects()
+bpy.ops.mesh.primitive_plane_add(size=2.5, location=(0, 1.5, 3.2), rotation=(math.radians(200), 0, 0))
+panel = bpy.context.active_object
+panel.name = "Panel"
+place(panel, material("Panel", (0, 0, 0), roughness=1.0, emission=(1.0, 0.9, 0.8), strength=8.0))
+cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+render_settings(scene, cam)
+export("spheres")
+
+scene = reset()
+objects()
+light("Point", "POINT", (-2, -2, 3), 400.0, color=(1.0, 0.8, 0.6), shadow_soft_size=0.0)
+light("Spot", "SPOT", (2.5, -2.5, 4), 800.0, target=(1.6, 0, 0.7), spot_size=math.radians(40),
+      spot_blend=0.25, shadow_soft_size=0.0)
+light("Sun", "SUN", (0, 0, 10), 2.0, target=(0.5, 0.3, 0), angle=0.0)
+cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+camera("Closeup", (3, -3, 1.5), (1.6, 0, 0.7), lens_mm=50.0)
+render_settings(scene, cam)
+export("lamps")

@@ -1,0 +1,295 @@
+//! A glTF 2.0 file as a whole scene (`rt-gpu model.glb`): its default scene's meshes with their
+//! own materials, seen by one of its cameras (or by a camera framing it), under a uniform white
+//! sky when it carries no lights.
+//!
+//! A glTF camera looks down its node's -z with +y up (glTF 2.0, 3.10.1); its `yfov` is the
+//! vertical field of view and its `aspectRatio`, where given, the image's default width over
+//! height.
+
+use super::environment::Environment;
+use super::image::Image;
+use super::mesh;
+use super::{Background, Camera, Object, RenderDefaults, Scene, Shape, Transform};
+use glam::{DMat4, DVec3, Vec3};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// The default image height of a file's render; its width follows the camera's aspect ratio.
+pub const DEFAULT_HEIGHT: u32 = 512;
+/// The vertical field of view of the camera that frames a file without one (degrees).
+pub const FRAMING_VFOV: f32 = 40.0;
+
+/// A perspective camera of the file, placed by its node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileCamera {
+    /// Its name, else its node's, else `camera<index>`.
+    pub name: String,
+    pub from: DVec3,
+    /// Unit view direction and up, in the file's root frame.
+    pub forward: DVec3,
+    pub up: DVec3,
+    pub yfov_radians: f32,
+    pub aspect_ratio: Option<f32>,
+    /// An orthographic camera, which rt-gpu does not render (refused when chosen).
+    pub orthographic: bool,
+}
+
+/// What of a file the scene takes besides its meshes.
+#[derive(Debug, Default)]
+pub struct FileExtras {
+    pub cameras: Vec<FileCamera>,
+    /// Lights it places (KHR_lights_punctual), by name.
+    pub lights: Vec<String>,
+}
+
+/// The scene of the glTF file at `path` (`source`: the path as the user wrote it), seen by its
+/// camera named `camera`, else by its first, else by one that frames it; with notes for the
+/// user on what of the file it leaves out.
+pub fn load(
+    path: &Path,
+    source: &str,
+    camera: Option<&str>,
+) -> Result<(Scene, Vec<String>), String> {
+    let parts = mesh::load(path, source, None)?;
+    let extras = read_extras(path, source)?;
+    let chosen =
+        match camera {
+            Some(name) => Some(extras.cameras.iter().find(|c| c.name == name).ok_or_else(
+                || {
+                    let names: Vec<&str> = extras.cameras.iter().map(|c| c.name.as_str()).collect();
+                    if names.is_empty() {
+                        format!("{source} has no camera named \"{name}\": it has no cameras")
+                    } else {
+                        format!(
+                            "{source} has no camera named \"{name}\" (cameras: {})",
+                            names.join(", ")
+                        )
+                    }
+                },
+            )?),
+            None => extras.cameras.first(),
+        };
+    let (min, max) = bounds(&parts);
+    let (camera, aspect) = match chosen {
+        Some(c) => (
+            camera_of(c, (min + max) / 2.0).map_err(|e| format!("{source}: {e}"))?,
+            c.aspect_ratio,
+        ),
+        None => (framing_camera(min, max), None),
+    };
+    let height = DEFAULT_HEIGHT;
+    let width = aspect
+        .filter(|a| a.is_finite() && *a > 0.0)
+        .map_or(height, |a| {
+            ((height as f32 * a).round() as u32).clamp(16, 4 * height)
+        });
+    let mut materials = Vec::new();
+    let mut material_names = Vec::new();
+    let mut objects = Vec::new();
+    for part in &parts {
+        let name = format!("{}#{}", source, part.material_name);
+        let index = match material_names.iter().position(|n| *n == name) {
+            Some(i) => i,
+            None => {
+                let own = part.material.unwrap_or_else(default_material);
+                own.validate()
+                    .map_err(|e| format!("{source} material \"{}\": {e}", part.material_name))?;
+                materials.push(own);
+                material_names.push(name);
+                materials.len() - 1
+            }
+        };
+        objects.push(Object {
+            shape: Shape::Mesh {
+                mesh: part,
+                scale: Vec3::ONE,
+            },
+            material: index as u32,
+            transform: Transform::default(),
+        });
+    }
+    // Light: the file's emitters where it has any, else a uniform sky.
+    let emissive = materials
+        .iter()
+        .any(|m| matches!(m, super::Material::Light(_)));
+    let background = if emissive {
+        Background::Constant(Vec3::ZERO)
+    } else {
+        Background::Environment(uniform_sky())
+    };
+    let name = Path::new(source)
+        .file_stem()
+        .map_or("gltf".into(), |s| s.to_string_lossy().into_owned());
+    let scene = Scene {
+        name,
+        camera,
+        background,
+        materials,
+        material_names,
+        objects,
+        defaults: RenderDefaults {
+            width,
+            height,
+            max_depth: 10,
+        },
+    };
+    scene.validate().map_err(|e| format!("{source}: {e}"))?;
+    let mut notes = Vec::new();
+    if !extras.lights.is_empty() {
+        notes.push(format!(
+            "note: {source} places {} punctual light(s) (KHR_lights_punctual: {}), which rt-gpu does not render yet{}",
+            extras.lights.len(),
+            extras.lights.join(", "),
+            if emissive {
+                ": its emissive materials light it"
+            } else {
+                ": a uniform white sky lights it instead"
+            }
+        ));
+    }
+    Ok((scene, notes))
+}
+
+/// What a primitive without a material takes: glTF's default material (white, rough,
+/// dielectric: 3.9.6), clamped as rt-gpu's `pbr`.
+fn default_material() -> super::Material {
+    super::Material::Pbr(crate::material::Pbr::new(
+        Vec3::ONE.into(),
+        1.0,
+        1.0,
+        1.5,
+        0.0,
+    ))
+}
+
+/// A sky of radiance 1 from every direction, sampled as a light: what lights a file that
+/// carries none (as a glTF viewer's neutral environment does).
+pub fn uniform_sky() -> Environment {
+    static WHITE: OnceLock<&'static Image> = OnceLock::new();
+    let image = WHITE.get_or_init(|| {
+        Image::from_linear("uniform", 1, 1, vec![1.0; 3])
+            .expect("a 1x1 image of ones is valid")
+            .leak()
+    });
+    Environment::new(image, 1.0, 0.0).expect("strength 1, no rotation")
+}
+
+/// The box around every part's vertices.
+fn bounds(parts: &[&'static mesh::Mesh]) -> (DVec3, DVec3) {
+    let mut min = DVec3::splat(f64::INFINITY);
+    let mut max = DVec3::splat(f64::NEG_INFINITY);
+    for p in parts.iter().flat_map(|m| &m.positions) {
+        min = min.min(p.as_dvec3());
+        max = max.max(p.as_dvec3());
+    }
+    (min, max)
+}
+
+/// A file camera as rt-gpu's, looking at the point of its view line nearest `center` (where
+/// the viewer orbits), at least a unit ahead.
+fn camera_of(c: &FileCamera, center: DVec3) -> Result<Camera, String> {
+    if c.orthographic {
+        return Err(format!(
+            "camera \"{}\" is orthographic: rt-gpu renders perspective cameras (pick one with --camera NAME)",
+            c.name
+        ));
+    }
+    let ahead = (center - c.from).dot(c.forward).max(1.0);
+    let camera = Camera {
+        look_from: c.from.as_vec3(),
+        look_at: (c.from + ahead * c.forward).as_vec3(),
+        up: c.up.as_vec3(),
+        vfov_degrees: c.yfov_radians.to_degrees(),
+        aperture: 0.0,
+        focus_distance: None,
+    };
+    camera
+        .validate()
+        .map_err(|e| format!("camera \"{}\": {e}", c.name))?;
+    Ok(camera)
+}
+
+/// A camera in front of the file's bounds (along +z, glTF's front, a little above), framing
+/// their bounding sphere.
+fn framing_camera(min: DVec3, max: DVec3) -> Camera {
+    let center = (min + max) / 2.0;
+    let radius = ((max - min).length() / 2.0).max(super::MIN_SIZE as f64);
+    let half = (FRAMING_VFOV as f64 / 2.0).to_radians();
+    let distance = 1.1 * radius / half.sin();
+    let direction = DVec3::new(0.0, 0.25, 1.0).normalize();
+    Camera {
+        look_from: (center + distance * direction).as_vec3(),
+        look_at: center.as_vec3(),
+        up: Vec3::Y,
+        vfov_degrees: FRAMING_VFOV,
+        aperture: 0.0,
+        focus_distance: None,
+    }
+}
+
+/// The cameras and lights of the file's default scene (the file was checked and its meshes
+/// read by `mesh::load` first).
+pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {source}: {e}"))?;
+    let document = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| format!("cannot read {source}: {}", e.to_string().replace('\n', " ")))?
+        .document;
+    let Some(scene) = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    else {
+        return Ok(FileExtras::default());
+    };
+    let mut extras = FileExtras::default();
+    // Depth first in file order (the stack pops the last pushed first): "the first camera" is
+    // the first a reader of the file meets.
+    let roots: Vec<gltf::Node> = scene.nodes().collect();
+    let mut stack: Vec<(gltf::Node, DMat4)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, DMat4::IDENTITY))
+        .collect();
+    // Finite: `mesh::load` checked that the nodes form trees.
+    while let Some((node, parent)) = stack.pop() {
+        let local =
+            DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|x| x as f64)));
+        let world = parent * local;
+        if let Some(camera) = node.camera() {
+            let name = camera
+                .name()
+                .or(node.name())
+                .map_or(format!("camera{}", camera.index()), str::to_string);
+            let (yfov_radians, aspect_ratio, orthographic) = match camera.projection() {
+                gltf::camera::Projection::Perspective(p) => (p.yfov(), p.aspect_ratio(), false),
+                gltf::camera::Projection::Orthographic(_) => (0.0, None, true),
+            };
+            let forward = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+            let up = world.transform_vector3(DVec3::Y).normalize_or_zero();
+            if forward == DVec3::ZERO || up == DVec3::ZERO {
+                return Err(format!(
+                    "{source}: camera \"{name}\"'s node has a degenerate transform"
+                ));
+            }
+            extras.cameras.push(FileCamera {
+                name,
+                from: world.transform_point3(DVec3::ZERO),
+                forward,
+                up,
+                yfov_radians,
+                aspect_ratio,
+                orthographic,
+            });
+        }
+        if let Some(light) = node.light() {
+            extras.lights.push(
+                light
+                    .name()
+                    .or(node.name())
+                    .map_or(format!("light{}", light.index()), str::to_string),
+            );
+        }
+        let children: Vec<_> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    Ok(extras)
+}

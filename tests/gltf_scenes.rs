@@ -1,0 +1,216 @@
+//! A glTF file rendered whole (`rt-gpu model.gltf`): its cameras placed by their nodes (and
+//! picked by name), a framing camera where it has none, the light it gets (its emitters, else
+//! a uniform sky), its punctual lights' extension accepted, and one-line errors.
+
+mod common;
+
+#[cfg(feature = "cli")]
+use common::cli::{rt_gpu, stderr};
+use glam::Vec3;
+use rt_gpu::scene::Background;
+use rt_gpu::scene::gltf_scene::{DEFAULT_HEIGHT, load};
+use std::path::{Path, PathBuf};
+
+/// A triangle at z = 0 spanning (-1..1, -1..1), with `material` as its material's JSON (none
+/// if empty), `nodes` after the mesh node (index 0) and `extra` top-level members.
+fn write_gltf(dir: &Path, name: &str, material: &str, nodes: &str, extra: &str) -> PathBuf {
+    let mut bin: Vec<u8> = Vec::new();
+    for v in [[-1.0f32, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]] {
+        for x in v {
+            bin.extend(x.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join("tri.bin"), &bin).expect("writes");
+    let (materials, reference) = if material.is_empty() {
+        (String::new(), String::new())
+    } else {
+        (
+            format!(r#""materials": [{material}],"#),
+            r#", "material": 0"#.to_string(),
+        )
+    };
+    let comma = if nodes.is_empty() { "" } else { "," };
+    let json = format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "buffers": [{{ "uri": "tri.bin", "byteLength": 36 }}],
+  "bufferViews": [{{ "buffer": 0, "byteOffset": 0, "byteLength": 36 }}],
+  "accessors": [{{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0] }}],
+  {materials}
+  "meshes": [{{ "primitives": [{{ "attributes": {{ "POSITION": 0 }}{reference} }}] }}],
+  {extra}
+  "nodes": [{{ "name": "Triangle", "mesh": 0 }}{comma}{nodes}],
+  "scenes": [{{ "nodes": [0{}] }}],
+  "scene": 0
+}}"#,
+        // Every node after the mesh's that no other names as a child is a root: here, nodes 1..
+        if nodes.is_empty() { "" } else { ", 1" }
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, json).expect("writes");
+    path
+}
+
+const SQRT_HALF: &str = "0.70710678";
+
+/// Node 1, "Side": camera 0 at (5, 0, 0) turned 90 degrees about +y (looking along -x). Node 2,
+/// "Lift" at (0, 10, 0), with child node 3 turned -90 degrees about +x: camera 1 "Top", looking
+/// down with up along -z. Camera 2 is orthographic, on no node the scene reaches but node 3's
+/// sibling 4.
+fn cameras_file(dir: &Path) -> PathBuf {
+    let nodes = format!(
+        r#"{{ "name": "Side", "camera": 0, "translation": [5, 0, 0], "rotation": [0, {SQRT_HALF}, 0, {SQRT_HALF}] }},
+    {{ "name": "Lift", "translation": [0, 10, 0], "children": [3, 4] }},
+    {{ "name": "TopNode", "camera": 1, "rotation": [-{SQRT_HALF}, 0, 0, {SQRT_HALF}] }},
+    {{ "name": "OrthoNode", "camera": 2 }}"#
+    );
+    let cameras = r#""cameras": [
+    { "name": "Side", "type": "perspective", "perspective": { "yfov": 0.5, "aspectRatio": 1.5, "znear": 0.1 } },
+    { "name": "Top", "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } },
+    { "name": "Ortho", "type": "orthographic", "orthographic": { "xmag": 1, "ymag": 1, "zfar": 100, "znear": 0.1 } }
+  ],"#;
+    let path = write_gltf(dir, "cams.gltf", "", &nodes, cameras);
+    // Nodes 3 and 4 are Lift's children, not roots.
+    let text = std::fs::read_to_string(&path).expect("reads");
+    std::fs::write(
+        &path,
+        text.replace(r#""nodes": [0, 1]"#, r#""nodes": [0, 1, 2]"#),
+    )
+    .expect("writes");
+    path
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+#[test]
+fn cameras_are_placed_by_their_nodes_and_picked_by_name() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = cameras_file(dir.path());
+    let (scene, notes) = load(&path, "cams.gltf", None).expect("loads");
+    assert!(notes.is_empty(), "{notes:?}");
+    // The first camera: Side.
+    let c = &scene.camera;
+    assert!(close(c.look_from, Vec3::new(5.0, 0.0, 0.0)), "{c:?}");
+    let forward = (c.look_at - c.look_from).normalize();
+    assert!(close(forward, Vec3::NEG_X), "{c:?}");
+    assert!(close(c.up, Vec3::Y), "{c:?}");
+    // Looking at the point of its view line nearest the scene's centre: the origin.
+    assert!(close(c.look_at, Vec3::ZERO), "{c:?}");
+    assert!((c.vfov_degrees - 0.5f32.to_degrees()).abs() < 1e-4, "{c:?}");
+    assert_eq!(scene.defaults.height, DEFAULT_HEIGHT);
+    assert_eq!(scene.defaults.width, 768, "aspect ratio 1.5");
+
+    // A camera under a translated parent, rotated about x.
+    let (scene, _) = load(&path, "cams.gltf", Some("Top")).expect("loads");
+    let c = &scene.camera;
+    assert!(close(c.look_from, Vec3::new(0.0, 10.0, 0.0)), "{c:?}");
+    assert!(
+        close((c.look_at - c.look_from).normalize(), Vec3::NEG_Y),
+        "{c:?}"
+    );
+    assert!(close(c.up, Vec3::NEG_Z), "{c:?}");
+    assert!((c.vfov_degrees - 0.8f32.to_degrees()).abs() < 1e-4, "{c:?}");
+    assert_eq!(
+        scene.defaults.width, DEFAULT_HEIGHT,
+        "no aspect ratio: square"
+    );
+
+    let error = load(&path, "cams.gltf", Some("Nope")).expect_err("no such camera");
+    assert!(
+        error.contains("no camera named \"Nope\"") && error.contains("Side, Top, Ortho"),
+        "{error}"
+    );
+    let error = load(&path, "cams.gltf", Some("Ortho")).expect_err("orthographic");
+    assert!(error.contains("orthographic"), "{error}");
+}
+
+#[test]
+fn a_file_without_cameras_is_framed_and_lit_by_a_sky_or_its_emitters() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = write_gltf(dir.path(), "plain.gltf", "", "", "");
+    let (scene, _) = load(&path, "plain.gltf", None).expect("loads");
+    let c = &scene.camera;
+    let forward = (c.look_at - c.look_from).normalize();
+    let half = (c.vfov_degrees / 2.0).to_radians();
+    for corner in [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ] {
+        let angle = forward.angle_between(corner - c.look_from);
+        assert!(
+            angle < half,
+            "{corner} is outside the framing camera's view: {c:?}"
+        );
+    }
+    assert!(forward.z < 0.0, "seen from its front (+z): {c:?}");
+    assert!(
+        matches!(scene.background, Background::Environment(_)),
+        "no emitters: a sky"
+    );
+    assert_eq!(scene.materials.len(), 1, "glTF's default material");
+
+    let glow = r#"{ "name": "Glow", "emissiveFactor": [1, 1, 1] }"#;
+    let path = write_gltf(dir.path(), "glow.gltf", glow, "", "");
+    let (scene, _) = load(&path, "glow.gltf", None).expect("loads");
+    assert_eq!(
+        scene.background,
+        Background::Constant(Vec3::ZERO),
+        "its emitters light it"
+    );
+}
+
+#[cfg(feature = "cli")]
+#[test]
+fn the_command_line_renders_a_gltf_file_and_its_errors_are_one_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    cameras_file(dir.path());
+    let out = rt_gpu(
+        &[
+            "cams.gltf",
+            "--camera",
+            "Top",
+            "--spp",
+            "2",
+            "--size",
+            "24x16",
+            "--backend",
+            "cpu",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let image = image::open(dir.path().join("cams.png")).expect("writes cams.png");
+    assert_eq!((image.width(), image.height()), (24, 16));
+
+    for (args, expected) in [
+        (&["cams.gltf", "--camera", "Nope"][..], "no camera named"),
+        (&["cams.gltf", "--camera", "Ortho"][..], "orthographic"),
+        (
+            &["cornell", "--camera", "Top"][..],
+            "--camera picks a camera of a glTF file",
+        ),
+        (&["missing.glb"][..], "missing.glb"),
+    ] {
+        let out = rt_gpu(args, dir.path());
+        let text = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(text.contains(expected), "{args:?}: {text}");
+        assert_eq!(text.trim_end().lines().count(), 1, "{args:?}: {text}");
+    }
+}
+
+#[test]
+fn a_file_requiring_punctual_lights_loads_with_a_note() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let nodes = r#"{ "name": "LampNode", "translation": [0, 3, 2], "extensions": { "KHR_lights_punctual": { "light": 0 } } }"#;
+    let extra = r#""extensionsUsed": ["KHR_lights_punctual"],
+  "extensionsRequired": ["KHR_lights_punctual"],
+  "extensions": { "KHR_lights_punctual": { "lights": [{ "name": "Lamp", "type": "point", "color": [1, 1, 1], "intensity": 50 }] } },"#;
+    let path = write_gltf(dir.path(), "lit.gltf", "", nodes, extra);
+    let (_, notes) = load(&path, "lit.gltf", None).expect("loads");
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].contains("Lamp") && notes[0].contains("KHR_lights_punctual"));
+}
