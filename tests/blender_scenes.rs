@@ -109,3 +109,89 @@ fn blenders_cameras_and_lights_arrive_as_the_script_set_them() {
         "{notes:?}"
     );
 }
+
+/// Regions of the 160x120 image: (name, rows, columns).
+const REGIONS: [(&str, [usize; 2], [usize; 2]); 8] = [
+    ("floor, front", [105, 120], [20, 140]),
+    ("floor, left", [60, 90], [0, 25]),
+    ("gold sphere", [50, 70], [25, 45]),
+    ("chrome sphere", [45, 60], [70, 90]),
+    ("glass sphere", [45, 65], [115, 135]),
+    ("cube, front face", [75, 95], [70, 90]),
+    ("panel", [0, 8], [60, 100]),
+    ("caustic under glass", [72, 80], [115, 135]),
+];
+
+/// Per region, the mean of rt-gpu's CPU render of `scene` (512 spp, seed 0) over that of
+/// Cycles' image `cycles`, both in scenes/blender/; printed as a table.
+fn ratios_to_cycles(scene: Scene, cycles: &str) -> Vec<f64> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender");
+    let reference = image::open(dir.join(cycles))
+        .unwrap_or_else(|e| panic!("{cycles}: {e}"))
+        .to_rgb32f();
+    let (width, height) = (reference.width(), reference.height());
+    let opts = rt_gpu::options::RenderOptions {
+        integrator: rt_gpu::render::Integrator::Nee,
+        ..rt_gpu::options::RenderOptions::new(width, height, 512, 10)
+    };
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, width, height).expect("valid");
+    let film = rt_gpu::cpu::render(&flat, &opts, &|| {});
+    let grey = |c: [f32; 3]| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0;
+    let ours = film.mean_rgb();
+    println!("{cycles}: region, Cycles, rt-gpu, ratio");
+    REGIONS
+        .iter()
+        .map(|(name, [y0, y1], [x0, x1])| {
+            let (mut theirs, mut mine) = (0.0, 0.0);
+            for y in *y0..*y1 {
+                for x in *x0..*x1 {
+                    theirs += grey(reference.get_pixel(x as u32, y as u32).0);
+                    mine += grey(ours[y * width as usize + x]);
+                }
+            }
+            let ratio = mine / theirs;
+            println!("  {name:<20} {theirs:10.3} {mine:10.3} {ratio:7.3}");
+            ratio
+        })
+        .collect()
+}
+
+/// Where both renderers model the same thing (the floor and cube Lambertian on both sides),
+/// rt-gpu's image of Blender's file agrees with Cycles' in every region, within 2.5% (at 512
+/// spp rt-gpu's own noise in a region is under 1%: a deterministic check at seed 0, with
+/// margin for Cycles' noise at 2048 spp and its half floats). Negative controls: the floor's
+/// albedo 5% brighter is caught in the floor's regions; and the Principled BSDF's diffuse
+/// (Cycles: Disney diffuse with retro-reflection and a specular layer added on top), against
+/// glTF's model (rt-gpu's `pbr`), differs by 10% or more on the floor's left and the cube,
+/// the known model difference this comparison reports.
+#[test]
+fn the_file_renders_as_cycles_renders_it_where_the_models_agree() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender/spheres-lambert.toml");
+    let lambert = rt_gpu::scene::file::load(&path).expect("loads");
+    let ratios = ratios_to_cycles(lambert.clone(), "spheres-lambert-cycles.exr");
+    for ((name, ..), ratio) in REGIONS.iter().zip(&ratios) {
+        assert!((ratio - 1.0).abs() < 0.025, "{name}: {ratio}");
+    }
+
+    let mut brighter = lambert;
+    let floor = brighter
+        .material_names
+        .iter()
+        .position(|n| n == "floor")
+        .expect("floor");
+    let Material::Lambertian(white) = &mut brighter.materials[floor] else {
+        panic!("the floor is lambertian");
+    };
+    white.albedo = Texture::Colour(Vec3::splat(0.63));
+    let ratios = ratios_to_cycles(brighter, "spheres-lambert-cycles.exr");
+    assert!(
+        ratios[..2].iter().all(|r| (r - 1.0).abs() >= 0.025),
+        "a 5% brighter floor went unseen: {ratios:?}"
+    );
+
+    let (principled, _) = blender_file("spheres.glb");
+    let ratios = ratios_to_cycles(principled, "spheres-cycles.exr");
+    for i in [1, 5] {
+        assert!(ratios[i] < 0.9, "{}: {}", REGIONS[i].0, ratios[i]);
+    }
+}

@@ -11,6 +11,10 @@ Scenes:
 - `spheres`: a floor, three spheres (rough gold, smooth chrome, glass) and a grey diffuse
   cube, lit only by an emissive panel (the world is black): everything in it both renderers
   model, so rt-gpu's image is compared with Cycles'.
+  `spheres-lambert-cycles.exr` renders it with the floor and the cube as Cycles' Diffuse BSDF
+  (Lambert) instead of the Principled BSDF's diffuse, for `spheres-lambert.toml`, which places
+  the file's objects with rt-gpu's `lambertian` there: where both renderers model the same
+  thing, their images must agree (tests/blender_scenes.rs).
 - `lamps`: the same objects lit by a point light, a spot light and a sun (KHR_lights_punctual),
   with a second camera.
 """
@@ -142,6 +146,19 @@ def render_settings(scene, cam):
     settings.exr_codec = "ZIP"
 
 
+def lambert_variant(name, materials):
+    """Renders the scene again with `materials` as Cycles' Diffuse BSDF (Lambert)."""
+    for material_name in materials:
+        tree = bpy.data.materials[material_name].node_tree
+        principled = tree.nodes["Principled BSDF"]
+        diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+        diffuse.inputs["Color"].default_value = principled.inputs["Base Color"].default_value
+        diffuse.inputs["Roughness"].default_value = 0.0
+        tree.links.new(diffuse.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
+    bpy.context.scene.render.filepath = os.path.join(OUT, name + "-cycles.exr")
+    bpy.ops.render.render(write_still=True)
+
+
 def export(name, cycles=True):
     path = os.path.join(OUT, name)
     bpy.ops.export_scene.gltf(filepath=path + ".glb", export_format="GLB",
@@ -162,6 +179,7 @@ place(panel, material("Panel", (0, 0, 0), roughness=1.0, emission=(1.0, 0.9, 0.8
 cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
 render_settings(scene, cam)
 export("spheres")
+lambert_variant("spheres-lambert", ["Floor", "Clay"])
 
 scene = reset()
 objects()
