@@ -62,19 +62,40 @@ fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> v
 //#else
     let environment = false;
 //#endif
-    if !environment {
+    // A punctual light: what it sends to start, reached unless something lies before reach.
+    var punctual = false;
+    var sent = vec3f(0.0);
+    var at_infinity = environment;
+    var reach = 3.0e38; // the sun and the environment: no distance stops the ray
+//#if PUNCTUAL
+    let l = light_at(index);
+    punctual = is_punctual(l);
+    if punctual {
+        sent = punctual_arriving(l, start);
+        at_infinity = l.kind == KIND_DIRECTIONAL;
+    }
+//#endif
+    if !at_infinity {
         let to_light = s.point - start;
         if !(dot(to_light, to_light) > 0.0) {
             return vec3f(0.0);
         }
         dir = normalize(to_light);
+        reach = length(to_light);
     }
     var ray = Ray(start, dir);
     var medium = medium_in;
     var transmitted = 1.0;
     for (var i = 0u; i <= MEDIUM_CROSSINGS; i++) {
         var hit: Hit;
-        if !intersect(ray, &hit) {
+        let found = intersect(ray, &hit);
+        if punctual && (!found || hit.t >= reach) {
+            if medium != 0u {
+                transmitted *= transmittance(material_at(medium - 1u).medium_density, reach);
+            }
+            return sent * transmitted;
+        }
+        if !found {
 //#if ENVIRONMENT
             if environment {
                 return environment_radiance(dir) * transmitted;
@@ -86,7 +107,7 @@ fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> v
             transmitted *= transmittance(material_at(medium - 1u).medium_density, hit.t);
         }
         let m = material_at(hit.material);
-        if light_of(hit.primitive) == index + 1u {
+        if !punctual && light_of(hit.primitive) == index + 1u {
             return emitted(m, hit) * transmitted;
         }
         if m.kind != MAT_MEDIUM {
@@ -94,6 +115,7 @@ fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> v
         }
         medium = entered(hit);
         ray = spawn(hit, ray.dir);
+        reach -= hit.t;
     }
     return vec3f(0.0);
 }
@@ -107,6 +129,11 @@ fn medium_direct_light(point: vec3f, dir: vec3f, g: f32, medium: u32, u0: f32, u
         return vec3f(0.0);
     }
     let phase_pdf = hg_pdf(g, dot(dir, s.dir));
+//#if PUNCTUAL
+    if is_punctual(light_at(index)) {
+        return light_arriving(point, s, index, medium) * (phase_pdf / s.pdf);
+    }
+//#endif
     return light_arriving(point, s, index, medium) * light_sample_factor(s.pdf, phase_pdf);
 }
 //#endif
@@ -123,7 +150,19 @@ fn direct_light(m: Material, hit: Hit, dir: vec3f, medium: u32, u0: f32, u1: f32
     if all(f == vec3f(0.0)) {
         return vec3f(0.0);
     }
-    let weight = light_sample_weight(s.pdf, bsdf_pdf(m, -dir, s.dir, hit));
+    // A punctual light's sample is a direction with probability: no MIS (BSDF sampling never
+    // finds it).
+    var weight: f32;
+//#if PUNCTUAL
+    let punctual = is_punctual(light_at(index));
+    if punctual {
+        weight = 1.0 / s.pdf;
+    } else {
+        weight = light_sample_weight(s.pdf, bsdf_pdf(m, -dir, s.dir, hit));
+    }
+//#else
+    weight = light_sample_weight(s.pdf, bsdf_pdf(m, -dir, s.dir, hit));
+//#endif
     // The shadow ray leaves the offset origin aimed at the sampled point itself (a tiny light
     // is not missed by the width of the offset); whatever it hits first must be that light.
     // Through the surface (rough glass), it leaves on the far side, into the medium there.
@@ -139,6 +178,26 @@ fn direct_light(m: Material, hit: Hit, dir: vec3f, medium: u32, u0: f32, u1: f32
             return vec3f(0.0);
         }
         return f * (environment_radiance(s.dir) * weight);
+    }
+//#endif
+//#if PUNCTUAL
+    if punctual {
+        let l = light_at(index);
+        var blocker: Hit;
+        if l.kind == KIND_DIRECTIONAL {
+            if intersect(Ray(origin, s.dir), &blocker) {
+                return vec3f(0.0);
+            }
+        } else {
+            let to_point = s.point - origin;
+            if !(dot(to_point, to_point) > 0.0) {
+                return vec3f(0.0);
+            }
+            if intersect(Ray(origin, normalize(to_point)), &blocker) && blocker.t < length(to_point) {
+                return vec3f(0.0);
+            }
+        }
+        return f * (punctual_arriving(l, origin) * weight);
     }
 //#endif
     let to_light = s.point - origin;

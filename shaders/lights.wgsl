@@ -85,6 +85,12 @@ fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
         return l.pick * environment_pdf(dir);
     }
 //#endif
+//#if PUNCTUAL
+    // A ray never meets a light of no area.
+    if l.kind == KIND_POINT || l.kind == KIND_DIRECTIONAL {
+        return 0.0;
+    }
+//#endif
     if l.kind == KIND_SPHERE {
         let cone = sphere_cone(l.position, l.size, x);
         if cone.w > 0.0 {
@@ -95,6 +101,28 @@ fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
     return quad_pdf(l, x, p, dir);
 }
 
+//#if PUNCTUAL
+// What punctual light l sends to x (what multiplies BSDF x cos): a point's or spot's intensity
+// times its falloff over the squared distance, the sun's irradiance.
+fn punctual_arriving(l: Light, x: vec3f) -> vec3f {
+    if l.kind == KIND_DIRECTIONAL {
+        return l.u;
+    }
+    let from_light = x - l.position;
+    let d2 = dot(from_light, from_light);
+    if !(d2 > 0.0) {
+        return vec3f(0.0);
+    }
+    let cos_axis = dot(l.normal, from_light) / sqrt(d2);
+    let t = clamp(cos_axis * l.v.x + l.v.y, 0.0, 1.0);
+    return l.u * (t * t / max(d2, MIN_DISTANCE_SQUARED));
+}
+
+fn is_punctual(l: Light) -> bool {
+    return l.kind == KIND_POINT || l.kind == KIND_DIRECTIONAL;
+}
+//#endif
+
 struct LightSample {
     dir: vec3f,
     pdf: f32,       // 0: no sample
@@ -104,6 +132,27 @@ struct LightSample {
 // A unit direction from x toward l and its solid-angle pdf (with the pick probability).
 fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
     var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
+//#if PUNCTUAL
+    // Punctual lights: one direction, with the probability of picking the light.
+    if l.kind == KIND_DIRECTIONAL {
+        if l.pick > 0.0 {
+            out.dir = l.normal;
+            out.pdf = l.pick;
+            out.point = x + l.normal;
+        }
+        return out;
+    }
+    if l.kind == KIND_POINT {
+        let to_light = l.position - x;
+        let dist2 = dot(to_light, to_light);
+        if dist2 > 0.0 && l.pick > 0.0 {
+            out.dir = to_light / sqrt(dist2);
+            out.pdf = l.pick;
+            out.point = l.position;
+        }
+        return out;
+    }
+//#endif
 //#if ENVIRONMENT
     if l.kind == KIND_ENVIRONMENT {
         let e = environment_sample(u1, u2);

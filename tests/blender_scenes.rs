@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 use rt_gpu::scene::gltf_scene::{load, read_extras};
+use rt_gpu::scene::punctual::Punctual;
 use rt_gpu::scene::texture::Texture;
 use rt_gpu::scene::{Background, Material, Scene};
 use std::path::Path;
@@ -103,10 +104,65 @@ fn blenders_cameras_and_lights_arrive_as_the_script_set_them() {
         "{closeup:?}"
     );
     assert_eq!(extras.lights, ["Point", "Spot", "Sun"]);
-    let (_, notes) = blender_file("lamps.glb");
-    assert!(
-        notes.len() == 1 && notes[0].contains("Point, Spot, Sun"),
-        "{notes:?}"
+    // Blender's watts, as its exporter writes them (x 683 / 4 pi in candela for points and
+    // spots, x 683 in lux for the sun), back in rt-gpu's W/sr and W/m^2.
+    let per_sr = 1.0 / (4.0 * std::f32::consts::PI);
+    let near = |a: Vec3, b: Vec3| (a - b).length() <= 1e-4 * b.length().max(1.0);
+    let direction = |from: Vec3, to: Vec3| (to - from).normalize();
+    match extras.punctual[..] {
+        [
+            Punctual::Point {
+                position,
+                intensity,
+            },
+            Punctual::Spot {
+                position: spot_at,
+                direction: spot_axis,
+                intensity: spot_intensity,
+                inner,
+                outer,
+            },
+            Punctual::Directional {
+                direction: sun,
+                irradiance,
+            },
+        ] => {
+            assert!(near(position, Vec3::new(-2.0, 3.0, 2.0)), "{position}");
+            assert!(
+                near(intensity, 400.0 * per_sr * Vec3::new(1.0, 0.8, 0.6)),
+                "{intensity}"
+            );
+            assert!(near(spot_at, Vec3::new(2.5, 4.0, 2.5)), "{spot_at}");
+            let aim = direction(spot_at, Vec3::new(1.6, 0.7, 0.0));
+            assert!(near(spot_axis, aim), "{spot_axis} against {aim}");
+            assert!(
+                near(spot_intensity, Vec3::splat(800.0 * per_sr)),
+                "{spot_intensity}"
+            );
+            assert!(
+                (outer.to_degrees() - 20.0).abs() < 1e-3,
+                "outer {}",
+                outer.to_degrees()
+            );
+            // Blender's blend 0.25: the exporter's inner cone is (1 - blend) x the outer.
+            assert!(
+                (inner.to_degrees() - 15.0).abs() < 1e-3,
+                "inner {}",
+                inner.to_degrees()
+            );
+            let aim = direction(Vec3::new(0.0, 10.0, 0.0), Vec3::new(0.5, 0.0, -0.3));
+            assert!(near(sun, aim), "{sun} against {aim}");
+            assert!(near(irradiance, Vec3::splat(2.0)), "{irradiance}");
+        }
+        ref other => panic!("lights {other:?}"),
+    }
+    let (scene, notes) = blender_file("lamps.glb");
+    assert!(notes.is_empty(), "{notes:?}");
+    assert_eq!(scene.punctual.len(), 3);
+    assert_eq!(
+        scene.background,
+        Background::Constant(Vec3::ZERO),
+        "lit by its lamps"
     );
 }
 
@@ -193,5 +249,36 @@ fn the_file_renders_as_cycles_renders_it_where_the_models_agree() {
     let ratios = ratios_to_cycles(principled, "spheres-cycles.exr");
     for i in [1, 5] {
         assert!(ratios[i] < 0.9, "{}: {}", REGIONS[i].0, ratios[i]);
+    }
+}
+
+/// Blender's lamps (a point, a spot and a sun), with the floor and cube Lambertian in both
+/// renderers (`lamps-lambert-cycles.exr`; here the file's materials swapped in code): rt-gpu's
+/// image agrees with Cycles' within 2.5% on the floor, the cube and the rough gold sphere, so
+/// the lights' units, positions, directions and cones arrive as Blender meant them. Not
+/// asserted, printed: the near-mirror chrome (GGX 0.05), the glass and the floor under it are
+/// 6-16% darker than Cycles' here, and it is not yet known why (under the area panel of
+/// `spheres` they agree within 1%).
+#[test]
+fn blenders_lamps_light_the_scene_as_in_cycles() {
+    let (mut scene, _) = blender_file("lamps.glb");
+    for (name, albedo) in [
+        ("Floor", Vec3::splat(0.6)),
+        ("Clay", Vec3::new(0.8, 0.3, 0.2)),
+    ] {
+        let i = scene
+            .material_names
+            .iter()
+            .position(|n| *n == format!("lamps.glb#{name}"))
+            .expect("material");
+        scene.materials[i] = Material::Lambertian(rt_gpu::material::Lambertian {
+            albedo: Texture::Colour(albedo),
+            emission: Vec3::ZERO,
+        });
+    }
+    let ratios = ratios_to_cycles(scene, "lamps-lambert-cycles.exr");
+    for i in [0, 1, 2, 5] {
+        let (name, ratio) = (REGIONS[i].0, ratios[i]);
+        assert!((ratio - 1.0).abs() < 0.025, "{name}: {ratio}");
     }
 }

@@ -1,6 +1,6 @@
 //! A glTF file rendered whole (`rt-gpu model.gltf`): its cameras placed by their nodes (and
 //! picked by name), a framing camera where it has none, the light it gets (its emitters, else
-//! a uniform sky), its punctual lights' extension accepted, and one-line errors.
+//! a uniform sky), its punctual lights read, and one-line errors.
 
 mod common;
 
@@ -9,6 +9,7 @@ use common::cli::{rt_gpu, stderr};
 use glam::Vec3;
 use rt_gpu::scene::Background;
 use rt_gpu::scene::gltf_scene::{DEFAULT_HEIGHT, load};
+use rt_gpu::scene::punctual::Punctual;
 use std::path::{Path, PathBuf};
 
 /// A triangle at z = 0 spanning (-1..1, -1..1), with `material` as its material's JSON (none
@@ -203,16 +204,31 @@ fn the_command_line_renders_a_gltf_file_and_its_errors_are_one_line() {
 }
 
 #[test]
-fn a_file_requiring_punctual_lights_loads_with_a_note() {
+fn a_file_requiring_punctual_lights_is_lit_by_them() {
     let dir = tempfile::tempdir().expect("temp dir");
     let nodes = r#"{ "name": "LampNode", "translation": [0, 3, 2], "extensions": { "KHR_lights_punctual": { "light": 0 } } }"#;
     let extra = r#""extensionsUsed": ["KHR_lights_punctual"],
   "extensionsRequired": ["KHR_lights_punctual"],
-  "extensions": { "KHR_lights_punctual": { "lights": [{ "name": "Lamp", "type": "point", "color": [1, 1, 1], "intensity": 50 }] } },"#;
+  "extensions": { "KHR_lights_punctual": { "lights": [{ "name": "Lamp", "type": "point", "color": [1, 0.5, 0.25], "intensity": 683, "range": 10 }] } },"#;
     let path = write_gltf(dir.path(), "lit.gltf", "", nodes, extra);
-    let (_, notes) = load(&path, "lit.gltf", None).expect("loads");
-    assert_eq!(notes.len(), 1, "{notes:?}");
-    assert!(notes[0].contains("Lamp") && notes[0].contains("KHR_lights_punctual"));
+    let (scene, notes) = load(&path, "lit.gltf", None).expect("loads");
+    // 683 candela: 1 W/sr, times the colour.
+    assert_eq!(
+        scene.punctual,
+        [Punctual::Point {
+            position: Vec3::new(0.0, 3.0, 2.0),
+            intensity: Vec3::new(1.0, 0.5, 0.25),
+        }]
+    );
+    assert_eq!(
+        scene.background,
+        Background::Constant(Vec3::ZERO),
+        "lit by its lamp alone"
+    );
+    assert!(
+        notes.len() == 1 && notes[0].contains("range is ignored"),
+        "{notes:?}"
+    );
 }
 
 /// The scene a glTF file makes, under its uniform sky (an environment light of a 1x1 image,

@@ -345,6 +345,9 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
                 hit_triangle(&triangle, &ray, 0.0, f32::INFINITY).map(|(t, _, _)| t)
             }
             LightShape::Environment(_) => unreachable!("tests/environment.rs"),
+            LightShape::Point { .. } | LightShape::Directional { .. } => {
+                unreachable!("delta lights have no pdf: tests/punctual.rs")
+            }
         };
         t.map(|t| ray.at(t))
     };
@@ -354,6 +357,9 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
         LightShape::Quad { corner, u, v, .. } => corner + 0.5 * (u + v),
         LightShape::Triangle { corner, u, v, .. } => corner + (u + v) / 3.0,
         LightShape::Environment(_) => unreachable!("tests/environment.rs"),
+        LightShape::Point { .. } | LightShape::Directional { .. } => {
+            unreachable!("delta lights have no pdf: tests/punctual.rs")
+        }
     };
     let axis = (centre - X).normalize();
     let (t, b) = rt_gpu::shared::warp::basis(axis);
@@ -369,6 +375,9 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
                     .fold(0.0, f64::max)
             }
             LightShape::Environment(_) => unreachable!("tests/environment.rs"),
+            LightShape::Point { .. } | LightShape::Directional { .. } => {
+                unreachable!("delta lights have no pdf: tests/punctual.rs")
+            }
         };
     let (n_theta, n_phi, sub) = (24usize, 24usize, 24usize);
     let cell_solid_angle = c_max * 2.0 * PI / (n_theta * n_phi) as f64;

@@ -16,7 +16,7 @@ Scenes:
   the file's objects with rt-gpu's `lambertian` there: where both renderers model the same
   thing, their images must agree (tests/blender_scenes.rs).
 - `lamps`: the same objects lit by a point light, a spot light and a sun (KHR_lights_punctual),
-  with a second camera.
+  with a second camera; `lamps-lambert-cycles.exr` as `spheres-lambert-cycles.exr`.
 """
 
 import math
@@ -138,7 +138,9 @@ def render_settings(scene, cam):
     scene.render.resolution_y = HEIGHT
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = False
-    scene.render.filter_size = 0.01  # one pixel's box, as rt-gpu's film
+    # Cycles' pixel filter stays its default (Blackman-Harris, 1.5 px): a region's mean is the
+    # same under any filter of unit integral (rt-gpu's is a one-pixel box) but at its edges.
+    scene.cycles.filter_width = 1.5
     settings = scene.render.image_settings
     settings.file_format = "OPEN_EXR"
     settings.color_mode = "RGB"
@@ -191,3 +193,4 @@ cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
 camera("Closeup", (3, -3, 1.5), (1.6, 0, 0.7), lens_mm=50.0)
 render_settings(scene, cam)
 export("lamps")
+lambert_variant("lamps-lambert", ["Floor", "Clay"])

@@ -307,6 +307,13 @@ impl RenderOptionArgs {
         Ok(())
     }
 
+    /// A note for the user where these options leave part of `scene` unseen.
+    pub fn note_for(&self, scene: &Scene) -> Option<String> {
+        (self.integrator == IntegratorArg::Naive && !scene.punctual.is_empty()).then(|| {
+            "note: the naive integrator never finds punctual lights (points, spots, the sun), which only light sampling reaches: they are left out (use --integrator nee)".to_string()
+        })
+    }
+
     /// The image size: --size, or the scene's.
     pub fn size(&self, scene: &Scene) -> (u32, u32) {
         self.size

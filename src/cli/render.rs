@@ -115,6 +115,9 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
     };
     args.options.check()?;
     let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
+    if let Some(note) = args.options.note_for(&scene) {
+        note!("{note}");
+    }
     let range = sample_range(args)?;
     let partial = args.samples.is_some() || args.shard.is_some();
     if let Some(x) = args.target_error {

@@ -8,6 +8,7 @@ use rt_gpu::output::ImageFormat;
 use rt_gpu::render::Backend;
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::viewer::{ViewConfig, run};
+use std::io::Write;
 use std::path::PathBuf;
 
 pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
@@ -18,6 +19,9 @@ pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
         bail!("--time must be a positive number of seconds, got {t}");
     }
     let (scene, _) = resolve_scene(&args.scene, args.options.camera.as_deref())?;
+    if let Some(note) = args.options.note_for(&scene) {
+        note!("{note}");
+    }
     let output = args
         .output
         .clone()

@@ -267,7 +267,13 @@ fn direct_light(
     if f == Vec3::ZERO {
         return None;
     }
-    let bsdf_pdf = material.pdf(-dir, sample.dir, hit);
+    // A punctual light's sample is a direction with probability: no MIS (BSDF sampling never
+    // finds it).
+    let weight = if scene.lights[index].shape.is_delta() {
+        1.0 / sample.pdf
+    } else {
+        lights::light_sample_weight(sample.pdf, material.pdf(-dir, sample.dir, hit))
+    };
     // The shadow ray leaves the offset origin aimed at the sampled point itself, so that a tiny
     // light is not missed by the width of the offset; through the surface (rough glass), into
     // the medium on the other side.
@@ -279,7 +285,7 @@ fn direct_light(
         (-hit.normal, medium)
     };
     let le = light_arriving(scene, leave(hit, side), &sample, index, medium)?;
-    Some(f * (le * lights::light_sample_weight(sample.pdf, bsdf_pdf)))
+    Some(f * (le * weight))
 }
 
 /// One light sample at a scattering event at `point` in `medium`, for a ray that travelled
@@ -301,6 +307,9 @@ fn medium_direct_light(
     let sample = lights::sample(&scene.lights[index], point, u1, u2)?;
     let phase_pdf = hg_pdf(g, dir.dot(sample.dir));
     let le = light_arriving(scene, point, &sample, index, medium)?;
+    if scene.lights[index].shape.is_delta() {
+        return Some(le * (phase_pdf / sample.pdf));
+    }
     Some(le * lights::light_sample_factor(sample.pdf, phase_pdf))
 }
 
@@ -316,25 +325,37 @@ pub fn light_arriving(
     index: usize,
     mut medium: u32,
 ) -> Option<Vec3> {
-    let environment = match scene.lights[index].shape {
+    let light = &scene.lights[index];
+    let environment = match light.shape {
         LightShape::Environment(env) => Some(env),
         _ => None,
     };
-    let dir = if environment.is_some() {
-        sample.dir
+    // A punctual light: what it sends to `from`, reached unless something lies before `reach`.
+    let punctual = light
+        .shape
+        .is_delta()
+        .then(|| lights::punctual_arriving(light, from));
+    let at_infinity =
+        environment.is_some() || matches!(light.shape, LightShape::Directional { .. });
+    let (dir, mut reach) = if at_infinity {
+        (sample.dir, f32::INFINITY)
     } else {
         let to_light = sample.point - from;
         if !(to_light.length_squared() > 0.0) {
             return None;
         }
-        to_light.normalize()
+        (to_light.normalize(), to_light.length())
     };
     let mut ray = Ray { origin: from, dir };
     // What the ray finds where nothing stops it first: the environment, or nothing.
     let escaped = || environment.map(|env| super::environment::radiance(&env, dir));
     if medium == 0 && scene.medium_crossings == 0 {
         // No medium on the way (the loop below, without its cost).
-        let Some(hit) = intersect(scene, &ray) else {
+        let hit = intersect(scene, &ray);
+        if let Some(le) = punctual {
+            return hit.is_none_or(|h| h.t >= reach).then_some(le);
+        }
+        let Some(hit) = hit else {
             return escaped();
         };
         return (scene.light_of(hit.primitive) == index as u32 + 1)
@@ -342,14 +363,23 @@ pub fn light_arriving(
     }
     let mut transmitted = 1.0;
     for _ in 0..=scene.medium_crossings {
-        let Some(hit) = intersect(scene, &ray) else {
+        let hit = intersect(scene, &ray);
+        if let Some(le) = punctual
+            && hit.is_none_or(|h| h.t >= reach)
+        {
+            if let Some(interior) = scene.medium(medium) {
+                transmitted *= transmittance(interior.density, reach);
+            }
+            return Some(le * transmitted);
+        }
+        let Some(hit) = hit else {
             // (Media are closed: a ray that escapes has left every one.)
             return escaped().map(|le| le * transmitted);
         };
         if let Some(interior) = scene.medium(medium) {
             transmitted *= transmittance(interior.density, hit.t);
         }
-        if scene.light_of(hit.primitive) == index as u32 + 1 {
+        if punctual.is_none() && scene.light_of(hit.primitive) == index as u32 + 1 {
             let le = scene.materials[hit.material as usize].emitted(&hit);
             return Some(le * transmitted);
         }
@@ -358,6 +388,7 @@ pub fn light_arriving(
         }
         medium = entered(&hit);
         ray = spawn(&hit, ray.dir);
+        reach -= hit.t;
     }
     None
 }

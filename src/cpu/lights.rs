@@ -5,6 +5,7 @@
 use super::environment;
 use super::shapes::hit_sphere;
 use crate::scene::flat::{FlatScene, Light, LightShape, Sphere};
+use crate::scene::punctual::MIN_DISTANCE_SQUARED;
 use crate::shared::constants::MIN_LIGHT_COSINE;
 use crate::shared::ray::Ray;
 use crate::shared::warp::basis;
@@ -74,6 +75,34 @@ pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
             normal, inv_area, ..
         } => quad_pdf(light.pick, normal, inv_area, x, p, dir),
         LightShape::Environment(env) => light.pick * environment::pdf(&env, dir),
+        // A ray never meets a light of no area.
+        LightShape::Point { .. } | LightShape::Directional { .. } => 0.0,
+    }
+}
+
+/// The radiance-like quantity a punctual light sends to `x` (what multiplies BSDF x cos): a
+/// point's or spot's intensity times its falloff over the squared distance, the sun's
+/// irradiance; zero for lights with area.
+#[inline]
+pub fn punctual_arriving(light: &Light, x: Vec3) -> Vec3 {
+    match light.shape {
+        LightShape::Point {
+            position,
+            intensity,
+            axis,
+            ramp,
+        } => {
+            let from_light = x - position;
+            let d2 = from_light.length_squared();
+            if !(d2 > 0.0) {
+                return Vec3::ZERO;
+            }
+            let cos = axis.dot(from_light) / d2.sqrt();
+            let t = (cos * ramp[0] + ramp[1]).clamp(0.0, 1.0);
+            intensity * (t * t / d2.max(MIN_DISTANCE_SQUARED))
+        }
+        LightShape::Directional { irradiance, .. } => irradiance,
+        _ => Vec3::ZERO,
     }
 }
 
@@ -136,6 +165,21 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
             let point = corner + (s * (1.0 - u2)) * u + (s * u2) * v;
             area_sample(light.pick, point, normal, inv_area, x)
         }
+        // Punctual lights: one direction, with the probability of picking the light.
+        LightShape::Point { position, .. } => {
+            let to_light = position - x;
+            let dist2 = to_light.length_squared();
+            (dist2 > 0.0 && light.pick > 0.0).then(|| LightSample {
+                dir: to_light / dist2.sqrt(),
+                pdf: light.pick,
+                point: position,
+            })
+        }
+        LightShape::Directional { toward, .. } => (light.pick > 0.0).then_some(LightSample {
+            dir: toward,
+            pdf: light.pick,
+            point: x + toward,
+        }),
         LightShape::Environment(env) => {
             let (dir, pdf) = environment::sample(&env, u1, u2)?;
             let pdf = light.pick * pdf;

@@ -91,6 +91,8 @@ fn wgsl_constants() -> String {
         ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
         ("TEXTURE_IMAGE", TEXTURE_IMAGE.literal()),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
+        ("KIND_POINT", KIND_POINT.literal()),
+        ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
         ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
         ("KIND_QUAD", KIND_QUAD.literal()),
         (
@@ -115,6 +117,10 @@ fn wgsl_constants() -> String {
             crate::shared::constants::MIN_LIGHT_COSINE.literal(),
         ),
         ("POINT_ERROR", POINT_ERROR.literal()),
+        (
+            "MIN_DISTANCE_SQUARED",
+            crate::scene::punctual::MIN_DISTANCE_SQUARED.literal(),
+        ),
         (
             "MIN_COSINE",
             crate::material::microfacet::MIN_COSINE.literal(),
@@ -456,6 +462,23 @@ fn gpu_light(l: &Light) -> GpuLight {
         }
         // Its parameters are the render's (GpuParams::environment_*).
         LightShape::Environment(_) => out.kind = KIND_ENVIRONMENT,
+        LightShape::Point {
+            position,
+            intensity,
+            axis,
+            ramp,
+        } => {
+            out.kind = KIND_POINT;
+            out.position = position.to_array();
+            out.u = intensity.to_array();
+            out.normal = axis.to_array();
+            out.v = [ramp[0], ramp[1], 0.0];
+        }
+        LightShape::Directional { toward, irradiance } => {
+            out.kind = KIND_DIRECTIONAL;
+            out.normal = toward.to_array();
+            out.u = irradiance.to_array();
+        }
     }
     out
 }

@@ -79,6 +79,8 @@ pub struct Features {
     /// Next-event estimation: light sampling with MIS (the nee integrator, in a scene with
     /// lights and diffuse surfaces to light).
     pub nee: bool,
+    /// Lights of no area (points, spots, the sun) among the lights.
+    pub punctual: bool,
     /// Scene arrays in uniform buffers of `scene_capacity` elements (faster where they fit).
     pub uniform_scene: bool,
     pub scene_capacity: u32,
@@ -97,7 +99,7 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 15] = [
+const SWITCHES: [Switch; 16] = [
     ("SPHERES", |f| &mut f.spheres),
     ("QUADS", |f| &mut f.quads),
     ("TRIANGLES", |f| &mut f.triangles),
@@ -110,6 +112,7 @@ const SWITCHES: [Switch; 15] = [
     ("ENVIRONMENT", |f| &mut f.environment),
     ("DEBUG", |f| &mut f.debug),
     ("NEE", |f| &mut f.nee),
+    ("PUNCTUAL", |f| &mut f.punctual),
     ("UNIFORM_SCENE", |f| &mut f.uniform_scene),
     ("UNIFORM_BVH", |f| &mut f.uniform_bvh),
     ("INLINE_SCENE", |f| &mut f.inline_scene),
@@ -202,6 +205,7 @@ impl Features {
             environment: matches!(scene.background, Background::Environment(_)),
             debug: false,
             nee: false,
+            punctual: scene.lights.iter().any(|l| l.shape.is_delta()),
             // BVH kernels too: lavapipe reads uniform arrays in straight-line code.
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
             scene_capacity: capacity as u32,
@@ -231,6 +235,7 @@ impl Features {
             uniform_scene: false,
             uniform_bvh: false,
             inline_scene: false,
+            punctual: true,
             ..own
         }
     }

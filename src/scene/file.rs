@@ -4,6 +4,7 @@
 //! line and column; whole-object checks (a zero-area quad, a degenerate camera) report the line of
 //! the table they belong to.
 
+use super::punctual::Punctual;
 use super::{
     Background, Camera, Material, Object, RenderDefaults, Scene, SceneError, Shape, Transform,
 };
@@ -241,6 +242,117 @@ struct ObjectsOnly {
     objects: Vec<Spanned<ObjectDoc>>,
 }
 
+/// `[[light]]`: one of `point = { position, intensity }`, `spot = { position, look_at,
+/// intensity, inner, outer }` (cone half-angles in degrees), `directional = { direction,
+/// irradiance }` (the direction light travels). Radiometric: W/sr, W/m^2.
+#[derive(Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+struct LightDoc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    point: Option<PointDoc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spot: Option<SpotDoc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    directional: Option<DirectionalDoc>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct PointDoc {
+    position: V3,
+    intensity: V3,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct SpotDoc {
+    position: V3,
+    look_at: V3,
+    intensity: V3,
+    inner: Num,
+    outer: Num,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct DirectionalDoc {
+    direction: V3,
+    irradiance: V3,
+}
+
+impl LightDoc {
+    fn light(self) -> Result<Punctual, String> {
+        let light = match (self.point, self.spot, self.directional) {
+            (Some(p), None, None) => Punctual::Point {
+                position: p.position.vec(),
+                intensity: p.intensity.vec(),
+            },
+            (None, Some(s), None) => Punctual::Spot {
+                position: s.position.vec(),
+                direction: (s.look_at.vec().as_dvec3() - s.position.vec().as_dvec3())
+                    .normalize_or_zero()
+                    .as_vec3(),
+                intensity: s.intensity.vec(),
+                inner: s.inner.0.to_radians(),
+                outer: s.outer.0.to_radians(),
+            },
+            (None, None, Some(d)) => Punctual::Directional {
+                direction: d.direction.vec().normalize_or_zero(),
+                irradiance: d.irradiance.vec(),
+            },
+            _ => {
+                return Err(
+                    "a [[light]] is one of point = {...}, spot = {...} or directional = {...}"
+                        .into(),
+                );
+            }
+        };
+        light.validate()?;
+        Ok(light)
+    }
+
+    fn from_light(light: &Punctual) -> LightDoc {
+        match *light {
+            Punctual::Point {
+                position,
+                intensity,
+            } => LightDoc {
+                point: Some(PointDoc {
+                    position: V3::from(position),
+                    intensity: V3::from(intensity),
+                }),
+                ..Default::default()
+            },
+            Punctual::Spot {
+                position,
+                direction,
+                intensity,
+                inner,
+                outer,
+            } => LightDoc {
+                spot: Some(SpotDoc {
+                    position: V3::from(position),
+                    look_at: V3::from(position + direction),
+                    intensity: V3::from(intensity),
+                    inner: Num(inner.to_degrees()),
+                    outer: Num(outer.to_degrees()),
+                }),
+                ..Default::default()
+            },
+            Punctual::Directional {
+                direction,
+                irradiance,
+            } => LightDoc {
+                directional: Some(DirectionalDoc {
+                    direction: V3::from(direction),
+                    irradiance: V3::from(irradiance),
+                }),
+                ..Default::default()
+            },
+        }
+    }
+}
+
 /// A parser message on one line, with any long quoted text in it cut short.
 fn quoted_message(message: &str) -> String {
     let flat = message.trim().replace('\n', " ");
@@ -393,6 +505,8 @@ struct SceneDoc {
     materials: BTreeMap<String, Spanned<Material>>,
     #[serde(default, rename = "object")]
     objects: Vec<Spanned<ObjectDoc>>,
+    #[serde(default, rename = "light", skip_serializing_if = "Vec::is_empty")]
+    lights: Vec<Spanned<LightDoc>>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -590,6 +704,11 @@ impl SceneDoc {
                 objects.push(object);
             }
         }
+        let mut punctual = Vec::new();
+        for spanned in self.lights {
+            let span = Some(spanned.span());
+            punctual.push(spanned.into_inner().light().map_err(|e| (span, e))?);
+        }
         let scene = Scene {
             name: name.to_string(),
             camera,
@@ -597,6 +716,7 @@ impl SceneDoc {
             materials: materials.materials,
             material_names: materials.names,
             objects,
+            punctual,
             defaults,
         };
         // Media problems point at the object they are found at.
@@ -700,6 +820,11 @@ impl SceneDoc {
             ),
             materials,
             objects,
+            lights: scene
+                .punctual
+                .iter()
+                .map(|l| Spanned::new(0..0, LightDoc::from_light(l)))
+                .collect(),
         }
     }
 }

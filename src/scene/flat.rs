@@ -259,8 +259,31 @@ pub enum LightShape {
         normal: Vec3,
         inv_area: f32,
     },
+    /// A point light of radiant `intensity` (W/sr), or a spot of it: `axis` the unit direction
+    /// it points, `ramp` the scale and offset of its falloff on cos(angle) (`Punctual::spot_ramp`;
+    /// a point light's (0, 1): 1 everywhere).
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+        axis: Vec3,
+        ramp: [f32; 2],
+    },
+    /// Light arriving from the unit direction `toward` alone, of `irradiance` (W/m^2) on a
+    /// surface facing it.
+    Directional { toward: Vec3, irradiance: Vec3 },
     /// The environment (always the last light): directions by its image's distribution.
     Environment(super::environment::Environment),
+}
+
+impl LightShape {
+    /// A light of no area, found by light sampling alone: its samples are directions with
+    /// probability, not density.
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            LightShape::Point { .. } | LightShape::Directional { .. }
+        )
+    }
 }
 
 /// Most squares a UV checker may put across [0, 1] (f32 resolves 2^24 steps there).
@@ -304,7 +327,7 @@ impl FlatScene {
             features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
         });
         flat.check_checker_scales()?;
-        flat.collect_lights();
+        flat.collect_lights(&scene.punctual);
         flat.medium_crossings = flat.count_medium_crossings();
         flat.build_bvh();
         Ok(flat)
@@ -537,7 +560,7 @@ impl FlatScene {
     /// Fills `lights` with every emitting primitive (spheres, then quads) and the environment,
     /// and links each primitive to its light. Lights are picked in proportion to their power,
     /// pi * luminance * area (twice that for two-sided ones).
-    pub fn collect_lights(&mut self) {
+    pub fn collect_lights(&mut self, punctual: &[super::punctual::Punctual]) {
         let mut lights = Vec::new();
         let mut powers = Vec::new();
         let materials = &self.materials;
@@ -545,6 +568,16 @@ impl FlatScene {
         add_area_lights(&mut self.quads, materials, &mut lights, &mut powers);
         let placed_triangles = &mut self.triangles[..self.instanced_triangles];
         add_area_lights(placed_triangles, materials, &mut lights, &mut powers);
+        let radius = self.bounding_radius();
+        for light in punctual {
+            let (power, shape) = punctual_light(light, self.origin, radius);
+            powers.push(power);
+            lights.push(Light {
+                shape,
+                cdf: 0.0,
+                pick: 0.0,
+            });
+        }
         if let Background::Environment(env) = self.background {
             powers.push(env.power(self.bounding_radius()));
             lights.push(Light {
@@ -560,6 +593,11 @@ impl FlatScene {
         let mut running = 0.0;
         for (light, power) in lights.iter_mut().zip(&powers) {
             light.pick = share(*power) as f32;
+            // A share too small for a normal f32 is never drawn in practice; as 0, its samples
+            // are refused rather than weighted by 1 / (a subnormal), which overflows.
+            if light.pick < f32::MIN_POSITIVE {
+                light.pick = 0.0;
+            }
             running += share(*power);
             light.cdf = running as f32;
         }
@@ -567,6 +605,65 @@ impl FlatScene {
             last.cdf = 1.0;
         }
         self.lights = lights;
+    }
+}
+
+/// A punctual light's power (how light picking weighs it) and its shape, in a scene whose
+/// coordinates start at `origin` and whose primitives lie within `radius` of their centre: a
+/// point's 4 pi I, a spot's 2 pi (1 - (cos inner + cos outer) / 2) I (pbrt-v4's), the sun's
+/// pi r^2 E on the disc it crosses, of luminances.
+fn punctual_light(
+    light: &super::punctual::Punctual,
+    origin: DVec3,
+    radius: f64,
+) -> (f64, LightShape) {
+    use super::environment::luminance;
+    use super::punctual::Punctual;
+    use std::f64::consts::PI;
+    let lum = |c: Vec3| luminance(c.x, c.y, c.z);
+    let relative = |p: Vec3| (p.as_dvec3() - origin).as_vec3();
+    match *light {
+        Punctual::Point {
+            position,
+            intensity,
+        } => (
+            4.0 * PI * lum(intensity),
+            LightShape::Point {
+                position: relative(position),
+                intensity,
+                axis: Vec3::Z,
+                ramp: [0.0, 1.0],
+            },
+        ),
+        Punctual::Spot {
+            position,
+            direction,
+            intensity,
+            inner,
+            outer,
+        } => {
+            let (scale, offset) = Punctual::spot_ramp(inner, outer);
+            let cone = 1.0 - 0.5 * (inner.cos() as f64 + outer.cos() as f64);
+            (
+                2.0 * PI * cone * lum(intensity),
+                LightShape::Point {
+                    position: relative(position),
+                    intensity,
+                    axis: direction.normalize(),
+                    ramp: [scale, offset],
+                },
+            )
+        }
+        Punctual::Directional {
+            direction,
+            irradiance,
+        } => (
+            PI * radius * radius * lum(irradiance),
+            LightShape::Directional {
+                toward: -direction.normalize(),
+                irradiance,
+            },
+        ),
     }
 }
 

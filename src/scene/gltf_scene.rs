@@ -9,6 +9,7 @@
 use super::environment::Environment;
 use super::image::Image;
 use super::mesh;
+use super::punctual::Punctual;
 use super::{Background, Camera, Object, RenderDefaults, Scene, Shape, Transform};
 use glam::{DMat4, DVec3, Vec3};
 use std::path::Path;
@@ -38,9 +39,18 @@ pub struct FileCamera {
 #[derive(Debug, Default)]
 pub struct FileExtras {
     pub cameras: Vec<FileCamera>,
-    /// Lights it places (KHR_lights_punctual), by name.
+    /// Lights it places (KHR_lights_punctual): their names and the lights, in rt-gpu's
+    /// radiometric units.
     pub lights: Vec<String>,
+    pub punctual: Vec<Punctual>,
+    /// What the user should know of what was left out.
+    pub notes: Vec<String>,
 }
+
+/// Lumens per watt: glTF's photometric units (candela, lux) over rt-gpu's radiometric ones
+/// (W/sr, W/m^2), the factor Blender's exporter multiplies by (683 lm/W, monochromatic at
+/// 555 nm).
+pub const LUMENS_PER_WATT: f32 = 683.0;
 
 /// The scene of the glTF file at `path` (`source`: the path as the user wrote it), seen by its
 /// camera named `camera`, else by its first, else by one that frames it; with notes for the
@@ -111,7 +121,8 @@ pub fn load(
     // Light: the file's emitters where it has any, else a uniform sky.
     let emissive = materials
         .iter()
-        .any(|m| matches!(m, super::Material::Light(_)));
+        .any(|m| matches!(m, super::Material::Light(_)))
+        || !extras.punctual.is_empty();
     let background = if emissive {
         Background::Constant(Vec3::ZERO)
     } else {
@@ -127,6 +138,7 @@ pub fn load(
         materials,
         material_names,
         objects,
+        punctual: extras.punctual.clone(),
         defaults: RenderDefaults {
             width,
             height,
@@ -134,20 +146,7 @@ pub fn load(
         },
     };
     scene.validate().map_err(|e| format!("{source}: {e}"))?;
-    let mut notes = Vec::new();
-    if !extras.lights.is_empty() {
-        notes.push(format!(
-            "note: {source} places {} punctual light(s) (KHR_lights_punctual: {}), which rt-gpu does not render yet{}",
-            extras.lights.len(),
-            extras.lights.join(", "),
-            if emissive {
-                ": its emissive materials light it"
-            } else {
-                ": a uniform white sky lights it instead"
-            }
-        ));
-    }
-    Ok((scene, notes))
+    Ok((scene, extras.notes))
 }
 
 /// What a primitive without a material takes: glTF's default material (white, rough,
@@ -230,6 +229,17 @@ fn framing_camera(min: DVec3, max: DVec3) -> Camera {
 /// The cameras and lights of the file's default scene (the file was checked and its meshes
 /// read by `mesh::load` first).
 pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
+    // A panic inside the `gltf` crate (it unwraps some values it validated) is one line too.
+    let read =
+        std::panic::catch_unwind(|| crate::quiet_panics(|| read_checked_extras(path, source)));
+    read.unwrap_or_else(|_| {
+        Err(format!(
+            "cannot read {source}: the glTF reader failed on it (a malformed file)"
+        ))
+    })
+}
+
+fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {source}: {e}"))?;
     let document = gltf::Gltf::from_slice(&bytes)
         .map_err(|e| format!("cannot read {source}: {}", e.to_string().replace('\n', " ")))?
@@ -281,12 +291,53 @@ pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
             });
         }
         if let Some(light) = node.light() {
-            extras.lights.push(
-                light
-                    .name()
-                    .or(node.name())
-                    .map_or(format!("light{}", light.index()), str::to_string),
-            );
+            let name = light
+                .name()
+                .or(node.name())
+                .map_or(format!("light{}", light.index()), str::to_string);
+            let colour = Vec3::from_array(light.color()).max(Vec3::ZERO);
+            let power = colour * (light.intensity().max(0.0) / LUMENS_PER_WATT);
+            let position = world.transform_point3(DVec3::ZERO).as_vec3();
+            let direction = world
+                .transform_vector3(DVec3::NEG_Z)
+                .normalize_or_zero()
+                .as_vec3();
+            use gltf::khr_lights_punctual::Kind;
+            let punctual = match light.kind() {
+                Kind::Point => Punctual::Point {
+                    position,
+                    intensity: power,
+                },
+                Kind::Spot {
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => Punctual::Spot {
+                    position,
+                    direction,
+                    intensity: power,
+                    inner: inner_cone_angle.min(outer_cone_angle - 1e-4).max(0.0),
+                    outer: outer_cone_angle,
+                },
+                Kind::Directional => Punctual::Directional {
+                    direction,
+                    irradiance: power,
+                },
+            };
+            // A light the file places badly (under a zero scale, say) is left out, not the file.
+            match punctual.validate() {
+                Err(e) => extras
+                    .notes
+                    .push(format!("note: {source}: light \"{name}\" is left out: {e}")),
+                Ok(()) => {
+                    if light.range().is_some() {
+                        extras.notes.push(format!(
+                            "note: {source}: light \"{name}\"'s range is ignored (its light falls off with the square of distance alone)"
+                        ));
+                    }
+                    extras.lights.push(name);
+                    extras.punctual.push(punctual);
+                }
+            }
         }
         let children: Vec<_> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));

@@ -12,6 +12,7 @@ pub mod gltf_scene;
 pub mod image;
 pub mod media;
 pub mod mesh;
+pub mod punctual;
 pub mod texture;
 
 use glam::Vec3;
@@ -112,6 +113,8 @@ pub struct Scene {
     /// A name per material, as scene files refer to them.
     pub material_names: Vec<String>,
     pub objects: Vec<Object>,
+    /// Lights of no area: points, spots and the sun (`punctual.rs`).
+    pub punctual: Vec<punctual::Punctual>,
     pub defaults: RenderDefaults,
 }
 
@@ -200,6 +203,9 @@ impl Scene {
                     "object {i} is translated beyond {MAX_EXTENT:e} from the origin"
                 )));
             }
+        }
+        for light in &self.punctual {
+            light.validate().map_err(SceneError::Invalid)?;
         }
         media::check(self).map_err(|(i, e)| SceneError::Invalid(format!("object {i}: {e}")))
     }

@@ -355,6 +355,11 @@ pub const TEXTURE_UV_CHECKER: u32 = 2;
 pub const TEXTURE_IMAGE: u32 = 3;
 /// `GpuLight::kind` of the environment (beside the primitive kinds of spheres and quads).
 pub const KIND_ENVIRONMENT: u32 = 15;
+/// `GpuLight::kind` of a point or spot light: `position`; `u` its intensity, `normal` its axis,
+/// `v.xy` its falloff's scale and offset on cos(angle).
+pub const KIND_POINT: u32 = 16;
+/// `GpuLight::kind` of a directional light: `normal` toward it, `u` its irradiance.
+pub const KIND_DIRECTIONAL: u32 = 17;
 
 gpu_struct! {
     /// What stays the same for a whole render: a uniform buffer, which drivers such as lavapipe

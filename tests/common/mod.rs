@@ -93,6 +93,7 @@ pub fn scene(
         material_names: (0..materials.len()).map(|i| format!("m{i}")).collect(),
         materials,
         objects,
+        punctual: Vec::new(),
         defaults: RenderDefaults {
             width: 16,
             height: 16,
