@@ -282,3 +282,46 @@ fn blenders_lamps_light_the_scene_as_in_cycles() {
         assert!((ratio - 1.0).abs() < 0.025, "{name}: {ratio}");
     }
 }
+
+/// Blender's OBJ export of the same scene: its .mtl materials arrive as the script set them
+/// (Blender writes roughness as Ns = (1 - roughness)^2 x 1000, metal as illum 3, emission as Ke;
+/// it does not write transmission).
+#[test]
+fn blenders_obj_materials_arrive_as_the_script_set_them() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender/spheres.obj");
+    let parts = rt_gpu::scene::mesh::load(&path, "spheres.obj", None).expect("loads");
+    let names: Vec<&str> = parts.iter().map(|p| p.material_name.as_str()).collect();
+    assert_eq!(names.len(), 6, "{names:?}");
+    for (name, colour, metallic, roughness, _) in PRINCIPLED {
+        let part = parts
+            .iter()
+            .find(|p| p.material_name == name)
+            .unwrap_or_else(|| panic!("no part {name} in {names:?}"));
+        let Some(Material::Pbr(pbr)) = part.material else {
+            panic!("{name}: {:?}", part.material);
+        };
+        assert_eq!(
+            pbr.base_color,
+            Texture::Colour(Vec3::from_array(colour)),
+            "{name}"
+        );
+        assert!(
+            (pbr.metallic - metallic).abs() < 1e-6,
+            "{name}: {}",
+            pbr.metallic
+        );
+        assert!(
+            (pbr.roughness - roughness).abs() < 1e-5,
+            "{name}: {}",
+            pbr.roughness
+        );
+    }
+    let panel = parts
+        .iter()
+        .find(|p| p.material_name == "Panel")
+        .expect("panel");
+    let Some(Material::Light(light)) = panel.material else {
+        panic!("the panel: {:?}", panel.material);
+    };
+    assert_eq!(light.radiance, Texture::Colour(Vec3::new(8.0, 7.2, 6.4)));
+}

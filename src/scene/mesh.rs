@@ -164,7 +164,7 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'stati
                     "mesh {source}: `node` selects a glTF node; an OBJ file has none"
                 ));
             }
-            vec![read_obj(path, source)?]
+            read_obj(path, source)?
         }
         Some("gltf" | "glb") => read_gltf(path, source, node)?,
         _ => {
@@ -199,7 +199,7 @@ pub fn load_named(source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>
     load(&super::image::resolve(source), source, node)
 }
 
-fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
+fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -209,21 +209,23 @@ fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
     let text = obj_text(path, source)?;
     check_obj_faces(&text)
         .map_err(|(line, what)| format!("cannot read mesh {source}:{line}: {what}"))?;
-    // Materials (.mtl) are not read, nor even opened (an `mtllib` line may name anything, a
-    // device or a FIFO among them): an OBJ object takes the scene's material.
-    let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
+    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut reader = std::io::Cursor::new(text.as_bytes());
-    let (models, _) = tobj::load_obj_buf(&mut reader, &options, no_materials).map_err(|e| {
-        let at = obj_error_line(&text, &e).map_or(String::new(), |l| format!(":{l}"));
-        format!("cannot read mesh {source}{at}: {}", obj_error(&e))
-    })?;
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    let mut normals = Vec::new();
+    let (models, materials) =
+        tobj::load_obj_buf(&mut reader, &options, |mtl| read_mtl(&base_dir, mtl)).map_err(|e| {
+            let at = obj_error_line(&text, &e).map_or(String::new(), |l| format!(":{l}"));
+            format!("cannot read mesh {source}{at}: {}", obj_error(&e))
+        })?;
+    // A missing or unreadable .mtl leaves the file without materials (the scene names one).
+    let materials = materials.unwrap_or_default();
+    // Parts by material (None: faces without one), in order of first use.
+    let mut parts: Vec<Part> = Vec::new();
     for model in models {
+        let mesh = &model.mesh;
+        let key = mesh.material_id.filter(|&i| i < materials.len());
+        let (_, positions, triangles, normals) = part_of(&mut parts, key);
         let base = positions.len() as u32;
         // Faces name their own normals (`f v//vn`); `tobj` gives them per corner.
-        let mesh = &model.mesh;
         let vn = |i: u32| {
             let n = mesh.normals.get(3 * i as usize..3 * i as usize + 3)?;
             Some(Vec3::new(n[0], n[1], n[2]))
@@ -237,21 +239,95 @@ fn read_obj(path: &Path, source: &str) -> Result<Mesh, String> {
             normals.extend(std::iter::repeat_n(None, mesh.indices.len() / 3));
         }
         positions.extend(
-            model
-                .mesh
-                .positions
+            mesh.positions
                 .chunks_exact(3)
                 .map(|p| Vec3::new(p[0], p[1], p[2])),
         );
         triangles.extend(
-            model
-                .mesh
-                .indices
+            mesh.indices
                 .chunks_exact(3)
                 .map(|t| [base + t[0], base + t[1], base + t[2]]),
         );
     }
-    Mesh::with_normals(source, positions, triangles, normals)
+    parts
+        .into_iter()
+        .map(|(key, positions, triangles, normals)| {
+            let mut mesh = Mesh::with_normals(source, positions, triangles, normals)?;
+            match key.map(|k| &materials[k]) {
+                Some(m) => {
+                    mesh.material = Some(mtl_material(m));
+                    mesh.material_name = m.name.clone();
+                }
+                None => mesh.material_name = "default".into(),
+            }
+            Ok(mesh)
+        })
+        .collect()
+}
+
+/// Largest .mtl file read.
+const MAX_MTL_BYTES: u64 = 16 << 20;
+
+/// The material library an OBJ file's `mtllib` names, beside it: only a relative path that
+/// stays in the OBJ's folder and names a regular file of at most 16 MiB is opened (an `mtllib`
+/// line may name anything, a device or a FIFO among them).
+fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
+    use std::path::Component;
+    if !name.components().all(|c| matches!(c, Component::Normal(_))) {
+        return Err(tobj::LoadError::OpenFileFailed);
+    }
+    let path = base_dir.join(name);
+    let regular = std::fs::metadata(&path).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
+    if !regular {
+        return Err(tobj::LoadError::OpenFileFailed);
+    }
+    let bytes = std::fs::read(&path).map_err(|_| tobj::LoadError::ReadError)?;
+    tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes))
+}
+
+/// An MTL material as rt-gpu's, the way Blender's OBJ exporter (3.4) writes its Principled
+/// BSDF: emission `Ke` (strength folded in) -> a two-sided `light`; else `pbr` with base colour
+/// `Kd`, roughness `Pr` or 1 - sqrt(`Ns` / 1000) (Blender writes Ns = (1 - roughness)^2 x 1000),
+/// metallic `Pm`, or 1 for `illum 3` (Blender's mark of a metallic surface), ior `Ni`. Not
+/// read: transmission (Blender does not write it), `d` (alpha), textures.
+pub fn mtl_material(m: &tobj::Material) -> Material {
+    use crate::material::{Light, Pbr};
+    let colour = |c: Option<[f32; 3]>| c.map(Vec3::from_array).filter(|c| c.is_finite());
+    let emission = colour(m.emissive).unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
+    if emission.max_element() > 0.0 {
+        return Material::Light(Light {
+            radiance: emission.min(Vec3::splat(1e6)).into(),
+            strength: 1.0,
+            two_sided: true,
+        });
+    }
+    let param = |key: &str| {
+        m.unknown_param
+            .get(key)
+            .and_then(|v| v.trim().parse::<f32>().ok())
+            .filter(|x| x.is_finite())
+    };
+    let unit = |x: f32| x.clamp(0.0, 1.0);
+    let roughness = param("Pr").unwrap_or_else(|| {
+        let ns = m.shininess.filter(|x| x.is_finite()).unwrap_or(0.0);
+        1.0 - (ns / 1000.0).clamp(0.0, 1.0).sqrt()
+    });
+    let metallic = param("Pm").unwrap_or(if m.illumination_model == Some(3) {
+        1.0
+    } else {
+        0.0
+    });
+    let base = colour(m.diffuse).unwrap_or(Vec3::splat(0.8));
+    Material::Pbr(Pbr::new(
+        base.clamp(Vec3::ZERO, Vec3::ONE).into(),
+        unit(metallic),
+        unit(roughness),
+        m.optical_density
+            .filter(|i| i.is_finite())
+            .unwrap_or(1.5)
+            .clamp(1.0, 4.0),
+        0.0,
+    ))
 }
 
 /// An OBJ file's text: UTF-8, or Latin-1 (which some exporters write; OBJ's syntax is ASCII, so
@@ -364,7 +440,7 @@ fn obj_error_line(text: &str, e: &tobj::LoadError) -> Option<usize> {
     None
 }
 
-/// A glTF material's index (`None`: primitives without one), its vertices, triangles and their
+/// A file material's index (`None`: faces without one), its vertices, triangles and their
 /// corner normals.
 type Part = (
     Option<usize>,
@@ -372,6 +448,18 @@ type Part = (
     Vec<[u32; 3]>,
     Vec<Option<[Vec3; 3]>>,
 );
+
+/// The part of material `key`, added (empty) on its first use.
+fn part_of(parts: &mut Vec<Part>, key: Option<usize>) -> &mut Part {
+    let at = match parts.iter().position(|p| p.0 == key) {
+        Some(at) => at,
+        None => {
+            parts.push((key, Vec::new(), Vec::new(), Vec::new()));
+            parts.len() - 1
+        }
+    };
+    &mut parts[at]
+}
 
 /// Reads a glTF file, checked first (`gltf_check`); a panic inside the `gltf` crate, which
 /// should no longer happen, is one line naming the file too.
@@ -448,14 +536,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     return Err(format!("mesh {source}: a primitive has no positions"));
                 };
                 let key = primitive.material().index();
-                let at = match parts.iter().position(|p| p.0 == key) {
-                    Some(at) => at,
-                    None => {
-                        parts.push((key, Vec::new(), Vec::new(), Vec::new()));
-                        parts.len() - 1
-                    }
-                };
-                let (_, positions, triangles, normals) = &mut parts[at];
+                let (_, positions, triangles, normals) = part_of(&mut parts, key);
                 let base = positions.len() as u32;
                 // Normals transform by the inverse transpose (non-uniform scales bend them).
                 let to_world = DMat3::from_mat4(world).inverse().transpose();
