@@ -52,9 +52,9 @@ fn next_event(ray: ptr<function, Ray>, medium: ptr<function, u32>, hit: ptr<func
 //#if NEE
 //#if MEDIA
 // The radiance light `index` sends to `start` along sample `s` (toward its point; the
-// environment along its direction), where the shadow ray starts in `medium_in`: its emission
-// times the media's transmittance on the way, through invisible boundaries; zero when anything
-// else is hit first.
+// environment and the sun along its direction), where the shadow ray starts in `medium_in`: its
+// emission (a punctual light: what reaches start) times the media's transmittance on the way,
+// through invisible boundaries; zero when anything else is hit first.
 fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> vec3f {
     var dir = s.dir;
 //#if ENVIRONMENT

@@ -314,9 +314,10 @@ fn medium_direct_light(
 }
 
 /// The radiance light `index` sends to `from` along `sample` (toward its point; the
-/// environment along its direction), where the shadow ray starts in `medium`: what it emits
-/// there times the transmittance of the media on the way, stepping through invisible medium
-/// boundaries. `None` when anything else is hit first.
+/// environment and the sun along its direction), where the shadow ray starts in `medium`: what
+/// it emits there (a punctual light: what reaches `from`) times the transmittance of the media
+/// on the way, stepping through invisible medium boundaries. `None` when anything else is hit
+/// first.
 #[inline(always)]
 pub fn light_arriving(
     scene: &FlatScene,

@@ -1,6 +1,6 @@
 //! A glTF 2.0 file as a whole scene (`rt-gpu model.glb`): its default scene's meshes with their
-//! own materials, seen by one of its cameras (or by a camera framing it), under a uniform white
-//! sky when it carries no lights.
+//! own materials and its punctual lights, seen by one of its cameras (or by a camera framing
+//! it), under a uniform white sky when it carries neither lights nor emitters.
 //!
 //! A glTF camera looks down its node's -z with +y up (glTF 2.0, 3.10.1); its `yfov` is the
 //! vertical field of view and its `aspectRatio`, where given, the image's default width over
@@ -118,12 +118,12 @@ pub fn load(
             transform: Transform::default(),
         });
     }
-    // Light: the file's emitters where it has any, else a uniform sky.
-    let emissive = materials
+    // Light: the file's emitters and lamps where it has any, else a uniform sky.
+    let lit = materials
         .iter()
         .any(|m| matches!(m, super::Material::Light(_)))
         || !extras.punctual.is_empty();
-    let background = if emissive {
+    let background = if lit {
         Background::Constant(Vec3::ZERO)
     } else {
         Background::Environment(uniform_sky())
