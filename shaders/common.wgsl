@@ -55,6 +55,10 @@ fn image_value(i: u32) -> vec4f {
 // Per triangle its three corner normals, nine floats (SceneBuffers::triangle_normals).
 @group(0) @binding(BINDING_TRIANGLE_NORMALS) var<storage, read> triangle_normals: array<f32>;
 //#endif
+//#if TRIANGLE_UVS
+// Per triangle its three corner texture coordinates, six floats (SceneBuffers::triangle_uvs).
+@group(0) @binding(BINDING_TRIANGLE_UVS) var<storage, read> triangle_uvs: array<f32>;
+//#endif
 //#if INSTANCES
 @group(0) @binding(BINDING_INSTANCES) var<storage, read> instances: array<Instance>;
 //#endif

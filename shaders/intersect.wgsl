@@ -386,9 +386,31 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
         (*hit).uv = c.weights;
     }
 //#endif
+//#if TRIANGLE_UVS
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        (*hit).uv = interpolated_uv(primitive_index(c.primitive), c.weights);
+    }
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE {
+        (*hit).uv = interpolated_uv(c.triangle, c.weights);
+    }
+//#endif
+//#endif
 //#endif
     return true;
 }
+
+//#if TRIANGLE_UVS
+// Triangle i's corner texture coordinates interpolated at weights (twin: interpolated_uv in
+// src/cpu/shapes.rs).
+fn interpolated_uv(i: u32, weights: vec2f) -> vec2f {
+    let at = 6u * i;
+    let uv0 = vec2f(triangle_uvs[at], triangle_uvs[at + 1u]);
+    let uv1 = vec2f(triangle_uvs[at + 2u], triangle_uvs[at + 3u]);
+    let uv2 = vec2f(triangle_uvs[at + 4u], triangle_uvs[at + 5u]);
+    return (1.0 - weights.x - weights.y) * uv0 + weights.x * uv1 + weights.y * uv2;
+}
+//#endif
 
 //#if SHADING_NORMALS
 fn corner_normal(at: u32) -> vec3f {

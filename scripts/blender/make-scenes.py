@@ -1,7 +1,9 @@
 """Builds rt-gpu's Blender test scenes from Blender's own primitives and writes each as Blender
 writes it (glTF 2.0 .glb, and .obj + .mtl), with a Cycles render of each as a reference.
 
-    blender -b --factory-startup -P scripts/blender/make-scenes.py -- OUT_DIR [SAMPLES]
+    blender -b --factory-startup -P scripts/blender/make-scenes.py -- OUT_DIR [SAMPLES [SCENE...]]
+
+With SCENE names, only those scenes are built (the others' files stay as they are).
 
 Blender 3.4 (Debian's `blender` package, with `python3-numpy` for the glTF exporter). The
 values set here are the ones tests/blender_scenes.rs expects to read back; the outputs are
@@ -17,6 +19,11 @@ Scenes:
   thing, their images must agree (tests/blender_scenes.rs).
 - `lamps`: the same objects lit by a point light, a spot light and a sun (KHR_lights_punctual),
   with a second camera; `lamps-lambert-cycles.exr` as `spheres-lambert-cycles.exr`.
+- `textured`: the floor and the cube of `spheres` with an image as their base colour (four
+  coloured quadrants, `textured-quadrants.png`, embedded in the .glb and named by the .mtl),
+  through their UV maps, under the emissive panel. `textured-lambert-cycles.exr` renders them as
+  Cycles' Diffuse BSDF with the image as its colour, for `textured-lambert.toml`: a wrong UV
+  convention (v up or down the image) or a wrong colour space shows in region means.
 """
 
 import math
@@ -29,6 +36,7 @@ from mathutils import Vector
 argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 OUT = os.path.abspath(argv[0] if argv else "scenes/blender")
 SAMPLES = int(argv[1]) if len(argv) > 1 else 1024
+SCENES = argv[2:] or ["spheres", "lamps", "textured"]
 WIDTH, HEIGHT = 160, 120
 os.makedirs(OUT, exist_ok=True)
 
@@ -154,7 +162,10 @@ def lambert_variant(name, materials):
         tree = bpy.data.materials[material_name].node_tree
         principled = tree.nodes["Principled BSDF"]
         diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-        diffuse.inputs["Color"].default_value = principled.inputs["Base Color"].default_value
+        base = principled.inputs["Base Color"]
+        diffuse.inputs["Color"].default_value = base.default_value
+        for link in base.links:
+            tree.links.new(link.from_socket, diffuse.inputs["Color"])
         diffuse.inputs["Roughness"].default_value = 0.0
         tree.links.new(diffuse.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
     bpy.context.scene.render.filepath = os.path.join(OUT, name + "-cycles.exr")
@@ -172,25 +183,78 @@ def export(name, cycles=True):
         bpy.ops.render.render(write_still=True)
 
 
-scene = reset()
-objects()
-bpy.ops.mesh.primitive_plane_add(size=2.5, location=(0, 1.5, 3.2), rotation=(math.radians(200), 0, 0))
-panel = bpy.context.active_object
-panel.name = "Panel"
-place(panel, material("Panel", (0, 0, 0), roughness=1.0, emission=(1.0, 0.9, 0.8), strength=8.0))
-cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
-render_settings(scene, cam)
-export("spheres")
-lambert_variant("spheres-lambert", ["Floor", "Clay"])
+def quadrant_image(name, size=64):
+    """An image of four coloured quadrants (sRGB values), saved beside the scenes."""
+    image = bpy.data.images.new(name, size, size, alpha=False)
+    # Blender's pixels run from the bottom row up.
+    colours = {(0, 1): (0.9, 0.2, 0.1), (1, 1): (0.2, 0.8, 0.2),
+               (0, 0): (0.2, 0.3, 0.9), (1, 0): (0.9, 0.9, 0.3)}
+    pixels = []
+    for y in range(size):
+        for x in range(size):
+            pixels.extend((*colours[(2 * x // size, 2 * y // size)], 1.0))
+    image.pixels = pixels
+    image.filepath_raw = os.path.join(OUT, name + ".png")
+    image.file_format = "PNG"
+    image.save()
+    return image
 
-scene = reset()
-objects()
-light("Point", "POINT", (-2, -2, 3), 400.0, color=(1.0, 0.8, 0.6), shadow_soft_size=0.0)
-light("Spot", "SPOT", (2.5, -2.5, 4), 800.0, target=(1.6, 0, 0.7), spot_size=math.radians(40),
-      spot_blend=0.25, shadow_soft_size=0.0)
-light("Sun", "SUN", (0, 0, 10), 2.0, target=(0.5, 0.3, 0), angle=0.0)
-cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
-camera("Closeup", (3, -3, 1.5), (1.6, 0, 0.7), lens_mm=50.0)
-render_settings(scene, cam)
-export("lamps")
-lambert_variant("lamps-lambert", ["Floor", "Clay"])
+
+def textured_material(name, image):
+    m = material(name, (1.0, 1.0, 1.0), roughness=1.0)
+    tree = m.node_tree
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Linear"
+    tree.links.new(texture.outputs["Color"], tree.nodes["Principled BSDF"].inputs["Base Color"])
+    return m
+
+
+def panel():
+    bpy.ops.mesh.primitive_plane_add(size=2.5, location=(0, 1.5, 3.2),
+                                     rotation=(math.radians(200), 0, 0))
+    obj = bpy.context.active_object
+    obj.name = "Panel"
+    place(obj, material("Panel", (0, 0, 0), roughness=1.0, emission=(1.0, 0.9, 0.8),
+                        strength=8.0))
+
+
+if "spheres" in SCENES:
+    scene = reset()
+    objects()
+    panel()
+    cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+    render_settings(scene, cam)
+    export("spheres")
+    lambert_variant("spheres-lambert", ["Floor", "Clay"])
+
+if "lamps" in SCENES:
+    scene = reset()
+    objects()
+    light("Point", "POINT", (-2, -2, 3), 400.0, color=(1.0, 0.8, 0.6), shadow_soft_size=0.0)
+    light("Spot", "SPOT", (2.5, -2.5, 4), 800.0, target=(1.6, 0, 0.7),
+          spot_size=math.radians(40), spot_blend=0.25, shadow_soft_size=0.0)
+    light("Sun", "SUN", (0, 0, 10), 2.0, target=(0.5, 0.3, 0), angle=0.0)
+    cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+    camera("Closeup", (3, -3, 1.5), (1.6, 0, 0.7), lens_mm=50.0)
+    render_settings(scene, cam)
+    export("lamps")
+    lambert_variant("lamps-lambert", ["Floor", "Clay"])
+
+if "textured" in SCENES:
+    scene = reset()
+    quadrants = quadrant_image("textured-quadrants")
+    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
+    floor = bpy.context.active_object
+    floor.name = "Floor"
+    place(floor, textured_material("Floor", quadrants))
+    bpy.ops.mesh.primitive_cube_add(size=1.2, location=(0.6, -1.0, 0.6),
+                                    rotation=(0, 0, math.radians(30)))
+    cube = bpy.context.active_object
+    cube.name = "Cube"
+    place(cube, textured_material("Box", quadrants))
+    panel()
+    cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+    render_settings(scene, cam)
+    export("textured", cycles=False)
+    lambert_variant("textured-lambert", ["Floor", "Box"])

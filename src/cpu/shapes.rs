@@ -366,6 +366,16 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
             complete(&scene.triangles[i as usize], scene, along_ray, weights)
         }
     };
+    // Corner texture coordinates, where the scene's meshes have them, replace the weights.
+    let uv = match primitive {
+        PrimitiveRef::Triangle(i) if !scene.triangle_uvs.is_empty() => {
+            interpolated_uv(&scene.triangle_uvs[i as usize], weights)
+        }
+        PrimitiveRef::Instance(_) if !scene.triangle_uvs.is_empty() => {
+            interpolated_uv(&scene.triangle_uvs[triangle as usize], weights)
+        }
+        _ => uv,
+    };
     let front_face = ray.dir.dot(outward) < 0.0;
     let shading = match primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
@@ -411,6 +421,14 @@ pub fn shading_normal(normals: &[Vec3; 3], weights: Vec2, outward: Vec3) -> Vec3
     }
     let n = n / len2.sqrt();
     if n.dot(outward) < 0.0 { -n } else { n }
+}
+
+/// A triangle's corner texture coordinates interpolated at its hit's `weights` (twin:
+/// `interpolated_uv` in shaders/intersect.wgsl).
+#[inline]
+pub fn interpolated_uv(uvs: &[Vec2; 3], weights: Vec2) -> Vec2 {
+    let (b1, b2) = (weights.x, weights.y);
+    (1.0 - b1 - b2) * uvs[0] + b1 * uvs[1] + b2 * uvs[2]
 }
 
 /// A point near `sphere`'s surface put back onto it, and a bound on the result's error.

@@ -44,6 +44,7 @@ bindings! {
     BvhPrimitives => "BINDING_BVH_PRIMITIVES",
     TriangleNormals => "BINDING_TRIANGLE_NORMALS",
     Instances => "BINDING_INSTANCES",
+    TriangleUvs => "BINDING_TRIANGLE_UVS",
 }
 
 impl Binding {
@@ -80,6 +81,7 @@ impl Binding {
             Binding::Dispatch
             | Binding::Triangles
             | Binding::TriangleNormals
+            | Binding::TriangleUvs
             | Binding::Instances => buffer(read_only),
             Binding::ImageTexels => texels,
             Binding::BvhNodes if features.uniform_bvh => buffer(Uniform),

@@ -176,6 +176,9 @@ pub struct SceneBuffers {
     /// Per triangle its three corner normals, nine floats (the kernel's `triangle_normals`),
     /// when the scene has shading normals.
     pub triangle_normals: Vec<f32>,
+    /// Per triangle its three corner texture coordinates, six floats (the kernel's
+    /// `triangle_uvs`), when the scene's meshes have them and a material reads them.
+    pub triangle_uvs: Vec<f32>,
     pub bvh_nodes: Vec<GpuBvhNode>,
     /// Packed primitive references, in the BVH's leaf order.
     pub bvh_primitives: Vec<u32>,
@@ -204,6 +207,14 @@ pub struct ImageArray {
 impl ImageArray {
     pub fn new(scene: &FlatScene) -> Self {
         Self::lay_out(scene, true)
+    }
+
+    /// The largest of the materials' images (what an error about their size names).
+    pub fn largest_texture(&self) -> Option<&'static Image> {
+        self.placed
+            .iter()
+            .map(|(image, _)| *image)
+            .max_by_key(|i| i.width as u64 * i.height as u64)
     }
 
     /// Where everything goes, without the values.
@@ -292,6 +303,7 @@ pub fn geometry_bytes(scene: &FlatScene) -> usize {
     let buffers = SceneBuffers::new(scene);
     std::mem::size_of_val(&buffers.triangles[..])
         + std::mem::size_of_val(&buffers.triangle_normals[..])
+        + std::mem::size_of_val(&buffers.triangle_uvs[..])
         + std::mem::size_of_val(&buffers.bvh_nodes[..])
         + std::mem::size_of_val(&buffers.bvh_primitives[..])
         + std::mem::size_of_val(&buffers.instances[..])
@@ -390,6 +402,14 @@ impl SceneBuffers {
         if triangle_normals.is_empty() {
             triangle_normals.push(0.0);
         }
+        let mut triangle_uvs: Vec<f32> = scene
+            .triangle_uvs
+            .iter()
+            .flat_map(|corners| corners.iter().flat_map(|uv| uv.to_array()))
+            .collect();
+        if triangle_uvs.is_empty() {
+            triangle_uvs.push(0.0);
+        }
         if bvh_primitives.is_empty() {
             bvh_primitives.push(0);
         }
@@ -411,6 +431,7 @@ impl SceneBuffers {
             quads,
             triangles,
             triangle_normals,
+            triangle_uvs,
             bvh_nodes,
             bvh_primitives,
             instances,

@@ -138,6 +138,7 @@ pub(super) struct SceneBindings {
     triangles: wgpu::Buffer,
     bvh_primitives: wgpu::Buffer,
     triangle_normals: wgpu::Buffer,
+    triangle_uvs: wgpu::Buffer,
     instances: wgpu::Buffer,
     bvh_nodes: NodeBinding,
     images: wgpu::TextureView,
@@ -213,7 +214,8 @@ impl GpuRenderer {
         //   medium is its material + 1 and a light 1 + its index, read only when non-zero; NEE
         //   code is composed only for scenes with a light (`Features::with_integrator`), and
         //   `check_kernel` refuses a kernel whose features or source are not this render's.
-        // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on.
+        // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on, and
+        //   corner texture coordinates (6 floats per triangle) wherever TRIANGLE_UVS is.
         // - accum: gid < tile_size <= (width, tile_rows), and the buffer holds tile_rows x width
         //   x ACCUM_WORDS words (below 2^32: `max_tile_pixels`); debug outputs hold a slot per
         //   invocation (`run_debug`).
@@ -320,6 +322,10 @@ impl GpuRenderer {
                 "triangle normals",
                 bytemuck::cast_slice(&buffers.triangle_normals),
             ),
+            triangle_uvs: storage(
+                "triangle texture coordinates",
+                bytemuck::cast_slice(&buffers.triangle_uvs),
+            ),
             instances: storage("instances", bytemuck::cast_slice(&buffers.instances)),
             bvh_nodes,
             images,
@@ -343,6 +349,10 @@ impl GpuRenderer {
             (
                 "vertex normals",
                 std::mem::size_of_val(&buffers.triangle_normals[..]),
+            ),
+            (
+                "texture coordinates",
+                std::mem::size_of_val(&buffers.triangle_uvs[..]),
             ),
             ("instances", std::mem::size_of_val(&buffers.instances[..])),
             ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
@@ -386,8 +396,21 @@ impl GpuRenderer {
         }
         let image_rows = texel_rows(buffers.images.bytes() / 16);
         if image_rows > max_rows {
+            let environment = match &scene.background {
+                crate::scene::Background::Environment(env) => Some(env.image),
+                _ => None,
+            };
+            let largest = buffers
+                .images
+                .largest_texture()
+                .into_iter()
+                .chain(environment)
+                .max_by_key(|i| i.width as u64 * i.height as u64);
+            let named = largest.map_or(String::new(), |i| {
+                format!(" (the largest: {}, {}x{})", i.source, i.width, i.height)
+            });
             return Err(GpuError::TooLarge(format!(
-                "the scene's images take {} MB, more than this GPU's largest texture holds ({} MB): use smaller textures or environment",
+                "the scene's images take {} MB{named}, more than this GPU's largest texture holds ({} MB, {max_rows} rows of {TEXEL_ROW} texels): use smaller images, or --backend cpu",
                 buffers.images.bytes() >> 20,
                 (max_rows * TEXEL_ROW as u64 * 16) >> 20
             )));
@@ -446,6 +469,7 @@ impl GpuRenderer {
             },
             Binding::BvhPrimitives => scene.bvh_primitives.as_entire_binding(),
             Binding::TriangleNormals => scene.triangle_normals.as_entire_binding(),
+            Binding::TriangleUvs => scene.triangle_uvs.as_entire_binding(),
             Binding::Instances => scene.instances.as_entire_binding(),
         };
         let entries: Vec<wgpu::BindGroupEntry> = BINDINGS

@@ -60,6 +60,8 @@ pub struct Features {
     pub triangles: bool,
     /// Triangles shaded with interpolated vertex normals.
     pub shading_normals: bool,
+    /// Triangles with corner texture coordinates, which a material's texture reads.
+    pub triangle_uvs: bool,
     /// Meshes placed as instances (the BVH's second level; see `scene::flat::Instance`).
     pub instances: bool,
     /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
@@ -99,11 +101,12 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 16] = [
+const SWITCHES: [Switch; 17] = [
     ("SPHERES", |f| &mut f.spheres),
     ("QUADS", |f| &mut f.quads),
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
+    ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
     ("INSTANCES", |f| &mut f.instances),
     ("BVH", |f| &mut f.bvh),
     ("LENS", |f| &mut f.lens),
@@ -118,7 +121,7 @@ const SWITCHES: [Switch; 16] = [
     ("INLINE_SCENE", |f| &mut f.inline_scene),
 ];
 /// How many of [`SWITCHES`] come before the material features in [`Features::flags`].
-const GEOMETRY_SWITCHES: usize = 6;
+const GEOMETRY_SWITCHES: usize = 7;
 
 /// Most spheres plus quads a kernel takes as constants.
 pub const MAX_INLINE_PRIMITIVES: usize = 64;
@@ -196,6 +199,7 @@ impl Features {
             quads: !scene.quads.is_empty(),
             triangles: !scene.triangles.is_empty(),
             shading_normals: !scene.triangle_normals.is_empty(),
+            triangle_uvs: !scene.triangle_uvs.is_empty(),
             instances: !scene.instances.is_empty(),
             bvh,
             materials,
@@ -222,8 +226,8 @@ impl Features {
 
     /// Everything on, scene arrays in storage buffers: the general kernel any scene can run
     /// (except `sky` and `environment`, which replace the constant background, `lens`, which
-    /// changes the random-number sequence, and `shading_normals`, whose buffer only scenes with
-    /// vertex normals fill).
+    /// changes the random-number sequence, and `shading_normals` and `triangle_uvs`, whose buffers
+    /// only scenes with vertex normals or texture coordinates fill).
     pub fn everything(scene: &FlatScene) -> Self {
         let own = Features::of(scene);
         Features {

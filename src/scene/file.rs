@@ -564,11 +564,17 @@ impl<'de> Deserialize<'de> for BackgroundDoc {
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct CameraDoc {
-    look_from: V3,
-    look_at: V3,
+    /// A camera of a glTF file the scene places, by name: its placement and field of view.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gltf: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    look_from: Option<V3>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    look_at: Option<V3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     up: Option<V3>,
-    vfov: Num,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vfov: Option<Num>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     aperture: Option<Num>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -692,7 +698,6 @@ impl SceneDoc {
     fn into_scene(self, name: &str) -> Result<Scene, Located> {
         let defaults = render_defaults(self.render.as_ref())?;
         let background = background(self.render.and_then(|r| r.background))?;
-        let camera = camera(self.camera)?;
         let mut materials = SceneMaterials::new(self.materials)?;
         let mut objects = Vec::new();
         let mut object_spans = Vec::new();
@@ -704,6 +709,7 @@ impl SceneDoc {
                 objects.push(object);
             }
         }
+        let camera = camera(self.camera, &objects)?;
         let mut punctual = Vec::new();
         for spanned in self.lights {
             let span = Some(spanned.span());
@@ -810,10 +816,11 @@ impl SceneDoc {
             camera: Spanned::new(
                 0..0,
                 CameraDoc {
-                    look_from: V3::from(c.look_from),
-                    look_at: V3::from(c.look_at),
+                    gltf: None,
+                    look_from: Some(V3::from(c.look_from)),
+                    look_at: Some(V3::from(c.look_at)),
                     up: Some(V3::from(c.up)),
-                    vfov: Num(c.vfov_degrees),
+                    vfov: Some(Num(c.vfov_degrees)),
                     aperture: (c.aperture != 0.0).then_some(Num(c.aperture)),
                     focus_distance: c.focus_distance.map(Num),
                 },
@@ -1086,15 +1093,81 @@ fn background(background_doc: Option<Spanned<BackgroundDoc>>) -> Result<Backgrou
     })
 }
 
-/// `[camera]`, validated.
-fn camera(camera: Spanned<CameraDoc>) -> Result<Camera, Located> {
+/// The camera named `name` of the first glTF file `objects` place that has one (placed as the
+/// file places it: the objects' transforms do not move it).
+fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
+    let mut files: Vec<&str> = Vec::new();
+    for object in objects {
+        if let Shape::Mesh { mesh, .. } = object.shape {
+            let lower = mesh.source.to_ascii_lowercase();
+            if (lower.ends_with(".glb") || lower.ends_with(".gltf"))
+                && !files.contains(&mesh.source.as_str())
+            {
+                files.push(&mesh.source);
+            }
+        }
+    }
+    if files.is_empty() {
+        return Err(format!(
+            "camera: gltf = \"{name}\" names a camera of a glTF file, and the scene places none"
+        ));
+    }
+    let mut known = Vec::new();
+    for source in files {
+        let path = super::image::resolve(source);
+        match super::gltf_scene::named_camera(&path, source, name)? {
+            Ok(camera) => return Ok(camera),
+            Err(names) => known.extend(names.into_iter().map(|n| format!("{source}: {n}"))),
+        }
+    }
+    let known = if known.is_empty() {
+        "they have no cameras".to_string()
+    } else {
+        format!("cameras: {}", known.join(", "))
+    };
+    Err(format!(
+        "camera: no glTF file the scene places has a camera named \"{name}\" ({known})"
+    ))
+}
+
+/// `[camera]`, validated: its own placement, or with `gltf = "NAME"` a camera of one of the
+/// glTF files `objects` place (the first that has one of that name).
+fn camera(camera: Spanned<CameraDoc>, objects: &[Object]) -> Result<Camera, Located> {
     let camera_span = camera.span();
     let c = camera.into_inner();
+    let at = |message: String| (Some(camera_span.clone()), message);
+    let (look_from, look_at, up, vfov_degrees) = match (&c.gltf, c.look_from, c.look_at, c.vfov) {
+        (Some(name), None, None, None) if c.up.is_none() => {
+            let from_file = file_camera(name, objects).map_err(at)?;
+            (
+                from_file.look_from,
+                from_file.look_at,
+                from_file.up,
+                from_file.vfov_degrees,
+            )
+        }
+        (Some(_), ..) => {
+            return Err(at(
+                "camera: `gltf` takes the camera's placement and field of view from the file; leave out look_from, look_at, up and vfov (aperture and focus_distance may stay)".into(),
+            ));
+        }
+        (None, Some(from), Some(to), Some(vfov)) => (
+            from.vec(),
+            to.vec(),
+            c.up.map(V3::vec).unwrap_or(Vec3::Y),
+            vfov.0,
+        ),
+        (None, ..) => {
+            return Err(at(
+                "camera needs look_from, look_at and vfov, or gltf = \"NAME\" (a camera of a glTF file the scene places)".into(),
+            ));
+        }
+    };
     let camera = Camera {
-        look_from: c.look_from.vec(),
-        look_at: c.look_at.vec(),
-        up: c.up.map(V3::vec).unwrap_or(Vec3::Y),
-        vfov_degrees: c.vfov.0,
+        look_from,
+        look_at,
+        up,
+        vfov_degrees,
         aperture: c.aperture.map(|a| a.0).unwrap_or(0.0),
         focus_distance: c.focus_distance.map(|f| f.0),
     };

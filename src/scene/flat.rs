@@ -8,7 +8,7 @@ use super::mesh::Mesh;
 use super::texture::Texture;
 use super::{Background, Material, Scene, SceneError, Shape};
 use crate::shared::primitive::{MAX_PRIMITIVES_PER_KIND, PrimitiveRef};
-use glam::{DVec3, Vec3, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec4};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
@@ -171,6 +171,10 @@ fn affine_point(rows: &[Vec4; 3], p: Vec3) -> Vec3 {
 /// shift is exact): a scene whose camera is within this distance of the origin is not moved.
 pub const RECENTRE_STEP: f64 = 1024.0;
 
+/// The corner texture coordinates of a triangle whose mesh has none, in a scene where others
+/// have them: interpolated, they are the barycentric weights a hit has without them.
+pub const BARYCENTRIC_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlatScene {
     /// The world position of this scene's coordinate origin. Every position below is relative
@@ -193,6 +197,10 @@ pub struct FlatScene {
     /// normals (triangles of the others take their face's); empty otherwise. Those of
     /// instanced meshes are in their meshes' coordinates.
     pub triangle_normals: Vec<[Vec3; 3]>,
+    /// Per triangle, its corners' texture coordinates, when some mesh of the scene has them and
+    /// some material reads them (`uv_textures`); empty otherwise. Triangles without them take
+    /// (0, 0), (1, 0), (0, 1), so their coordinates are their barycentric weights, as without.
+    pub triangle_uvs: Vec<[Vec2; 3]>,
     /// Where the instanced meshes' triangles begin in `triangles`.
     pub instanced_triangles: usize,
     /// Each instanced mesh's triangles in `triangles`.
@@ -326,6 +334,9 @@ impl FlatScene {
             let features = m.extra_features();
             features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
         });
+        if !flat.uv_textures {
+            flat.triangle_uvs = Vec::new();
+        }
         flat.check_checker_scales()?;
         flat.collect_lights(&scene.punctual);
         flat.medium_crossings = flat.count_medium_crossings();
@@ -797,14 +808,18 @@ struct Flattener<'a> {
     placements: std::collections::HashMap<InstancingKey, usize>,
     /// Whether every triangle gets corner normals: the scene has vertex normals somewhere.
     smooth: bool,
+    /// Whether every triangle gets corner texture coordinates: some mesh of the scene has them.
+    textured: bool,
     spheres: Vec<Sphere>,
     quads: Vec<Quad>,
     boxes: Vec<u32>,
     triangles: Vec<Triangle>,
     triangle_normals: Vec<[Vec3; 3]>,
+    triangle_uvs: Vec<[Vec2; 3]>,
     /// Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
     local_triangles: Vec<Triangle>,
     local_normals: Vec<[Vec3; 3]>,
+    local_uvs: Vec<[Vec2; 3]>,
     meshes: Vec<std::ops::Range<usize>>,
     mesh_of: std::collections::HashMap<InstancingKey, u32>,
     instances: Vec<Instance>,
@@ -816,18 +831,25 @@ impl<'a> Flattener<'a> {
             .objects
             .iter()
             .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
+        let textured = scene
+            .objects
+            .iter()
+            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
         let mut flattener = Flattener {
             scene,
             instancing,
             placements: Default::default(),
             smooth,
+            textured,
             spheres: Vec::new(),
             quads: Vec::new(),
             boxes: Vec::new(),
             triangles: Vec::new(),
             triangle_normals: Vec::new(),
+            triangle_uvs: Vec::new(),
             local_triangles: Vec::new(),
             local_normals: Vec::new(),
+            local_uvs: Vec::new(),
             meshes: Vec::new(),
             mesh_of: Default::default(),
             instances: Vec::new(),
@@ -916,6 +938,8 @@ impl<'a> Flattener<'a> {
                 Some(&normals) => normals,
                 None => [n.normalize(); 3],
             });
+            self.local_uvs
+                .push(mesh.uvs.get(i).copied().unwrap_or(BARYCENTRIC_UVS));
         }
         self.meshes.push(first..self.local_triangles.len());
         let index = self.meshes.len() as u32 - 1;
@@ -962,6 +986,13 @@ impl<'a> Flattener<'a> {
                     None => [face; 3],
                 });
             }
+            if self.textured {
+                self.triangle_uvs.push(match mesh.uvs.get(i) {
+                    Some(&[uv0, uv1, uv2]) if mirrored => [uv0, uv2, uv1],
+                    Some(&uvs) => uvs,
+                    None => BARYCENTRIC_UVS,
+                });
+            }
             self.triangles.push(Triangle {
                 p0,
                 p1,
@@ -982,6 +1013,7 @@ impl<'a> Flattener<'a> {
     ) -> Result<FlatScene, SceneError> {
         let mut triangles = self.triangles;
         let mut triangle_normals = self.triangle_normals;
+        let mut triangle_uvs = self.triangle_uvs;
         let instanced_triangles = triangles.len();
         let instanced_meshes = self
             .meshes
@@ -991,6 +1023,9 @@ impl<'a> Flattener<'a> {
         triangles.extend(self.local_triangles);
         if self.smooth {
             triangle_normals.extend(self.local_normals);
+        }
+        if self.textured {
+            triangle_uvs.extend(self.local_uvs);
         }
         if self.spheres.len() > MAX_PRIMITIVES_PER_KIND
             || self.quads.len() > MAX_PRIMITIVES_PER_KIND
@@ -1010,6 +1045,7 @@ impl<'a> Flattener<'a> {
             quads: self.quads,
             triangles,
             triangle_normals,
+            triangle_uvs,
             instanced_triangles,
             instanced_meshes,
             instances: self.instances,

@@ -149,6 +149,24 @@ pub fn load(
     Ok((scene, extras.notes))
 }
 
+/// The perspective camera named `name` of the glTF file at `path` (`source`: as the scene
+/// names it), looking toward the middle of the file's meshes; `Ok(Err(names))`: the file has no
+/// camera of that name, and these are its cameras' names.
+pub fn named_camera(
+    path: &Path,
+    source: &str,
+    name: &str,
+) -> Result<Result<Camera, Vec<String>>, String> {
+    let extras = read_extras(path, source)?;
+    let Some(chosen) = extras.cameras.iter().find(|c| c.name == name) else {
+        return Ok(Err(extras.cameras.into_iter().map(|c| c.name).collect()));
+    };
+    let (min, max) = bounds(&mesh::load(path, source, None)?);
+    camera_of(chosen, (min + max) / 2.0)
+        .map(Ok)
+        .map_err(|e| format!("{source}: {e}"))
+}
+
 /// What a primitive without a material takes: glTF's default material (white, rough,
 /// dielectric: 3.9.6), clamped as rt-gpu's `pbr`.
 fn default_material() -> super::Material {

@@ -80,6 +80,18 @@ impl Image {
         glam::Vec3::new(self.texels[i], self.texels[i + 1], self.texels[i + 2])
     }
 
+    /// This image with every texel multiplied by `factor` channel by channel (glTF's factor x
+    /// texture products), named `source`.
+    pub fn scaled(&self, factor: glam::Vec3, source: &str) -> Result<Self, String> {
+        let factor = factor.to_array();
+        let texels = self
+            .texels
+            .chunks_exact(3)
+            .flat_map(|rgb| [0, 1, 2].map(|c| rgb[c] * factor[c]))
+            .collect();
+        Self::from_linear(source, self.width, self.height, texels)
+    }
+
     /// Leaks `self` for the rest of the process (see the module's documentation).
     pub fn leak(self) -> &'static Image {
         Box::leak(Box::new(self))
@@ -222,13 +234,29 @@ fn decode(path: &Path, source: &str) -> Result<Image, String> {
             decode_from(reader, source)?
         }
     };
+    to_linear(decoded, source, true)
+}
+
+/// Decodes an image held in memory (one embedded in a glTF file, say) as [`load`] decodes a
+/// file, except that 8- and 16-bit values are taken as sRGB only where `srgb` (glTF's colour
+/// textures), else as linear (its metallic-roughness and normal textures).
+pub fn decode_bytes(bytes: &[u8], source: &str, srgb: bool) -> Result<Image, String> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;
+    to_linear(decode_from(reader, source)?, source, srgb)
+}
+
+/// A decoded image's linear RGB: floating-point values as they are, others from sRGB where
+/// `srgb`.
+fn to_linear(decoded: image::DynamicImage, source: &str, srgb: bool) -> Result<Image, String> {
     let float = matches!(
         decoded.color(),
         image::ColorType::Rgb32F | image::ColorType::Rgba32F
     );
     let (width, height) = (decoded.width(), decoded.height());
     let mut texels = decoded.into_rgb32f().into_raw();
-    if !float {
+    if !float && srgb {
         for x in &mut texels {
             *x = srgb_to_linear(*x);
         }

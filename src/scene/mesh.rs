@@ -7,7 +7,7 @@
 //! file's winding: counter-clockwise seen from the front.
 
 use super::Material;
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -26,6 +26,9 @@ pub struct Mesh {
     /// Per triangle, its corners' shading normals (unit), where the file gives vertex normals;
     /// empty where it gives none. Corners without a usable normal take the face's.
     pub normals: Vec<[Vec3; 3]>,
+    /// Per triangle, its corners' texture coordinates (u across an image, v up it), where the
+    /// file gives them; empty where it gives none. Corners without them take (0, 0).
+    pub uvs: Vec<[Vec2; 3]>,
     /// The file's material for this part (glTF), `None` for OBJ or primitives without one.
     pub material: Option<Material>,
     /// Its name in the file, or its index.
@@ -75,7 +78,25 @@ impl Mesh {
         triangles: Vec<[u32; 3]>,
         normals: Vec<Option<[Vec3; 3]>>,
     ) -> Result<Self, String> {
+        Self::with_corners(source, positions, triangles, normals, Vec::new())
+    }
+
+    /// A mesh as [`Mesh::with_normals`], with its triangles' corner texture coordinates too
+    /// (`uvs`: one entry per triangle, `None` where the file gives none).
+    pub fn with_corners(
+        source: &str,
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        normals: Vec<Option<[Vec3; 3]>>,
+        uvs: Vec<Option<[Vec2; 3]>>,
+    ) -> Result<Self, String> {
         let smooth = normals.iter().any(Option::is_some);
+        let textured = uvs.iter().any(Option::is_some);
+        if let Some(uv) = uvs.iter().flatten().flatten().find(|uv| !uv.is_finite()) {
+            return Err(format!(
+                "mesh {source} has a non-finite texture coordinate {uv}"
+            ));
+        }
         if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
             return Err(format!("mesh {source} has a non-finite vertex {p}"));
         }
@@ -90,6 +111,7 @@ impl Mesh {
             (b - a).cross(c - a)
         };
         let mut kept_normals = Vec::new();
+        let mut kept_uvs = Vec::new();
         let triangles: Vec<[u32; 3]> = triangles
             .into_iter()
             .enumerate()
@@ -105,6 +127,9 @@ impl Mesh {
                         let n = n.normalize_or_zero();
                         if n == Vec3::ZERO { face } else { n }
                     }));
+                }
+                if textured {
+                    kept_uvs.push(uvs.get(i).copied().flatten().unwrap_or([Vec2::ZERO; 3]));
                 }
                 Some(t)
             })
@@ -125,6 +150,7 @@ impl Mesh {
             positions,
             triangles,
             normals: kept_normals,
+            uvs: kept_uvs,
             material: None,
             material_name: String::new(),
             extent,
@@ -223,39 +249,57 @@ fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
     for model in models {
         let mesh = &model.mesh;
         let key = mesh.material_id.filter(|&i| i < materials.len());
-        let (_, positions, triangles, normals) = part_of(&mut parts, key);
-        let base = positions.len() as u32;
-        // Faces name their own normals (`f v//vn`); `tobj` gives them per corner.
+        let part = part_of(&mut parts, key);
+        let base = part.positions.len() as u32;
+        let faces = mesh.indices.len() / 3;
+        // Faces name their own normals (`f v//vn`) and texture coordinates (`f v/vt`); `tobj`
+        // gives them per corner.
         let vn = |i: u32| {
             let n = mesh.normals.get(3 * i as usize..3 * i as usize + 3)?;
             Some(Vec3::new(n[0], n[1], n[2]))
         };
         if mesh.normal_indices.len() == mesh.indices.len() {
-            normals.extend(mesh.normal_indices.chunks_exact(3).map(|c| {
-                let [a, b, c] = [vn(c[0])?, vn(c[1])?, vn(c[2])?];
-                Some([a, b, c])
-            }));
+            part.normals
+                .extend(mesh.normal_indices.chunks_exact(3).map(|c| {
+                    let [a, b, c] = [vn(c[0])?, vn(c[1])?, vn(c[2])?];
+                    Some([a, b, c])
+                }));
         } else {
-            normals.extend(std::iter::repeat_n(None, mesh.indices.len() / 3));
+            part.normals.extend(std::iter::repeat_n(None, faces));
         }
-        positions.extend(
+        let vt = |i: u32| {
+            let uv = mesh.texcoords.get(2 * i as usize..2 * i as usize + 2)?;
+            Some(Vec2::new(uv[0], uv[1]))
+        };
+        if mesh.texcoord_indices.len() == mesh.indices.len() {
+            part.uvs
+                .extend(mesh.texcoord_indices.chunks_exact(3).map(|c| {
+                    let [a, b, c] = [vt(c[0])?, vt(c[1])?, vt(c[2])?];
+                    Some([a, b, c])
+                }));
+        } else {
+            part.uvs.extend(std::iter::repeat_n(None, faces));
+        }
+        part.positions.extend(
             mesh.positions
                 .chunks_exact(3)
                 .map(|p| Vec3::new(p[0], p[1], p[2])),
         );
-        triangles.extend(
+        part.triangles.extend(
             mesh.indices
                 .chunks_exact(3)
                 .map(|t| [base + t[0], base + t[1], base + t[2]]),
         );
     }
+    let folder = path.parent().unwrap_or(Path::new(""));
     parts
         .into_iter()
-        .map(|(key, positions, triangles, normals)| {
-            let mut mesh = Mesh::with_normals(source, positions, triangles, normals)?;
+        .map(|part| {
+            let key = part.key;
+            let mut mesh = part.into_mesh(source)?;
             match key.map(|k| &materials[k]) {
                 Some(m) => {
-                    mesh.material = Some(mtl_material(m));
+                    mesh.material = Some(mtl_material(m, folder, source)?);
                     mesh.material_name = m.name.clone();
                 }
                 None => mesh.material_name = "default".into(),
@@ -287,19 +331,20 @@ fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
 
 /// An MTL material as rt-gpu's, the way Blender's OBJ exporter (3.4) writes its Principled
 /// BSDF: emission `Ke` (strength folded in) -> a two-sided `light`; else `pbr` with base colour
-/// `Kd`, roughness `Pr` or 1 - sqrt(`Ns` / 1000) (Blender writes Ns = (1 - roughness)^2 x 1000),
-/// metallic `Pm`, or 1 for `illum 3` (Blender's mark of a metallic surface), ior `Ni`. Not
-/// read: transmission (Blender does not write it), `d` (alpha), textures.
-pub fn mtl_material(m: &tobj::Material) -> Material {
+/// `Kd`, or the image `map_Kd` (in `folder`, the OBJ file's, or below it: OBJ's `vt` has v up
+/// the image), roughness `Pr` or 1 - sqrt(`Ns` / 1000) (Blender writes Ns = (1 - roughness)^2 x
+/// 1000), metallic `Pm`, or 1 for `illum 3` (Blender's mark of a metallic surface), ior `Ni`.
+/// Not read: transmission (Blender does not write it), `d` (alpha), other maps.
+fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Material, String> {
     use crate::material::{Light, Pbr};
     let colour = |c: Option<[f32; 3]>| c.map(Vec3::from_array).filter(|c| c.is_finite());
     let emission = colour(m.emissive).unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
     if emission.max_element() > 0.0 {
-        return Material::Light(Light {
+        return Ok(Material::Light(Light {
             radiance: emission.min(Vec3::splat(1e6)).into(),
             strength: 1.0,
             two_sided: true,
-        });
+        }));
     }
     let param = |key: &str| {
         m.unknown_param
@@ -317,9 +362,17 @@ pub fn mtl_material(m: &tobj::Material) -> Material {
     } else {
         0.0
     });
-    let base = colour(m.diffuse).unwrap_or(Vec3::splat(0.8));
-    Material::Pbr(Pbr::new(
-        base.clamp(Vec3::ZERO, Vec3::ONE).into(),
+    let base = match &m.diffuse_texture {
+        Some(map) => {
+            crate::scene::texture::Texture::Image(mtl_image(map, folder, source, &m.name)?)
+        }
+        None => colour(m.diffuse)
+            .unwrap_or(Vec3::splat(0.8))
+            .clamp(Vec3::ZERO, Vec3::ONE)
+            .into(),
+    };
+    Ok(Material::Pbr(Pbr::new(
+        base,
         unit(metallic),
         unit(roughness),
         m.optical_density
@@ -327,7 +380,38 @@ pub fn mtl_material(m: &tobj::Material) -> Material {
             .unwrap_or(1.5)
             .clamp(1.0, 4.0),
         0.0,
-    ))
+    )))
+}
+
+/// The image an MTL map names (`map` after its options: tobj keeps `-o u v` and the like in the
+/// string, and rt-gpu reads none of them): a relative path inside the OBJ file's `folder`.
+fn mtl_image(
+    map: &str,
+    folder: &Path,
+    source: &str,
+    material: &str,
+) -> Result<&'static super::image::Image, String> {
+    use std::path::Component;
+    let name = if map.starts_with('-') {
+        map.split_whitespace().last().unwrap_or_default()
+    } else {
+        map.trim()
+    };
+    let relative = Path::new(name);
+    if name.is_empty()
+        || !relative
+            .components()
+            .all(|c| matches!(c, Component::Normal(_)))
+    {
+        return Err(format!(
+            "mesh {source}: material \"{material}\"'s map_Kd \"{map}\" is not a relative path inside the OBJ file's folder (rt-gpu reads images beside the file or below it)"
+        ));
+    }
+    let shown = Path::new(source)
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(relative);
+    super::image::load(&folder.join(relative), &shown.to_string_lossy())
 }
 
 /// An OBJ file's text: UTF-8, or Latin-1 (which some exporters write; OBJ's syntax is ASCII, so
@@ -440,21 +524,39 @@ fn obj_error_line(text: &str, e: &tobj::LoadError) -> Option<usize> {
     None
 }
 
-/// A file material's index (`None`: faces without one), its vertices, triangles and their
-/// corner normals.
-type Part = (
-    Option<usize>,
-    Vec<Vec3>,
-    Vec<[u32; 3]>,
-    Vec<Option<[Vec3; 3]>>,
-);
+/// The triangles of one material of a file as read, per triangle with its corner normals and
+/// texture coordinates where the file gives them.
+#[derive(Default)]
+struct Part {
+    /// The file material's index (`None`: faces without one).
+    key: Option<usize>,
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    normals: Vec<Option<[Vec3; 3]>>,
+    uvs: Vec<Option<[Vec2; 3]>>,
+}
+
+impl Part {
+    fn into_mesh(self, source: &str) -> Result<Mesh, String> {
+        Mesh::with_corners(
+            source,
+            self.positions,
+            self.triangles,
+            self.normals,
+            self.uvs,
+        )
+    }
+}
 
 /// The part of material `key`, added (empty) on its first use.
 fn part_of(parts: &mut Vec<Part>, key: Option<usize>) -> &mut Part {
-    let at = match parts.iter().position(|p| p.0 == key) {
+    let at = match parts.iter().position(|p| p.key == key) {
         Some(at) => at,
         None => {
-            parts.push((key, Vec::new(), Vec::new(), Vec::new()));
+            parts.push(Part {
+                key,
+                ..Part::default()
+            });
             parts.len() - 1
         }
     };
@@ -536,7 +638,27 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     return Err(format!("mesh {source}: a primitive has no positions"));
                 };
                 let key = primitive.material().index();
-                let (_, positions, triangles, normals) = part_of(&mut parts, key);
+                let uvs: Option<Vec<Vec2>> = reader.read_tex_coords(0).map(|read| {
+                    read.into_f32()
+                        .map(|[u, v]| Vec2::new(u, 1.0 - v))
+                        .collect()
+                });
+                if uvs.is_none()
+                    && let Some(slot) = textured_slot(&primitive.material())
+                {
+                    return Err(format!(
+                        "mesh {source}: a primitive of mesh {} has no TEXCOORD_0, which its material \"{}\"'s {slot} reads",
+                        mesh.index(),
+                        primitive.material().name().unwrap_or("")
+                    ));
+                }
+                let Part {
+                    positions,
+                    triangles,
+                    normals,
+                    uvs: part_uvs,
+                    ..
+                } = part_of(&mut parts, key);
                 let base = positions.len() as u32;
                 // Normals transform by the inverse transpose (non-uniform scales bend them).
                 let to_world = DMat3::from_mat4(world).inverse().transpose();
@@ -578,17 +700,26 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     let [a, b, c] = [*a?, *b?, *c?];
                     Some(if flip { [a, c, b] } else { [a, b, c] })
                 }));
+                part_uvs.extend(indices.chunks_exact(3).map(|t| {
+                    let uvs = uvs.as_ref()?;
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| uvs.get(i as usize));
+                    let [a, b, c] = [*a?, *b?, *c?];
+                    Some(if flip { [a, c, b] } else { [a, b, c] })
+                }));
             }
         }
         stack.extend(n.children().map(|c| (c, world)));
     }
     let materials: Vec<gltf::Material> = document.materials().collect();
+    let mut textures =
+        super::gltf_textures::FileTextures::new(&document, &buffers, path.parent(), source);
     parts
         .into_iter()
-        .map(|(key, positions, triangles, normals)| {
-            let mut mesh = Mesh::with_normals(source, positions, triangles, normals)?;
+        .map(|part| {
+            let key = part.key;
+            let mut mesh = part.into_mesh(source)?;
             if let Some(m) = key.and_then(|k| materials.get(k)) {
-                mesh.material = Some(material_of(m));
+                mesh.material = Some(material_of(m, &mut textures)?);
                 mesh.material_name = m.name().map_or(
                     format!("material{}", m.index().unwrap_or(0)),
                     str::to_string,
@@ -601,24 +732,50 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
         .collect()
 }
 
-/// A glTF metallic-roughness material as rt-gpu's (textures are not read): emissive -> light
-/// (emissive factor x KHR_materials_emissive_strength, two-sided when the material is), else
-/// `pbr` with the base colour, metallic and roughness factors, KHR_materials_ior (default 1.5)
-/// and KHR_materials_transmission's factor (default 0).
-pub fn material_of(m: &gltf::Material) -> Material {
+/// The first of `material`'s textures that reads texture coordinates, by its property name.
+fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
+    let pbr = material.pbr_metallic_roughness();
+    if pbr.base_color_texture().is_some() {
+        Some("baseColorTexture")
+    } else if material.emissive_texture().is_some() {
+        Some("emissiveTexture")
+    } else {
+        None
+    }
+}
+
+/// A glTF metallic-roughness material as rt-gpu's: emissive -> light (emissive factor x
+/// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is), else
+/// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
+/// KHR_materials_ior (default 1.5) and KHR_materials_transmission's factor (default 0). Not
+/// read: the metallic-roughness, normal and occlusion textures, alpha.
+fn material_of(
+    m: &gltf::Material,
+    textures: &mut super::gltf_textures::FileTextures,
+) -> Result<Material, String> {
     use crate::material::{Light, Pbr};
+    use crate::scene::texture::Texture;
+    let name = m.name().unwrap_or("");
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
-    let emissive = Vec3::from_array(m.emissive_factor());
+    let emissive = Vec3::from_array(m.emissive_factor()).clamp(Vec3::ZERO, Vec3::splat(1e6));
     let strength = m.emissive_strength().unwrap_or(1.0);
     if emissive.max_element() > 0.0 && strength > 0.0 {
-        return Material::Light(Light {
-            radiance: emissive.clamp(Vec3::ZERO, Vec3::splat(1e6)).into(),
+        let radiance = match m.emissive_texture() {
+            Some(info) => textures.colour(&info, emissive, name, "emissiveTexture")?,
+            None => Texture::Colour(emissive),
+        };
+        return Ok(Material::Light(Light {
+            radiance,
             strength: strength.clamp(0.0, crate::material::light::MAX_STRENGTH),
             two_sided: m.double_sided(),
-        });
+        }));
     }
+    let base = match pbr.base_color_texture() {
+        Some(info) => textures.colour(&info, base, name, "baseColorTexture")?,
+        None => Texture::Colour(base),
+    };
     let unit = |x: f32| {
         if x.is_finite() {
             x.clamp(0.0, 1.0)
@@ -626,8 +783,8 @@ pub fn material_of(m: &gltf::Material) -> Material {
             0.0
         }
     };
-    Material::Pbr(Pbr::new(
-        base.into(),
+    Ok(Material::Pbr(Pbr::new(
+        base,
         unit(pbr.metallic_factor()),
         unit(pbr.roughness_factor()),
         m.ior()
@@ -635,5 +792,5 @@ pub fn material_of(m: &gltf::Material) -> Material {
             .unwrap_or(1.5)
             .clamp(1.0, 4.0),
         unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
-    ))
+    )))
 }

@@ -9,6 +9,7 @@ pub mod file;
 pub mod flat;
 pub mod gltf_check;
 pub mod gltf_scene;
+pub mod gltf_textures;
 pub mod image;
 pub mod media;
 pub mod mesh;

@@ -1,0 +1,197 @@
+//! The textures of a glTF file's materials as rt-gpu's: each image the file holds (in a .glb's
+//! buffer, a data URI or a file beside it) decoded once, and each factor x texture product of
+//! the spec (glTF 2.0, 3.9.2) made once, as a [`Texture::Image`].
+//!
+//! Read: a texture's image and `texCoord` 0. Not read: samplers (every texture repeats and is
+//! filtered bilinearly, Blender's default), `KHR_texture_transform`, other UV sets.
+
+use super::image::{self, Image};
+use super::texture::Texture;
+use glam::Vec3;
+use std::collections::HashMap;
+use std::path::{Component, Path};
+
+/// Largest image file beside a glTF file that is read.
+const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
+
+/// A glTF file's images, decoded as its materials use them.
+pub struct FileTextures<'a> {
+    document: &'a gltf::Document,
+    buffers: &'a [gltf::buffer::Data],
+    /// The folder the file's relative URIs start from.
+    base_dir: Option<&'a Path>,
+    /// The file as the user named it, for messages.
+    source: &'a str,
+    /// Images decoded, by (image index, whether decoded from sRGB).
+    decoded: HashMap<(usize, bool), &'static Image>,
+    /// Factor x image products, by (image index, sRGB, the factor's bits).
+    products: HashMap<(usize, bool, [u32; 3]), &'static Image>,
+}
+
+impl<'a> FileTextures<'a> {
+    pub fn new(
+        document: &'a gltf::Document,
+        buffers: &'a [gltf::buffer::Data],
+        base_dir: Option<&'a Path>,
+        source: &'a str,
+    ) -> Self {
+        FileTextures {
+            document,
+            buffers,
+            base_dir,
+            source,
+            decoded: HashMap::new(),
+            products: HashMap::new(),
+        }
+    }
+
+    /// A colour texture (base colour, emission: sRGB) times `factor`, as `material` names
+    /// it in `slot` (its glTF property name, for messages).
+    pub fn colour(
+        &mut self,
+        info: &gltf::texture::Info,
+        factor: Vec3,
+        material: &str,
+        slot: &str,
+    ) -> Result<Texture, String> {
+        let source = self.source;
+        if info.tex_coord() != 0 {
+            return Err(format!(
+                "mesh {source}: material \"{material}\"'s {slot} reads TEXCOORD_{}; rt-gpu reads TEXCOORD_0 only",
+                info.tex_coord()
+            ));
+        }
+        let index = info.texture().source().index();
+        let image = self.image(index, true)?;
+        if factor == Vec3::ONE {
+            return Ok(Texture::Image(image));
+        }
+        let key = (index, true, factor.to_array().map(f32::to_bits));
+        if let Some(&product) = self.products.get(&key) {
+            return Ok(Texture::Image(product));
+        }
+        let name = format!("{} x {factor}", image.source);
+        let product = image.scaled(factor, &name)?.leak();
+        self.products.insert(key, product);
+        Ok(Texture::Image(product))
+    }
+
+    /// Image `index` decoded (from sRGB where `srgb`), once.
+    fn image(&mut self, index: usize, srgb: bool) -> Result<&'static Image, String> {
+        if let Some(&image) = self.decoded.get(&(index, srgb)) {
+            return Ok(image);
+        }
+        let source = self.source;
+        let Some(file_image) = self.document.images().nth(index) else {
+            return Err(format!(
+                "mesh {source}: a texture names image {index}, which does not exist"
+            ));
+        };
+        let name = match file_image.name() {
+            Some(name) => format!("{source} image {index} (\"{name}\")"),
+            None => format!("{source} image {index}"),
+        };
+        let bytes = self.bytes(&file_image, &name)?;
+        let image = image::decode_bytes(&bytes, &name, srgb)?.leak();
+        self.decoded.insert((index, srgb), image);
+        Ok(image)
+    }
+
+    /// The encoded bytes of `file_image` (`name`: how messages name it).
+    fn bytes(&self, file_image: &gltf::Image, name: &str) -> Result<Vec<u8>, String> {
+        match file_image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = self.buffers.get(view.buffer().index()).map(|b| &b.0[..]);
+                let range = view.offset()..view.offset().saturating_add(view.length());
+                buffer
+                    .and_then(|b| b.get(range))
+                    .map(<[u8]>::to_vec)
+                    .ok_or_else(|| format!("image {name}: its buffer view lies outside its buffer"))
+            }
+            gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+                Some(data) => {
+                    let Some((_, encoded)) = data.split_once(";base64,") else {
+                        return Err(format!(
+                            "image {name}: a data URI must be base64 (data:<type>;base64,...)"
+                        ));
+                    };
+                    base64::decode(encoded)
+                        .map_err(|e| format!("image {name}: its data URI is not base64: {e}"))
+                }
+                None => self.file_bytes(uri, name),
+            },
+        }
+    }
+
+    /// The bytes of the image file `uri` names: only a relative path that stays inside the
+    /// glTF file's folder and names a regular file is opened.
+    fn file_bytes(&self, uri: &str, name: &str) -> Result<Vec<u8>, String> {
+        let relative = percent_decoded(uri).ok_or_else(|| {
+            format!("image {name}: its URI \"{uri}\" is not valid UTF-8 once decoded")
+        })?;
+        let path = Path::new(&relative);
+        if !path.components().all(|c| matches!(c, Component::Normal(_))) {
+            return Err(format!(
+                "image {name}: its URI \"{uri}\" leaves the glTF file's folder (rt-gpu reads images beside the file or below it)"
+            ));
+        }
+        let path = match self.base_dir {
+            Some(dir) => dir.join(path),
+            None => path.to_path_buf(),
+        };
+        let meta = std::fs::metadata(&path)
+            .map_err(|e| format!("cannot read image {name} ({relative}): {e}"))?;
+        if !meta.is_file() {
+            return Err(format!("image {name} ({relative}) is not a regular file"));
+        }
+        if meta.len() > MAX_IMAGE_FILE_BYTES {
+            return Err(format!(
+                "image {name} ({relative}) is {} bytes, more than the {MAX_IMAGE_FILE_BYTES} rt-gpu reads",
+                meta.len()
+            ));
+        }
+        std::fs::read(&path).map_err(|e| format!("cannot read image {name} ({relative}): {e}"))
+    }
+}
+
+/// `uri` with its %XX escapes decoded (glTF URIs are URI-encoded: Blender writes a space as
+/// %20); `None` if the result is not UTF-8.
+fn percent_decoded(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (
+            bytes[i],
+            bytes.get(i + 1).copied().and_then(hex),
+            bytes.get(i + 2).copied().and_then(hex),
+        ) {
+            (b'%', Some(hi), Some(lo)) => {
+                out.push((hi * 16 + lo) as u8);
+                i += 3;
+            }
+            (b, _, _) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uris_are_percent_decoded() {
+        assert_eq!(percent_decoded("a%20b.png").as_deref(), Some("a b.png"));
+        assert_eq!(
+            percent_decoded("tex/w%C3%BCrfel.png").as_deref(),
+            Some("tex/würfel.png")
+        );
+        assert_eq!(percent_decoded("100%.png").as_deref(), Some("100%.png"));
+        assert_eq!(percent_decoded("%ff.png"), None);
+    }
+}

@@ -1,0 +1,187 @@
+//! A glTF file's textures: TEXCOORD_0 arrives on triangles (v turned to rt-gpu's "up the
+//! image") and is interpolated in hits; baseColorTexture x baseColorFactor becomes the base
+//! colour, decoded from sRGB once, from a file beside the glTF file or a data URI; a bad
+//! texture is a one-line error naming the file and what is wrong.
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use rt_gpu::scene::gltf_scene::load;
+use rt_gpu::scene::image::srgb_to_linear;
+use rt_gpu::scene::texture::Texture;
+use rt_gpu::scene::{Material, Scene};
+use std::path::{Path, PathBuf};
+
+/// The 2x1 PNG written as `tex.png`: left texel red, right texel (sRGB) 128 grey.
+fn write_png(dir: &Path) -> Vec<u8> {
+    let image = image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 128, 128, 128]).expect("2x1");
+    let path = dir.join("tex.png");
+    image.save(&path).expect("writes tex.png");
+    std::fs::read(path).expect("reads tex.png")
+}
+
+/// A triangle at z = 0 with corners (-1, -1), (1, -1), (0, 1) and, where `uvs`, TEXCOORD_0
+/// (0, 1), (1, 1), (0.5, 0) (glTF's v runs down the image); its material is `material`, and
+/// `extra` adds top-level members (textures, images, samplers).
+fn write_gltf(dir: &Path, uvs: bool, material: &str, extra: &str) -> PathBuf {
+    let mut bin: Vec<u8> = Vec::new();
+    for x in [-1.0f32, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend(x.to_le_bytes());
+    }
+    for x in [0.0f32, 1.0, 1.0, 1.0, 0.5, 0.0] {
+        bin.extend(x.to_le_bytes());
+    }
+    std::fs::write(dir.join("tri.bin"), &bin).expect("writes");
+    let texcoord = if uvs { r#", "TEXCOORD_0": 1"# } else { "" };
+    let json = format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "buffers": [{{ "uri": "tri.bin", "byteLength": 60 }}],
+  "bufferViews": [{{ "buffer": 0, "byteOffset": 0, "byteLength": 36 }}, {{ "buffer": 0, "byteOffset": 36, "byteLength": 24 }}],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0] }},
+    {{ "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" }}
+  ],
+  "materials": [{material}],
+  {extra}
+  "meshes": [{{ "primitives": [{{ "attributes": {{ "POSITION": 0{texcoord} }}, "material": 0 }}] }}],
+  "nodes": [{{ "name": "Triangle", "mesh": 0 }}],
+  "scenes": [{{ "nodes": [0] }}],
+  "scene": 0
+}}"#
+    );
+    let path = dir.join("tri.gltf");
+    std::fs::write(&path, json).expect("writes");
+    path
+}
+
+const TEXTURED: &str = r#"{ "name": "Painted", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "baseColorFactor": [0.5, 1, 1, 1], "metallicFactor": 0 } }"#;
+
+fn images(uri: &str) -> String {
+    format!(r#""textures": [{{ "source": 0 }}], "images": [{{ "uri": "{uri}" }}],"#)
+}
+
+fn base_colour(scene: &Scene) -> Texture {
+    match &scene.materials[0] {
+        Material::Pbr(pbr) => pbr.base_color,
+        other => panic!("not pbr: {other:?}"),
+    }
+}
+
+#[test]
+fn a_base_colour_texture_arrives_with_its_factor_and_uvs() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = write_png(dir.path());
+    let data_uri = format!("data:image/png;base64,{}", base64::encode(&png));
+    for uri in ["tex.png", data_uri.as_str()] {
+        let path = write_gltf(dir.path(), true, TEXTURED, &images(uri));
+        let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+        let Texture::Image(image) = base_colour(&scene) else {
+            panic!("not an image: {:?}", base_colour(&scene));
+        };
+        assert_eq!((image.width, image.height), (2, 1));
+        // Decoded from sRGB, then times the factor (0.5, 1, 1).
+        assert_eq!(image.texel(0, 0), Vec3::new(0.5, 0.0, 0.0));
+        let grey = srgb_to_linear(128.0 / 255.0);
+        assert!(
+            (image.texel(1, 0) - Vec3::new(0.5 * grey, grey, grey))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        let rt_gpu::scene::Shape::Mesh { mesh, .. } = scene.objects[0].shape else {
+            panic!("a mesh");
+        };
+        let expected = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(0.5, 1.0),
+        ];
+        assert_eq!(mesh.uvs, vec![expected], "v turned up the image");
+    }
+}
+
+/// A ray at the triangle's centroid hits it with the corners' mean texture coordinates; without
+/// TEXCOORD_0 (and an untextured material) the hit's coordinates are its barycentric weights.
+#[test]
+fn hits_interpolate_the_corners_texture_coordinates() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_png(dir.path());
+    let path = write_gltf(dir.path(), true, TEXTURED, &images("tex.png"));
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+    assert_eq!(flat.triangle_uvs.len(), 1);
+    let centroid = Vec3::new(0.0, -1.0 / 3.0, 0.0) - flat.origin.as_vec3();
+    let ray = rt_gpu::shared::ray::Ray {
+        origin: centroid + Vec3::Z,
+        dir: -Vec3::Z,
+    };
+    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+    assert!(
+        (hit.uv - Vec2::new(0.5, 1.0 / 3.0)).length() < 1e-5,
+        "{}",
+        hit.uv
+    );
+
+    let plain = r#"{ "name": "Plain", "pbrMetallicRoughness": { "metallicFactor": 0 } }"#;
+    let path = write_gltf(dir.path(), true, plain, "");
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+    assert!(flat.triangle_uvs.is_empty(), "nothing reads them");
+}
+
+#[test]
+fn bad_textures_are_one_line_errors_naming_the_file() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_png(dir.path());
+    std::fs::write(dir.path().join("junk.png"), b"not a png at all").expect("writes");
+    let second_set = TEXTURED.replace(r#""index": 0 }"#, r#""index": 0, "texCoord": 1 }"#);
+    let cases: [(bool, &str, String, &str); 6] = [
+        (true, TEXTURED, images("missing.png"), "missing.png"),
+        (true, TEXTURED, images("junk.png"), "image 0"),
+        (
+            true,
+            TEXTURED,
+            images("../tex.png"),
+            "leaves the glTF file's folder",
+        ),
+        (
+            true,
+            TEXTURED,
+            images("data:image/png;base64,@@@"),
+            "not base64",
+        ),
+        (false, TEXTURED, images("tex.png"), "no TEXCOORD_0"),
+        (true, &second_set, images("tex.png"), "TEXCOORD_1"),
+    ];
+    for (uvs, material, extra, expected) in cases {
+        let path = write_gltf(dir.path(), uvs, material, &extra);
+        let err = load(&path, "tri.gltf", None).expect_err(expected);
+        assert!(
+            err.contains("tri.gltf") && err.contains(expected),
+            "{expected}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+    let out_of_range = TEXTURED.replace(r#""index": 0 }"#, r#""index": 3 }"#);
+    let path = write_gltf(dir.path(), true, &out_of_range, &images("tex.png"));
+    let err = load(&path, "tri.gltf", None).expect_err("texture 3 does not exist");
+    assert!(
+        err.contains("tri.gltf") && err.lines().count() == 1,
+        "{err}"
+    );
+}
+
+#[cfg(feature = "cli")]
+#[test]
+fn the_command_line_refuses_a_bad_texture_and_writes_nothing() {
+    use common::cli::{rt_gpu, stderr};
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_gltf(dir.path(), true, TEXTURED, &images("missing.png"));
+    let out = rt_gpu(&["tri.gltf", "--spp", "1", "--backend", "cpu"], dir.path());
+    let text = stderr(&out);
+    assert!(!out.status.success());
+    assert!(text.contains("missing.png"), "{text}");
+    assert_eq!(text.trim_end().lines().count(), 1, "{text}");
+    assert!(!dir.path().join("tri.png").exists());
+}
