@@ -180,9 +180,9 @@ const REGIONS: [(&str, [usize; 2], [usize; 2]); 8] = [
     ("caustic under glass", [72, 80], [115, 135]),
 ];
 
-/// Per region, the mean of rt-gpu's CPU render of `scene` (512 spp, seed 0) over that of
-/// Cycles' image `cycles`, both in scenes/blender/; printed as a table.
-fn ratios_to_cycles(scene: Scene, cycles: &str) -> Vec<f64> {
+/// Cycles' image `cycles` (in scenes/blender/) and rt-gpu's CPU render of `scene` at its size
+/// (512 spp, seed 0, nee): a pixel's (Cycles, rt-gpu) values.
+fn beside_cycles(scene: Scene, cycles: &str) -> impl Fn(usize, usize) -> ([f32; 3], [f32; 3]) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender");
     let reference = image::open(dir.join(cycles))
         .unwrap_or_else(|e| panic!("{cycles}: {e}"))
@@ -193,9 +193,20 @@ fn ratios_to_cycles(scene: Scene, cycles: &str) -> Vec<f64> {
         ..rt_gpu::options::RenderOptions::new(width, height, 512, 10)
     };
     let flat = rt_gpu::scene::flat::FlatScene::new(&scene, width, height).expect("valid");
-    let film = rt_gpu::cpu::render(&flat, &opts, &|| {});
+    let ours = rt_gpu::cpu::render(&flat, &opts, &|| {}).mean_rgb();
+    move |x, y| {
+        (
+            reference.get_pixel(x as u32, y as u32).0,
+            ours[y * width as usize + x],
+        )
+    }
+}
+
+/// Per region, the mean of rt-gpu's CPU render of `scene` over that of Cycles' image `cycles`
+/// (see [`beside_cycles`]); printed as a table.
+fn ratios_to_cycles(scene: Scene, cycles: &str) -> Vec<f64> {
+    let pixel = beside_cycles(scene, cycles);
     let grey = |c: [f32; 3]| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0;
-    let ours = film.mean_rgb();
     println!("{cycles}: region, Cycles, rt-gpu, ratio");
     REGIONS
         .iter()
@@ -203,8 +214,9 @@ fn ratios_to_cycles(scene: Scene, cycles: &str) -> Vec<f64> {
             let (mut theirs, mut mine) = (0.0, 0.0);
             for y in *y0..*y1 {
                 for x in *x0..*x1 {
-                    theirs += grey(reference.get_pixel(x as u32, y as u32).0);
-                    mine += grey(ours[y * width as usize + x]);
+                    let (cycles, rt_gpu) = pixel(x, y);
+                    theirs += grey(cycles);
+                    mine += grey(rt_gpu);
                 }
             }
             let ratio = mine / theirs;
@@ -410,19 +422,9 @@ const TEXTURED_REGIONS: [(&str, [usize; 2], [usize; 2], usize); 5] = [
 ];
 
 /// Per region of [`TEXTURED_REGIONS`], rt-gpu's mean of its dominant channel over Cycles' in
-/// `textured-lambert-cycles.exr` (CPU, 512 spp, seed 0); printed as a table.
+/// `textured-lambert-cycles.exr` (see [`beside_cycles`]); printed as a table.
 fn textured_ratios(scene: Scene) -> Vec<f64> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender");
-    let reference = image::open(dir.join("textured-lambert-cycles.exr"))
-        .expect("reads the Cycles image")
-        .to_rgb32f();
-    let (width, height) = (reference.width(), reference.height());
-    let opts = rt_gpu::options::RenderOptions {
-        integrator: rt_gpu::render::Integrator::Nee,
-        ..rt_gpu::options::RenderOptions::new(width, height, 512, 10)
-    };
-    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, width, height).expect("valid");
-    let ours = rt_gpu::cpu::render(&flat, &opts, &|| {}).mean_rgb();
+    let pixel = beside_cycles(scene, "textured-lambert-cycles.exr");
     println!("textured-lambert-cycles.exr: region, channel, Cycles, rt-gpu, ratio");
     TEXTURED_REGIONS
         .iter()
@@ -430,8 +432,9 @@ fn textured_ratios(scene: Scene) -> Vec<f64> {
             let (mut theirs, mut mine) = (0.0, 0.0);
             for y in *y0..*y1 {
                 for x in *x0..*x1 {
-                    theirs += reference.get_pixel(x as u32, y as u32).0[*c] as f64;
-                    mine += ours[y * width as usize + x][*c] as f64;
+                    let (cycles, rt_gpu) = pixel(x, y);
+                    theirs += cycles[*c] as f64;
+                    mine += rt_gpu[*c] as f64;
                 }
             }
             let ratio = mine / theirs;

@@ -171,6 +171,12 @@ fn affine_point(rows: &[Vec4; 3], p: Vec3) -> Vec3 {
 /// shift is exact): a scene whose camera is within this distance of the origin is not moved.
 pub const RECENTRE_STEP: f64 = 1024.0;
 
+/// Whether `material` has a texture looked up by surface (UV) coordinates.
+fn reads_uvs(material: &Material) -> bool {
+    let features = material.extra_features();
+    features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
+}
+
 /// The corner texture coordinates of a triangle whose mesh has none, in a scene where others
 /// have them: interpolated, they are the barycentric weights a hit has without them.
 pub const BARYCENTRIC_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
@@ -330,13 +336,7 @@ impl FlatScene {
         }
         let camera = camera_frame(scene, origin, width, height);
         let mut flat = primitives.finish(materials, origin, camera)?;
-        flat.uv_textures = flat.materials.iter().any(|m| {
-            let features = m.extra_features();
-            features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
-        });
-        if !flat.uv_textures {
-            flat.triangle_uvs = Vec::new();
-        }
+        flat.uv_textures = flat.materials.iter().any(reads_uvs);
         flat.check_checker_scales()?;
         flat.collect_lights(&scene.punctual);
         flat.medium_crossings = flat.count_medium_crossings();
@@ -808,7 +808,8 @@ struct Flattener<'a> {
     placements: std::collections::HashMap<InstancingKey, usize>,
     /// Whether every triangle gets corner normals: the scene has vertex normals somewhere.
     smooth: bool,
-    /// Whether every triangle gets corner texture coordinates: some mesh of the scene has them.
+    /// Whether every triangle gets corner texture coordinates: some mesh of the scene has them
+    /// and some material reads them.
     textured: bool,
     spheres: Vec<Sphere>,
     quads: Vec<Quad>,
@@ -831,10 +832,16 @@ impl<'a> Flattener<'a> {
             .objects
             .iter()
             .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
+        // Decided before copying, as `uv_textures` is after: Blender writes TEXCOORD_0 on every
+        // mesh, textured or not, and large meshes should not carry coordinates nothing reads.
         let textured = scene
             .objects
             .iter()
-            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
+            .any(|o| reads_uvs(&scene.materials[o.material as usize]))
+            && scene
+                .objects
+                .iter()
+                .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
         let mut flattener = Flattener {
             scene,
             instancing,
