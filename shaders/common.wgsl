@@ -15,7 +15,7 @@ fn texel_at(t: texture_2d<u32>, i: u32) -> vec4u {
 
 // Every image the scene reads (a texel per vec4f), and the environment's alias table
 // (ImageArray in src/gpu/layout.rs).
-//#if IMAGE_TEXTURE || ENVIRONMENT
+//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS
 @group(0) @binding(BINDING_IMAGE_TEXELS) var image_texels: texture_2d<u32>;
 
 fn image_value(i: u32) -> vec4f {
@@ -58,6 +58,10 @@ fn image_value(i: u32) -> vec4f {
 //#if TRIANGLE_UVS
 // Per triangle its three corner texture coordinates, six floats (SceneBuffers::triangle_uvs).
 @group(0) @binding(BINDING_TRIANGLE_UVS) var<storage, read> triangle_uvs: array<f32>;
+//#endif
+//#if NORMAL_MAPS
+// Per triangle its three corner tangents, twelve floats (SceneBuffers::triangle_tangents).
+@group(0) @binding(BINDING_TRIANGLE_TANGENTS) var<storage, read> triangle_tangents: array<f32>;
 //#endif
 //#if INSTANCES
 @group(0) @binding(BINDING_INSTANCES) var<storage, read> instances: array<Instance>;

@@ -374,7 +374,7 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
-//#if UV_CHECKER || IMAGE_TEXTURE
+//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS
     (*hit).uv = c.uv;
 //#if SPHERES
     if primitive_kind(c.primitive) == KIND_SPHERE {
@@ -396,6 +396,14 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     }
 //#endif
 //#endif
+//#endif
+//#if NORMAL_MAPS
+    // Meshes copied into the scene only: normal-mapped meshes are never instanced.
+    let m = materials[c.material];
+    if primitive_kind(c.primitive) == KIND_TRIANGLE && m.normal_map_size.x > 0.0 {
+        shading = normal_mapped(m, primitive_index(c.primitive), c.weights, (*hit).uv, shading, n);
+        (*hit).shading = select(-shading, shading, front);
+    }
 //#endif
     return true;
 }

@@ -8,7 +8,7 @@ fn parity(x: f32) -> f32 {
 }
 //#endif
 
-//#if UV_CHECKER || IMAGE_TEXTURE
+//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS
 // A sphere's (longitude, latitude) at unit outward direction n (Ray Tracing: The Next Week).
 fn sphere_uv(n: vec3f) -> vec2f {
     let u = (atan2(-n.z, n.x) + PI) / (2.0 * PI);
@@ -17,7 +17,7 @@ fn sphere_uv(n: vec3f) -> vec2f {
 }
 //#endif
 
-//#if IMAGE_TEXTURE || ENVIRONMENT
+//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS
 // Texel (x, y) of the image of `width` columns whose texels start at `start` among the images.
 fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
     return image_value(start + y * width + x).xyz;

@@ -100,6 +100,7 @@ fn closed_emitting_sphere_gives_the_geometric_series() {
         vec![Material::Lambertian(rt_gpu::material::Lambertian {
             albedo: albedo.into(),
             emission,
+            normal_map: None,
         })],
         vec![common::object(
             Shape::Sphere {

@@ -185,3 +185,136 @@ fn the_command_line_refuses_a_bad_texture_and_writes_nothing() {
     assert_eq!(text.trim_end().lines().count(), 1, "{text}");
     assert!(!dir.path().join("tri.png").exists());
 }
+
+/// The 1x1 PNG written as `normals.png`, of 8-bit values `texel` (191, 128, 238: the
+/// tangent-space normal tilted 30 degrees toward +u).
+fn write_normal_png(dir: &Path, texel: [u8; 3]) {
+    let image = image::RgbImage::from_raw(1, 1, texel.to_vec()).expect("1x1");
+    image
+        .save(dir.join("normals.png"))
+        .expect("writes normals.png");
+}
+
+fn normal_mapped(scale: &str) -> String {
+    format!(
+        r#"{{ "name": "Bumpy", "normalTexture": {{ "index": 0{scale} }}, "pbrMetallicRoughness": {{ "metallicFactor": 0 }} }}"#
+    )
+}
+
+/// glTF's normalTexture arrives as a linear image with its `scale`, and bends the shading
+/// normal of a hit in the triangle's tangent frame (MikkTSpace from its UVs: +u along +x on
+/// this triangle, the geometric normal +z): toward +x by the map's tilt, x and y times scale.
+#[test]
+fn a_normal_texture_bends_the_shading_normal_by_its_scale() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_normal_png(dir.path(), [191, 128, 238]);
+    let texel = Vec3::new(191.0, 128.0, 238.0) / 255.0 * 2.0 - Vec3::ONE;
+    for (scale, factor) in [("", 1.0), (r#", "scale": 0.5"#, 0.5)] {
+        let path = write_gltf(
+            dir.path(),
+            true,
+            &normal_mapped(scale),
+            &images("normals.png"),
+        );
+        let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+        let Material::Pbr(pbr) = &scene.materials[0] else {
+            panic!("not pbr");
+        };
+        let map = pbr.normal_map.expect("a normal map");
+        assert_eq!(map.scale, factor);
+        assert!((map.image.texel(0, 0) - (texel + Vec3::ONE) / 2.0).length() < 1e-6);
+        let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+        let centroid = Vec3::new(0.0, -1.0 / 3.0, 0.0) - flat.origin.as_vec3();
+        let ray = rt_gpu::shared::ray::Ray {
+            origin: centroid + Vec3::Z,
+            dir: -Vec3::Z,
+        };
+        let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+        let expected = (texel * Vec3::new(factor, factor, 1.0)).normalize();
+        assert!(
+            (hit.shading - expected).length() < 1e-4,
+            "scale {factor}: {} against {expected}",
+            hit.shading
+        );
+        assert_eq!(hit.normal, Vec3::Z);
+    }
+    // A texel pointing below the surface (toward +u and down) is reflected into the upper
+    // hemisphere, so it still slopes toward +u.
+    write_normal_png(dir.path(), [255, 128, 0]);
+    let path = write_gltf(dir.path(), true, &normal_mapped(""), &images("normals.png"));
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+    let ray = rt_gpu::shared::ray::Ray {
+        origin: Vec3::new(0.0, -1.0 / 3.0, 1.0) - flat.origin.as_vec3(),
+        dir: -Vec3::Z,
+    };
+    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+    let expected = Vec3::new(1.0, 1.0 / 255.0, 1.0).normalize();
+    assert!((hit.shading - expected).length() < 1e-4, "{}", hit.shading);
+}
+
+/// A normal map needs texture coordinates to lay it out: without TEXCOORD_0, on a second UV
+/// set, or in a scene file on a sphere, it is a one-line error.
+#[test]
+fn a_normal_map_without_texture_coordinates_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_normal_png(dir.path(), [191, 128, 238]);
+    for (uvs, scale, expected) in [
+        (false, "", "no TEXCOORD_0"),
+        (true, r#", "texCoord": 1"#, "TEXCOORD_1"),
+    ] {
+        let path = write_gltf(
+            dir.path(),
+            uvs,
+            &normal_mapped(scale),
+            &images("normals.png"),
+        );
+        let err = load(&path, "tri.gltf", None).expect_err(expected);
+        assert!(
+            err.contains("tri.gltf") && err.contains(expected),
+            "{expected}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+    let png = dir.path().join("normals.png");
+    let text = format!(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\n[materials]\nbumpy = {{ type = \"lambertian\", albedo = [0.5, 0.5, 0.5], normal_map = {{ image = \"{}\", scale = 2 }} }}\n[[object]]\nsphere = {{ center = [0, 0, 0], radius = 1 }}\nmaterial = \"bumpy\"\n",
+        png.display()
+    );
+    let err = rt_gpu::scene::file::parse(&text, "bumpy.toml", "bumpy")
+        .expect_err("a sphere has no texture coordinates")
+        .to_string();
+    assert!(
+        err.contains("normal map") && err.contains("not a mesh"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let too_steep = text.replace("scale = 2", "scale = 1e3");
+    let err = rt_gpu::scene::file::parse(&too_steep, "bumpy.toml", "bumpy")
+        .expect_err("scale beyond 100")
+        .to_string();
+    assert!(err.contains("scale"), "{err}");
+}
+
+/// An OBJ's map_Bump naming a grey image is a height map (tobj files `bump` there too), which
+/// rt-gpu does not read as a normal map: a one-line error naming the file and the image.
+#[test]
+fn an_obj_height_map_is_not_taken_for_a_normal_map() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let grey = image::RgbImage::from_raw(2, 1, vec![10, 10, 10, 200, 200, 200]).expect("2x1");
+    grey.save(dir.path().join("height.png")).expect("writes");
+    std::fs::write(
+        dir.path().join("m.mtl"),
+        "newmtl Bumpy\nKd 0.8 0.8 0.8\nmap_Bump -bm 1.0 height.png\n",
+    )
+    .expect("writes");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl Bumpy\nf 1/1 2/2 3/3\n";
+    let path = dir.path().join("tri.obj");
+    std::fs::write(&path, obj).expect("writes");
+    let err = rt_gpu::scene::mesh::load(&path, "tri.obj", None).expect_err("a height map");
+    assert!(
+        err.contains("tri.obj") && err.contains("height.png") && err.contains("height (bump) map"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}

@@ -46,11 +46,11 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
 }
 
 /// Switch i (in the order of `Features::flags`) on where bit i is set.
-fn features_from_bits(bits: u32) -> Features {
+fn features_from_bits(bits: u64) -> Features {
     let mut features = no_features();
     for (i, (name, _)) in no_features().flags().into_iter().enumerate() {
         features
-            .set(name, bits & (1 << i) != 0)
+            .set(name, bits & (1u64 << i) != 0)
             .expect("a known switch");
     }
     features
@@ -61,7 +61,7 @@ fn feature_count() -> u32 {
     no_features().flags().len() as u32
 }
 
-fn assert_validates(bits: u32) {
+fn assert_validates(bits: u64) {
     let features = features_from_bits(bits);
     let source = compose(&features, &small_scene()).expect("composes");
     if let Err(e) = validate(&source) {
@@ -71,7 +71,7 @@ fn assert_validates(bits: u32) {
 
 /// Rows of switches (as bits) in which every pair of features takes every pair of values
 /// (on/off, on/on, ...) at least once: a greedy covering array, deterministic.
-fn pairwise_covering(features: u32) -> Vec<u32> {
+fn pairwise_covering(features: u32) -> Vec<u64> {
     let mut uncovered: Vec<(u32, u32, u32)> = Vec::new(); // (i, j, values of i and j as 2 bits)
     for i in 0..features {
         for j in i + 1..features {
@@ -80,8 +80,8 @@ fn pairwise_covering(features: u32) -> Vec<u32> {
             }
         }
     }
-    let covers = |row: u32, &(i, j, values): &(u32, u32, u32)| {
-        ((row >> i) & 1) | (((row >> j) & 1) << 1) == values
+    let covers = |row: u64, &(i, j, values): &(u32, u32, u32)| {
+        (((row >> i) & 1) | (((row >> j) & 1) << 1)) as u32 == values
     };
     let mut state = 0x2545_F491_4F6C_DD1Du64;
     let mut rows = Vec::new();
@@ -91,7 +91,7 @@ fn pairwise_covering(features: u32) -> Vec<u32> {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            let row = (state as u32) & ((1 << features) - 1);
+            let row = state & ((1u64 << features) - 1);
             let count = uncovered.iter().filter(|p| covers(row, p)).count();
             if count > best.1 {
                 best = (row, count);
@@ -105,16 +105,16 @@ fn pairwise_covering(features: u32) -> Vec<u32> {
 
 /// Kernel variants compose into valid WGSL: none and all features, every feature alone and
 /// every feature left out, and a pairwise covering set (every two features in every on/off
-/// combination): about 75 kernels, where all combinations are 2^28 and double with each new
+/// combination): about 75 kernels, where all combinations are 2^32 and double with each new
 /// feature. The full set: `cargo test --test gpu_layout -- --ignored`.
 #[test]
 fn kernel_variants_validate() {
     let count = feature_count();
-    let all = (1 << count) - 1;
+    let all = (1u64 << count) - 1;
     let mut rows = vec![0, all];
     for i in 0..count {
-        rows.push(1 << i);
-        rows.push(all & !(1 << i));
+        rows.push(1u64 << i);
+        rows.push(all & !(1u64 << i));
     }
     let pairwise = pairwise_covering(count);
     assert!(pairwise.len() <= 24, "{} rows", pairwise.len());
@@ -124,11 +124,11 @@ fn kernel_variants_validate() {
     }
 }
 
-/// Every combination of features (2^28 kernels) composes into valid WGSL.
+/// Every combination of features (2^32 kernels) composes into valid WGSL.
 #[test]
-#[ignore = "slow: 2^28 kernels; the pairwise set above runs by default"]
+#[ignore = "slow: 2^32 kernels; the pairwise set above runs by default"]
 fn every_kernel_variant_validates() {
-    for bits in 0u32..1 << feature_count() {
+    for bits in 0u64..1 << feature_count() {
         assert_validates(bits);
     }
 }

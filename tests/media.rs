@@ -174,6 +174,7 @@ fn an_albedo_one_medium_in_an_emitting_furnace_is_invisible() {
     let walls = Material::Lambertian(rt_gpu::material::Lambertian {
         albedo: Vec3::ZERO.into(),
         emission,
+        normal_map: None,
     });
     for (name, filled) in [
         ("smoke", Material::Medium(medium(1.5, 1.0, 0.6))),
@@ -574,6 +575,7 @@ fn smoke_resting_on_a_floor_leaks_nothing() {
     let walls = Material::Lambertian(rt_gpu::material::Lambertian {
         albedo: Vec3::ZERO.into(),
         emission: Vec3::ONE,
+        normal_map: None,
     });
     let mut scene = common::scene(
         Vec3::new(0.0, 0.0, 4.5),

@@ -72,6 +72,7 @@ fn spheres_with_lights() -> Scene {
         Material::Lambertian(rt_gpu::material::Lambertian {
             albedo: Vec3::splat(0.5).into(),
             emission: Vec3::new(8.0, 2.0, 1.0),
+            normal_map: None,
         }),
     );
     // Facing down: u x v = -y.

@@ -337,5 +337,5 @@ fn the_documented_example_parses() {
     .unwrap_or_else(|e| panic!("{e}"));
     // Three shapes and the knot of scenes/models/knot.obj.
     assert_eq!(scene.objects.len(), 4);
-    assert_eq!(scene.materials.len(), 15);
+    assert_eq!(scene.materials.len(), 16);
 }

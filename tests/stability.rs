@@ -599,6 +599,7 @@ fn closed_furnaces_never_gain_energy() {
     let white_glow = Material::Lambertian(rt_gpu::material::Lambertian {
         albedo: Vec3::ONE.into(),
         emission: Vec3::splat(e),
+        normal_map: None,
     });
     let sphere = |center: Vec3, radius: f32, material: u32| {
         object(Shape::Sphere { center, radius }, material)

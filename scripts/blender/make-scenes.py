@@ -24,6 +24,12 @@ Scenes:
   through their UV maps, under the emissive panel. `textured-lambert-cycles.exr` renders them as
   Cycles' Diffuse BSDF with the image as its colour, for `textured-lambert.toml`: a wrong UV
   convention (v up or down the image) or a wrong colour space shows in region means.
+- `bumpy`: the floor and cube of `textured`, grey, with a tangent-space normal map
+  (`bumpy-normals.png`: per quadrant the normal tilted 30 degrees toward +u, +v, -v or -u,
+  through Blender's Normal Map node, which the exporter writes as glTF's normalTexture and the
+  .mtl as map_Bump), lit by a low sun from the side: each quadrant's brightness depends on its
+  tilt. `bumpy-lambert-cycles.exr` renders them as Cycles' Diffuse BSDF with the same normal
+  map: a wrong tangent frame (its handedness, the green channel's sign) shows in region means.
 """
 
 import math
@@ -36,7 +42,7 @@ from mathutils import Vector
 argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 OUT = os.path.abspath(argv[0] if argv else "scenes/blender")
 SAMPLES = int(argv[1]) if len(argv) > 1 else 1024
-SCENES = argv[2:] or ["spheres", "lamps", "textured"]
+SCENES = argv[2:] or ["spheres", "lamps", "textured", "bumpy"]
 WIDTH, HEIGHT = 160, 120
 os.makedirs(OUT, exist_ok=True)
 
@@ -157,7 +163,8 @@ def render_settings(scene, cam):
 
 
 def lambert_variant(name, materials):
-    """Renders the scene again with `materials` as Cycles' Diffuse BSDF (Lambert)."""
+    """Renders the scene again with `materials` as Cycles' Diffuse BSDF (Lambert), their
+    colour and normal inputs kept."""
     for material_name in materials:
         tree = bpy.data.materials[material_name].node_tree
         principled = tree.nodes["Principled BSDF"]
@@ -166,6 +173,8 @@ def lambert_variant(name, materials):
         diffuse.inputs["Color"].default_value = base.default_value
         for link in base.links:
             tree.links.new(link.from_socket, diffuse.inputs["Color"])
+        for link in principled.inputs["Normal"].links:
+            tree.links.new(link.from_socket, diffuse.inputs["Normal"])
         diffuse.inputs["Roughness"].default_value = 0.0
         tree.links.new(diffuse.outputs["BSDF"], tree.nodes["Material Output"].inputs["Surface"])
     bpy.context.scene.render.filepath = os.path.join(OUT, name + "-cycles.exr")
@@ -210,6 +219,53 @@ def textured_material(name, image):
     return m
 
 
+def normal_quadrants(name, size=64, tilt=math.radians(30)):
+    """A tangent-space normal map (OpenGL convention, as glTF: green toward +v) whose
+    quadrants tilt the normal toward +u (top left), +v (top right), -v (bottom left) and -u
+    (bottom right), saved beside the scenes as linear data."""
+    image = bpy.data.images.new(name, size, size, alpha=False)
+    image.colorspace_settings.name = "Non-Color"
+    toward = {(0, 1): (1, 0), (1, 1): (0, 1), (0, 0): (0, -1), (1, 0): (-1, 0)}
+    pixels = []
+    for y in range(size):
+        for x in range(size):
+            du, dv = toward[(2 * x // size, 2 * y // size)]
+            n = (math.sin(tilt) * du, math.sin(tilt) * dv, math.cos(tilt))
+            pixels.extend((*(0.5 * c + 0.5 for c in n), 1.0))
+    image.pixels = pixels
+    image.filepath_raw = os.path.join(OUT, name + ".png")
+    image.file_format = "PNG"
+    image.save()
+    return image
+
+
+def normal_mapped_material(name, color, image):
+    m = material(name, color, roughness=1.0)
+    tree = m.node_tree
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Linear"
+    normal_map = tree.nodes.new("ShaderNodeNormalMap")
+    normal_map.space = "TANGENT"
+    normal_map.inputs["Strength"].default_value = 1.0
+    tree.links.new(texture.outputs["Color"], normal_map.inputs["Color"])
+    tree.links.new(normal_map.outputs["Normal"], tree.nodes["Principled BSDF"].inputs["Normal"])
+    return m
+
+
+def floor_and_cube(floor_material, cube_material):
+    """The 8 m floor and the turned 1.2 m cube of `textured` and `bumpy`."""
+    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
+    floor = bpy.context.active_object
+    floor.name = "Floor"
+    place(floor, floor_material)
+    bpy.ops.mesh.primitive_cube_add(size=1.2, location=(0.6, -1.0, 0.6),
+                                    rotation=(0, 0, math.radians(30)))
+    cube = bpy.context.active_object
+    cube.name = "Cube"
+    place(cube, cube_material)
+
+
 def panel():
     bpy.ops.mesh.primitive_plane_add(size=2.5, location=(0, 1.5, 3.2),
                                      rotation=(math.radians(200), 0, 0))
@@ -244,17 +300,22 @@ if "lamps" in SCENES:
 if "textured" in SCENES:
     scene = reset()
     quadrants = quadrant_image("textured-quadrants")
-    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
-    floor = bpy.context.active_object
-    floor.name = "Floor"
-    place(floor, textured_material("Floor", quadrants))
-    bpy.ops.mesh.primitive_cube_add(size=1.2, location=(0.6, -1.0, 0.6),
-                                    rotation=(0, 0, math.radians(30)))
-    cube = bpy.context.active_object
-    cube.name = "Cube"
-    place(cube, textured_material("Box", quadrants))
+    floor_and_cube(textured_material("Floor", quadrants), textured_material("Box", quadrants))
     panel()
     cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
     render_settings(scene, cam)
     export("textured", cycles=False)
     lambert_variant("textured-lambert", ["Floor", "Box"])
+
+if "bumpy" in SCENES:
+    scene = reset()
+    normals = normal_quadrants("bumpy-normals")
+    floor_and_cube(normal_mapped_material("Floor", (0.8, 0.8, 0.8), normals),
+                   normal_mapped_material("Box", (0.8, 0.8, 0.8), normals))
+    # Light travelling along -(0.61, 0.35, 0.71): 45 degrees up, from +x turned 30 degrees
+    # toward +y, so all four tilts (and both signs of each tangent axis) light differently.
+    light("Sun", "SUN", (6.12, 3.54, 7.07), 3.0, target=(0, 0, 0), angle=0.0)
+    cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+    render_settings(scene, cam)
+    export("bumpy", cycles=False)
+    lambert_variant("bumpy-lambert", ["Floor", "Box"])

@@ -1,9 +1,10 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
 use crate::scene::flat::{FlatScene, Instance, Quad, Sphere, Triangle};
+use crate::scene::normal_map::NormalMap;
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
 use crate::shared::ray::{Hit, POINT_ERROR, Ray};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 /// Distance along the ray to `sphere` within (t_min, t_max), if any.
 #[inline]
@@ -395,6 +396,19 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         }
         _ => outward,
     };
+    // Meshes copied into the scene only: normal-mapped meshes are never instanced.
+    let shading = match primitive {
+        PrimitiveRef::Triangle(i) if !scene.triangle_tangents.is_empty() => {
+            match scene.materials[material as usize].normal_map() {
+                Some(map) => {
+                    let tangents = &scene.triangle_tangents[i as usize];
+                    normal_mapped(map, tangents, weights, uv, shading, outward)
+                }
+                None => shading,
+            }
+        }
+        _ => shading,
+    };
     Some(Hit {
         t: closest,
         point,
@@ -421,6 +435,41 @@ pub fn shading_normal(normals: &[Vec3; 3], weights: Vec2, outward: Vec3) -> Vec3
     }
     let n = n / len2.sqrt();
     if n.dot(outward) < 0.0 { -n } else { n }
+}
+
+/// Unit `shading` (on unit `outward`'s side) bent by `map` at texture coordinates `uv`, in the
+/// frame of the corner tangents `tangents` interpolated at `weights`, by MikkTSpace's
+/// per-pixel rule as Blender applies it: the tangent as interpolated, the bitangent its sign x
+/// shading x tangent. `shading` where the tangent or the result vanishes; reflected into
+/// `outward`'s hemisphere (twin: `normal_mapped` in shaders/normal_map.wgsl).
+#[inline]
+pub fn normal_mapped(
+    map: &NormalMap,
+    tangents: &[Vec4; 3],
+    weights: Vec2,
+    uv: Vec2,
+    shading: Vec3,
+    outward: Vec3,
+) -> Vec3 {
+    let (b1, b2) = (weights.x, weights.y);
+    let t = (1.0 - b1 - b2) * tangents[0] + b1 * tangents[1] + b2 * tangents[2];
+    let tangent = t.truncate();
+    if !(tangent.dot(tangent) > 1e-12) {
+        return shading;
+    }
+    let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
+    let bitangent = sign * shading.cross(tangent);
+    let texel = crate::material::texture::bilinear(map.image, uv.x, 1.0 - uv.y);
+    let local = (2.0 * texel - Vec3::ONE) * Vec3::new(map.scale, map.scale, 1.0);
+    let n = local.x * tangent + local.y * bitangent + local.z * shading;
+    let len2 = n.dot(n);
+    if !(len2 > 1e-12) {
+        return shading;
+    }
+    // Reflected, not negated, into outward's hemisphere: a steep texel keeps the way it slopes.
+    let n = n / len2.sqrt();
+    let n = n - 2.0 * n.dot(outward).min(0.0) * outward;
+    n / n.dot(n).sqrt()
 }
 
 /// A triangle's corner texture coordinates interpolated at its hit's `weights` (twin:

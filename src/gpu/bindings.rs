@@ -45,6 +45,7 @@ bindings! {
     TriangleNormals => "BINDING_TRIANGLE_NORMALS",
     Instances => "BINDING_INSTANCES",
     TriangleUvs => "BINDING_TRIANGLE_UVS",
+    TriangleTangents => "BINDING_TRIANGLE_TANGENTS",
 }
 
 impl Binding {
@@ -82,6 +83,7 @@ impl Binding {
             | Binding::Triangles
             | Binding::TriangleNormals
             | Binding::TriangleUvs
+            | Binding::TriangleTangents
             | Binding::Instances => buffer(read_only),
             Binding::ImageTexels => texels,
             Binding::BvhNodes if features.uniform_bvh => buffer(Uniform),

@@ -179,6 +179,9 @@ pub struct SceneBuffers {
     /// Per triangle its three corner texture coordinates, six floats (the kernel's
     /// `triangle_uvs`), when the scene's meshes have them and a material reads them.
     pub triangle_uvs: Vec<f32>,
+    /// Per triangle its three corner tangents, twelve floats (the kernel's
+    /// `triangle_tangents`), when some mesh is normal-mapped.
+    pub triangle_tangents: Vec<f32>,
     pub bvh_nodes: Vec<GpuBvhNode>,
     /// Packed primitive references, in the BVH's leaf order.
     pub bvh_primitives: Vec<u32>,
@@ -240,10 +243,12 @@ impl ImageArray {
             at
         };
         for m in &scene.materials {
-            for texture in m.textures() {
-                if let Texture::Image(image) = texture
-                    && !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image))
-                {
+            let textures = m.textures().into_iter().filter_map(|t| match t {
+                Texture::Image(image) => Some(image),
+                _ => None,
+            });
+            for image in textures.chain(m.normal_map().map(|n| n.image)) {
+                if !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image)) {
                     let at = place(&mut out, image, &|_| 0.0);
                     out.placed.push((image, at));
                 }
@@ -304,6 +309,7 @@ pub fn geometry_bytes(scene: &FlatScene) -> usize {
     std::mem::size_of_val(&buffers.triangles[..])
         + std::mem::size_of_val(&buffers.triangle_normals[..])
         + std::mem::size_of_val(&buffers.triangle_uvs[..])
+        + std::mem::size_of_val(&buffers.triangle_tangents[..])
         + std::mem::size_of_val(&buffers.bvh_nodes[..])
         + std::mem::size_of_val(&buffers.bvh_primitives[..])
         + std::mem::size_of_val(&buffers.instances[..])
@@ -347,6 +353,9 @@ impl SceneBuffers {
                     if let Texture::Image(image) = texture {
                         gpu.texture_image = images.texels_of(image);
                     }
+                }
+                if let Some(map) = m.normal_map() {
+                    gpu.normal_map_image = images.texels_of(map.image);
                 }
                 gpu
             })
@@ -410,6 +419,14 @@ impl SceneBuffers {
         if triangle_uvs.is_empty() {
             triangle_uvs.push(0.0);
         }
+        let mut triangle_tangents: Vec<f32> = scene
+            .triangle_tangents
+            .iter()
+            .flat_map(|corners| corners.iter().flat_map(|t| t.to_array()))
+            .collect();
+        if triangle_tangents.is_empty() {
+            triangle_tangents.push(0.0);
+        }
         if bvh_primitives.is_empty() {
             bvh_primitives.push(0);
         }
@@ -432,6 +449,7 @@ impl SceneBuffers {
             triangles,
             triangle_normals,
             triangle_uvs,
+            triangle_tangents,
             bvh_nodes,
             bvh_primitives,
             instances,

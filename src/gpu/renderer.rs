@@ -139,6 +139,7 @@ pub(super) struct SceneBindings {
     bvh_primitives: wgpu::Buffer,
     triangle_normals: wgpu::Buffer,
     triangle_uvs: wgpu::Buffer,
+    triangle_tangents: wgpu::Buffer,
     instances: wgpu::Buffer,
     bvh_nodes: NodeBinding,
     images: wgpu::TextureView,
@@ -214,8 +215,11 @@ impl GpuRenderer {
         //   medium is its material + 1 and a light 1 + its index, read only when non-zero; NEE
         //   code is composed only for scenes with a light (`Features::with_integrator`), and
         //   `check_kernel` refuses a kernel whose features or source are not this render's.
-        // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on, and
-        //   corner texture coordinates (6 floats per triangle) wherever TRIANGLE_UVS is.
+        // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on, corner
+        //   texture coordinates (6 floats per triangle) wherever TRIANGLE_UVS is, and corner
+        //   tangents (12 floats per triangle) wherever NORMAL_MAPS is.
+        // - A normal map's texels lie in the images array: its size is its image's, and its
+        //   start where `ImageArray` placed that image; texel indices are wrapped into it.
         // - accum: gid < tile_size <= (width, tile_rows), and the buffer holds tile_rows x width
         //   x ACCUM_WORDS words (below 2^32: `max_tile_pixels`); debug outputs hold a slot per
         //   invocation (`run_debug`).
@@ -326,6 +330,10 @@ impl GpuRenderer {
                 "triangle texture coordinates",
                 bytemuck::cast_slice(&buffers.triangle_uvs),
             ),
+            triangle_tangents: storage(
+                "triangle tangents",
+                bytemuck::cast_slice(&buffers.triangle_tangents),
+            ),
             instances: storage("instances", bytemuck::cast_slice(&buffers.instances)),
             bvh_nodes,
             images,
@@ -353,6 +361,10 @@ impl GpuRenderer {
             (
                 "texture coordinates",
                 std::mem::size_of_val(&buffers.triangle_uvs[..]),
+            ),
+            (
+                "tangents",
+                std::mem::size_of_val(&buffers.triangle_tangents[..]),
             ),
             ("instances", std::mem::size_of_val(&buffers.instances[..])),
             ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
@@ -470,6 +482,7 @@ impl GpuRenderer {
             Binding::BvhPrimitives => scene.bvh_primitives.as_entire_binding(),
             Binding::TriangleNormals => scene.triangle_normals.as_entire_binding(),
             Binding::TriangleUvs => scene.triangle_uvs.as_entire_binding(),
+            Binding::TriangleTangents => scene.triangle_tangents.as_entire_binding(),
             Binding::Instances => scene.instances.as_entire_binding(),
         };
         let entries: Vec<wgpu::BindGroupEntry> = BINDINGS

@@ -29,6 +29,10 @@ const MODULES: &[(&str, &str)] = &[
     ),
     ("accel.wgsl", include_str!("../../shaders/accel.wgsl")),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
+    (
+        "normal_map.wgsl",
+        include_str!("../../shaders/normal_map.wgsl"),
+    ),
     ("coat.wgsl", include_str!("../../shaders/coat.wgsl")),
     (
         "environment.wgsl",
@@ -62,6 +66,8 @@ pub struct Features {
     pub shading_normals: bool,
     /// Triangles with corner texture coordinates, which a material's texture reads.
     pub triangle_uvs: bool,
+    /// Triangles with corner tangents, for their materials' normal maps.
+    pub normal_maps: bool,
     /// Meshes placed as instances (the BVH's second level; see `scene::flat::Instance`).
     pub instances: bool,
     /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
@@ -101,12 +107,13 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 17] = [
+const SWITCHES: [Switch; 18] = [
     ("SPHERES", |f| &mut f.spheres),
     ("QUADS", |f| &mut f.quads),
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
     ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
+    ("NORMAL_MAPS", |f| &mut f.normal_maps),
     ("INSTANCES", |f| &mut f.instances),
     ("BVH", |f| &mut f.bvh),
     ("LENS", |f| &mut f.lens),
@@ -121,7 +128,7 @@ const SWITCHES: [Switch; 17] = [
     ("INLINE_SCENE", |f| &mut f.inline_scene),
 ];
 /// How many of [`SWITCHES`] come before the material features in [`Features::flags`].
-const GEOMETRY_SWITCHES: usize = 7;
+const GEOMETRY_SWITCHES: usize = 8;
 
 /// Most spheres plus quads a kernel takes as constants.
 pub const MAX_INLINE_PRIMITIVES: usize = 64;
@@ -200,6 +207,7 @@ impl Features {
             triangles: !scene.triangles.is_empty(),
             shading_normals: !scene.triangle_normals.is_empty(),
             triangle_uvs: !scene.triangle_uvs.is_empty(),
+            normal_maps: !scene.triangle_tangents.is_empty(),
             instances: !scene.instances.is_empty(),
             bvh,
             materials,
@@ -226,8 +234,9 @@ impl Features {
 
     /// Everything on, scene arrays in storage buffers: the general kernel any scene can run
     /// (except `sky` and `environment`, which replace the constant background, `lens`, which
-    /// changes the random-number sequence, and `shading_normals` and `triangle_uvs`, whose buffers
-    /// only scenes with vertex normals or texture coordinates fill).
+    /// changes the random-number sequence, and `shading_normals`, `triangle_uvs` and
+    /// `normal_maps`, whose buffers only scenes with vertex normals, texture coordinates or
+    /// normal maps fill).
     pub fn everything(scene: &FlatScene) -> Self {
         let own = Features::of(scene);
         Features {

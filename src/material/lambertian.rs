@@ -5,6 +5,7 @@ use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::warp::{cosine_pdf, unit_vector};
 use crate::shared::ray::{Hit, below_surface};
 use crate::material::texture;
+use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::sampler::Sampler;
@@ -12,14 +13,17 @@ use crate::scene::file::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-/// `{ type = "lambertian", albedo = [r, g, b], emission = [r, g, b] }`. `emission` (optional,
-/// both faces) makes it glow, as the furnace tests need; `albedo` may be a texture.
+/// `{ type = "lambertian", albedo = [r, g, b], emission = [r, g, b], normal_map = { image, scale } }`.
+/// `emission` (optional, both faces) makes it glow, as the furnace tests need; `albedo` may be a
+/// texture; `normal_map` (optional) bends meshes' shading normals (`scene::normal_map`).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lambertian {
     pub albedo: Texture,
     #[serde(default, skip_serializing_if = "checked::is_black", with = "checked::colour")]
     pub emission: Vec3,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_map: Option<NormalMap>,
 }
 
 impl MaterialModel for Lambertian {
@@ -51,6 +55,10 @@ impl MaterialModel for Lambertian {
 
     fn emitted(&self, _hit: &Hit) -> Vec3 {
         self.emission
+    }
+
+    fn normal_map(&self) -> Option<&NormalMap> {
+        self.normal_map.as_ref()
     }
 
     fn area_light(&self) -> Option<(Vec3, bool)> {

@@ -7,6 +7,7 @@
 //! (which gives it its scene-file `type` name, kernel kind and feature), document it in
 //! `scenes/README.md`.
 
+use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::ray::Hit;
@@ -59,6 +60,11 @@ pub trait MaterialModel {
     }
     /// The medium filling the object it is the surface of, if any.
     fn interior(&self) -> Option<&Medium> {
+        None
+    }
+    /// The normal map that bends its shading normal on meshes, if any (applied where hits are
+    /// completed, before any of the methods below sees the hit).
+    fn normal_map(&self) -> Option<&NormalMap> {
         None
     }
     /// Radiance leaving the surface toward the ray.
@@ -156,7 +162,14 @@ macro_rules! registry {
             pub fn interior(&self) -> Option<&Medium> {
                 match self { $(Material::$ty(m) => m.interior(),)+ }
             }
+            #[inline]
+            pub fn normal_map(&self) -> Option<&NormalMap> {
+                match self { $(Material::$ty(m) => m.normal_map(),)+ }
+            }
             pub fn validate(&self) -> Result<(), String> {
+                if let Some(map) = self.normal_map() {
+                    map.validate()?;
+                }
                 match self { $(Material::$ty(m) => m.validate(),)+ }
             }
             pub fn extra_features(&self) -> Vec<&'static str> {
@@ -187,9 +200,15 @@ macro_rules! registry {
             pub fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
                 match self { $(Material::$ty(m) => m.pdf(wo, wi, hit),)+ }
             }
+            /// Its GPU form, with its kind and its normal map (whose `normal_map_image` is set
+            /// where the scene's images are laid out).
             pub fn gpu(&self) -> GpuMaterial {
                 let packed = match self { $(Material::$ty(m) => m.gpu(),)+ };
-                GpuMaterial { kind: self.kind().kind, ..packed }
+                let (normal_map_size, normal_map_scale) = self.normal_map().map_or(
+                    ([0.0; 2], 0.0),
+                    |n| ([n.image.width as f32, n.image.height as f32], n.scale),
+                );
+                GpuMaterial { kind: self.kind().kind, normal_map_size, normal_map_scale, ..packed }
             }
         }
     };
@@ -220,6 +239,7 @@ impl Material {
         Material::Lambertian(Lambertian {
             albedo: albedo.into(),
             emission: Vec3::ZERO,
+            normal_map: None,
         })
     }
 }

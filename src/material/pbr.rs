@@ -19,6 +19,7 @@ use super::plastic::default_ior;
 use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
 use crate::material::texture;
 use crate::scene::file::checked;
+use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::ray::{Hit, below_surface};
@@ -28,7 +29,8 @@ use serde::{Deserialize, Serialize};
 
 /// `{ type = "pbr", base_color = [0.8, 0.7, 0.2], metallic = 1.0, roughness = 0.35, ior = 1.5,
 /// transmission = 0 }`; the defaults are glTF's (metallic 1, roughness 1, ior 1.5,
-/// transmission 0); `base_color` may be any texture.
+/// transmission 0); `base_color` may be any texture; `normal_map = { image, scale }` (optional)
+/// bends meshes' shading normals (glTF's `normalTexture`; `scene::normal_map`).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -37,6 +39,7 @@ pub struct Pbr {
     pub roughness: f32,
     pub ior: f32,
     pub transmission: f32,
+    pub normal_map: Option<NormalMap>,
     coat: Coat,
 }
 
@@ -52,6 +55,8 @@ struct PbrDoc {
     ior: f32,
     #[serde(default, with = "checked::number")]
     transmission: f32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    normal_map: Option<NormalMap>,
 }
 
 fn one() -> f32 {
@@ -64,7 +69,8 @@ impl TryFrom<PbrDoc> for Pbr {
         if !(d.ior > 0.0) {
             return Err(format!("ior must be > 0, got {}", d.ior));
         }
-        Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission))
+        Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
+            .with_normal_map(d.normal_map))
     }
 }
 
@@ -76,6 +82,7 @@ impl From<Pbr> for PbrDoc {
             roughness: p.roughness,
             ior: p.ior,
             transmission: p.transmission,
+            normal_map: p.normal_map,
         }
     }
 }
@@ -102,8 +109,14 @@ impl Pbr {
             roughness,
             ior,
             transmission,
+            normal_map: None,
             coat: Coat::new(ior, roughness, false),
         }
+    }
+
+    /// This material with `normal_map`.
+    pub fn with_normal_map(self, normal_map: Option<NormalMap>) -> Self {
+        Pbr { normal_map, ..self }
     }
 
     /// The weights of the coat, the glass and the metal in the mix.
@@ -185,6 +198,10 @@ impl MaterialModel for Pbr {
 
     fn textures(&self) -> Vec<Texture> {
         vec![self.base_color]
+    }
+
+    fn normal_map(&self) -> Option<&NormalMap> {
+        self.normal_map.as_ref()
     }
 
     /// A lobe that is not a delta: the coat's base, or any rough one.

@@ -171,10 +171,13 @@ fn affine_point(rows: &[Vec4; 3], p: Vec3) -> Vec3 {
 /// shift is exact): a scene whose camera is within this distance of the origin is not moved.
 pub const RECENTRE_STEP: f64 = 1024.0;
 
-/// Whether `material` has a texture looked up by surface (UV) coordinates.
+/// Whether `material` has a texture looked up by surface (UV) coordinates, a normal map
+/// among them.
 fn reads_uvs(material: &Material) -> bool {
     let features = material.extra_features();
-    features.contains(&"UV_CHECKER") || features.contains(&"IMAGE_TEXTURE")
+    features.contains(&"UV_CHECKER")
+        || features.contains(&"IMAGE_TEXTURE")
+        || material.normal_map().is_some()
 }
 
 /// The corner texture coordinates of a triangle whose mesh has none, in a scene where others
@@ -207,6 +210,10 @@ pub struct FlatScene {
     /// some material reads them (`uv_textures`); empty otherwise. Triangles without them take
     /// (0, 0), (1, 0), (0, 1), so their coordinates are their barycentric weights, as without.
     pub triangle_uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, its corners' tangents (`scene::tangents`), when some mesh of the scene has
+    /// a normal-mapped material (the other triangles' are zero, and never read); empty
+    /// otherwise. Such meshes are never instanced, so these are all in scene coordinates.
+    pub triangle_tangents: Vec<[Vec4; 3]>,
     /// Where the instanced meshes' triangles begin in `triangles`.
     pub instanced_triangles: usize,
     /// Each instanced mesh's triangles in `triangles`.
@@ -817,6 +824,9 @@ struct Flattener<'a> {
     triangles: Vec<Triangle>,
     triangle_normals: Vec<[Vec3; 3]>,
     triangle_uvs: Vec<[Vec2; 3]>,
+    /// Whether every triangle gets corner tangents: some mesh of the scene is normal-mapped.
+    normal_mapped: bool,
+    triangle_tangents: Vec<[Vec4; 3]>,
     /// Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
     local_triangles: Vec<Triangle>,
     local_normals: Vec<[Vec3; 3]>,
@@ -828,10 +838,16 @@ struct Flattener<'a> {
 
 impl<'a> Flattener<'a> {
     fn new(scene: &'a Scene, instancing: bool) -> Self {
-        let smooth = scene
-            .objects
-            .iter()
-            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
+        let normal_mapped = scene.objects.iter().any(|o| {
+            matches!(o.shape, Shape::Mesh { .. })
+                && scene.materials[o.material as usize].normal_map().is_some()
+        });
+        // A normal map bends a shading normal: every triangle then has corner normals.
+        let smooth = normal_mapped
+            || scene
+                .objects
+                .iter()
+                .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
         // Decided before copying, as `uv_textures` is after: Blender writes TEXCOORD_0 on every
         // mesh, textured or not, and large meshes should not carry coordinates nothing reads.
         let textured = scene
@@ -854,6 +870,8 @@ impl<'a> Flattener<'a> {
             triangles: Vec::new(),
             triangle_normals: Vec::new(),
             triangle_uvs: Vec::new(),
+            normal_mapped,
+            triangle_tangents: Vec::new(),
             local_triangles: Vec::new(),
             local_normals: Vec::new(),
             local_uvs: Vec::new(),
@@ -869,13 +887,13 @@ impl<'a> Flattener<'a> {
         flattener
     }
 
-    /// The key under which `object` could be instanced: a mesh whose material neither emits
-    /// nor bounds a medium.
+    /// The key under which `object` could be instanced: a mesh whose material neither emits,
+    /// nor bounds a medium, nor has a normal map (whose tangents are placed here).
     fn instancing_key(&self, object: &super::Object) -> Option<InstancingKey> {
         match object.shape {
             Shape::Mesh { mesh, .. } if self.instancing => {
                 let m = &self.scene.materials[object.material as usize];
-                (m.area_light().is_none() && !m.is_invisible())
+                (m.area_light().is_none() && !m.is_invisible() && m.normal_map().is_none())
                     .then_some((std::ptr::from_ref(mesh) as usize, object.material))
             }
             _ => None,
@@ -917,7 +935,12 @@ impl<'a> Flattener<'a> {
                     let instance = instance_of(&t, scale, origin, material, mesh_index);
                     self.instances.push(instance);
                 }
-                _ => self.copy_mesh(mesh, scale, &t, origin, material),
+                _ => {
+                    let normal_mapped = self.scene.materials[object.material as usize]
+                        .normal_map()
+                        .is_some();
+                    self.copy_mesh(mesh, scale, &t, origin, material, normal_mapped)
+                }
             },
         }
     }
@@ -954,7 +977,8 @@ impl<'a> Flattener<'a> {
         index
     }
 
-    /// Copies `mesh`'s triangles, scaled by `scale` and placed by `t`, into the scene.
+    /// Copies `mesh`'s triangles, scaled by `scale` and placed by `t`, into the scene (with
+    /// their tangents where its material is `normal_mapped`).
     fn copy_mesh(
         &mut self,
         mesh: &Mesh,
@@ -962,6 +986,7 @@ impl<'a> Flattener<'a> {
         t: &super::Transform,
         origin: DVec3,
         material: u32,
+        normal_mapped: bool,
     ) {
         // A mirroring scale turns the winding around: swap two corners so the front face stays
         // the same side of the surface.
@@ -973,6 +998,12 @@ impl<'a> Flattener<'a> {
             .collect();
         // Normals by the inverse transpose: divided by the scale, then rotated.
         let shading = |n: Vec3| t.rotate_vector(n / scale).normalize_or_zero();
+        // Tangents as the surface's vectors; a mirroring scale turns the bitangent around.
+        let tangents = normal_mapped.then(|| super::tangents::of(mesh)).flatten();
+        let tangent = |v: Vec4| {
+            let along = t.rotate_vector(v.truncate() * scale).normalize_or_zero();
+            along.extend(if mirrored { -v.w } else { v.w })
+        };
         for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
             let [b, c] = if mirrored { [c, b] } else { [b, c] };
             let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
@@ -1000,6 +1031,24 @@ impl<'a> Flattener<'a> {
                     None => BARYCENTRIC_UVS,
                 });
             }
+            if self.normal_mapped {
+                let corners = match tangents.as_ref().map(|t| t[i]) {
+                    Some([t0, t1, t2]) if mirrored => [t0, t2, t1].map(tangent),
+                    Some(corners) => corners.map(tangent),
+                    None => [Vec4::ZERO; 3],
+                };
+                // Hits turn a file's normals that point against the winding around; the frame
+                // keeps the map's slopes only with the tangent and its sign turned too.
+                let against = self
+                    .triangle_normals
+                    .last()
+                    .is_some_and(|[n0, n1, n2]| (*n0 + *n1 + *n2).dot(n) < 0.0);
+                self.triangle_tangents.push(if against {
+                    corners.map(|t| -t)
+                } else {
+                    corners
+                });
+            }
             self.triangles.push(Triangle {
                 p0,
                 p1,
@@ -1021,6 +1070,7 @@ impl<'a> Flattener<'a> {
         let mut triangles = self.triangles;
         let mut triangle_normals = self.triangle_normals;
         let mut triangle_uvs = self.triangle_uvs;
+        let mut triangle_tangents = self.triangle_tangents;
         let instanced_triangles = triangles.len();
         let instanced_meshes = self
             .meshes
@@ -1033,6 +1083,10 @@ impl<'a> Flattener<'a> {
         }
         if self.textured {
             triangle_uvs.extend(self.local_uvs);
+        }
+        if self.normal_mapped {
+            // Instanced meshes have no normal map: zero tangents, never read.
+            triangle_tangents.resize(triangles.len(), [Vec4::ZERO; 3]);
         }
         if self.spheres.len() > MAX_PRIMITIVES_PER_KIND
             || self.quads.len() > MAX_PRIMITIVES_PER_KIND
@@ -1053,6 +1107,7 @@ impl<'a> Flattener<'a> {
             triangles,
             triangle_normals,
             triangle_uvs,
+            triangle_tangents,
             instanced_triangles,
             instanced_meshes,
             instances: self.instances,

@@ -134,6 +134,7 @@ pub fn check_document(
                 let (expected, name) = match semantic {
                     Checked::Valid(json::mesh::Semantic::Positions) => (Type::Vec3, "POSITION"),
                     Checked::Valid(json::mesh::Semantic::Normals) => (Type::Vec3, "NORMAL"),
+                    Checked::Valid(json::mesh::Semantic::Tangents) => (Type::Vec4, "TANGENT"),
                     _ => {
                         check_accessor(root, buffer_lengths, index.value(), &at)?;
                         continue;
@@ -141,17 +142,23 @@ pub fn check_document(
                 };
                 let (ty, component) = kinds(accessor);
                 if ty != Some(expected) || component != Some(ComponentType::F32) {
+                    let shape = if expected == Type::Vec4 {
+                        "VEC4"
+                    } else {
+                        "VEC3"
+                    };
                     return Err(format!(
-                        "{at}: {name} (accessor {}) is {}, not VEC3 of FLOAT",
+                        "{at}: {name} (accessor {}) is {}, not {shape} of FLOAT",
                         index.value(),
                         describe(accessor)
                     ));
                 }
                 let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
-                if name == "POSITION" {
-                    position_count = Some(count);
-                } else {
-                    normal_count = Some(count);
+                match name {
+                    "POSITION" => position_count = Some(count),
+                    "NORMAL" => normal_count = Some(count),
+                    // Fewer or more than the positions: the loader computes its own.
+                    _ => {}
                 }
             }
             let Some(vertices) = position_count else {

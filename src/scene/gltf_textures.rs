@@ -2,10 +2,11 @@
 //! buffer, a data URI or a file beside it) decoded once, and each factor x texture product of
 //! the spec (glTF 2.0, 3.9.2) made once, as a [`Texture::Image`].
 //!
-//! Read: a texture's image and `texCoord` 0. Not read: samplers (every texture repeats and is
+//! Read: a texture's image and `texCoord` 0; normal textures with their scale. Not read: samplers (every texture repeats and is
 //! filtered bilinearly, Blender's default), `KHR_texture_transform`, other UV sets.
 
 use super::image::{self, Image};
+use super::normal_map::NormalMap;
 use super::texture::Texture;
 use glam::Vec3;
 use std::collections::HashMap;
@@ -74,6 +75,29 @@ impl<'a> FileTextures<'a> {
         let product = image.scaled(factor, &name)?.leak();
         self.products.insert(key, product);
         Ok(Texture::Image(product))
+    }
+
+    /// A material's `normalTexture` (linear values) with its `scale`.
+    pub fn normal_map(
+        &mut self,
+        normal: &gltf::material::NormalTexture,
+        material: &str,
+    ) -> Result<NormalMap, String> {
+        let source = self.source;
+        if normal.tex_coord() != 0 {
+            return Err(format!(
+                "mesh {source}: material \"{material}\"'s normalTexture reads TEXCOORD_{}; rt-gpu reads TEXCOORD_0 only",
+                normal.tex_coord()
+            ));
+        }
+        let image = self.image(normal.texture().source().index(), false)?;
+        let map = NormalMap {
+            image,
+            scale: normal.scale(),
+        };
+        map.validate()
+            .map_err(|e| format!("mesh {source}: material \"{material}\": {e}"))?;
+        Ok(map)
     }
 
     /// Image `index` decoded (from sRGB where `srgb`), once.

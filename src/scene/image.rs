@@ -126,8 +126,14 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 /// decoded from sRGB, floating-point ones are linear; alpha is ignored. `source` is the path as
 /// the scene wrote it. Errors are one line naming the file.
 pub fn load(path: &Path, source: &str) -> Result<&'static Image, String> {
-    /// A file as it was when decoded: its path, size and modification time.
-    type FileVersion = (PathBuf, u64, std::time::SystemTime);
+    load_as(path, source, true)
+}
+
+/// [`load`], with 8- and 16-bit values taken as sRGB only where `srgb` (colours), else as
+/// linear (data such as normal maps). Each file is decoded once per encoding.
+pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, String> {
+    /// A file as it was when decoded (its path, size and modification time), and its encoding.
+    type FileVersion = (PathBuf, u64, std::time::SystemTime, bool);
     static CACHE: OnceLock<Mutex<HashMap<FileVersion, &'static Image>>> = OnceLock::new();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read image {source}: {e}"))?;
     if !meta.is_file() {
@@ -135,12 +141,12 @@ pub fn load(path: &Path, source: &str) -> Result<&'static Image, String> {
     }
     let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
-    let key = (canonical, meta.len(), modified);
+    let key = (canonical, meta.len(), modified, srgb);
     let cache = CACHE.get_or_init(Default::default);
     if let Some(image) = cache.lock().map_err(|_| "image cache poisoned")?.get(&key) {
         return Ok(image);
     }
-    let image = decode(path, source)?.leak();
+    let image = decode(path, source, srgb)?.leak();
     cache
         .lock()
         .map_err(|_| "image cache poisoned")?
@@ -221,7 +227,7 @@ fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Resu
     Ok(())
 }
 
-fn decode(path: &Path, source: &str) -> Result<Image, String> {
+fn decode(path: &Path, source: &str, srgb: bool) -> Result<Image, String> {
     let decoded = match radiance_hdr(path, source)? {
         Some(bytes) => decode_from(
             image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Hdr),
@@ -234,7 +240,7 @@ fn decode(path: &Path, source: &str) -> Result<Image, String> {
             decode_from(reader, source)?
         }
     };
-    to_linear(decoded, source, true)
+    to_linear(decoded, source, srgb)
 }
 
 /// Decodes an image held in memory (one embedded in a glTF file, say) as [`load`] decodes a
@@ -336,6 +342,11 @@ pub fn with_base_dir<R>(dir: &Path, f: impl FnOnce() -> R) -> R {
 /// (see [`with_base_dir`]), else to the working directory.
 pub fn load_named(source: &str) -> Result<&'static Image, String> {
     load(&resolve(source), source)
+}
+
+/// [`load_named`] for data (a normal map): 8- and 16-bit values are linear.
+pub fn load_named_linear(source: &str) -> Result<&'static Image, String> {
+    load_as(&resolve(source), source, false)
 }
 
 /// A path a scene file names (an image, a mesh): relative to the scene file's directory (see

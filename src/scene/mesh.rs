@@ -7,7 +7,8 @@
 //! file's winding: counter-clockwise seen from the front.
 
 use super::Material;
-use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
+use super::normal_map::NormalMap;
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -29,6 +30,9 @@ pub struct Mesh {
     /// Per triangle, its corners' texture coordinates (u across an image, v up it), where the
     /// file gives them; empty where it gives none. Corners without them take (0, 0).
     pub uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, its corners' tangents (xyz unit along +u, w = ±1 the bitangent's sign; see
+    /// `scene::tangents`) where the file gives them all (glTF `TANGENT`); empty otherwise.
+    pub tangents: Vec<[Vec4; 3]>,
     /// The file's material for this part (glTF), `None` for OBJ or primitives without one.
     pub material: Option<Material>,
     /// Its name in the file, or its index.
@@ -90,12 +94,30 @@ impl Mesh {
         normals: Vec<Option<[Vec3; 3]>>,
         uvs: Vec<Option<[Vec2; 3]>>,
     ) -> Result<Self, String> {
+        Self::with_tangents(source, positions, triangles, normals, uvs, Vec::new())
+    }
+
+    /// A mesh as [`Mesh::with_corners`], with its triangles' corner tangents too (`tangents`:
+    /// one entry per triangle, kept only where every triangle has them).
+    pub fn with_tangents(
+        source: &str,
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        normals: Vec<Option<[Vec3; 3]>>,
+        uvs: Vec<Option<[Vec2; 3]>>,
+        tangents: Vec<Option<[Vec4; 3]>>,
+    ) -> Result<Self, String> {
         let smooth = normals.iter().any(Option::is_some);
         let textured = uvs.iter().any(Option::is_some);
+        let tangent_frames =
+            tangents.len() == triangles.len() && tangents.iter().all(Option::is_some);
         if let Some(uv) = uvs.iter().flatten().flatten().find(|uv| !uv.is_finite()) {
             return Err(format!(
                 "mesh {source} has a non-finite texture coordinate {uv}"
             ));
+        }
+        if let Some(t) = tangents.iter().flatten().flatten().find(|t| !t.is_finite()) {
+            return Err(format!("mesh {source} has a non-finite tangent {t}"));
         }
         if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
             return Err(format!("mesh {source} has a non-finite vertex {p}"));
@@ -112,6 +134,7 @@ impl Mesh {
         };
         let mut kept_normals = Vec::new();
         let mut kept_uvs = Vec::new();
+        let mut kept_tangents = Vec::new();
         let triangles: Vec<[u32; 3]> = triangles
             .into_iter()
             .enumerate()
@@ -130,6 +153,13 @@ impl Mesh {
                 }
                 if textured {
                     kept_uvs.push(uvs.get(i).copied().flatten().unwrap_or([Vec2::ZERO; 3]));
+                }
+                if let Some(Some(corners)) = tangent_frames.then(|| tangents[i]) {
+                    // A tangent of no length bends nothing (`cpu::shapes::normal_mapped`).
+                    kept_tangents.push(corners.map(|t| {
+                        let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
+                        t.truncate().normalize_or_zero().extend(sign)
+                    }));
                 }
                 Some(t)
             })
@@ -151,6 +181,7 @@ impl Mesh {
             triangles,
             normals: kept_normals,
             uvs: kept_uvs,
+            tangents: kept_tangents,
             material: None,
             material_name: String::new(),
             extent,
@@ -333,8 +364,10 @@ fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
 /// BSDF: emission `Ke` (strength folded in) -> a two-sided `light`; else `pbr` with base colour
 /// `Kd`, or the image `map_Kd` (in `folder`, the OBJ file's, or below it: OBJ's `vt` has v up
 /// the image), roughness `Pr` or 1 - sqrt(`Ns` / 1000) (Blender writes Ns = (1 - roughness)^2 x
-/// 1000), metallic `Pm`, or 1 for `illum 3` (Blender's mark of a metallic surface), ior `Ni`.
-/// Not read: transmission (Blender does not write it), `d` (alpha), other maps.
+/// 1000), metallic `Pm`, or 1 for `illum 3` (Blender's mark of a metallic surface), ior `Ni`,
+/// and a normal map `map_Bump` or `norm` (linear, its `-bm` option the scale: what Blender
+/// writes for a Normal Map node). Not read: transmission (Blender does not write it), `d`
+/// (alpha), other maps.
 fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Material, String> {
     use crate::material::{Light, Pbr};
     let colour = |c: Option<[f32; 3]>| c.map(Vec3::from_array).filter(|c| c.is_finite());
@@ -363,30 +396,66 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
         0.0
     });
     let base = match &m.diffuse_texture {
-        Some(map) => {
-            crate::scene::texture::Texture::Image(mtl_image(map, folder, source, &m.name)?)
-        }
+        Some(map) => crate::scene::texture::Texture::Image(mtl_image(
+            map, "map_Kd", true, folder, source, &m.name,
+        )?),
         None => colour(m.diffuse)
             .unwrap_or(Vec3::splat(0.8))
             .clamp(Vec3::ZERO, Vec3::ONE)
             .into(),
     };
-    Ok(Material::Pbr(Pbr::new(
-        base,
-        unit(metallic),
-        unit(roughness),
-        m.optical_density
-            .filter(|i| i.is_finite())
-            .unwrap_or(1.5)
-            .clamp(1.0, 4.0),
-        0.0,
-    )))
+    let bump = (m.normal_texture.as_ref().map(|map| (map, "map_Bump")))
+        .or_else(|| m.unknown_param.get("norm").map(|map| (map, "norm")));
+    let normal_map = match bump {
+        Some((map, slot)) => {
+            let image = mtl_image(map, slot, false, folder, source, &m.name)?;
+            // tobj files `bump` height maps under map_Bump too; grey everywhere gives them away.
+            if image
+                .texels
+                .chunks_exact(3)
+                .all(|t| t[0] == t[1] && t[1] == t[2])
+            {
+                return Err(format!(
+                    "mesh {source}: material \"{}\"'s {slot} image {} is grey, a height (bump) map: rt-gpu reads tangent-space normal maps only",
+                    m.name, image.source
+                ));
+            }
+            let words: Vec<&str> = map.split_whitespace().collect();
+            let scale = words
+                .windows(2)
+                .find(|w| w[0] == "-bm")
+                .and_then(|w| w[1].parse::<f32>().ok())
+                .filter(|x| x.is_finite())
+                .unwrap_or(1.0);
+            let map = NormalMap { image, scale };
+            map.validate()
+                .map_err(|e| format!("mesh {source}: material \"{}\": {e}", m.name))?;
+            Some(map)
+        }
+        None => None,
+    };
+    Ok(Material::Pbr(
+        Pbr::new(
+            base,
+            unit(metallic),
+            unit(roughness),
+            m.optical_density
+                .filter(|i| i.is_finite())
+                .unwrap_or(1.5)
+                .clamp(1.0, 4.0),
+            0.0,
+        )
+        .with_normal_map(normal_map),
+    ))
 }
 
-/// The image an MTL map names (`map` after its options: tobj keeps `-o u v` and the like in the
-/// string, and rt-gpu reads none of them): a relative path inside the OBJ file's `folder`.
+/// The image an MTL map `slot` names (`map` after its options: tobj keeps `-o u v` and the like
+/// in the string): a relative path inside the OBJ file's `folder`, decoded from sRGB where
+/// `srgb` (colours).
 fn mtl_image(
     map: &str,
+    slot: &str,
+    srgb: bool,
     folder: &Path,
     source: &str,
     material: &str,
@@ -404,14 +473,14 @@ fn mtl_image(
             .all(|c| matches!(c, Component::Normal(_)))
     {
         return Err(format!(
-            "mesh {source}: material \"{material}\"'s map_Kd \"{map}\" is not a relative path inside the OBJ file's folder (rt-gpu reads images beside the file or below it)"
+            "mesh {source}: material \"{material}\"'s {slot} \"{map}\" is not a relative path inside the OBJ file's folder (rt-gpu reads images beside the file or below it)"
         ));
     }
     let shown = Path::new(source)
         .parent()
         .unwrap_or(Path::new(""))
         .join(relative);
-    super::image::load(&folder.join(relative), &shown.to_string_lossy())
+    super::image::load_as(&folder.join(relative), &shown.to_string_lossy(), srgb)
 }
 
 /// An OBJ file's text: UTF-8, or Latin-1 (which some exporters write; OBJ's syntax is ASCII, so
@@ -534,16 +603,18 @@ struct Part {
     triangles: Vec<[u32; 3]>,
     normals: Vec<Option<[Vec3; 3]>>,
     uvs: Vec<Option<[Vec2; 3]>>,
+    tangents: Vec<Option<[Vec4; 3]>>,
 }
 
 impl Part {
     fn into_mesh(self, source: &str) -> Result<Mesh, String> {
-        Mesh::with_corners(
+        Mesh::with_tangents(
             source,
             self.positions,
             self.triangles,
             self.normals,
             self.uvs,
+            self.tangents,
         )
     }
 }
@@ -657,6 +728,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     triangles,
                     normals,
                     uvs: part_uvs,
+                    tangents: part_tangents,
                     ..
                 } = part_of(&mut parts, key);
                 let base = positions.len() as u32;
@@ -665,6 +737,18 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 let vertex_normals: Option<Vec<Vec3>> = reader.read_normals().map(|read| {
                     read.map(|n| (to_world * DVec3::from_array(n.map(|x| x as f64))).as_vec3())
                         .collect()
+                });
+                // Tangents lie along the surface: they transform as its vectors do, and a
+                // mirroring placement turns the bitangent around.
+                let along = DMat3::from_mat4(world);
+                // glTF: TANGENT without NORMAL is to be ignored.
+                let tangents = vertex_normals.as_ref().and(reader.read_tangents());
+                let vertex_tangents: Option<Vec<Vec4>> = tangents.map(|read| {
+                    read.map(|[x, y, z, w]| {
+                        let t = (along * DVec3::new(x as f64, y as f64, z as f64)).as_vec3();
+                        t.extend(if flip { -w } else { w })
+                    })
+                    .collect()
                 });
                 let placed: Vec<DVec3> = read
                     .map(|p| world.transform_point3(DVec3::from_array(p.map(|x| x as f64))))
@@ -706,6 +790,12 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     let [a, b, c] = [*a?, *b?, *c?];
                     Some(if flip { [a, c, b] } else { [a, b, c] })
                 }));
+                part_tangents.extend(indices.chunks_exact(3).map(|t| {
+                    let tangents = vertex_tangents.as_ref()?;
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| tangents.get(i as usize));
+                    let [a, b, c] = [*a?, *b?, *c?];
+                    Some(if flip { [a, c, b] } else { [a, b, c] })
+                }));
             }
         }
         stack.extend(n.children().map(|c| (c, world)));
@@ -739,6 +829,8 @@ fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
         Some("baseColorTexture")
     } else if material.emissive_texture().is_some() {
         Some("emissiveTexture")
+    } else if material.normal_texture().is_some() {
+        Some("normalTexture")
     } else {
         None
     }
@@ -747,8 +839,8 @@ fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
 /// A glTF metallic-roughness material as rt-gpu's: emissive -> light (emissive factor x
 /// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is), else
 /// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
-/// KHR_materials_ior (default 1.5) and KHR_materials_transmission's factor (default 0). Not
-/// read: the metallic-roughness, normal and occlusion textures, alpha.
+/// KHR_materials_ior (default 1.5), KHR_materials_transmission's factor (default 0) and the
+/// normal texture. Not read: the metallic-roughness and occlusion textures, alpha.
 fn material_of(
     m: &gltf::Material,
     textures: &mut super::gltf_textures::FileTextures,
@@ -783,14 +875,21 @@ fn material_of(
             0.0
         }
     };
-    Ok(Material::Pbr(Pbr::new(
-        base,
-        unit(pbr.metallic_factor()),
-        unit(pbr.roughness_factor()),
-        m.ior()
-            .filter(|i| i.is_finite())
-            .unwrap_or(1.5)
-            .clamp(1.0, 4.0),
-        unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
-    )))
+    let normal_map = match m.normal_texture() {
+        Some(normal) => Some(textures.normal_map(&normal, name)?),
+        None => None,
+    };
+    Ok(Material::Pbr(
+        Pbr::new(
+            base,
+            unit(pbr.metallic_factor()),
+            unit(pbr.roughness_factor()),
+            m.ior()
+                .filter(|i| i.is_finite())
+                .unwrap_or(1.5)
+                .clamp(1.0, 4.0),
+            unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
+        )
+        .with_normal_map(normal_map),
+    ))
 }

@@ -13,7 +13,9 @@ pub mod gltf_textures;
 pub mod image;
 pub mod media;
 pub mod mesh;
+pub mod normal_map;
 pub mod punctual;
+pub mod tangents;
 pub mod texture;
 
 use glam::Vec3;
@@ -199,6 +201,27 @@ impl Scene {
                 )));
             }
             object.shape.validate().map_err(SceneError::Invalid)?;
+            // Tangent frames follow from texture coordinates (`scene::tangents`).
+            if self.materials[object.material as usize]
+                .normal_map()
+                .is_some()
+            {
+                let name = &self.material_names[object.material as usize];
+                match object.shape {
+                    Shape::Mesh { mesh, .. } if mesh.uvs.is_empty() => {
+                        return Err(SceneError::Invalid(format!(
+                            "material \"{name}\" has a normal map, but mesh {} (part {}) has no texture coordinates to lay it out",
+                            mesh.source, mesh.material_name
+                        )));
+                    }
+                    Shape::Mesh { .. } => {}
+                    _ => {
+                        return Err(SceneError::Invalid(format!(
+                            "material \"{name}\" has a normal map, which applies to meshes with texture coordinates only; object {i} is not a mesh"
+                        )));
+                    }
+                }
+            }
             if !within_extent(object.transform.translate) {
                 return Err(SceneError::Invalid(format!(
                     "object {i} is translated beyond {MAX_EXTENT:e} from the origin"

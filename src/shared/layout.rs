@@ -346,6 +346,11 @@ gpu_struct! {
         texture_shift: [f32; 3],
         /// A coat's internal diffuse reflectance (`material::Plastic`).
         internal_reflectance: f32,
+        /// Its normal map's width and height (0: none; `scene::normal_map`), where its texels
+        /// start in the images array, and its scale.
+        normal_map_size: [f32; 2],
+        normal_map_image: u32,
+        normal_map_scale: f32,
     }
 }
 
