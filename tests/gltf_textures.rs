@@ -318,3 +318,49 @@ fn an_obj_height_map_is_not_taken_for_a_normal_map() {
     );
     assert_eq!(err.lines().count(), 1, "{err}");
 }
+
+/// A file whose normals point against the winding (here -z on a triangle wound toward +z) is
+/// shaded from the winding's side with its normals turned round; its normal map turns with
+/// them: the bent normal is the file's own, glTF's x t + y b + z n in the frame of its normal
+/// n = -z, its MikkTSpace tangent t = +x and b = w (n x t) = -y (MikkTSpace's sign w = +1
+/// follows the UVs' winding, not the normals), turned round: toward -x, +y.
+#[test]
+fn a_normal_map_turns_with_normals_that_point_against_the_winding() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_normal_png(dir.path(), [191, 128, 238]);
+    let path = write_gltf(dir.path(), true, &normal_mapped(""), &images("normals.png"));
+    let mut bin = std::fs::read(dir.path().join("tri.bin")).expect("reads");
+    for _ in 0..3 {
+        for x in [0.0f32, 0.0, -1.0] {
+            bin.extend(x.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.path().join("tri.bin"), &bin).expect("writes");
+    let json = std::fs::read_to_string(&path)
+        .expect("reads")
+        .replace(r#""byteLength": 60 }"#, r#""byteLength": 96 }"#)
+        .replace(
+            r#"{ "buffer": 0, "byteOffset": 36, "byteLength": 24 }]"#,
+            r#"{ "buffer": 0, "byteOffset": 36, "byteLength": 24 }, { "buffer": 0, "byteOffset": 60, "byteLength": 36 }]"#,
+        )
+        .replace(
+            r#""type": "VEC2" }"#,
+            r#""type": "VEC2" }, { "bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3" }"#,
+        )
+        .replace(r#""TEXCOORD_0": 1"#, r#""TEXCOORD_0": 1, "NORMAL": 2"#);
+    std::fs::write(&path, json).expect("writes");
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+    let ray = rt_gpu::shared::ray::Ray {
+        origin: Vec3::new(0.0, -1.0 / 3.0, 1.0) - flat.origin.as_vec3(),
+        dir: -Vec3::Z,
+    };
+    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+    let texel = Vec3::new(191.0, 128.0, 238.0) / 255.0 * 2.0 - Vec3::ONE;
+    let expected = Vec3::new(-texel.x, texel.y, texel.z).normalize();
+    assert!(
+        (hit.shading - expected).length() < 1e-4,
+        "{} against {expected}",
+        hit.shading
+    );
+}
