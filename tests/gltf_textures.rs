@@ -68,6 +68,16 @@ fn base_colour(scene: &Scene) -> Texture {
     }
 }
 
+/// The CPU's hit of a ray straight down (-z) onto the triangle's centroid, (0, -1/3, 0).
+fn hit_at_centroid(scene: &Scene) -> rt_gpu::shared::ray::Hit {
+    let flat = rt_gpu::scene::flat::FlatScene::new(scene, 8, 8).expect("valid");
+    let ray = rt_gpu::shared::ray::Ray {
+        origin: Vec3::new(0.0, -1.0 / 3.0, 1.0) - flat.origin.as_vec3(),
+        dir: -Vec3::Z,
+    };
+    rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits")
+}
+
 #[test]
 fn a_base_colour_texture_arrives_with_its_factor_and_uvs() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -111,12 +121,7 @@ fn hits_interpolate_the_corners_texture_coordinates() {
     let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
     let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
     assert_eq!(flat.triangle_uvs.len(), 1);
-    let centroid = Vec3::new(0.0, -1.0 / 3.0, 0.0) - flat.origin.as_vec3();
-    let ray = rt_gpu::shared::ray::Ray {
-        origin: centroid + Vec3::Z,
-        dir: -Vec3::Z,
-    };
-    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+    let hit = hit_at_centroid(&scene);
     assert!(
         (hit.uv - Vec2::new(0.5, 1.0 / 3.0)).length() < 1e-5,
         "{}",
@@ -223,13 +228,7 @@ fn a_normal_texture_bends_the_shading_normal_by_its_scale() {
         let map = pbr.normal_map.expect("a normal map");
         assert_eq!(map.scale, factor);
         assert!((map.image.texel(0, 0) - (texel + Vec3::ONE) / 2.0).length() < 1e-6);
-        let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
-        let centroid = Vec3::new(0.0, -1.0 / 3.0, 0.0) - flat.origin.as_vec3();
-        let ray = rt_gpu::shared::ray::Ray {
-            origin: centroid + Vec3::Z,
-            dir: -Vec3::Z,
-        };
-        let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+        let hit = hit_at_centroid(&scene);
         let expected = (texel * Vec3::new(factor, factor, 1.0)).normalize();
         assert!(
             (hit.shading - expected).length() < 1e-4,
@@ -243,12 +242,7 @@ fn a_normal_texture_bends_the_shading_normal_by_its_scale() {
     write_normal_png(dir.path(), [255, 128, 0]);
     let path = write_gltf(dir.path(), true, &normal_mapped(""), &images("normals.png"));
     let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
-    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
-    let ray = rt_gpu::shared::ray::Ray {
-        origin: Vec3::new(0.0, -1.0 / 3.0, 1.0) - flat.origin.as_vec3(),
-        dir: -Vec3::Z,
-    };
-    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+    let hit = hit_at_centroid(&scene);
     let expected = Vec3::new(1.0, 1.0 / 255.0, 1.0).normalize();
     assert!((hit.shading - expected).length() < 1e-4, "{}", hit.shading);
 }
@@ -350,12 +344,7 @@ fn a_normal_map_turns_with_normals_that_point_against_the_winding() {
         .replace(r#""TEXCOORD_0": 1"#, r#""TEXCOORD_0": 1, "NORMAL": 2"#);
     std::fs::write(&path, json).expect("writes");
     let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
-    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
-    let ray = rt_gpu::shared::ray::Ray {
-        origin: Vec3::new(0.0, -1.0 / 3.0, 1.0) - flat.origin.as_vec3(),
-        dir: -Vec3::Z,
-    };
-    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits");
+    let hit = hit_at_centroid(&scene);
     let texel = Vec3::new(191.0, 128.0, 238.0) / 255.0 * 2.0 - Vec3::ONE;
     let expected = Vec3::new(-texel.x, texel.y, texel.z).normalize();
     assert!(

@@ -827,6 +827,9 @@ struct Flattener<'a> {
     /// Whether every triangle gets corner tangents: some mesh of the scene is normal-mapped.
     normal_mapped: bool,
     triangle_tangents: Vec<[Vec4; 3]>,
+    /// Each normal-mapped mesh's tangents (`scene::tangents::of`), by the mesh's address:
+    /// computed once however many objects place it.
+    mesh_tangents: std::collections::HashMap<usize, Option<std::rc::Rc<[[Vec4; 3]]>>>,
     /// Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
     local_triangles: Vec<Triangle>,
     local_normals: Vec<[Vec3; 3]>,
@@ -872,6 +875,7 @@ impl<'a> Flattener<'a> {
             triangle_uvs: Vec::new(),
             normal_mapped,
             triangle_tangents: Vec::new(),
+            mesh_tangents: Default::default(),
             local_triangles: Vec::new(),
             local_normals: Vec::new(),
             local_uvs: Vec::new(),
@@ -999,7 +1003,15 @@ impl<'a> Flattener<'a> {
         // Normals by the inverse transpose: divided by the scale, then rotated.
         let shading = |n: Vec3| t.rotate_vector(n / scale).normalize_or_zero();
         // Tangents as the surface's vectors; a mirroring scale turns the bitangent around.
-        let tangents = normal_mapped.then(|| super::tangents::of(mesh)).flatten();
+        let tangents = if normal_mapped {
+            let key = std::ptr::from_ref(mesh) as usize;
+            self.mesh_tangents
+                .entry(key)
+                .or_insert_with(|| super::tangents::of(mesh).map(Into::into))
+                .clone()
+        } else {
+            None
+        };
         let tangent = |v: Vec4| {
             let along = t.rotate_vector(v.truncate() * scale).normalize_or_zero();
             along.extend(if mirrored { -v.w } else { v.w })

@@ -778,24 +778,9 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
                     if flip { [a, c, b] } else { [a, b, c] }
                 }));
-                normals.extend(indices.chunks_exact(3).map(|t| {
-                    let vertex_normals = vertex_normals.as_ref()?;
-                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| vertex_normals.get(i as usize));
-                    let [a, b, c] = [*a?, *b?, *c?];
-                    Some(if flip { [a, c, b] } else { [a, b, c] })
-                }));
-                part_uvs.extend(indices.chunks_exact(3).map(|t| {
-                    let uvs = uvs.as_ref()?;
-                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| uvs.get(i as usize));
-                    let [a, b, c] = [*a?, *b?, *c?];
-                    Some(if flip { [a, c, b] } else { [a, b, c] })
-                }));
-                part_tangents.extend(indices.chunks_exact(3).map(|t| {
-                    let tangents = vertex_tangents.as_ref()?;
-                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| tangents.get(i as usize));
-                    let [a, b, c] = [*a?, *b?, *c?];
-                    Some(if flip { [a, c, b] } else { [a, b, c] })
-                }));
+                normals.extend(per_corner(vertex_normals.as_deref(), &indices, flip));
+                part_uvs.extend(per_corner(uvs.as_deref(), &indices, flip));
+                part_tangents.extend(per_corner(vertex_tangents.as_deref(), &indices, flip));
             }
         }
         stack.extend(n.children().map(|c| (c, world)));
@@ -823,6 +808,21 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
 }
 
 /// The first of `material`'s textures that reads texture coordinates, by its property name.
+/// Per triangle of `indices`, its corners' values of the per-vertex `values` (in the order
+/// the triangle is kept: two corners swapped where `flip`); `None` where there are none.
+fn per_corner<'a, T: Copy>(
+    values: Option<&'a [T]>,
+    indices: &'a [u32],
+    flip: bool,
+) -> impl Iterator<Item = Option<[T; 3]>> + 'a {
+    indices.chunks_exact(3).map(move |t| {
+        let values = values?;
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| values.get(i as usize));
+        let [a, b, c] = [*a?, *b?, *c?];
+        Some(if flip { [a, c, b] } else { [a, b, c] })
+    })
+}
+
 fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
     let pbr = material.pbr_metallic_roughness();
     if pbr.base_color_texture().is_some() {
