@@ -374,7 +374,7 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS
+//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
     (*hit).uv = c.uv;
 //#if SPHERES
     if primitive_kind(c.primitive) == KIND_SPHERE {

@@ -198,7 +198,12 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     var out = trace_debug(ray, &hit);
     out.dir = vec3f(0.0);
     if out.hit == 1u {
-        let s = bsdf_sample(material_at(hit.material), -ray.dir, hit, &sampler);
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS
+        let m = with_albedo_at(material_at(hit.material), hit);
+//#else
+        let m = material_at(hit.material);
+//#endif
+        let s = bsdf_sample(m, -ray.dir, hit, &sampler);
         out.dir = s.wi;
         out.scattered = select(0u, 1u, s.lobe != 0u);
     }

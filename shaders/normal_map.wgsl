@@ -20,8 +20,7 @@ fn normal_mapped(m: Material, i: u32, weights: vec2f, uv: vec2f, shading: vec3f,
     }
     let sign = select(1.0, -1.0, t.w < 0.0);
     let bitangent = sign * cross(shading, tangent);
-    let texel = bilinear(m.normal_map_image, u32(m.normal_map_size.x), u32(m.normal_map_size.y),
-        uv.x, 1.0 - uv.y);
+    let texel = image_at(m.normal_map_image, m.normal_map_size, m.normal_map_lookup, uv);
     let local = (2.0 * texel - vec3f(1.0)) * vec3f(m.normal_map_scale, m.normal_map_scale, 1.0);
     let bent = local.x * tangent + local.y * bitangent + local.z * shading;
     let len2 = dot(bent, bent);

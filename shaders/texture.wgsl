@@ -8,7 +8,7 @@ fn parity(x: f32) -> f32 {
 }
 //#endif
 
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS
+//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
 // A sphere's (longitude, latitude) at unit outward direction n (Ray Tracing: The Next Week).
 fn sphere_uv(n: vec3f) -> vec2f {
     let u = (atan2(-n.z, n.x) + PI) / (2.0 * PI);
@@ -17,33 +17,56 @@ fn sphere_uv(n: vec3f) -> vec2f {
 }
 //#endif
 
-//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS
+//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS
 // Texel (x, y) of the image of `width` columns whose texels start at `start` among the images.
 fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
     return image_value(start + y * width + x).xyz;
 }
 
-// Integer-valued i wrapped into 0..n in f32 arithmetic (as the CPU does), then kept in range
-// whatever i was (NaN included): the kernel runs without bounds checks.
-fn wrap(i: f32, n: f32) -> u32 {
-    return min(u32(clamp(i - n * floor(i / n), 0.0, n - 1.0)), u32(n) - 1u);
+// Integer-valued texel index i of an axis of n texels brought into 0..n by wrap mode `mode`
+// (ImageLookup's codes), in f32 arithmetic as the CPU does it; kept in range whatever i was.
+fn wrapped(mode: u32, i: f32, n: f32) -> u32 {
+    var j = i - n * floor(i / n);
+    if mode == WRAP_CLAMP {
+        j = i;
+    } else if mode == WRAP_MIRROR {
+        // Period 2n: the image, then the image reversed.
+        let m = i - 2.0 * n * floor(i / (2.0 * n));
+        j = select(m, 2.0 * n - 1.0 - m, m >= n);
+    }
+    return min(u32(clamp(j, 0.0, n - 1.0)), u32(n) - 1u);
+}
+
+// The image of `size` texels starting at `start` at surface coordinates uv (u across, v up),
+// wrapped on each axis and filtered as `lookup` (ImageLookup::bits) says.
+fn image_at(start: u32, size: vec2f, lookup: u32, uv: vec2f) -> vec3f {
+    return filtered(start, size, lookup, uv.x, 1.0 - uv.y);
 }
 
 // An image filtered bilinearly at image coordinates (s across, t down; texel centres at
-// half-integers), wrapping around both edges.
+// half-integers), wrapping around both edges: how environments read their images.
 fn bilinear(start: u32, width: u32, height: u32, s: f32, t: f32) -> vec3f {
-    let w = f32(width);
-    let h = f32(height);
-    let x = s * w - 0.5;
-    let y = t * h - 0.5;
+    return filtered(start, vec2f(f32(width), f32(height)), 0u, s, t);
+}
+
+// The image at image coordinates (s across, t down), wrapped and filtered as `lookup` says.
+fn filtered(start: u32, size: vec2f, lookup: u32, s: f32, t: f32) -> vec3f {
+    let width = u32(size.x);
+    let wrap_u = lookup & 3u;
+    let wrap_v = (lookup >> 2u) & 3u;
+    if (lookup & LOOKUP_NEAREST) != 0u {
+        return texel(start, width, wrapped(wrap_u, floor(s * size.x), size.x), wrapped(wrap_v, floor(t * size.y), size.y));
+    }
+    let x = s * size.x - 0.5;
+    let y = t * size.y - 0.5;
     let x0 = floor(x);
     let y0 = floor(y);
     let fx = x - x0;
     let fy = y - y0;
-    let xa = wrap(x0, w);
-    let xb = wrap(x0 + 1.0, w);
-    let ya = wrap(y0, h);
-    let yb = wrap(y0 + 1.0, h);
+    let xa = wrapped(wrap_u, x0, size.x);
+    let xb = wrapped(wrap_u, x0 + 1.0, size.x);
+    let ya = wrapped(wrap_v, y0, size.y);
+    let yb = wrapped(wrap_v, y0 + 1.0, size.y);
     let top = texel(start, width, xa, ya) * (1.0 - fx) + texel(start, width, xb, ya) * fx;
     let bottom = texel(start, width, xa, yb) * (1.0 - fx) + texel(start, width, xb, yb) * fx;
     return top * (1.0 - fy) + bottom * fy;
@@ -53,7 +76,7 @@ fn bilinear(start: u32, width: u32, height: u32, s: f32, t: f32) -> vec3f {
 fn albedo_at(m: Material, hit: Hit) -> vec3f {
 //#if IMAGE_TEXTURE
     if m.texture == TEXTURE_IMAGE {
-        return bilinear(m.texture_image, u32(m.texture_odd.x), u32(m.texture_odd.y), hit.uv.x, 1.0 - hit.uv.y);
+        return image_at(m.texture_image, m.texture_odd.xy, m.texture_lookup, hit.uv);
     }
 //#endif
     var parities = 0.0;
@@ -76,13 +99,30 @@ fn albedo_at(m: Material, hit: Hit) -> vec3f {
 //#endif
 }
 
-//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE
+//#if METALLIC_ROUGHNESS
+// The GGX alpha of roughness: roughness^2, or 0 (smooth) below MIN_ALPHA (Coat::alpha_of).
+fn roughness_alpha(roughness: f32) -> f32 {
+    let alpha = roughness * roughness;
+    return select(0.0, alpha, alpha >= MIN_ALPHA);
+}
+//#endif
+
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS
 // m with its albedo looked up at hit once, for the several uses a path vertex makes of it (light
-// sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe.
+// sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe. And
+// with pbr's metallic and alpha scaled by its metallic-roughness image there (Pbr::at).
 fn with_albedo_at(m: Material, hit: Hit) -> Material {
     var out = m;
     out.albedo = albedo_at(m, hit);
     out.texture = TEXTURE_NONE;
+//#if METALLIC_ROUGHNESS
+    if m.metallic_roughness_size.x > 0.0 {
+        let texel = image_at(m.metallic_roughness_image, m.metallic_roughness_size, m.metallic_roughness_lookup, hit.uv);
+        out.emission.x = m.emission.x * texel.z;
+        out.alpha = roughness_alpha(m.roughness * texel.y);
+        out.metallic_roughness_size = vec2f(0.0);
+    }
+//#endif
     return out;
 }
 //#endif

@@ -353,3 +353,156 @@ fn a_normal_map_turns_with_normals_that_point_against_the_winding() {
         hit.shading
     );
 }
+
+/// A texture's sampler arrives as its image's lookup (wrap modes per axis, magnification
+/// filter); absent, the default (repeat, linear); one image read by two samplers is decoded
+/// once and held with each.
+#[test]
+fn samplers_arrive_as_the_images_lookup() {
+    use rt_gpu::scene::image_lookup::{Filter, ImageLookup, Wrap};
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_png(dir.path());
+    let with_sampler = |sampler: &str| {
+        format!(
+            r#""textures": [{{ "source": 0, "sampler": 0 }}], "samplers": [{sampler}], "images": [{{ "uri": "tex.png" }}],"#
+        )
+    };
+    let cases = [
+        (
+            r#"{ "wrapS": 33071, "wrapT": 33648, "magFilter": 9728, "minFilter": 9728 }"#,
+            ImageLookup {
+                wrap_u: Wrap::Clamp,
+                wrap_v: Wrap::Mirror,
+                filter: Filter::Nearest,
+            },
+        ),
+        (
+            r#"{ "wrapS": 33648, "magFilter": 9729 }"#,
+            ImageLookup {
+                wrap_u: Wrap::Mirror,
+                wrap_v: Wrap::Repeat,
+                filter: Filter::Linear,
+            },
+        ),
+        ("{}", ImageLookup::default()),
+    ];
+    for (sampler, expected) in cases {
+        let path = write_gltf(dir.path(), true, TEXTURED, &with_sampler(sampler));
+        let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+        let Texture::Image(image) = base_colour(&scene) else {
+            panic!("an image")
+        };
+        assert_eq!(image.lookup, expected, "{sampler}");
+    }
+}
+
+/// KHR_texture_transform (offset, rotation, scale) maps the mesh's texture coordinates as the
+/// extension's matrix T R S does, in glTF's coordinates (v down) before rt-gpu turns v up;
+/// transforms that differ between a material's textures, or that name another UV set, are
+/// one-line errors.
+#[test]
+fn texture_transforms_map_the_texture_coordinates() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_png(dir.path());
+    let transformed = |transform: &str| {
+        format!(
+            r#"{{ "name": "Painted", "pbrMetallicRoughness": {{ "baseColorTexture": {{ "index": 0, "extensions": {{ "KHR_texture_transform": {transform} }} }}, "metallicFactor": 0 }} }}"#
+        )
+    };
+    let material =
+        transformed(r#"{ "offset": [0.25, -0.5], "rotation": 1.5707963, "scale": [2, 3] }"#);
+    let path = write_gltf(dir.path(), true, &material, &images("tex.png"));
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let rt_gpu::scene::Shape::Mesh { mesh, .. } = scene.objects[0].shape else {
+        panic!("a mesh");
+    };
+    // glTF's corners (0, 1), (1, 1), (0.5, 0): scaled (0, 3), (2, 3), (1, 0); turned a quarter
+    // (u' = v, v' = -u) (3, 0), (3, -2), (0, -1); offset (3.25, -0.5), (3.25, -2.5),
+    // (0.25, -1.5); v turned up: 1 - v.
+    let expected = [
+        Vec2::new(3.25, 1.5),
+        Vec2::new(3.25, 3.5),
+        Vec2::new(0.25, 2.5),
+    ];
+    for (got, want) in mesh.uvs[0].iter().zip(expected) {
+        assert!(
+            (*got - want).length() < 1e-5,
+            "{:?} against {expected:?}",
+            mesh.uvs[0]
+        );
+    }
+
+    let two = r#"{ "name": "Two", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "extensions": { "KHR_texture_transform": { "scale": [2, 2] } } }, "metallicRoughnessTexture": { "index": 0 } } }"#;
+    let other_set = transformed(r#"{ "texCoord": 1 }"#);
+    for (material, expected) in [
+        (two, "different KHR_texture_transforms"),
+        (other_set.as_str(), "TEXCOORD_1"),
+    ] {
+        let path = write_gltf(dir.path(), true, material, &images("tex.png"));
+        let err = load(&path, "tri.gltf", None).expect_err(expected);
+        assert!(
+            err.contains("tri.gltf") && err.contains(expected),
+            "{expected}: {err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}
+
+/// metallicRoughnessTexture arrives linear, and the material's metallic and roughness at a hit
+/// are its factors times the texel's blue and green: the textured pbr evaluates there as the
+/// plain pbr of those values does.
+#[test]
+fn a_metallic_roughness_texture_scales_the_factors_at_each_hit() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // Green 128 (roughness x 0.502), blue 64 (metallic x 0.251), read as linear values.
+    let image = image::RgbImage::from_raw(1, 1, vec![0, 128, 64]).expect("1x1");
+    image.save(dir.path().join("mr.png")).expect("writes");
+    let material = r#"{ "name": "Worn", "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.6, 0.3, 1], "metallicFactor": 0.9, "roughnessFactor": 0.7, "metallicRoughnessTexture": { "index": 0 } } }"#;
+    let path = write_gltf(dir.path(), true, material, &images("mr.png"));
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let Material::Pbr(pbr) = &scene.materials[0] else {
+        panic!("pbr")
+    };
+    let image = pbr.metallic_roughness.expect("a metallic-roughness image");
+    assert_eq!(
+        image.texel(0, 0),
+        Vec3::new(0.0, 128.0 / 255.0, 64.0 / 255.0)
+    );
+    let hit = hit_at_centroid(&scene);
+    let (metallic, roughness) = (0.9 * (64.0 / 255.0f32), 0.7 * (128.0 / 255.0f32));
+    let plain = rt_gpu::material::Pbr::new(
+        Texture::Colour(Vec3::new(0.8, 0.6, 0.3)),
+        metallic,
+        roughness,
+        1.5,
+        0.0,
+    );
+    let factors_only = rt_gpu::material::Pbr::new(
+        Texture::Colour(Vec3::new(0.8, 0.6, 0.3)),
+        0.9,
+        0.7,
+        1.5,
+        0.0,
+    );
+    use rt_gpu::material::MaterialModel;
+    let wo = Vec3::new(0.3, 0.1, 1.0).normalize();
+    let mut differ_from_factors = 0;
+    for wi in [
+        Vec3::new(-0.3, -0.1, 1.0),
+        Vec3::new(0.5, 0.2, 0.6),
+        Vec3::new(0.0, 0.0, 1.0),
+    ] {
+        let wi = wi.normalize();
+        let (textured, expected) = (pbr.eval(wo, wi, &hit), plain.eval(wo, wi, &hit));
+        assert!(
+            (textured - expected).abs().max_element() <= 1e-6 * expected.max_element(),
+            "{textured} against {expected}"
+        );
+        assert!(
+            (pbr.pdf(wo, wi, &hit) - plain.pdf(wo, wi, &hit)).abs()
+                <= 1e-6 * plain.pdf(wo, wi, &hit)
+        );
+        differ_from_factors += (factors_only.eval(wo, wi, &hit) != textured) as usize;
+    }
+    assert_eq!(differ_from_factors, 3, "the texture changed nothing");
+}

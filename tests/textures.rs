@@ -269,6 +269,154 @@ fn gpu_texture_lookups_match_the_cpu() {
     );
 }
 
+/// Images read with every wrap mode and filter (glTF's samplers) give the CPU's values on the
+/// GPU, at coordinates well beyond [0, 1]; negative control: read as the default (repeat,
+/// linear) the CPU's values differ from the GPU's.
+#[cfg(feature = "gpu")]
+#[test]
+fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
+    use rt_gpu::scene::image_lookup::{Filter, ImageLookup, Wrap};
+    use rt_gpu::scene::texture::Texture;
+    let Some(gpu) = renderer() else { return };
+    let mut text = String::from(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\n[materials]\n",
+    );
+    let mut objects = String::new();
+    let wraps = [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror];
+    let mut lookups_wanted = Vec::new();
+    for wrap_u in wraps {
+        for wrap_v in wraps {
+            for filter in [Filter::Linear, Filter::Nearest] {
+                let k = lookups_wanted.len();
+                lookups_wanted.push(ImageLookup {
+                    wrap_u,
+                    wrap_v,
+                    filter,
+                });
+                text += &format!(
+                    "m{k} = {{ type = \"lambertian\", albedo = {{ image = \"textures/tiles.png\" }} }}\n"
+                );
+                objects += &format!(
+                    "[[object]]\nquad = {{ q = [{k}, 0, 0], u = [1, 0, 0], v = [0, 1, 0] }}\nmaterial = \"m{k}\"\n"
+                );
+            }
+        }
+    }
+    let mut scene = textured_lights(&(text + &objects));
+    for (material, lookup) in scene.materials.iter_mut().zip(&lookups_wanted) {
+        let rt_gpu::scene::Material::Lambertian(l) = material else {
+            panic!("lambertian")
+        };
+        let Texture::Image(image) = l.albedo else {
+            panic!("an image")
+        };
+        l.albedo = Texture::Image(image.with_lookup(*lookup).leak());
+    }
+    let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+    assert_eq!(flat.materials.len(), lookups_wanted.len());
+    let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 7);
+    let lookups: Vec<(u32, Vec3, glam::Vec2)> = (0..18_000)
+        .map(|k| {
+            let uv = glam::Vec2::new(rng.next_f32(), rng.next_f32()) * 5.0 - 2.0;
+            ((k % flat.materials.len()) as u32, Vec3::ZERO, uv)
+        })
+        .collect();
+    let gpu_values = gpu.look_up_albedo(&flat, &lookups).expect("lookups run");
+    let (mut worst, mut differ_from_default) = (0.0f32, 0);
+    for ((material, point, uv), gpu_value) in lookups.iter().zip(gpu_values) {
+        let rt_gpu::scene::Material::Lambertian(l) = &flat.materials[*material as usize] else {
+            panic!("lambertian")
+        };
+        let Texture::Image(image) = l.albedo else {
+            panic!("an image")
+        };
+        let hit = rt_gpu::shared::ray::Hit {
+            t: 1.0,
+            point: *point,
+            error: 0.0,
+            normal: Vec3::Z,
+            shading: Vec3::Z,
+            front_face: true,
+            material: *material,
+            primitive: rt_gpu::shared::primitive::PrimitiveRef::Quad(0),
+            uv: *uv,
+        };
+        let cpu_value = rt_gpu::material::texture::value(&l.albedo, &hit);
+        worst = worst.max((gpu_value - cpu_value).abs().max_element());
+        let default = image.with_lookup(ImageLookup::default());
+        let as_default = rt_gpu::material::texture::image_at(&default, *uv);
+        differ_from_default += ((gpu_value - as_default).abs().max_element() > 1e-3) as usize;
+    }
+    eprintln!(
+        "largest difference {worst:e}; {differ_from_default} of {} differ from the default lookup",
+        lookups.len()
+    );
+    // Bilinear weights may round differently (fused multiply-adds); a wrong texel is off by
+    // far more.
+    assert!(worst < 1e-5, "GPU and CPU lookups differ by {worst}");
+    assert!(
+        differ_from_default > lookups.len() / 2,
+        "lookups read as the default went undetected"
+    );
+}
+
+/// A floor of glTF's pbr whose metallic and roughness an image scales point by point (the
+/// tiles' blue and green channels: metals and dielectrics, smooth and rough), a textured ball of
+/// it, and an area light.
+const METALLIC_ROUGHNESS: &str = r#"
+[render]
+background = [0.05, 0.05, 0.06]
+
+[camera]
+look_from = [0, 1.6, 3]
+look_at = [0, 0.2, 0]
+vfov = 50
+
+[materials]
+floor = { type = "pbr", base_color = [0.8, 0.6, 0.3], metallic = 1, roughness = 0.8, metallic_roughness = "textures/tiles.png" }
+ball = { type = "pbr", base_color = { image = "textures/planet.png" }, metallic = 0.9, roughness = 1, metallic_roughness = "textures/tiles.png" }
+lamp = { type = "light", radiance = [6, 6, 6] }
+
+[[object]]
+quad = { q = [-2, 0, 2], u = [4, 0, 0], v = [0, 0, -4] }
+material = "floor"
+
+[[object]]
+sphere = { center = [0.5, 0.5, 0], radius = 0.5 }
+material = "ball"
+
+[[object]]
+quad = { q = [-1.5, 2.5, -1], u = [1, 0, 0], v = [0, 0, 1] }
+material = "lamp"
+"#;
+
+#[cfg(feature = "gpu")]
+/// Metallic-roughness images: the kernel renders them as the CPU does (nee, 24x18 at 2 048
+/// spp, Welch z + Sidak at family-wise 0.01); negative control: the floor's roughness 2% higher
+/// on the GPU is told apart.
+#[test]
+fn metallic_roughness_images_render_alike_on_both_backends() {
+    let Some(gpu) = renderer() else { return };
+    let scene = textured_lights(METALLIC_ROUGHNESS);
+    let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+    assert!(flat.materials.iter().any(|m| m.parameter_image().is_some()));
+    let opts = |seed| common::nee_opts(24, 18, 2048, 5, seed);
+    let cpu = common::render_cpu(&scene, &opts(1));
+    assert_eq!(cpu.invalid_samples, 0);
+    let gpu_film = render_gpu(&gpu, &scene, &opts(2), &Tuning::default());
+    let verdict = compare(&cpu, &gpu_film);
+    eprintln!("metallic-roughness, cpu vs gpu: {verdict:?}");
+    assert!(verdict.passed(), "CPU and GPU differ: {verdict:?}");
+    let rougher =
+        textured_lights(&METALLIC_ROUGHNESS.replace("roughness = 0.8", "roughness = 0.816"));
+    let verdict = compare(
+        &cpu,
+        &render_gpu(&gpu, &rougher, &opts(2), &Tuning::default()),
+    );
+    eprintln!("floor 2% rougher: {verdict:?}");
+    assert!(!verdict.passed(), "a 2% rougher floor went undetected");
+}
+
 /// Lights with textured radiance: a quad showing an image (scaled by `strength`), a sphere
 /// with a UV checker; beside them diffuse surfaces that nee lights.
 const TEXTURED_LIGHTS: &str = r#"

@@ -30,6 +30,13 @@ Scenes:
   .mtl as map_Bump), lit by a low sun from the side: each quadrant's brightness depends on its
   tilt. `bumpy-lambert-cycles.exr` renders them as Cycles' Diffuse BSDF with the same normal
   map: a wrong tangent frame (its handedness, the green channel's sign) shows in region means.
+- `worn`: the floor and cube of `textured` with metallic and roughness from an image
+  (`worn-metal-rough.png`, linear: per quadrant metallic 1 or 0 in blue, roughness 0.3 to 0.9
+  in green, through a Separate RGB node, which the exporter writes as glTF's
+  metallicRoughnessTexture) and the quadrant image as base colour, both through a Mapping node
+  scaling them 2x (KHR_texture_transform); the floor's base colour read Closest (nearest), the
+  cube's with Extend (clamp to edge) beyond its mapping's 1.5x, under the emissive panel.
+  `worn-cycles.exr` is Cycles' render of it with its Principled BSDF.
 """
 
 import math
@@ -42,7 +49,7 @@ from mathutils import Vector
 argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 OUT = os.path.abspath(argv[0] if argv else "scenes/blender")
 SAMPLES = int(argv[1]) if len(argv) > 1 else 1024
-SCENES = argv[2:] or ["spheres", "lamps", "textured", "bumpy"]
+SCENES = argv[2:] or ["spheres", "lamps", "textured", "bumpy", "worn"]
 WIDTH, HEIGHT = 160, 120
 os.makedirs(OUT, exist_ok=True)
 
@@ -253,6 +260,53 @@ def normal_mapped_material(name, color, image):
     return m
 
 
+# `worn-metal-rough.png`'s quadrants (as in quadrant_image: (column, row from the bottom)):
+# (metallic, roughness).
+WORN = {(0, 1): (1.0, 0.3), (1, 1): (0.0, 0.3), (0, 0): (1.0, 0.8), (1, 0): (0.0, 0.9)}
+
+
+def metal_rough_quadrants(name, size=64):
+    """Metallic in blue and roughness in green, per quadrant as WORN says, as linear data."""
+    image = bpy.data.images.new(name, size, size, alpha=False)
+    image.colorspace_settings.name = "Non-Color"
+    pixels = []
+    for y in range(size):
+        for x in range(size):
+            metallic, roughness = WORN[(2 * x // size, 2 * y // size)]
+            pixels.extend((0.0, roughness, metallic, 1.0))
+    image.pixels = pixels
+    image.filepath_raw = os.path.join(OUT, name + ".png")
+    image.file_format = "PNG"
+    image.save()
+    return image
+
+
+def worn_material(name, colours, metal_rough, scale, interpolation, extension):
+    """Base colour `colours` and metallic and roughness from `metal_rough`'s blue and green,
+    both through one Mapping node scaling the UVs by `scale`."""
+    m = material(name, (1.0, 1.0, 1.0), metallic=1.0, roughness=1.0)
+    tree = m.node_tree
+    principled = tree.nodes["Principled BSDF"]
+    uv = tree.nodes.new("ShaderNodeTexCoord")
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.inputs["Scale"].default_value = (scale, scale, 1.0)
+    tree.links.new(uv.outputs["UV"], mapping.inputs["Vector"])
+    def image_node(image):
+        node = tree.nodes.new("ShaderNodeTexImage")
+        node.image = image
+        node.interpolation = interpolation
+        node.extension = extension
+        tree.links.new(mapping.outputs["Vector"], node.inputs["Vector"])
+        return node
+    tree.links.new(image_node(colours).outputs["Color"], principled.inputs["Base Color"])
+    mr = image_node(metal_rough)
+    separate = tree.nodes.new("ShaderNodeSeparateColor")
+    tree.links.new(mr.outputs["Color"], separate.inputs["Color"])
+    tree.links.new(separate.outputs["Green"], principled.inputs["Roughness"])
+    tree.links.new(separate.outputs["Blue"], principled.inputs["Metallic"])
+    return m
+
+
 def floor_and_cube(floor_material, cube_material):
     """The 8 m floor and the turned 1.2 m cube of `textured` and `bumpy`."""
     bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
@@ -319,3 +373,14 @@ if "bumpy" in SCENES:
     render_settings(scene, cam)
     export("bumpy", cycles=False)
     lambert_variant("bumpy-lambert", ["Floor", "Box"])
+
+if "worn" in SCENES:
+    scene = reset()
+    quadrants = bpy.data.images.get("textured-quadrants") or quadrant_image("textured-quadrants")
+    metal_rough = metal_rough_quadrants("worn-metal-rough")
+    floor_and_cube(worn_material("Floor", quadrants, metal_rough, 2.0, "Closest", "REPEAT"),
+                   worn_material("Box", quadrants, metal_rough, 1.5, "Linear", "EXTEND"))
+    panel()
+    cam = camera("Camera", (0, -7, 3.2), (0, 0, 0.6))
+    render_settings(scene, cam)
+    export("worn")

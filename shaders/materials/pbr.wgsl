@@ -2,7 +2,9 @@
 // model): a mix of a coat over the base colour (shaders/coat.wgsl, not saturating), rough glass
 // whose transmission it tints (dielectric.wgsl's functions) and a GGX metal with Schlick's
 // Fresnel from F0 = base colour. Packed: albedo (and texture_*): base colour; param: ior; alpha:
-// GGX alpha (0: smooth); internal_reflectance: the coat's K; emission: metallic, transmission, 0.
+// GGX alpha (0: smooth); internal_reflectance: the coat's K; emission: metallic, transmission,
+// and 1 where it samples lights; metallic_roughness_*: its image (with_albedo_at in
+// texture.wgsl scales metallic and alpha by it); roughness: its roughness.
 
 fn schlick(f0: vec3f, cos: f32) -> vec3f {
     let x = pow(1.0 - clamp(cos, 0.0, 1.0), 5.0);
@@ -19,7 +21,7 @@ fn pbr_glass(m: Material) -> Material {
 }
 
 fn pbr_samples_lights(m: Material) -> bool {
-    return (1.0 - m.emission.x) * (1.0 - m.emission.y) > 0.0 || m.alpha > 0.0;
+    return m.emission.z > 0.0;
 }
 
 // The metal's BSDF x cos (xyz) and pdf (w) at (wo, wi), rough only.

@@ -459,7 +459,7 @@ pub fn normal_mapped(
     }
     let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
     let bitangent = sign * shading.cross(tangent);
-    let texel = crate::material::texture::bilinear(map.image, uv.x, 1.0 - uv.y);
+    let texel = crate::material::texture::image_at(map.image, uv);
     let local = (2.0 * texel - Vec3::ONE) * Vec3::new(map.scale, map.scale, 1.0);
     let n = local.x * tangent + local.y * bitangent + local.z * shading;
     let len2 = n.dot(n);

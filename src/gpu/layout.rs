@@ -90,6 +90,22 @@ fn wgsl_constants() -> String {
         ("TEXTURE_CHECKER", TEXTURE_CHECKER.literal()),
         ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
         ("TEXTURE_IMAGE", TEXTURE_IMAGE.literal()),
+        (
+            "WRAP_CLAMP",
+            crate::scene::image_lookup::WRAP_CLAMP.literal(),
+        ),
+        (
+            "WRAP_MIRROR",
+            crate::scene::image_lookup::WRAP_MIRROR.literal(),
+        ),
+        (
+            "LOOKUP_NEAREST",
+            crate::scene::image_lookup::LOOKUP_NEAREST.literal(),
+        ),
+        (
+            "MIN_ALPHA",
+            crate::material::microfacet::MIN_ALPHA.literal(),
+        ),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("KIND_POINT", KIND_POINT.literal()),
         ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
@@ -247,7 +263,12 @@ impl ImageArray {
                 Texture::Image(image) => Some(image),
                 _ => None,
             });
-            for image in textures.chain(m.normal_map().map(|n| n.image)) {
+            let maps = m
+                .normal_map()
+                .map(|n| n.image)
+                .into_iter()
+                .chain(m.parameter_image());
+            for image in textures.chain(maps) {
                 if !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image)) {
                     let at = place(&mut out, image, &|_| 0.0);
                     out.placed.push((image, at));
@@ -356,6 +377,9 @@ impl SceneBuffers {
                 }
                 if let Some(map) = m.normal_map() {
                     gpu.normal_map_image = images.texels_of(map.image);
+                }
+                if let Some(image) = m.parameter_image() {
+                    gpu.metallic_roughness_image = images.texels_of(image);
                 }
                 gpu
             })

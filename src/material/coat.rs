@@ -35,13 +35,20 @@ impl Coat {
     /// A coat of index `ior` (> 0) and `roughness` (alpha = roughness^2; below alpha
     /// [`MIN_ALPHA`], smooth).
     pub fn new(ior: f32, roughness: f32, saturates: bool) -> Self {
-        let alpha = roughness * roughness;
         Coat {
             ior,
-            alpha: if alpha >= MIN_ALPHA { alpha } else { 0.0 },
+            alpha: Coat::alpha_of(roughness),
             internal_reflectance: 1.0 - (1.0 - fresnel_mean(ior)) / (ior * ior),
             saturates,
         }
+    }
+
+    /// The GGX alpha of `roughness`: roughness^2, or 0 (smooth) below [`MIN_ALPHA`] (twin:
+    /// `roughness_alpha` in `shaders/texture.wgsl`).
+    #[inline]
+    pub fn alpha_of(roughness: f32) -> f32 {
+        let alpha = roughness * roughness;
+        if alpha >= MIN_ALPHA { alpha } else { 0.0 }
     }
 
     fn ggx(&self) -> Option<Ggx> {

@@ -7,6 +7,7 @@
 //! (which gives it its scene-file `type` name, kernel kind and feature), document it in
 //! `scenes/README.md`.
 
+use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
@@ -65,6 +66,11 @@ pub trait MaterialModel {
     /// The normal map that bends its shading normal on meshes, if any (applied where hits are
     /// completed, before any of the methods below sees the hit).
     fn normal_map(&self) -> Option<&NormalMap> {
+        None
+    }
+    /// An image of per-point parameters, if it has one (`pbr`'s metallic-roughness texture):
+    /// the GPU's image array holds it.
+    fn parameter_image(&self) -> Option<&'static Image> {
         None
     }
     /// Radiance leaving the surface toward the ray.
@@ -178,6 +184,9 @@ macro_rules! registry {
             pub fn textures(&self) -> Vec<Texture> {
                 match self { $(Material::$ty(m) => m.textures(),)+ }
             }
+            pub fn parameter_image(&self) -> Option<&'static Image> {
+                match self { $(Material::$ty(m) => m.parameter_image(),)+ }
+            }
             pub fn relocated(self, origin: glam::DVec3) -> Self {
                 match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }
             }
@@ -204,11 +213,17 @@ macro_rules! registry {
             /// where the scene's images are laid out).
             pub fn gpu(&self) -> GpuMaterial {
                 let packed = match self { $(Material::$ty(m) => m.gpu(),)+ };
-                let (normal_map_size, normal_map_scale) = self.normal_map().map_or(
-                    ([0.0; 2], 0.0),
-                    |n| ([n.image.width as f32, n.image.height as f32], n.scale),
+                let (normal_map_size, normal_map_scale, normal_map_lookup) = self.normal_map().map_or(
+                    ([0.0; 2], 0.0, 0),
+                    |n| ([n.image.width as f32, n.image.height as f32], n.scale, n.image.lookup.bits()),
                 );
-                GpuMaterial { kind: self.kind().kind, normal_map_size, normal_map_scale, ..packed }
+                GpuMaterial {
+                    kind: self.kind().kind,
+                    normal_map_size,
+                    normal_map_scale,
+                    normal_map_lookup,
+                    ..packed
+                }
             }
         }
     };

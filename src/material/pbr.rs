@@ -6,7 +6,9 @@
 //! Fresnel of `ior` (KHR_materials_ior) where the appendix allows Schlick's; the metal is GGX
 //! with Schlick's Fresnel from F0 = base colour, as the appendix defines it; the glass is
 //! `dielectric`'s.
-//! One roughness for all three (alpha = roughness^2). Two-sided but for the glass.
+//! One roughness for all three (alpha = roughness^2). Two-sided but for the glass. A
+//! metallic-roughness image (glTF's metallicRoughnessTexture, linear) scales metallic by its
+//! blue channel and roughness by its green one, point by point.
 //!
 //! Sampling picks a component with its weight in the mix (one number), then samples it: 2
 //! more numbers for the metal, 3 for the coat, glass's own (1 smooth, 3 rough). A non-delta
@@ -19,6 +21,7 @@ use super::plastic::default_ior;
 use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
 use crate::material::texture;
 use crate::scene::file::checked;
+use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
@@ -30,7 +33,9 @@ use serde::{Deserialize, Serialize};
 /// `{ type = "pbr", base_color = [0.8, 0.7, 0.2], metallic = 1.0, roughness = 0.35, ior = 1.5,
 /// transmission = 0 }`; the defaults are glTF's (metallic 1, roughness 1, ior 1.5,
 /// transmission 0); `base_color` may be any texture; `normal_map = { image, scale }` (optional)
-/// bends meshes' shading normals (glTF's `normalTexture`; `scene::normal_map`).
+/// bends meshes' shading normals (glTF's `normalTexture`; `scene::normal_map`);
+/// `metallic_roughness = "file.png"` (optional, linear) scales metallic by its blue channel and
+/// roughness by its green one (glTF's metallicRoughnessTexture).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -40,6 +45,7 @@ pub struct Pbr {
     pub ior: f32,
     pub transmission: f32,
     pub normal_map: Option<NormalMap>,
+    pub metallic_roughness: Option<&'static Image>,
     coat: Coat,
 }
 
@@ -57,6 +63,8 @@ struct PbrDoc {
     transmission: f32,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     normal_map: Option<NormalMap>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    metallic_roughness: Option<String>,
 }
 
 fn one() -> f32 {
@@ -69,8 +77,13 @@ impl TryFrom<PbrDoc> for Pbr {
         if !(d.ior > 0.0) {
             return Err(format!("ior must be > 0, got {}", d.ior));
         }
+        let metallic_roughness = match d.metallic_roughness {
+            Some(name) => Some(crate::scene::image::load_named_linear(&name)?),
+            None => None,
+        };
         Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
-            .with_normal_map(d.normal_map))
+            .with_normal_map(d.normal_map)
+            .with_metallic_roughness(metallic_roughness))
     }
 }
 
@@ -83,6 +96,7 @@ impl From<Pbr> for PbrDoc {
             ior: p.ior,
             transmission: p.transmission,
             normal_map: p.normal_map,
+            metallic_roughness: p.metallic_roughness.map(|i| i.source.clone()),
         }
     }
 }
@@ -110,6 +124,7 @@ impl Pbr {
             ior,
             transmission,
             normal_map: None,
+            metallic_roughness: None,
             coat: Coat::new(ior, roughness, false),
         }
     }
@@ -117,6 +132,35 @@ impl Pbr {
     /// This material with `normal_map`.
     pub fn with_normal_map(self, normal_map: Option<NormalMap>) -> Self {
         Pbr { normal_map, ..self }
+    }
+
+    /// This material with its metallic and roughness scaled by `image`'s blue and green
+    /// channels.
+    pub fn with_metallic_roughness(self, image: Option<&'static Image>) -> Self {
+        Pbr {
+            metallic_roughness: image,
+            ..self
+        }
+    }
+
+    /// This material at `hit`: its metallic and roughness scaled by its metallic-roughness
+    /// image there (then without one), as the kernel's `with_albedo_at` resolves them.
+    fn at(&self, hit: &Hit) -> Pbr {
+        let Some(image) = self.metallic_roughness else {
+            return *self;
+        };
+        let texel = texture::image_at(image, hit.uv);
+        let roughness = self.roughness * texel.y;
+        Pbr {
+            metallic: self.metallic * texel.z,
+            roughness,
+            metallic_roughness: None,
+            coat: Coat {
+                alpha: Coat::alpha_of(roughness),
+                ..self.coat
+            },
+            ..*self
+        }
     }
 
     /// The weights of the coat, the glass and the metal in the mix.
@@ -159,7 +203,7 @@ impl MaterialModel for Pbr {
     const FEATURE: &'static str = "PBR";
     /// Rough; glass in the mix; textured base colours.
     const EXTRA_FEATURES: &'static [&'static str] =
-        &["MICROFACET", "DIELECTRIC", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+        &["MICROFACET", "DIELECTRIC", "METALLIC_ROUGHNESS", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -176,15 +220,25 @@ impl MaterialModel for Pbr {
         if !(self.ior > 0.0) {
             return Err(format!("ior must be > 0, got {}", self.ior));
         }
+        if let Some(image) = self.metallic_roughness
+            && image.max_value > 1.0
+        {
+            return Err(format!(
+                "metallic-roughness image {} has values up to {}: its values lie in [0, 1]",
+                image.source, image.max_value
+            ));
+        }
         self.base_color.validate_albedo()
     }
 
     fn extra_features(&self) -> Vec<&'static str> {
         let rough = (self.roughness * self.roughness >= MIN_ALPHA).then_some("MICROFACET");
         let glass = (self.weights().1 > 0.0).then_some("DIELECTRIC");
+        let image = self.metallic_roughness.map(|_| "METALLIC_ROUGHNESS");
         rough
             .into_iter()
             .chain(glass)
+            .chain(image)
             .chain(self.base_color.feature())
             .collect()
     }
@@ -204,23 +258,30 @@ impl MaterialModel for Pbr {
         self.normal_map.as_ref()
     }
 
-    /// A lobe that is not a delta: the coat's base, or any rough one.
+    /// A lobe that is not a delta: the coat's base, or any rough one, at some point (a
+    /// metallic-roughness image may take metallic to 0 anywhere).
     fn samples_lights(&self) -> bool {
-        self.weights().0 > 0.0 || self.ggx().is_some()
+        let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
+        (1.0 - least_metallic) * (1.0 - self.transmission) > 0.0 || self.ggx().is_some()
+    }
+
+    fn parameter_image(&self) -> Option<&'static Image> {
+        self.metallic_roughness
     }
 
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
-        let (w_coat, w_glass, _) = self.weights();
-        let base = texture::value(&self.base_color, hit);
+        let this = self.at(hit);
+        let (w_coat, w_glass, _) = this.weights();
+        let base = texture::value(&this.base_color, hit);
         let u = sampler.next_f32();
         let chosen = if u < w_coat {
             let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
-            self.coat.sample(base, wo, hit, numbers)?
+            this.coat.sample(base, wo, hit, numbers)?
         } else if u < w_coat + w_glass {
-            let s = self.glass().sample(wo, hit, sampler)?;
+            let s = this.glass().sample(wo, hit, sampler)?;
             // A direction within rounding of where the glass's own density vanishes: not one
             // for the other components' densities to weigh.
-            if !s.lobe.is_delta() && !(self.glass().pdf(wo, s.wi, hit) > 0.0) {
+            if !s.lobe.is_delta() && !(this.glass().pdf(wo, s.wi, hit) > 0.0) {
                 return None;
             }
             BsdfSample {
@@ -234,7 +295,7 @@ impl MaterialModel for Pbr {
             if !(wo_local.z > MIN_COSINE) {
                 return None;
             }
-            let Some(ggx) = self.ggx() else {
+            let Some(ggx) = this.ggx() else {
                 let wi = reflect(-wo, hit.shading);
                 return (!below_surface(hit, wi)).then(|| BsdfSample {
                     weight: schlick(base, wo_local.z),
@@ -261,55 +322,68 @@ impl MaterialModel for Pbr {
         if chosen.lobe.is_delta() {
             return Some(chosen);
         }
-        let pdf = self.pdf(wo, chosen.wi, hit);
+        let pdf = this.pdf(wo, chosen.wi, hit);
         (pdf > 0.0).then(|| BsdfSample {
-            weight: self.eval(wo, chosen.wi, hit) / pdf,
+            weight: this.eval(wo, chosen.wi, hit) / pdf,
             pdf,
             ..chosen
         })
     }
 
     fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
-        let (w_coat, w_glass, w_metal) = self.weights();
-        let base = texture::value(&self.base_color, hit);
+        let this = self.at(hit);
+        let (w_coat, w_glass, w_metal) = this.weights();
+        let base = texture::value(&this.base_color, hit);
         let mut f = Vec3::ZERO;
         if w_coat > 0.0 {
-            f += w_coat * self.coat.eval(base, wo, wi, hit);
+            f += w_coat * this.coat.eval(base, wo, wi, hit);
         }
         if w_glass > 0.0 {
             let tint = transmission_tint(base, wi.dot(hit.shading) < 0.0);
-            f += w_glass * tint * self.glass().eval(wo, wi, hit);
+            f += w_glass * tint * this.glass().eval(wo, wi, hit);
         }
         if w_metal > 0.0 {
-            f += w_metal * self.metal(base, wo, wi, hit).0;
+            f += w_metal * this.metal(base, wo, wi, hit).0;
         }
         f
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
-        let (w_coat, w_glass, w_metal) = self.weights();
-        let base = texture::value(&self.base_color, hit);
+        let this = self.at(hit);
+        let (w_coat, w_glass, w_metal) = this.weights();
+        let base = texture::value(&this.base_color, hit);
         let mut pdf = 0.0;
         if w_coat > 0.0 {
-            pdf += w_coat * self.coat.pdf(base, wo, wi, hit);
+            pdf += w_coat * this.coat.pdf(base, wo, wi, hit);
         }
         if w_glass > 0.0 {
-            pdf += w_glass * self.glass().pdf(wo, wi, hit);
+            pdf += w_glass * this.glass().pdf(wo, wi, hit);
         }
         if w_metal > 0.0 {
-            pdf += w_metal * self.metal(base, wo, wi, hit).1;
+            pdf += w_metal * this.metal(base, wo, wi, hit).1;
         }
         pdf
     }
 
     /// albedo (and texture_*): base colour; param: ior; alpha: GGX alpha (0: smooth);
-    /// internal_reflectance: the coat's K; emission: metallic, transmission, 0.
+    /// internal_reflectance: the coat's K; emission: metallic, transmission, and 1 where it
+    /// samples lights (else 0); metallic_roughness_*: its image, roughness: its roughness.
     fn gpu(&self) -> GpuMaterial {
+        let size = self
+            .metallic_roughness
+            .map_or([0.0; 2], |i| [i.width as f32, i.height as f32]);
         GpuMaterial {
             param: self.ior,
             alpha: self.coat.alpha,
             internal_reflectance: self.coat.internal_reflectance,
-            emission: [self.metallic, self.transmission, 0.0],
+            emission: [
+                self.metallic,
+                self.transmission,
+                if self.samples_lights() { 1.0 } else { 0.0 },
+            ],
+            metallic_roughness_size: size,
+            metallic_roughness_lookup: self.metallic_roughness.map_or(0, |i| i.lookup.bits()),
+            roughness: self.roughness,
             ..GpuMaterial::with_albedo(&self.base_color)
         }
     }

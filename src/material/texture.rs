@@ -1,6 +1,7 @@
 //! Texture lookups (twin: `shaders/texture.wgsl`) and the surface coordinates they use.
 
 use crate::scene::image::Image;
+use crate::scene::image_lookup::{Filter, ImageLookup, Wrap};
 use crate::scene::texture::Texture;
 use crate::shared::layout::{GpuMaterial, TEXTURE_CHECKER, TEXTURE_IMAGE, TEXTURE_UV_CHECKER};
 use crate::shared::ray::Hit;
@@ -20,21 +21,62 @@ pub fn value(texture: &Texture, hit: &Hit) -> Vec3 {
             let p = hit.uv * c.scale;
             pick(parity(p.x) + parity(p.y), c.even, c.odd)
         }
-        Texture::Image(image) => bilinear(image, hit.uv.x, 1.0 - hit.uv.y),
+        Texture::Image(image) => image_at(image, hit.uv),
+    }
+}
+
+/// Integer-valued texel index `i` of an axis of `n` texels, brought into 0..n by `mode`, in f32
+/// arithmetic as the kernel does it.
+#[inline]
+fn wrapped(mode: Wrap, i: f32, n: f32) -> u32 {
+    match mode {
+        Wrap::Repeat => wrap(i, n),
+        Wrap::Clamp => i.clamp(0.0, n - 1.0) as u32,
+        Wrap::Mirror => {
+            // Period 2n: the image, then the image reversed.
+            let m = i - 2.0 * n * (i / (2.0 * n)).floor();
+            let mirrored = if m >= n { 2.0 * n - 1.0 - m } else { m };
+            mirrored.clamp(0.0, n - 1.0) as u32
+        }
     }
 }
 
 /// `image` filtered bilinearly at image coordinates (s, t) (s across, t down, [0, 1] spans
-/// the image once; texel centres at half-integers), wrapping around both edges.
+/// the image once; texel centres at half-integers), wrapping around both edges: how
+/// environments read their images.
 #[inline]
 pub fn bilinear(image: &Image, s: f32, t: f32) -> Vec3 {
+    filtered(image, ImageLookup::default(), s, t)
+}
+
+/// `image` at surface coordinates `uv` (u across, v up; [0, 1] spans the image once) as its
+/// lookup says: wrapped on each axis and filtered.
+#[inline]
+pub fn image_at(image: &Image, uv: Vec2) -> Vec3 {
+    filtered(image, image.lookup, uv.x, 1.0 - uv.y)
+}
+
+/// `image` at image coordinates (s, t), wrapped and filtered as `lookup` says.
+#[inline]
+fn filtered(image: &Image, lookup: ImageLookup, s: f32, t: f32) -> Vec3 {
     let (w, h) = (image.width as f32, image.height as f32);
+    if lookup.filter == Filter::Nearest {
+        let x = wrapped(lookup.wrap_u, (s * w).floor(), w);
+        let y = wrapped(lookup.wrap_v, (t * h).floor(), h);
+        return image.texel(x, y);
+    }
     let x = s * w - 0.5;
     let y = t * h - 0.5;
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let (x0, x1) = (wrap(x0, w), wrap(x0 + 1.0, w));
-    let (y0, y1) = (wrap(y0, h), wrap(y0 + 1.0, h));
+    let (x0, x1) = (
+        wrapped(lookup.wrap_u, x0, w),
+        wrapped(lookup.wrap_u, x0 + 1.0, w),
+    );
+    let (y0, y1) = (
+        wrapped(lookup.wrap_v, y0, h),
+        wrapped(lookup.wrap_v, y0 + 1.0, h),
+    );
     let top = image.texel(x0, y0) * (1.0 - fx) + image.texel(x1, y0) * fx;
     let bottom = image.texel(x0, y1) * (1.0 - fx) + image.texel(x1, y1) * fx;
     top * (1.0 - fy) + bottom * fy
@@ -85,6 +127,7 @@ impl GpuMaterial {
                 return GpuMaterial {
                     texture: TEXTURE_IMAGE,
                     texture_odd: [image.width as f32, image.height as f32, 0.0],
+                    texture_lookup: image.lookup.bits(),
                     ..Default::default()
                 };
             }
@@ -161,6 +204,50 @@ mod tests {
             let parity = (world.x.floor() + world.y.floor() + world.z.floor()).rem_euclid(2.0);
             let expected = if parity == 0.0 { c.even } else { c.odd };
             assert_eq!(value(&moved, &hit_at(p, Vec2::ZERO)), expected, "{p}");
+        }
+    }
+
+    /// A 3x2 image whose texels hold their own (x, y, 0), read at u beyond [0, 1] each way.
+    #[test]
+    fn images_wrap_and_filter_as_their_lookup_says() {
+        use crate::scene::image_lookup::{Filter, ImageLookup, Wrap};
+        let texels = (0..2)
+            .flat_map(|y| (0..3).flat_map(move |x| [x as f32, y as f32, 0.0]))
+            .collect();
+        let image = Image::from_linear("xy", 3, 2, texels).expect("valid");
+        let read = |wrap_u, filter, u: f32| {
+            let lookup = ImageLookup {
+                wrap_u,
+                wrap_v: Wrap::Repeat,
+                filter,
+            };
+            // v = 0.75: row 0's centre (t = 0.25), so only x varies.
+            image_at(&image.with_lookup(lookup), Vec2::new(u, 0.75))
+        };
+        let x = |wrap, filter, u| read(wrap, filter, u).x;
+        // Nearest: u = -0.1 is texel -1, u = 1.2 texel 3 (of 0..3).
+        assert_eq!(x(Wrap::Repeat, Filter::Nearest, -0.1), 2.0);
+        assert_eq!(x(Wrap::Clamp, Filter::Nearest, -0.1), 0.0);
+        assert_eq!(x(Wrap::Mirror, Filter::Nearest, -0.1), 0.0);
+        assert_eq!(x(Wrap::Repeat, Filter::Nearest, 1.2), 0.0);
+        assert_eq!(x(Wrap::Clamp, Filter::Nearest, 1.2), 2.0);
+        assert_eq!(x(Wrap::Mirror, Filter::Nearest, 1.2), 2.0);
+        // Mirror's period is twice the image: texel 4 is texel 1, texel 6 texel 0 again.
+        assert_eq!(x(Wrap::Mirror, Filter::Nearest, 1.5), 1.0);
+        assert_eq!(x(Wrap::Mirror, Filter::Nearest, 2.1), 0.0);
+        assert_eq!(x(Wrap::Clamp, Filter::Nearest, 0.5), 1.0);
+        // Linear, halfway between texel centres 2 and 3 (u = 1): repeat blends texel 2 with
+        // texel 0, clamp and mirror keep texel 2.
+        assert_eq!(x(Wrap::Repeat, Filter::Linear, 1.0), 1.0);
+        assert_eq!(x(Wrap::Clamp, Filter::Linear, 1.0), 2.0);
+        assert_eq!(x(Wrap::Mirror, Filter::Linear, 1.0), 2.0);
+        // The default lookup is the bilinear repeat environments use.
+        for u in [-0.7, 0.1, 0.5, 1.3] {
+            assert_eq!(
+                image_at(&image, Vec2::new(u, 0.3)),
+                bilinear(&image, u, 0.7),
+                "{u}"
+            );
         }
     }
 

@@ -177,6 +177,7 @@ fn reads_uvs(material: &Material) -> bool {
     let features = material.extra_features();
     features.contains(&"UV_CHECKER")
         || features.contains(&"IMAGE_TEXTURE")
+        || features.contains(&"METALLIC_ROUGHNESS")
         || material.normal_map().is_some()
 }
 

@@ -2,10 +2,13 @@
 //! buffer, a data URI or a file beside it) decoded once, and each factor x texture product of
 //! the spec (glTF 2.0, 3.9.2) made once, as a [`Texture::Image`].
 //!
-//! Read: a texture's image and `texCoord` 0; normal textures with their scale. Not read: samplers (every texture repeats and is
-//! filtered bilinearly, Blender's default), `KHR_texture_transform`, other UV sets.
+//! Read: a texture's image and `texCoord` 0, its sampler's wrap modes and magnification filter
+//! (mipmaps are not built: a path tracer filters by taking many samples per pixel); normal
+//! textures with their scale. `KHR_texture_transform` is applied to the mesh's texture
+//! coordinates (`uv_transform`). Not read: other UV sets.
 
 use super::image::{self, Image};
+use super::image_lookup::{Filter, ImageLookup, Wrap};
 use super::normal_map::NormalMap;
 use super::texture::Texture;
 use glam::Vec3;
@@ -25,8 +28,10 @@ pub struct FileTextures<'a> {
     source: &'a str,
     /// Images decoded, by (image index, whether decoded from sRGB).
     decoded: HashMap<(usize, bool), &'static Image>,
-    /// Factor x image products, by (image index, sRGB, the factor's bits).
-    products: HashMap<(usize, bool, [u32; 3]), &'static Image>,
+    /// Decoded images read with a sampler other than the default, by (image index, sRGB, how).
+    sampled: HashMap<(usize, bool, ImageLookup), &'static Image>,
+    /// Factor x image products, by (image index, sRGB, how it is read, the factor's bits).
+    products: HashMap<(usize, bool, ImageLookup, [u32; 3]), &'static Image>,
 }
 
 impl<'a> FileTextures<'a> {
@@ -42,6 +47,7 @@ impl<'a> FileTextures<'a> {
             base_dir,
             source,
             decoded: HashMap::new(),
+            sampled: HashMap::new(),
             products: HashMap::new(),
         }
     }
@@ -63,11 +69,16 @@ impl<'a> FileTextures<'a> {
             ));
         }
         let index = info.texture().source().index();
-        let image = self.image(index, true)?;
+        let image = self.sampled(&info.texture(), true)?;
         if factor == Vec3::ONE {
             return Ok(Texture::Image(image));
         }
-        let key = (index, true, factor.to_array().map(f32::to_bits));
+        let key = (
+            index,
+            true,
+            image.lookup,
+            factor.to_array().map(f32::to_bits),
+        );
         if let Some(&product) = self.products.get(&key) {
             return Ok(Texture::Image(product));
         }
@@ -90,7 +101,7 @@ impl<'a> FileTextures<'a> {
                 normal.tex_coord()
             ));
         }
-        let image = self.image(normal.texture().source().index(), false)?;
+        let image = self.sampled(&normal.texture(), false)?;
         let map = NormalMap {
             image,
             scale: normal.scale(),
@@ -98,6 +109,36 @@ impl<'a> FileTextures<'a> {
         map.validate()
             .map_err(|e| format!("mesh {source}: material \"{material}\": {e}"))?;
         Ok(map)
+    }
+
+    /// A material's `metallicRoughnessTexture` (linear values: green roughness, blue metallic).
+    pub fn metallic_roughness(
+        &mut self,
+        info: &gltf::texture::Info,
+        material: &str,
+    ) -> Result<&'static Image, String> {
+        if info.tex_coord() != 0 {
+            return Err(format!(
+                "mesh {}: material \"{material}\"'s metallicRoughnessTexture reads TEXCOORD_{}; rt-gpu reads TEXCOORD_0 only",
+                self.source,
+                info.tex_coord()
+            ));
+        }
+        self.sampled(&info.texture(), false)
+    }
+
+    /// `texture`'s image decoded (from sRGB where `srgb`) and read as its sampler says.
+    fn sampled(&mut self, texture: &gltf::Texture, srgb: bool) -> Result<&'static Image, String> {
+        let index = texture.source().index();
+        let image = self.image(index, srgb)?;
+        let lookup = lookup_of(&texture.sampler());
+        if lookup == image.lookup {
+            return Ok(image);
+        }
+        Ok(*self
+            .sampled
+            .entry((index, srgb, lookup))
+            .or_insert_with(|| image.with_lookup(lookup).leak()))
     }
 
     /// Image `index` decoded (from sRGB where `srgb`), once.
@@ -175,6 +216,146 @@ impl<'a> FileTextures<'a> {
             ));
         }
         std::fs::read(&path).map_err(|e| format!("cannot read image {name} ({relative}): {e}"))
+    }
+}
+
+/// glTF's UV coordinates (v down) as `KHR_texture_transform` maps them: scale, then rotate
+/// (counter-clockwise in the image), then offset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    pub offset: [f32; 2],
+    pub rotation: f32,
+    pub scale: [f32; 2],
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform {
+        offset: [0.0; 2],
+        rotation: 0.0,
+        scale: [1.0; 2],
+    };
+
+    /// `uv` (glTF's, v down) transformed, by the extension's matrix T R S.
+    pub fn apply(&self, [u, v]: [f32; 2]) -> [f32; 2] {
+        let (sin, cos) = self.rotation.sin_cos();
+        let (su, sv) = (self.scale[0] * u, self.scale[1] * v);
+        [
+            cos * su + sin * sv + self.offset[0],
+            -sin * su + cos * sv + self.offset[1],
+        ]
+    }
+}
+
+/// The one `KHR_texture_transform` the textures of `material` share (identity without one);
+/// an error where they differ or one reads another UV set, since rt-gpu applies it to the
+/// mesh's coordinates.
+pub fn uv_transform(material: &gltf::Material, source: &str) -> Result<UvTransform, String> {
+    let name = material.name().unwrap_or("");
+    let pbr = material.pbr_metallic_roughness();
+    let infos = [
+        ("baseColorTexture", pbr.base_color_texture()),
+        ("metallicRoughnessTexture", pbr.metallic_roughness_texture()),
+        ("emissiveTexture", material.emissive_texture()),
+    ];
+    let mut found: Vec<(&str, UvTransform, Option<u32>)> = infos
+        .into_iter()
+        .filter_map(|(slot, info)| {
+            let info = info?;
+            let t = info.texture_transform();
+            Some((
+                slot,
+                t.as_ref().map_or(UvTransform::IDENTITY, |t| UvTransform {
+                    offset: t.offset(),
+                    rotation: t.rotation(),
+                    scale: t.scale(),
+                }),
+                t.and_then(|t| t.tex_coord()),
+            ))
+        })
+        .collect();
+    if let Some(normal) = material.normal_texture() {
+        let value = normal.extension_value("KHR_texture_transform");
+        found.push((
+            "normalTexture",
+            transform_of_json(value),
+            tex_coord_of_json(value),
+        ));
+    }
+    if let Some((slot, _, Some(set))) = found.iter().find(|(_, _, set)| set.is_some_and(|s| s != 0))
+    {
+        return Err(format!(
+            "mesh {source}: material \"{name}\"'s {slot} reads TEXCOORD_{set} (KHR_texture_transform's texCoord); rt-gpu reads TEXCOORD_0 only"
+        ));
+    }
+    let Some(&(first_slot, first, _)) = found.first() else {
+        return Ok(UvTransform::IDENTITY);
+    };
+    if let Some((slot, other, _)) = found.iter().find(|(_, t, _)| *t != first) {
+        return Err(format!(
+            "mesh {source}: material \"{name}\"'s {first_slot} and {slot} have different KHR_texture_transforms ({first:?} and {other:?}); rt-gpu applies one per material"
+        ));
+    }
+    if !(first
+        .offset
+        .iter()
+        .chain(&first.scale)
+        .all(|x| x.is_finite())
+        && first.rotation.is_finite())
+    {
+        return Err(format!(
+            "mesh {source}: material \"{name}\"'s KHR_texture_transform is not finite: {first:?}"
+        ));
+    }
+    Ok(first)
+}
+
+/// A `KHR_texture_transform` read from its JSON (the `gltf` crate gives normal textures'
+/// extensions only so); absent values take the extension's defaults.
+fn transform_of_json(value: Option<&gltf::json::Value>) -> UvTransform {
+    let Some(value) = value else {
+        return UvTransform::IDENTITY;
+    };
+    let pair = |key: &str, default: [f32; 2]| {
+        value
+            .get(key)
+            .and_then(|v| v.as_array())
+            .filter(|a| a.len() == 2)
+            .and_then(|a| Some([a[0].as_f64()? as f32, a[1].as_f64()? as f32]))
+            .unwrap_or(default)
+    };
+    UvTransform {
+        offset: pair("offset", [0.0; 2]),
+        rotation: value
+            .get("rotation")
+            .and_then(|r| r.as_f64())
+            .unwrap_or(0.0) as f32,
+        scale: pair("scale", [1.0; 2]),
+    }
+}
+
+fn tex_coord_of_json(value: Option<&gltf::json::Value>) -> Option<u32> {
+    value?
+        .get("texCoord")?
+        .as_u64()
+        .map(|t| t.min(u32::MAX as u64) as u32)
+}
+
+/// How a glTF sampler reads its image: its wrap modes, and its magnification filter (glTF
+/// leaves an absent one to the renderer: linear, as Blender's importer takes it).
+fn lookup_of(sampler: &gltf::texture::Sampler) -> ImageLookup {
+    use gltf::texture::{MagFilter, WrappingMode};
+    let wrap = |mode| match mode {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::ClampToEdge => Wrap::Clamp,
+        WrappingMode::MirroredRepeat => Wrap::Mirror,
+    };
+    ImageLookup {
+        wrap_u: wrap(sampler.wrap_s()),
+        wrap_v: wrap(sampler.wrap_t()),
+        filter: match sampler.mag_filter() {
+            Some(MagFilter::Nearest) => Filter::Nearest,
+            _ => Filter::Linear,
+        },
     }
 }
 

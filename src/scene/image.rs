@@ -26,6 +26,9 @@ pub struct Image {
     pub max_value: f32,
     /// The mean texel (what light picking weighs an image-textured emitter by).
     pub mean: glam::Vec3,
+    /// How a textured surface reads it beyond [0, 1] and between texels (an environment reads
+    /// it its own way).
+    pub lookup: super::image_lookup::ImageLookup,
     /// Built on first use by an environment light (see `scene::environment`).
     pub(crate) sampling: OnceLock<super::environment::Distribution>,
 }
@@ -69,6 +72,7 @@ impl Image {
             mean: (sum / (width as f64 * height as f64)).as_vec3(),
             texels,
             max_value,
+            lookup: Default::default(),
             sampling: OnceLock::new(),
         })
     }
@@ -89,7 +93,22 @@ impl Image {
             .chunks_exact(3)
             .flat_map(|rgb| [0, 1, 2].map(|c| rgb[c] * factor[c]))
             .collect();
-        Self::from_linear(source, self.width, self.height, texels)
+        let scaled = Self::from_linear(source, self.width, self.height, texels)?;
+        Ok(Image {
+            lookup: self.lookup,
+            ..scaled
+        })
+    }
+
+    /// A copy of this image read with `lookup`.
+    pub fn with_lookup(&self, lookup: super::image_lookup::ImageLookup) -> Self {
+        Image {
+            source: self.source.clone(),
+            texels: self.texels.clone(),
+            lookup,
+            sampling: OnceLock::new(),
+            ..*self
+        }
     }
 
     /// Leaks `self` for the rest of the process (see the module's documentation).
@@ -109,6 +128,7 @@ impl PartialEq for Image {
         std::ptr::eq(self, other)
             || (self.width == other.width
                 && self.height == other.height
+                && self.lookup == other.lookup
                 && self.texels == other.texels)
     }
 }

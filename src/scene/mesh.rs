@@ -280,6 +280,10 @@ fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
     for model in models {
         let mesh = &model.mesh;
         let key = mesh.material_id.filter(|&i| i < materials.len());
+        let (scale, offset) = match key {
+            Some(k) => mtl_uv_transform(&materials[k], source)?,
+            None => (Vec2::ONE, Vec2::ZERO),
+        };
         let part = part_of(&mut parts, key);
         let base = part.positions.len() as u32;
         let faces = mesh.indices.len() / 3;
@@ -300,7 +304,7 @@ fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
         }
         let vt = |i: u32| {
             let uv = mesh.texcoords.get(2 * i as usize..2 * i as usize + 2)?;
-            Some(Vec2::new(uv[0], uv[1]))
+            Some(Vec2::new(uv[0], uv[1]) * scale + offset)
         };
         if mesh.texcoord_indices.len() == mesh.indices.len() {
             part.uvs
@@ -447,6 +451,46 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
         )
         .with_normal_map(normal_map),
     ))
+}
+
+/// The scale and offset (`-s u v`, `-o u v`: what Blender's exporter writes for a Mapping
+/// node) that `m`'s maps apply to texture coordinates, `vt * scale + offset`; one for all its
+/// maps (an error where they differ, since rt-gpu applies it to the mesh's coordinates).
+fn mtl_uv_transform(m: &tobj::Material, source: &str) -> Result<(Vec2, Vec2), String> {
+    let option = |words: &[&str], flag: &str, default: f32| {
+        let at = words.iter().position(|w| *w == flag)?;
+        let mut values = words[at + 1..].iter().map_while(|w| w.parse::<f32>().ok());
+        let u = values.next()?;
+        Some(Vec2::new(u, values.next().unwrap_or(default)))
+    };
+    let maps = [m.diffuse_texture.as_deref(), m.normal_texture.as_deref()]
+        .into_iter()
+        .chain([m.unknown_param.get("norm").map(String::as_str)])
+        .flatten();
+    let mut found: Option<(Vec2, Vec2)> = None;
+    for map in maps {
+        let words: Vec<&str> = map.split_whitespace().collect();
+        let transform = (
+            option(&words, "-s", 1.0).unwrap_or(Vec2::ONE),
+            option(&words, "-o", 0.0).unwrap_or(Vec2::ZERO),
+        );
+        if !(transform.0.is_finite() && transform.1.is_finite()) {
+            return Err(format!(
+                "mesh {source}: material \"{}\"'s map \"{map}\" has a scale or offset that is not finite",
+                m.name
+            ));
+        }
+        match found {
+            Some(other) if other != transform => {
+                return Err(format!(
+                    "mesh {source}: material \"{}\"'s maps scale or offset texture coordinates differently (-s, -o); rt-gpu applies one per material",
+                    m.name
+                ));
+            }
+            _ => found = Some(transform),
+        }
+    }
+    Ok(found.unwrap_or((Vec2::ONE, Vec2::ZERO)))
 }
 
 /// The image an MTL map `slot` names (`map` after its options: tobj keeps `-o u v` and the like
@@ -709,9 +753,13 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     return Err(format!("mesh {source}: a primitive has no positions"));
                 };
                 let key = primitive.material().index();
+                let transform = super::gltf_textures::uv_transform(&primitive.material(), source)?;
                 let uvs: Option<Vec<Vec2>> = reader.read_tex_coords(0).map(|read| {
                     read.into_f32()
-                        .map(|[u, v]| Vec2::new(u, 1.0 - v))
+                        .map(|uv| {
+                            let [u, v] = transform.apply(uv);
+                            Vec2::new(u, 1.0 - v)
+                        })
                         .collect()
                 });
                 if uvs.is_none()
@@ -827,6 +875,8 @@ fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
     let pbr = material.pbr_metallic_roughness();
     if pbr.base_color_texture().is_some() {
         Some("baseColorTexture")
+    } else if pbr.metallic_roughness_texture().is_some() {
+        Some("metallicRoughnessTexture")
     } else if material.emissive_texture().is_some() {
         Some("emissiveTexture")
     } else if material.normal_texture().is_some() {
@@ -839,8 +889,8 @@ fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
 /// A glTF metallic-roughness material as rt-gpu's: emissive -> light (emissive factor x
 /// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is), else
 /// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
-/// KHR_materials_ior (default 1.5), KHR_materials_transmission's factor (default 0) and the
-/// normal texture. Not read: the metallic-roughness and occlusion textures, alpha.
+/// KHR_materials_ior (default 1.5), KHR_materials_transmission's factor (default 0), the
+/// metallic-roughness texture and the normal texture. Not read: the occlusion texture, alpha.
 fn material_of(
     m: &gltf::Material,
     textures: &mut super::gltf_textures::FileTextures,
@@ -879,6 +929,10 @@ fn material_of(
         Some(normal) => Some(textures.normal_map(&normal, name)?),
         None => None,
     };
+    let metallic_roughness = match pbr.metallic_roughness_texture() {
+        Some(info) => Some(textures.metallic_roughness(&info, name)?),
+        None => None,
+    };
     Ok(Material::Pbr(
         Pbr::new(
             base,
@@ -890,6 +944,7 @@ fn material_of(
                 .clamp(1.0, 4.0),
             unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
         )
-        .with_normal_map(normal_map),
+        .with_normal_map(normal_map)
+        .with_metallic_roughness(metallic_roughness),
     ))
 }

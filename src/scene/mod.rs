@@ -11,6 +11,7 @@ pub mod gltf_check;
 pub mod gltf_scene;
 pub mod gltf_textures;
 pub mod image;
+pub mod image_lookup;
 pub mod media;
 pub mod mesh;
 pub mod normal_map;

@@ -351,6 +351,18 @@ gpu_struct! {
         normal_map_size: [f32; 2],
         normal_map_image: u32,
         normal_map_scale: f32,
+        /// How the albedo's and the normal map's images are read (`ImageLookup::bits`).
+        texture_lookup: u32,
+        normal_map_lookup: u32,
+        /// A metallic-roughness image's width and height (0: none; `material::Pbr`), where
+        /// its texels start in the images array, and how it is read.
+        metallic_roughness_size: [f32; 2],
+        metallic_roughness_image: u32,
+        metallic_roughness_lookup: u32,
+        /// Roughness before the metallic-roughness image scales it (`alpha` is what it is
+        /// without one).
+        roughness: f32,
+        _pad: u32,
     }
 }
 
