@@ -68,6 +68,11 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
     let packed = (KIND_INSTANCE << PRIMITIVE_INDEX_BITS) | instance;
     let h = triangle_hit(triangles[triangle], ray, sh);
     if replaces_in_instance(h.x, packed, triangle, c) {
+//#if ALPHA
+        if passes_through(instances[instance].material, triangle, h.yz, ray, packed, triangle) {
+            return;
+        }
+//#endif
         (*c).t = h.x;
         (*c).found = true;
         (*c).primitive = packed;

@@ -233,6 +233,11 @@ fn triangle_hit(tri: Triangle, ray: Ray, sh: Shear) -> vec3f {
 fn consider_triangle(tri: Triangle, index: u32, ray: Ray, sh: Shear, c: ptr<function, Closest>) {
     let h = triangle_hit(tri, ray, sh);
     if replaces(h.x, (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index, c) {
+//#if ALPHA
+        if passes_through(tri.material, index, h.yz, ray, (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index, 0u) {
+            return;
+        }
+//#endif
         (*c).t = h.x;
         (*c).found = true;
         (*c).primitive = (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index;

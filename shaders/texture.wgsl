@@ -17,7 +17,7 @@ fn sphere_uv(n: vec3f) -> vec2f {
 }
 //#endif
 
-//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS || ALPHA
 // Texel (x, y) of the image of `width` columns whose texels start at `start` among the images.
 fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
     return image_value(start + y * width + x).xyz;

@@ -4,6 +4,7 @@ use crate::scene::flat::{FlatScene, Instance, Quad, Sphere, Triangle};
 use crate::scene::normal_map::NormalMap;
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
 use crate::shared::ray::{Hit, POINT_ERROR, Ray};
+use crate::shared::rng::alpha_number;
 use glam::{Vec2, Vec3, Vec4};
 
 /// Distance along the ray to `sphere` within (t_min, t_max), if any.
@@ -262,6 +263,19 @@ fn consider(
     if !replaces(t, (p.packed(), 0), *closest, found) {
         return;
     }
+    if let PrimitiveRef::Triangle(i) = p
+        && scene.see_through
+        && passes_through(
+            scene,
+            scene.triangles[i as usize].material,
+            i,
+            weights,
+            ray,
+            (p.packed(), 0),
+        )
+    {
+        return;
+    }
     *closest = t;
     *found = Some(Candidate {
         primitive: p,
@@ -302,6 +316,19 @@ fn consider_instance(
             if !replaces(t, (primitive.packed(), triangle), *closest, found) {
                 return;
             }
+            let key = (primitive.packed(), triangle);
+            if scene.see_through
+                && passes_through(
+                    scene,
+                    instance.material,
+                    triangle,
+                    Vec2::new(b1, b2),
+                    &local,
+                    key,
+                )
+            {
+                return;
+            }
             *closest = t;
             *found = Some(Candidate {
                 primitive,
@@ -311,6 +338,40 @@ fn consider_instance(
             });
         },
     );
+}
+
+/// Whether `ray` passes through triangle `triangle` (of material `material`) at barycentric
+/// weights `weights`, the primitive keyed `key` (as [`Candidate::key`]): never for opaque
+/// materials; see `scene::alpha` (twin: `shaders/alpha.wgsl`).
+#[inline]
+fn passes_through(
+    scene: &FlatScene,
+    material: u32,
+    triangle: u32,
+    weights: Vec2,
+    ray: &Ray,
+    (primitive, instanced): (u32, u32),
+) -> bool {
+    let Some(alpha) = scene.materials[material as usize].alpha() else {
+        return false;
+    };
+    let texture = match alpha.image {
+        Some(image) => {
+            let uv = match scene.triangle_uvs.get(triangle as usize) {
+                Some(uvs) => interpolated_uv(uvs, weights),
+                None => weights,
+            };
+            crate::material::texture::image_at(image, uv).x
+        }
+        None => 1.0,
+    };
+    let u = alpha_number(
+        ray.origin.to_array(),
+        ray.dir.to_array(),
+        primitive,
+        instanced,
+    );
+    alpha.passes(alpha.factor * texture, u)
 }
 
 /// The closest hit along `ray` beyond its origin.

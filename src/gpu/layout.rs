@@ -106,6 +106,8 @@ fn wgsl_constants() -> String {
             "MIN_ALPHA",
             crate::material::microfacet::MIN_ALPHA.literal(),
         ),
+        ("ALPHA_MASK", crate::scene::alpha::ALPHA_MASK.literal()),
+        ("ALPHA_BLEND", crate::scene::alpha::ALPHA_BLEND.literal()),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("KIND_POINT", KIND_POINT.literal()),
         ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
@@ -263,11 +265,9 @@ impl ImageArray {
                 Texture::Image(image) => Some(image),
                 _ => None,
             });
-            let maps = m
-                .normal_map()
-                .map(|n| n.image)
-                .into_iter()
-                .chain(m.parameter_image());
+            let maps = (m.normal_map().map(|n| n.image).into_iter())
+                .chain(m.parameter_image())
+                .chain(m.alpha().and_then(|a| a.image));
             for image in textures.chain(maps) {
                 if !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image)) {
                     let at = place(&mut out, image, &|_| 0.0);
@@ -380,6 +380,9 @@ impl SceneBuffers {
                 }
                 if let Some(image) = m.parameter_image() {
                     gpu.metallic_roughness_image = images.texels_of(image);
+                }
+                if let Some(image) = m.alpha().and_then(|a| a.image) {
+                    gpu.alpha_image = images.texels_of(image);
                 }
                 gpu
             })

@@ -29,6 +29,7 @@ const MODULES: &[(&str, &str)] = &[
     ),
     ("accel.wgsl", include_str!("../../shaders/accel.wgsl")),
     ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
+    ("alpha.wgsl", include_str!("../../shaders/alpha.wgsl")),
     (
         "normal_map.wgsl",
         include_str!("../../shaders/normal_map.wgsl"),

@@ -7,6 +7,7 @@
 //! (which gives it its scene-file `type` name, kernel kind and feature), document it in
 //! `scenes/README.md`.
 
+use crate::scene::alpha::Alpha;
 use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
@@ -71,6 +72,10 @@ pub trait MaterialModel {
     /// An image of per-point parameters, if it has one (`pbr`'s metallic-roughness texture):
     /// the GPU's image array holds it.
     fn parameter_image(&self) -> Option<&'static Image> {
+        None
+    }
+    /// How rays see through it, if they may (`scene::alpha`; the closest-hit search asks).
+    fn alpha(&self) -> Option<&Alpha> {
         None
     }
     /// Radiance leaving the surface toward the ray.
@@ -176,6 +181,9 @@ macro_rules! registry {
                 if let Some(map) = self.normal_map() {
                     map.validate()?;
                 }
+                if let Some(alpha) = self.alpha() {
+                    alpha.validate()?;
+                }
                 match self { $(Material::$ty(m) => m.validate(),)+ }
             }
             pub fn extra_features(&self) -> Vec<&'static str> {
@@ -186,6 +194,10 @@ macro_rules! registry {
             }
             pub fn parameter_image(&self) -> Option<&'static Image> {
                 match self { $(Material::$ty(m) => m.parameter_image(),)+ }
+            }
+            #[inline]
+            pub fn alpha(&self) -> Option<&Alpha> {
+                match self { $(Material::$ty(m) => m.alpha(),)+ }
             }
             pub fn relocated(self, origin: glam::DVec3) -> Self {
                 match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }
@@ -217,11 +229,18 @@ macro_rules! registry {
                     ([0.0; 2], 0.0, 0),
                     |n| ([n.image.width as f32, n.image.height as f32], n.scale, n.image.lookup.bits()),
                 );
+                let (alpha_mode, alpha_cutoff) = self.alpha().map_or((0, 0.0), |a| a.gpu_mode());
+                let alpha_image = self.alpha().and_then(|a| a.image);
                 GpuMaterial {
                     kind: self.kind().kind,
                     normal_map_size,
                     normal_map_scale,
                     normal_map_lookup,
+                    alpha_mode,
+                    alpha_cutoff,
+                    alpha_factor: self.alpha().map_or(1.0, |a| a.factor),
+                    alpha_size: alpha_image.map_or([0.0; 2], |i| [i.width as f32, i.height as f32]),
+                    alpha_lookup: alpha_image.map_or(0, |i| i.lookup.bits()),
                     ..packed
                 }
             }

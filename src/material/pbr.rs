@@ -20,6 +20,7 @@ use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
 use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
 use crate::material::texture;
+use crate::scene::alpha::Alpha;
 use crate::scene::file::checked;
 use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
@@ -46,6 +47,8 @@ pub struct Pbr {
     pub transmission: f32,
     pub normal_map: Option<NormalMap>,
     pub metallic_roughness: Option<&'static Image>,
+    /// How rays see through it (glTF's alphaMode; not in scene files yet).
+    pub alpha: Option<Alpha>,
     coat: Coat,
 }
 
@@ -125,6 +128,7 @@ impl Pbr {
             transmission,
             normal_map: None,
             metallic_roughness: None,
+            alpha: None,
             coat: Coat::new(ior, roughness, false),
         }
     }
@@ -141,6 +145,11 @@ impl Pbr {
             metallic_roughness: image,
             ..self
         }
+    }
+
+    /// This material, seen through as `alpha` says.
+    pub fn with_alpha(self, alpha: Option<Alpha>) -> Self {
+        Pbr { alpha, ..self }
     }
 
     /// This material at `hit`: its metallic and roughness scaled by its metallic-roughness
@@ -203,7 +212,7 @@ impl MaterialModel for Pbr {
     const FEATURE: &'static str = "PBR";
     /// Rough; glass in the mix; textured base colours.
     const EXTRA_FEATURES: &'static [&'static str] =
-        &["MICROFACET", "DIELECTRIC", "METALLIC_ROUGHNESS", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+        &["MICROFACET", "DIELECTRIC", "METALLIC_ROUGHNESS", "ALPHA", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -235,10 +244,12 @@ impl MaterialModel for Pbr {
         let rough = (self.roughness * self.roughness >= MIN_ALPHA).then_some("MICROFACET");
         let glass = (self.weights().1 > 0.0).then_some("DIELECTRIC");
         let image = self.metallic_roughness.map(|_| "METALLIC_ROUGHNESS");
+        let alpha = self.alpha.map(|_| "ALPHA");
         rough
             .into_iter()
             .chain(glass)
             .chain(image)
+            .chain(alpha)
             .chain(self.base_color.feature())
             .collect()
     }
@@ -267,6 +278,10 @@ impl MaterialModel for Pbr {
 
     fn parameter_image(&self) -> Option<&'static Image> {
         self.metallic_roughness
+    }
+
+    fn alpha(&self) -> Option<&Alpha> {
+        self.alpha.as_ref()
     }
 
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {

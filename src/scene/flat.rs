@@ -179,6 +179,7 @@ fn reads_uvs(material: &Material) -> bool {
         || features.contains(&"IMAGE_TEXTURE")
         || features.contains(&"METALLIC_ROUGHNESS")
         || material.normal_map().is_some()
+        || material.alpha().is_some_and(|a| a.image.is_some())
 }
 
 /// The corner texture coordinates of a triangle whose mesh has none, in a scene where others
@@ -241,6 +242,8 @@ pub struct FlatScene {
     pub medium_crossings: u32,
     /// Whether some material's texture needs surface (UV) coordinates: hits compute them.
     pub uv_textures: bool,
+    /// Whether some material is see-through (`scene::alpha`): the closest-hit search asks it.
+    pub see_through: bool,
     /// Where each box's six quads begin in `quads` (in the order of [`box_faces`]): kernels
     /// with the scene inlined test the six as one, as the slabs between opposite faces (see
     /// `box_test` in src/gpu/shader.rs: less work than six quad tests).
@@ -345,6 +348,7 @@ impl FlatScene {
         let camera = camera_frame(scene, origin, width, height);
         let mut flat = primitives.finish(materials, origin, camera)?;
         flat.uv_textures = flat.materials.iter().any(reads_uvs);
+        flat.see_through = flat.materials.iter().any(|m| m.alpha().is_some());
         flat.check_checker_scales()?;
         flat.collect_lights(&scene.punctual);
         flat.medium_crossings = flat.count_medium_crossings();
@@ -1129,6 +1133,7 @@ impl<'a> Flattener<'a> {
             lights: Vec::new(),
             medium_crossings: 0,
             uv_textures: false,
+            see_through: false,
             boxes: self.boxes,
         })
     }

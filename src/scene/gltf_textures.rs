@@ -30,6 +30,8 @@ pub struct FileTextures<'a> {
     decoded: HashMap<(usize, bool), &'static Image>,
     /// Decoded images read with a sampler other than the default, by (image index, sRGB, how).
     sampled: HashMap<(usize, bool, ImageLookup), &'static Image>,
+    /// Alpha channels of images, by (image index, how it is read); `None`: it has none.
+    alphas: HashMap<(usize, ImageLookup), Option<&'static Image>>,
     /// Factor x image products, by (image index, sRGB, how it is read, the factor's bits).
     products: HashMap<(usize, bool, ImageLookup, [u32; 3]), &'static Image>,
 }
@@ -48,6 +50,7 @@ impl<'a> FileTextures<'a> {
             source,
             decoded: HashMap::new(),
             sampled: HashMap::new(),
+            alphas: HashMap::new(),
             products: HashMap::new(),
         }
     }
@@ -109,6 +112,28 @@ impl<'a> FileTextures<'a> {
         map.validate()
             .map_err(|e| format!("mesh {source}: material \"{material}\": {e}"))?;
         Ok(map)
+    }
+
+    /// The alpha channel of a material's base colour texture (linear), read as the texture's
+    /// sampler says; `None` where its image has none.
+    pub fn alpha(&mut self, info: &gltf::texture::Info) -> Result<Option<&'static Image>, String> {
+        let texture = info.texture();
+        let index = texture.source().index();
+        let lookup = lookup_of(&texture.sampler());
+        if let Some(&image) = self.alphas.get(&(index, lookup)) {
+            return Ok(image);
+        }
+        let Some(file_image) = self.document.images().nth(index) else {
+            return Err(format!(
+                "mesh {}: a texture names image {index}, which does not exist",
+                self.source
+            ));
+        };
+        let name = format!("{} image {index}", self.source);
+        let bytes = self.bytes(&file_image, &name)?;
+        let image = image::decode_alpha_bytes(&bytes, &name)?.map(|a| a.with_lookup(lookup).leak());
+        self.alphas.insert((index, lookup), image);
+        Ok(image)
     }
 
     /// A material's `metallicRoughnessTexture` (linear values: green roughness, blue metallic).

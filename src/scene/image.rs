@@ -273,6 +273,23 @@ pub fn decode_bytes(bytes: &[u8], source: &str, srgb: bool) -> Result<Image, Str
     to_linear(decode_from(reader, source)?, source, srgb)
 }
 
+/// The alpha channel of the image in `bytes` (PNG, JPEG, ...) as a linear image with alpha in
+/// each channel; `None` if it has no alpha channel (everywhere opaque).
+pub fn decode_alpha_bytes(bytes: &[u8], source: &str) -> Result<Option<Image>, String> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;
+    let decoded = decode_from(reader, source)?;
+    if !decoded.color().has_alpha() {
+        return Ok(None);
+    }
+    let (width, height) = (decoded.width(), decoded.height());
+    let texels = (decoded.into_rgba32f().into_raw().chunks_exact(4))
+        .flat_map(|rgba| [rgba[3]; 3])
+        .collect();
+    Image::from_linear(&format!("{source} (alpha)"), width, height, texels).map(Some)
+}
+
 /// A decoded image's linear RGB: floating-point values as they are, others from sRGB where
 /// `srgb`.
 fn to_linear(decoded: image::DynamicImage, source: &str, srgb: bool) -> Result<Image, String> {

@@ -370,8 +370,8 @@ fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
 /// the image), roughness `Pr` or 1 - sqrt(`Ns` / 1000) (Blender writes Ns = (1 - roughness)^2 x
 /// 1000), metallic `Pm`, or 1 for `illum 3` (Blender's mark of a metallic surface), ior `Ni`,
 /// and a normal map `map_Bump` or `norm` (linear, its `-bm` option the scale: what Blender
-/// writes for a Normal Map node). Not read: transmission (Blender does not write it), `d`
-/// (alpha), other maps.
+/// writes for a Normal Map node), and `d` below 1 as stochastic opacity (glTF's BLEND). Not
+/// read: transmission (Blender does not write it), other maps.
 fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Material, String> {
     use crate::material::{Light, Pbr};
     let colour = |c: Option<[f32; 3]>| c.map(Vec3::from_array).filter(|c| c.is_finite());
@@ -408,6 +408,16 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
             .clamp(Vec3::ZERO, Vec3::ONE)
             .into(),
     };
+    // `d` below 1 (Blender writes the Principled BSDF's alpha there): see-through, as glTF's
+    // BLEND.
+    let dissolve =
+        m.dissolve
+            .filter(|d| d.is_finite() && *d < 1.0)
+            .map(|d| crate::scene::alpha::Alpha {
+                mode: crate::scene::alpha::AlphaMode::Blend,
+                factor: d.max(0.0),
+                image: None,
+            });
     let bump = (m.normal_texture.as_ref().map(|map| (map, "map_Bump")))
         .or_else(|| m.unknown_param.get("norm").map(|map| (map, "norm")));
     let normal_map = match bump {
@@ -449,7 +459,8 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
                 .clamp(1.0, 4.0),
             0.0,
         )
-        .with_normal_map(normal_map),
+        .with_normal_map(normal_map)
+        .with_alpha(dissolve),
     ))
 }
 
@@ -890,7 +901,8 @@ fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
 /// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is), else
 /// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
 /// KHR_materials_ior (default 1.5), KHR_materials_transmission's factor (default 0), the
-/// metallic-roughness texture and the normal texture. Not read: the occlusion texture, alpha.
+/// metallic-roughness texture, the normal texture and alphaMode MASK or BLEND (the base
+/// colour's alpha factor x its texture's alpha channel). Not read: the occlusion texture.
 fn material_of(
     m: &gltf::Material,
     textures: &mut super::gltf_textures::FileTextures,
@@ -933,6 +945,30 @@ fn material_of(
         Some(info) => Some(textures.metallic_roughness(&info, name)?),
         None => None,
     };
+    let alpha = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => None,
+        mode => {
+            let image = match pbr.base_color_texture() {
+                Some(info) => textures.alpha(&info)?,
+                None => None,
+            };
+            let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+            Some(crate::scene::alpha::Alpha {
+                mode: match mode {
+                    gltf::material::AlphaMode::Mask => crate::scene::alpha::AlphaMode::Mask {
+                        cutoff: if cutoff.is_finite() {
+                            cutoff.max(0.0)
+                        } else {
+                            0.5
+                        },
+                    },
+                    _ => crate::scene::alpha::AlphaMode::Blend,
+                },
+                factor: unit(pbr.base_color_factor()[3]),
+                image,
+            })
+        }
+    };
     Ok(Material::Pbr(
         Pbr::new(
             base,
@@ -945,6 +981,7 @@ fn material_of(
             unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
         )
         .with_normal_map(normal_map)
-        .with_metallic_roughness(metallic_roughness),
+        .with_metallic_roughness(metallic_roughness)
+        .with_alpha(alpha),
     ))
 }

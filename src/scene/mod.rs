@@ -3,6 +3,7 @@
 //! A [`Scene`] is what a user describes (boxes, instances, named materials); [`flat::FlatScene`] is
 //! what the backends trace (world-space spheres and quads, resolved material indices).
 
+pub mod alpha;
 pub mod builtin;
 pub mod environment;
 pub mod file;

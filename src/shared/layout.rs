@@ -362,7 +362,16 @@ gpu_struct! {
         /// Roughness before the metallic-roughness image scales it (`alpha` is what it is
         /// without one).
         roughness: f32,
-        _pad: u32,
+        /// See-through surfaces (`scene::alpha`): the alpha factor, the alpha image's size (0:
+        /// none), where its texels start and how it is read, the mode (`ALPHA_*`; opaque 0)
+        /// and MASK's cutoff.
+        alpha_factor: f32,
+        alpha_size: [f32; 2],
+        alpha_image: u32,
+        alpha_lookup: u32,
+        alpha_mode: u32,
+        alpha_cutoff: f32,
+        _pad: [u32; 2],
     }
 }
 

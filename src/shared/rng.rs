@@ -14,6 +14,19 @@ pub fn pcg_hash(input: u32) -> u32 {
     (word >> 22) ^ word
 }
 
+/// A see-through surface's number in [0, 1) for a ray (`origin`, `dir`) meeting primitive
+/// `primitive` (packed; an instance's `triangle`, else 0): a hash of all of them, so that each
+/// test of one ray against one surface draws the same number and surfaces behind one another
+/// draw independent ones (see `scene::alpha`).
+#[inline]
+pub fn alpha_number(origin: [f32; 3], dir: [f32; 3], primitive: u32, triangle: u32) -> f32 {
+    let mut h = pcg_hash(primitive ^ pcg_hash(triangle));
+    for x in origin.into_iter().chain(dir) {
+        h = pcg_hash(h ^ x.to_bits());
+    }
+    (h >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
 /// A PCG32 stream with 32 bits of state: ample for the few dozen numbers one path uses.
 /// `Default` is an unused stream (state 0), for samplers that draw no PCG numbers.
 #[derive(Clone, Copy, Debug, Default)]
@@ -64,6 +77,38 @@ mod tests {
         }
         // Standard error of the mean of U(0,1) is sqrt(1/12/n) ~ 0.0009; 5 sigma.
         assert!((sum / n as f64 - 0.5).abs() < 0.0046);
+    }
+
+    /// Alpha numbers of rays from nearby origins (the bits that vary are the low ones) and of
+    /// surfaces behind one another are uniform: chi-square over 16 bins of 160 000 numbers, at
+    /// 0.001 (37.7 for 15 degrees of freedom), for each.
+    #[test]
+    fn alpha_numbers_are_uniform_over_rays_and_surfaces() {
+        let bins = |numbers: &mut dyn Iterator<Item = f32>| {
+            let mut counts = [0u32; 16];
+            let mut n = 0;
+            for x in numbers {
+                assert!((0.0..1.0).contains(&x));
+                counts[(x * 16.0) as usize] += 1;
+                n += 1;
+            }
+            let expected = n as f64 / 16.0;
+            counts
+                .iter()
+                .map(|&c| (c as f64 - expected).powi(2) / expected)
+                .sum::<f64>()
+        };
+        let n = 160_000;
+        let along_x = bins(
+            &mut (0..n)
+                .map(|i| alpha_number([0.5 + i as f32 * 1e-6, 0.25, 1.0], [0.0, 0.0, -1.0], 7, 0)),
+        );
+        let behind =
+            bins(&mut (0..n).map(|i| alpha_number([0.5, 0.25, 1.0], [0.0, 0.0, -1.0], i, 0)));
+        assert!(
+            along_x < 37.7 && behind < 37.7,
+            "chi-square {along_x}, {behind}"
+        );
     }
 
     #[test]
