@@ -584,8 +584,9 @@ fn alpha_masks_cut_holes_and_blending_stops_rays_by_chance() {
 }
 
 /// A floor under an area light with two see-through triangles between: `mask.gltf`'s cut by
-/// alpha.png's clear half (MASK), `veil.gltf`'s the same texture's alpha x 0.6 (BLEND).
-fn see_through_scene(dir: &Path, veil_alpha: f32) -> Scene {
+/// alpha.png's clear half (MASK), `veil.gltf`'s the same texture's alpha x 0.6 (BLEND); with
+/// `twice`, the mask placed a second time, so that both placements are instances.
+fn see_through_scene(dir: &Path, veil_alpha: f32, twice: bool) -> Scene {
     let mask = dir.join("mask");
     let veil = dir.join("veil");
     for (folder, material) in [
@@ -625,8 +626,10 @@ translate = [-0.7, 0, 0]
 mesh = { file = "veil/tri.gltf" }
 translate = [0.7, 0, 0.3]
 "#;
+    let second =
+        "\n[[object]]\nmesh = { file = \"mask/tri.gltf\" }\ntranslate = [0.2, -0.9, 0.2]\n";
     let path = dir.join("see-through.toml");
-    std::fs::write(&path, text).expect("writes");
+    std::fs::write(&path, format!("{text}{}", if twice { second } else { "" })).expect("writes");
     rt_gpu::scene::file::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -638,7 +641,7 @@ translate = [0.7, 0, 0.3]
 fn see_through_surfaces_render_alike_every_way() {
     use common::stats::compare;
     let dir = tempfile::tempdir().expect("temp dir");
-    let scene = see_through_scene(dir.path(), 0.6);
+    let scene = see_through_scene(dir.path(), 0.6, false);
     let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
     assert!(flat.see_through);
     let naive = common::render_cpu(&scene, &common::opts(24, 18, 4096, 5, 1));
@@ -655,14 +658,15 @@ fn see_through_surfaces_render_alike_every_way() {
         let verdict = compare(&nee, &render_gpu(&gpu, &scene, &opts, &tuning));
         eprintln!("see-through, cpu vs gpu: {verdict:?}");
         assert!(verdict.passed(), "{verdict:?}");
-        let denser = see_through_scene(&dir.path().join("denser"), 0.63);
+        let denser = see_through_scene(&dir.path().join("denser"), 0.63, false);
         let verdict = compare(&nee, &render_gpu(&gpu, &denser, &opts, &tuning));
         eprintln!("see-through, the veil's alpha 0.63 on the gpu: {verdict:?}");
         assert!(!verdict.passed(), "a 5% denser veil went undetected");
     }
 }
 
-/// The kernel's closest hits of rays straight down onto the see-through scene equal the CPU's
+/// The kernel's closest hits of rays straight down onto the see-through scene (its meshes
+/// copied, and with the mask placed twice, instanced) equal the CPU's
 /// (the same primitive, or both none) but for a few within rounding of a mask's edge or of a
 /// veil's number; negative control: with every alpha ignored, the CPU's hits differ from the
 /// kernel's for a large share of the rays.
@@ -671,44 +675,48 @@ fn see_through_surfaces_render_alike_every_way() {
 fn gpu_rays_pass_see_through_surfaces_where_cpu_rays_do() {
     use common::gpu::renderer;
     let Some(gpu) = renderer() else { return };
-    let dir = tempfile::tempdir().expect("temp dir");
-    let scene = see_through_scene(dir.path(), 0.6);
-    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
-    let mut opaque = flat.clone();
-    for m in &mut opaque.materials {
-        if let Material::Pbr(p) = m {
-            *p = p.with_alpha(None);
+    for twice in [false, true] {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let scene = see_through_scene(dir.path(), 0.6, twice);
+        let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+        assert_eq!(flat.instances.is_empty(), !twice);
+        let mut opaque = flat.clone();
+        for m in &mut opaque.materials {
+            if let Material::Pbr(p) = m {
+                *p = p.with_alpha(None);
+            }
         }
+        opaque.see_through = false;
+        let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 13);
+        let rays: Vec<(Vec3, Vec3)> = (0..20_000)
+            .map(|_| {
+                let p = Vec3::new(3.0 * rng.next_f32() - 1.5, 2.0 * rng.next_f32() - 1.0, 1.0);
+                (p - flat.origin.as_vec3(), -Vec3::Z)
+            })
+            .collect();
+        let gpu_hits = gpu.trace_rays(&flat, &rays).expect("rays run");
+        let (mut differ, mut differ_opaque) = (0, 0);
+        for ((origin, dir), g) in rays.iter().zip(&gpu_hits) {
+            let ray = rt_gpu::shared::ray::Ray {
+                origin: *origin,
+                dir: *dir,
+            };
+            let primitive =
+                |hit: Option<rt_gpu::shared::ray::Hit>| hit.map(|h| h.primitive.packed());
+            let gpu_primitive = (g.hit == 1).then_some(g.primitive);
+            differ +=
+                (primitive(rt_gpu::cpu::shapes::intersect(&flat, &ray)) != gpu_primitive) as usize;
+            differ_opaque += (primitive(rt_gpu::cpu::shapes::intersect(&opaque, &ray))
+                != gpu_primitive) as usize;
+        }
+        eprintln!(
+            "{differ} of {} rays differ ({differ_opaque} from the opaque scene's)",
+            rays.len()
+        );
+        assert!(differ <= rays.len() / 200, "{differ} rays differ");
+        assert!(
+            differ_opaque > rays.len() / 10,
+            "alpha ignored went undetected"
+        );
     }
-    opaque.see_through = false;
-    let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 13);
-    let rays: Vec<(Vec3, Vec3)> = (0..20_000)
-        .map(|_| {
-            let p = Vec3::new(3.0 * rng.next_f32() - 1.5, 2.0 * rng.next_f32() - 1.0, 1.0);
-            (p - flat.origin.as_vec3(), -Vec3::Z)
-        })
-        .collect();
-    let gpu_hits = gpu.trace_rays(&flat, &rays).expect("rays run");
-    let (mut differ, mut differ_opaque) = (0, 0);
-    for ((origin, dir), g) in rays.iter().zip(&gpu_hits) {
-        let ray = rt_gpu::shared::ray::Ray {
-            origin: *origin,
-            dir: *dir,
-        };
-        let primitive = |hit: Option<rt_gpu::shared::ray::Hit>| hit.map(|h| h.primitive.packed());
-        let gpu_primitive = (g.hit == 1).then_some(g.primitive);
-        differ +=
-            (primitive(rt_gpu::cpu::shapes::intersect(&flat, &ray)) != gpu_primitive) as usize;
-        differ_opaque +=
-            (primitive(rt_gpu::cpu::shapes::intersect(&opaque, &ray)) != gpu_primitive) as usize;
-    }
-    eprintln!(
-        "{differ} of {} rays differ ({differ_opaque} from the opaque scene's)",
-        rays.len()
-    );
-    assert!(differ <= rays.len() / 200, "{differ} rays differ");
-    assert!(
-        differ_opaque > rays.len() / 10,
-        "alpha ignored went undetected"
-    );
 }
