@@ -64,13 +64,7 @@ impl<'a> FileTextures<'a> {
         material: &str,
         slot: &str,
     ) -> Result<Texture, String> {
-        let source = self.source;
-        if info.tex_coord() != 0 {
-            return Err(format!(
-                "mesh {source}: material \"{material}\"'s {slot} reads TEXCOORD_{}; rt-gpu reads TEXCOORD_0 only",
-                info.tex_coord()
-            ));
-        }
+        self.check_uv_set(info.tex_coord(), material, slot)?;
         let index = info.texture().source().index();
         let image = self.sampled(&info.texture(), true)?;
         if factor == Vec3::ONE {
@@ -98,12 +92,7 @@ impl<'a> FileTextures<'a> {
         material: &str,
     ) -> Result<NormalMap, String> {
         let source = self.source;
-        if normal.tex_coord() != 0 {
-            return Err(format!(
-                "mesh {source}: material \"{material}\"'s normalTexture reads TEXCOORD_{}; rt-gpu reads TEXCOORD_0 only",
-                normal.tex_coord()
-            ));
-        }
+        self.check_uv_set(normal.tex_coord(), material, "normalTexture")?;
         let image = self.sampled(&normal.texture(), false)?;
         let map = NormalMap {
             image,
@@ -142,14 +131,19 @@ impl<'a> FileTextures<'a> {
         info: &gltf::texture::Info,
         material: &str,
     ) -> Result<&'static Image, String> {
-        if info.tex_coord() != 0 {
-            return Err(format!(
-                "mesh {}: material \"{material}\"'s metallicRoughnessTexture reads TEXCOORD_{}; rt-gpu reads TEXCOORD_0 only",
-                self.source,
-                info.tex_coord()
-            ));
-        }
+        self.check_uv_set(info.tex_coord(), material, "metallicRoughnessTexture")?;
         self.sampled(&info.texture(), false)
+    }
+
+    /// An error unless `set`, the UV set `material`'s `slot` reads, is TEXCOORD_0.
+    fn check_uv_set(&self, set: u32, material: &str, slot: &str) -> Result<(), String> {
+        if set == 0 {
+            return Ok(());
+        }
+        Err(format!(
+            "mesh {}: material \"{material}\"'s {slot} reads TEXCOORD_{set}; rt-gpu reads TEXCOORD_0 only",
+            self.source
+        ))
     }
 
     /// `texture`'s image decoded (from sRGB where `srgb`) and read as its sampler says.
