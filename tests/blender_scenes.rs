@@ -270,15 +270,9 @@ fn the_file_renders_as_cycles_renders_it_where_the_models_agree() {
     }
 }
 
-/// Blender's lamps (a point, a spot and a sun), with the floor and cube Lambertian in both
-/// renderers (`lamps-lambert-cycles.exr`; here the file's materials swapped in code): rt-gpu's
-/// image agrees with Cycles' within 2.5% on the floor, the cube and the rough gold sphere, so
-/// the lights' units, positions, directions and cones arrive as Blender meant them. Not
-/// asserted, printed: the near-mirror chrome (GGX 0.05), the glass and the floor under it are
-/// 6-16% darker than Cycles' here, and it is not yet known why (under the area panel of
-/// `spheres` they agree within 1%).
-#[test]
-fn blenders_lamps_light_the_scene_as_in_cycles() {
+/// `lamps.glb` with its floor and cube as rt-gpu's `lambertian`, as Cycles' Diffuse BSDF
+/// renders them in the `lamps*-lambert-cycles.exr` references.
+fn lamps_lambert() -> Scene {
     let (mut scene, _) = blender_file("lamps.glb");
     for (name, albedo) in [
         ("Floor", Vec3::splat(0.6)),
@@ -295,11 +289,65 @@ fn blenders_lamps_light_the_scene_as_in_cycles() {
             normal_map: None,
         });
     }
-    let ratios = ratios_to_cycles(scene, "lamps-lambert-cycles.exr", &REGIONS);
+    scene
+}
+
+/// Blender's lamps (a point, a spot and a sun), with the floor and cube Lambertian in both
+/// renderers: rt-gpu's image agrees with Cycles' within 2.5% on the floor, the cube and the
+/// rough gold sphere, so the lights' units, positions, directions and cones arrive as Blender
+/// meant them. Printed, not asserted: where the spot's penumbra shows (the floor beside the
+/// glass, and through it) rt-gpu is darker by design: Blender's spot is a smoothstep over
+/// `spot_blend` in cos(angle) times cos(angle), which its exporter writes as glTF's inner cone
+/// (rt-gpu renders glTF's falloff); with Cycles' falloff swapped in, a throwaway build agreed
+/// there (docs/benchmarks.md). The glass region of this reference also holds one firefly
+/// (23.4, +16% on the region's mean) and the chrome's region is its lamps' highlights, a
+/// fraction of a pixel each: see the test below.
+#[test]
+fn blenders_lamps_light_the_scene_as_in_cycles() {
+    let ratios = ratios_to_cycles(lamps_lambert(), "lamps-lambert-cycles.exr", &REGIONS);
     for i in [0, 1, 2, 5] {
         let (name, ratio) = (REGIONS[i].0, ratios[i]);
         assert!((ratio - 1.0).abs() < 0.025, "{name}: {ratio}");
     }
+}
+
+/// The point and the sun alone (the spot, whose falloff differs by design, dropped on both
+/// sides; Cycles at 16384 spp): every region agrees within 2.5%, the glass (the lit floor
+/// seen through it) and the floor in its shadow included. Not asserted: the near-mirror
+/// chrome (GGX 0.05), whose region's light is half in its two lamps' highlights, each on a
+/// fraction of a pixel, so that its mean is noise-bound at any affordable count (two rt-gpu
+/// seeds at 16384 spp gave 1.06 and 1.26 of Cycles'). Negative control: the floor's albedo 5%
+/// brighter is caught in the floor's regions.
+#[test]
+fn blenders_point_and_sun_light_the_glass_as_in_cycles() {
+    let without_spot = |albedo: f32| {
+        let mut scene = lamps_lambert();
+        scene
+            .punctual
+            .retain(|light| !matches!(light, Punctual::Spot { .. }));
+        assert_eq!(scene.punctual.len(), 2);
+        let floor = scene
+            .material_names
+            .iter()
+            .position(|n| n == "lamps.glb#Floor")
+            .expect("floor");
+        scene.materials[floor] = Material::lambertian(Vec3::splat(albedo));
+        scene
+    };
+    const CHROME: usize = 3;
+    const PANEL: usize = 6;
+    let reference = "lamps-no-spot-lambert-cycles.exr";
+    let ratios = ratios_to_cycles(without_spot(0.6), reference, &REGIONS);
+    for (i, ((name, ..), ratio)) in REGIONS.iter().zip(&ratios).enumerate() {
+        if i != CHROME && i != PANEL {
+            assert!((ratio - 1.0).abs() < 0.025, "{name}: {ratio}");
+        }
+    }
+    let ratios = ratios_to_cycles(without_spot(0.63), reference, &REGIONS);
+    assert!(
+        ratios[..2].iter().all(|r| (r - 1.0).abs() >= 0.025),
+        "a 5% brighter floor went unseen: {ratios:?}"
+    );
 }
 
 /// Blender's OBJ export of the same scene: its .mtl materials arrive as the script set them
