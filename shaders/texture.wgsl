@@ -99,29 +99,23 @@ fn albedo_at(m: Material, hit: Hit) -> vec3f {
 //#endif
 }
 
-//#if METALLIC_ROUGHNESS
-// The GGX alpha of roughness: roughness^2, or 0 (smooth) below MIN_ALPHA (Coat::alpha_of).
-fn roughness_alpha(roughness: f32) -> f32 {
-    let alpha = roughness * roughness;
-    return select(0.0, alpha, alpha >= MIN_ALPHA);
-}
-//#endif
-
 //#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS
 // m with its albedo looked up at hit once, for the several uses a path vertex makes of it (light
 // sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe. And
-// with pbr's metallic and alpha scaled by its metallic-roughness image there (Pbr::at).
+// with pbr's metallic and alpha scaled by its metallic-roughness image there (pbr_with_texel;
+// only pbr has one).
 fn with_albedo_at(m: Material, hit: Hit) -> Material {
     var out = m;
     out.albedo = albedo_at(m, hit);
     out.texture = TEXTURE_NONE;
 //#if METALLIC_ROUGHNESS
+//#if PBR
     if m.metallic_roughness_size.x > 0.0 {
         let texel = image_at(m.metallic_roughness_image, m.metallic_roughness_size, m.metallic_roughness_lookup, hit.uv);
-        out.emission.x = m.emission.x * texel.z;
-        out.alpha = roughness_alpha(m.roughness * texel.y);
+        out = pbr_with_texel(out, texel);
         out.metallic_roughness_size = vec2f(0.0);
     }
+//#endif
 //#endif
     return out;
 }

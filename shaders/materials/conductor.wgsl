@@ -1,7 +1,6 @@
 // A metal (twin: src/material/conductor.rs): exact conductor Fresnel of eta + i k per channel,
 // smooth (alpha 0: a delta lobe) or on GGX microfacets sampled by visible normals. Random
-// numbers per sample: 2 when rough, none when smooth. Packed: albedo: eta; emission: k;
-// alpha: GGX alpha (0: smooth, as any alpha below MIN_ALPHA is packed).
+// numbers per sample: 2 when rough, none when smooth. Its parameters: ConductorParams.
 
 // Exact unpolarised Fresnel reflectance from index 1 into eta + i k, per channel.
 fn fresnel_conductor(cos_i: f32, eta: vec3f, k: vec3f) -> vec3f {
@@ -22,14 +21,15 @@ fn fresnel_conductor(cos_i: f32, eta: vec3f, k: vec3f) -> vec3f {
 }
 
 fn conductor_samples_lights(m: Material) -> bool {
-    return m.alpha > 0.0;
+    return conductor_params(m).alpha > 0.0;
 }
 
 fn conductor_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
-    if !(m.alpha > 0.0) {
+    let p = conductor_params(m);
+    if !(p.alpha > 0.0) {
         out.wi = reflect_dir(-wo, hit.shading);
-        out.weight = fresnel_conductor(dot(wo, hit.shading), m.albedo, m.emission);
+        out.weight = fresnel_conductor(dot(wo, hit.shading), p.eta, p.k);
         // Reflected below the surface by a shading normal: absorbed.
         out.lobe = select(0u, LOBE_REFLECTION | LOBE_DELTA, dot(out.wi, hit.normal) > 0.0);
         return out;
@@ -42,17 +42,17 @@ fn conductor_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sam
     if !(wo_local.z > MIN_COSINE) {
         return out;
     }
-    let mf = ggx_sample_visible(m.alpha, wo_local, u1, u2);
+    let mf = ggx_sample_visible(p.alpha, wo_local, u1, u2);
     let wi_local = reflect_dir(-wo_local, mf);
     let wi = to_world(frame, wi_local);
     if !(wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
         return out;
     }
     // f cos / pdf = F G2 / G1.
-    out.weight = fresnel_conductor(dot(wo_local, mf), m.albedo, m.emission)
-        * (ggx_g2(m.alpha, wo_local, wi_local) / ggx_g1(m.alpha, wo_local));
+    out.weight = fresnel_conductor(dot(wo_local, mf), p.eta, p.k)
+        * (ggx_g2(p.alpha, wo_local, wi_local) / ggx_g1(p.alpha, wo_local));
     out.wi = wi;
-    out.pdf = ggx_reflection_pdf(m.alpha, wo_local, mf);
+    out.pdf = ggx_reflection_pdf(p.alpha, wo_local, mf);
     out.lobe = LOBE_REFLECTION | LOBE_GLOSSY;
 //#endif
     return out;
@@ -81,10 +81,11 @@ fn reflection_half_vector(wo: vec3f, wi: vec3f, hit: Hit) -> ReflectionPair {
 
 fn conductor_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
 //#if MICROFACET
+    let c = conductor_params(m);
     let p = reflection_half_vector(wo, wi, hit);
-    if p.ok && m.alpha > 0.0 {
-        return fresnel_conductor(dot(p.wo, p.m), m.albedo, m.emission)
-            * (ggx_d(m.alpha, p.m) * ggx_g2(m.alpha, p.wo, p.wi) / (4.0 * p.wo.z));
+    if p.ok && c.alpha > 0.0 {
+        return fresnel_conductor(dot(p.wo, p.m), c.eta, c.k)
+            * (ggx_d(c.alpha, p.m) * ggx_g2(c.alpha, p.wo, p.wi) / (4.0 * p.wo.z));
     }
 //#endif
     return vec3f(0.0);
@@ -92,9 +93,10 @@ fn conductor_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
 
 fn conductor_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
 //#if MICROFACET
+    let alpha = conductor_params(m).alpha;
     let p = reflection_half_vector(wo, wi, hit);
-    if p.ok && m.alpha > 0.0 {
-        return ggx_reflection_pdf(m.alpha, p.wo, p.m);
+    if p.ok && alpha > 0.0 {
+        return ggx_reflection_pdf(alpha, p.wo, p.m);
     }
 //#endif
     return 0.0;

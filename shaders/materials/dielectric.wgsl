@@ -1,11 +1,12 @@
 // Glass (twin: src/material/dielectric.rs): exact unpolarised Fresnel, refraction by Snell's
 // law, total internal reflection; smooth (alpha 0: two delta lobes) or on GGX microfacets
 // (Walter et al. 2007) sampled by visible normals. Random numbers per sample: 1 when smooth, 3
-// when rough. Packed: param: ior; alpha: GGX alpha (0: smooth, as any alpha below MIN_ALPHA).
+// when rough. Its parameters: DielectricParams; the glass_* functions take them alone, for pbr's
+// glass too.
 
 fn dielectric_samples_lights(m: Material) -> bool {
 //#if MICROFACET
-    return m.alpha > 0.0;
+    return dielectric_params(m).alpha > 0.0;
 //#else
     return false;
 //#endif
@@ -23,12 +24,24 @@ fn on_its_side(hit: Hit, wi: vec3f, reflected: bool) -> bool {
 }
 
 fn dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    return glass_sample(dielectric_params(m), wo, hit, sampler);
+}
+
+fn dielectric_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
+    return glass_eval(dielectric_params(m), wo, wi, hit);
+}
+
+fn dielectric_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+    return glass_pdf(dielectric_params(m), wo, wi, hit);
+}
+
+fn glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
 //#if MICROFACET
-    if m.alpha > 0.0 {
-        return rough_dielectric_sample(m, wo, hit, sampler);
+    if g.alpha > 0.0 {
+        return rough_glass_sample(g, wo, hit, sampler);
     }
 //#endif
-    let eta = select(m.param, 1.0 / m.param, hit.front_face);
+    let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
     let n = hit.shading;
     let dir_in = -wo;
     let cos_i = clamp(dot(wo, n), 0.0, 1.0);
@@ -77,7 +90,7 @@ fn pair_fresnel(cos_o: f32, cos_i: f32, eta: f32, reflected: bool) -> f32 {
     return fresnel(cos_o, -cos_i, eta);
 }
 
-fn rough_dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+fn rough_glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
     let u1 = sampler_next(sampler);
     let u2 = sampler_next(sampler);
@@ -87,8 +100,8 @@ fn rough_dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<functi
     if !(wo_local.z > MIN_COSINE) {
         return out;
     }
-    let eta = select(m.param, 1.0 / m.param, hit.front_face);
-    let mf = ggx_sample_visible(m.alpha, wo_local, u1, u2);
+    let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
+    let mf = ggx_sample_visible(g.alpha, wo_local, u1, u2);
     let cos_i = dot(wo_local, mf);
     let fr = fresnel_and_cos_t(cos_i, eta);
     // Reflection with probability F: the BSDF's F and the pdf's cancel in the weight.
@@ -98,11 +111,11 @@ fn rough_dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<functi
         wi_local = (eta * cos_i - fr.cos_t) * mf - eta * wo_local;
         let denom = dot(wi_local, mf) + eta * cos_i;
         let jacobian = abs(dot(wi_local, mf)) / (denom * denom);
-        out.pdf = (1.0 - fr.f) * ggx_visible_pdf(m.alpha, wo_local, mf) * jacobian;
+        out.pdf = (1.0 - fr.f) * ggx_visible_pdf(g.alpha, wo_local, mf) * jacobian;
         reflected = false;
     } else {
         wi_local = reflect_dir(-wo_local, mf);
-        out.pdf = fr.f * ggx_reflection_pdf(m.alpha, wo_local, mf);
+        out.pdf = fr.f * ggx_reflection_pdf(g.alpha, wo_local, mf);
     }
     let wi = to_world(frame, wi_local);
     let on_side = select((wi_local.z < -MIN_COSINE), (wi_local.z > MIN_COSINE), reflected);
@@ -111,7 +124,7 @@ fn rough_dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<functi
         return out;
     }
     // f cos / pdf = G2 / G1 for either lobe (Walter's BTDF over its pdf).
-    out.weight = vec3f(ggx_g2(m.alpha, wo_local, wi_local) / ggx_g1(m.alpha, wo_local));
+    out.weight = vec3f(ggx_g2(g.alpha, wo_local, wi_local) / ggx_g1(g.alpha, wo_local));
     out.wi = wi;
     out.lobe = select(LOBE_TRANSMISSION, LOBE_REFLECTION, reflected) | LOBE_GLOSSY;
     return out;
@@ -143,14 +156,14 @@ fn rough_pair(wo: vec3f, wi: vec3f, hit: Hit, eta: f32) -> RoughPair {
 }
 //#endif
 
-fn dielectric_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
+fn glass_eval(g: DielectricParams, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
 //#if MICROFACET
-    let eta = select(m.param, 1.0 / m.param, hit.front_face);
+    let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
     let p = rough_pair(wo, wi, hit, eta);
-    if p.ok && m.alpha > 0.0 {
+    if p.ok && g.alpha > 0.0 {
         let cos_i = dot(p.wo, p.m);
         let f = pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected);
-        let dg = ggx_d(m.alpha, p.m) * ggx_g2(m.alpha, p.wo, p.wi);
+        let dg = ggx_d(g.alpha, p.m) * ggx_g2(g.alpha, p.wo, p.wi);
         if p.reflected {
             return vec3f(f * dg / (4.0 * p.wo.z));
         }
@@ -161,18 +174,18 @@ fn dielectric_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     return vec3f(0.0);
 }
 
-fn dielectric_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+fn glass_pdf(g: DielectricParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
 //#if MICROFACET
-    let eta = select(m.param, 1.0 / m.param, hit.front_face);
+    let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
     let p = rough_pair(wo, wi, hit, eta);
-    if p.ok && m.alpha > 0.0 {
+    if p.ok && g.alpha > 0.0 {
         let cos_i = dot(p.wo, p.m);
         let f = pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected);
         if p.reflected {
-            return f * ggx_reflection_pdf(m.alpha, p.wo, p.m);
+            return f * ggx_reflection_pdf(g.alpha, p.wo, p.m);
         }
         let denom = dot(p.wi, p.m) + eta * cos_i;
-        return (1.0 - f) * ggx_visible_pdf(m.alpha, p.wo, p.m) * abs(dot(p.wi, p.m)) / (denom * denom);
+        return (1.0 - f) * ggx_visible_pdf(g.alpha, p.wo, p.m) * abs(dot(p.wi, p.m)) / (denom * denom);
     }
 //#endif
     return 0.0;

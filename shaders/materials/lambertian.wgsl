@@ -1,8 +1,8 @@
 // Ideal diffuse reflection (twin: src/material/lambertian.rs). Random numbers per sample: 2.
-// Packed: albedo, emission.
+// Its albedo is GpuMaterial's (albedo_at); its parameters: LambertianParams.
 
 fn lambertian_emitted(m: Material, hit: Hit) -> vec3f {
-    return m.emission;
+    return lambertian_params(m).emission;
 }
 
 fn lambertian_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {

@@ -1,9 +1,10 @@
 // A diffuse area light (twin: src/material/light.rs): emits from its front face unless
-// two-sided, reflects nothing. Packed: albedo (and texture_*): radiance; emission: strength;
-// param: 1 if two-sided.
+// two-sided, reflects nothing. Its radiance is GpuMaterial's albedo (albedo_at); its
+// parameters: LightParams.
 
 fn light_emitted(m: Material, hit: Hit) -> vec3f {
-    return select(vec3f(0.0), albedo_at(m, hit) * m.emission, hit.front_face || m.param > 0.5);
+    let p = light_params(m);
+    return select(vec3f(0.0), albedo_at(m, hit) * p.strength, hit.front_face || p.two_sided != 0u);
 }
 
 fn light_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {

@@ -1,100 +1,116 @@
 // glTF's metallic-roughness material (twin: src/material/pbr.rs, whose comment gives the
 // model): a mix of a coat over the base colour (shaders/coat.wgsl, not saturating), rough glass
 // whose transmission it tints (dielectric.wgsl's functions) and a GGX metal with Schlick's
-// Fresnel from F0 = base colour. Packed: albedo (and texture_*): base colour; param: ior; alpha:
-// GGX alpha (0: smooth); internal_reflectance: the coat's K; emission: metallic, transmission,
-// and 1 where it samples lights; metallic_roughness_*: its image (with_albedo_at in
-// texture.wgsl scales metallic and alpha by it); roughness: its roughness.
+// Fresnel from F0 = base colour. Its base colour is GpuMaterial's albedo (albedo_at); its
+// parameters: PbrParams, whose metallic and alpha its metallic-roughness image scales per hit
+// (pbr_with_texel, called by with_albedo_at in texture.wgsl).
 
 fn schlick(f0: vec3f, cos: f32) -> vec3f {
     let x = pow(1.0 - clamp(cos, 0.0, 1.0), 5.0);
     return f0 + (vec3f(1.0) - f0) * x;
 }
 
-// The glass of the mix: as dielectric.wgsl packs a dielectric (an index of 1 is smooth).
-fn pbr_glass(m: Material) -> Material {
-    var g = m;
-    if g.param == 1.0 {
-        g.alpha = 0.0;
-    }
-    return g;
+//#if DIELECTRIC
+// The glass of the mix, as a dielectric's parameters (an index of 1 is smooth).
+fn pbr_glass(p: PbrParams) -> DielectricParams {
+    return DielectricParams(p.ior, select(p.alpha, 0.0, p.ior == 1.0));
+}
+//#endif
+
+//#if METALLIC_ROUGHNESS
+// The GGX alpha of roughness: roughness^2, or 0 (smooth) below MIN_ALPHA (Coat::alpha_of).
+fn roughness_alpha(roughness: f32) -> f32 {
+    let alpha = roughness * roughness;
+    return select(0.0, alpha, alpha >= MIN_ALPHA);
 }
 
+// Its metallic and alpha scaled by a texel of its metallic-roughness image (Pbr::at).
+fn pbr_with_texel(m: Material, texel: vec3f) -> Material {
+    var p = pbr_params(m);
+    p.metallic = p.metallic * texel.z;
+    p.alpha = roughness_alpha(p.roughness * texel.y);
+    return pbr_with_params(m, p);
+}
+//#endif
+
 fn pbr_samples_lights(m: Material) -> bool {
-    return m.emission.z > 0.0;
+    return pbr_params(m).samples_lights != 0u;
 }
 
 // The metal's BSDF x cos (xyz) and pdf (w) at (wo, wi), rough only.
-fn pbr_metal(m: Material, base: vec3f, wo: vec3f, wi: vec3f, hit: Hit) -> vec4f {
+fn pbr_metal(alpha: f32, base: vec3f, wo: vec3f, wi: vec3f, hit: Hit) -> vec4f {
     let frame = frame_of(hit.shading);
     let wo_local = to_local(frame, wo);
     let wi_local = to_local(frame, wi);
-    if !(m.alpha > 0.0) || !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
+    if !(alpha > 0.0) || !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
         return vec4f(0.0);
     }
     let mf = normalize(wo_local + wi_local);
-    let f = schlick(base, dot(wo_local, mf)) * (ggx_d(m.alpha, mf) * ggx_g2(m.alpha, wo_local, wi_local) / (4.0 * wo_local.z));
-    return vec4f(f, ggx_reflection_pdf(m.alpha, wo_local, mf));
+    let f = schlick(base, dot(wo_local, mf)) * (ggx_d(alpha, mf) * ggx_g2(alpha, wo_local, wi_local) / (4.0 * wo_local.z));
+    return vec4f(f, ggx_reflection_pdf(alpha, wo_local, mf));
 }
 
 fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
-    let w_coat = (1.0 - m.emission.x) * (1.0 - m.emission.y);
-    let w_glass = (1.0 - m.emission.x) * m.emission.y;
-    let w_metal = m.emission.x;
+    let p = pbr_params(m);
+    let w_coat = (1.0 - p.metallic) * (1.0 - p.transmission);
+    let w_glass = (1.0 - p.metallic) * p.transmission;
+    let w_metal = p.metallic;
     let base = albedo_at(m, hit);
     var f = vec3f(0.0);
     if w_coat > 0.0 {
-        f += w_coat * coat_eval(base, m.param, m.alpha, m.internal_reflectance, false, wo, wi, hit);
+        f += w_coat * coat_eval(base, p.ior, p.alpha, p.internal_reflectance, false, wo, wi, hit);
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
         let tint = select(vec3f(1.0), base, dot(wi, hit.shading) < 0.0);
-        f += w_glass * tint * dielectric_eval(pbr_glass(m), wo, wi, hit);
+        f += w_glass * tint * glass_eval(pbr_glass(p), wo, wi, hit);
     }
 //#endif
     if w_metal > 0.0 {
-        f += w_metal * pbr_metal(m, base, wo, wi, hit).xyz;
+        f += w_metal * pbr_metal(p.alpha, base, wo, wi, hit).xyz;
     }
     return f;
 }
 
 fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
-    let w_coat = (1.0 - m.emission.x) * (1.0 - m.emission.y);
-    let w_glass = (1.0 - m.emission.x) * m.emission.y;
-    let w_metal = m.emission.x;
+    let p = pbr_params(m);
+    let w_coat = (1.0 - p.metallic) * (1.0 - p.transmission);
+    let w_glass = (1.0 - p.metallic) * p.transmission;
+    let w_metal = p.metallic;
     let base = albedo_at(m, hit);
     var pdf = 0.0;
     if w_coat > 0.0 {
-        pdf += w_coat * coat_pdf(base, m.param, m.alpha, wo, wi, hit);
+        pdf += w_coat * coat_pdf(base, p.ior, p.alpha, wo, wi, hit);
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
-        pdf += w_glass * dielectric_pdf(pbr_glass(m), wo, wi, hit);
+        pdf += w_glass * glass_pdf(pbr_glass(p), wo, wi, hit);
     }
 //#endif
     if w_metal > 0.0 {
-        pdf += w_metal * pbr_metal(m, base, wo, wi, hit).w;
+        pdf += w_metal * pbr_metal(p.alpha, base, wo, wi, hit).w;
     }
     return pdf;
 }
 
 fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
-    let w_coat = (1.0 - m.emission.x) * (1.0 - m.emission.y);
-    let w_glass = (1.0 - m.emission.x) * m.emission.y;
+    let p = pbr_params(m);
+    let w_coat = (1.0 - p.metallic) * (1.0 - p.transmission);
+    let w_glass = (1.0 - p.metallic) * p.transmission;
     let base = albedo_at(m, hit);
     let u = sampler_next(sampler);
     if u < w_coat {
         let v = sampler_next(sampler);
         let u1 = sampler_next(sampler);
         let u2 = sampler_next(sampler);
-        out = coat_sample(base, m.param, m.alpha, m.internal_reflectance, false, wo, hit, v, u1, u2);
+        out = coat_sample(base, p.ior, p.alpha, p.internal_reflectance, false, wo, hit, v, u1, u2);
     } else if u < w_coat + w_glass {
 //#if DIELECTRIC
-        out = dielectric_sample(pbr_glass(m), wo, hit, sampler);
+        out = glass_sample(pbr_glass(p), wo, hit, sampler);
         // A direction within rounding of where the glass's own density vanishes: not one for
         // the other components' densities to weigh.
-        if out.lobe != 0u && (out.lobe & LOBE_DELTA) == 0u && !(dielectric_pdf(pbr_glass(m), wo, out.wi, hit) > 0.0) {
+        if out.lobe != 0u && (out.lobe & LOBE_DELTA) == 0u && !(glass_pdf(pbr_glass(p), wo, out.wi, hit) > 0.0) {
             out.lobe = 0u;
         }
         out.weight *= select(vec3f(1.0), base, (out.lobe & LOBE_TRANSMISSION) != 0u);
@@ -107,13 +123,13 @@ fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>)
         if !(wo_local.z > MIN_COSINE) {
             return out;
         }
-        if !(m.alpha > 0.0) {
+        if !(p.alpha > 0.0) {
             out.wi = reflect_dir(-wo, hit.shading);
             out.weight = schlick(base, wo_local.z);
             out.lobe = select(0u, LOBE_REFLECTION | LOBE_DELTA, !below_surface(hit, out.wi));
             return out;
         }
-        let mf = ggx_sample_visible(m.alpha, wo_local, u1, u2);
+        let mf = ggx_sample_visible(p.alpha, wo_local, u1, u2);
         let wi_local = reflect_dir(-wo_local, mf);
         let wi = to_world(frame, wi_local);
         // Below the surface the metal's own density is lost mass: the path ends.

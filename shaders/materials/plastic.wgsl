@@ -1,19 +1,22 @@
 // Plastic (twin: src/material/plastic.rs): a clear coat, smooth or on GGX microfacets, over a
 // lambertian base, the light between them summed in closed form (a saturating coat,
-// shaders/coat.wgsl). Random numbers per sample: 3. Packed: albedo (and texture_*); param: ior;
-// alpha: GGX alpha (0: smooth); internal_reflectance: the coat's K.
+// shaders/coat.wgsl). Random numbers per sample: 3. Its albedo is GpuMaterial's (albedo_at); its
+// parameters: PlasticParams.
 
 fn plastic_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
-    return coat_eval(albedo_at(m, hit), m.param, m.alpha, m.internal_reflectance, true, wo, wi, hit);
+    let p = plastic_params(m);
+    return coat_eval(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, wo, wi, hit);
 }
 
 fn plastic_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
-    return coat_pdf(albedo_at(m, hit), m.param, m.alpha, wo, wi, hit);
+    let p = plastic_params(m);
+    return coat_pdf(albedo_at(m, hit), p.ior, p.alpha, wo, wi, hit);
 }
 
 fn plastic_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     let u = sampler_next(sampler);
     let u1 = sampler_next(sampler);
     let u2 = sampler_next(sampler);
-    return coat_sample(albedo_at(m, hit), m.param, m.alpha, m.internal_reflectance, true, wo, hit, u, u1, u2);
+    let p = plastic_params(m);
+    return coat_sample(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, wo, hit, u, u1, u2);
 }

@@ -384,6 +384,7 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
             for kind in features.kinds() {
                 let name = format!("materials/{}.wgsl", kind.name);
                 out.push_str(&format!("\n// ---- {name} ----\n"));
+                out.push_str(&(kind.params_wgsl)(kind.name));
                 out.push_str(
                     &preprocess(kind.wgsl, features).map_err(|e| format!("shaders/{name}: {e}"))?,
                 );

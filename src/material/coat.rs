@@ -44,7 +44,7 @@ impl Coat {
     }
 
     /// The GGX alpha of `roughness`: roughness^2, or 0 (smooth) below [`MIN_ALPHA`] (twin:
-    /// `roughness_alpha` in `shaders/texture.wgsl`).
+    /// `roughness_alpha` in `shaders/materials/pbr.wgsl`).
     #[inline]
     pub fn alpha_of(roughness: f32) -> f32 {
         let alpha = roughness * roughness;

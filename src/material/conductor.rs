@@ -9,6 +9,7 @@ use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::{BsdfSample, Lobe, MaterialModel, reflect};
 use crate::scene::file::checked;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::ray::{Hit, below_surface};
 use crate::shared::sampler::Sampler;
 use glam::Vec3;
@@ -117,7 +118,17 @@ impl Conductor {
     }
 }
 
+material_params! {
+    pub struct ConductorParams {
+        eta: [f32; 3],
+        /// GGX alpha; 0: smooth (as any alpha below `MIN_ALPHA`).
+        alpha: f32,
+        k: [f32; 3],
+    }
+}
+
 impl MaterialModel for Conductor {
+    type Params = ConductorParams;
     const FEATURE: &'static str = "CONDUCTOR";
     /// Rough conductors.
     const EXTRA_FEATURES: &'static [&'static str] = &["MICROFACET"];
@@ -208,12 +219,15 @@ impl MaterialModel for Conductor {
             .map_or(0.0, |(wo_local, _, m)| self.ggx().reflection_pdf(wo_local, m))
     }
 
-    /// albedo: eta; emission: k; alpha: GGX alpha (0: smooth).
+    /// Its [`ConductorParams`].
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            albedo: self.eta.to_array(),
-            emission: self.k.to_array(),
-            alpha: if self.samples_lights() { self.ggx().alpha } else { 0.0 },
+            params: ConductorParams {
+                eta: self.eta.to_array(),
+                alpha: if self.samples_lights() { self.ggx().alpha } else { 0.0 },
+                k: self.k.to_array(),
+            }
+            .words(),
             ..Default::default()
         }
     }

@@ -15,6 +15,7 @@ use super::fresnel::{fresnel, refract_cos};
 use super::{BsdfSample, Lobe, MaterialModel, Medium, reflect};
 use crate::shared::ray::Hit;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
@@ -160,7 +161,17 @@ fn rough_pair(wo: Vec3, wi: Vec3, hit: &Hit, eta: f32) -> Option<(Vec3, Vec3, Ve
         .then_some((wo_local, wi_local, m, reflected))
 }
 
+material_params! {
+    /// Also the glass of `pbr`'s mix.
+    pub struct DielectricParams {
+        ior: f32,
+        /// GGX alpha; 0: smooth (as any alpha below `MIN_ALPHA`).
+        alpha: f32,
+    }
+}
+
 impl MaterialModel for Dielectric {
+    type Params = DielectricParams;
     const FEATURE: &'static str = "DIELECTRIC";
     /// Glass filled with a medium; rough glass.
     const EXTRA_FEATURES: &'static [&'static str] = &["MEDIA", "MICROFACET"];
@@ -285,12 +296,15 @@ impl MaterialModel for Dielectric {
         }
     }
 
-    /// param: ior; alpha: GGX alpha (0: smooth); medium_*: the medium inside, if any.
+    /// Its [`DielectricParams`]; medium_*: the medium inside, if any.
     fn gpu(&self) -> GpuMaterial {
         let glass = GpuMaterial {
             albedo: [1.0; 3],
-            param: self.ior,
-            alpha: if self.samples_lights() { self.ggx().alpha } else { 0.0 },
+            params: DielectricParams {
+                ior: self.ior,
+                alpha: if self.samples_lights() { self.ggx().alpha } else { 0.0 },
+            }
+            .words(),
             ..Default::default()
         };
         Medium::pack(self.medium.as_ref(), glass)

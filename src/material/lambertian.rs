@@ -8,6 +8,7 @@ use crate::material::texture;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
@@ -26,7 +27,15 @@ pub struct Lambertian {
     pub normal_map: Option<NormalMap>,
 }
 
+material_params! {
+    /// Beside the albedo (`GpuMaterial::with_albedo`).
+    pub struct LambertianParams {
+        emission: [f32; 3],
+    }
+}
+
 impl MaterialModel for Lambertian {
+    type Params = LambertianParams;
     const FEATURE: &'static str = "LAMBERTIAN";
     /// Lambertian surfaces with emission; textured albedos.
     const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
@@ -90,10 +99,13 @@ impl MaterialModel for Lambertian {
         cosine_pdf(hit, wi)
     }
 
-    /// albedo (and texture_*), emission.
+    /// albedo (and texture_*); its [`LambertianParams`].
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            emission: self.emission.to_array(),
+            params: LambertianParams {
+                emission: self.emission.to_array(),
+            }
+            .words(),
             ..GpuMaterial::with_albedo(&self.albedo)
         }
     }

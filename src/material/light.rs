@@ -5,6 +5,7 @@ use super::{BsdfSample, MaterialModel};
 use crate::shared::ray::Hit;
 use crate::material::texture;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
 use crate::scene::texture::{self as textures, Texture};
 use glam::Vec3;
@@ -34,7 +35,17 @@ fn is_one(x: &f32) -> bool {
 /// Largest strength accepted.
 pub const MAX_STRENGTH: f32 = 1e6;
 
+material_params! {
+    /// Beside the radiance (`GpuMaterial::with_albedo`).
+    pub struct LightParams {
+        strength: f32,
+        /// 1: both faces emit.
+        two_sided: u32,
+    }
+}
+
 impl MaterialModel for Light {
+    type Params = LightParams;
     const FEATURE: &'static str = "LIGHT";
     /// Textured radiance.
     const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
@@ -82,12 +93,14 @@ impl MaterialModel for Light {
         None
     }
 
-    /// albedo (and texture_*): radiance; emission: strength (each channel); param: 1 if
-    /// two-sided.
+    /// albedo (and texture_*): radiance; its [`LightParams`].
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            emission: [self.strength; 3],
-            param: if self.two_sided { 1.0 } else { 0.0 },
+            params: LightParams {
+                strength: self.strength,
+                two_sided: self.two_sided as u32,
+            }
+            .words(),
             ..GpuMaterial::with_albedo(&self.radiance)
         }
     }

@@ -60,6 +60,7 @@ impl Medium {
 }
 
 impl MaterialModel for Medium {
+    type Params = crate::shared::params::NoParams;
     const FEATURE: &'static str = "MEDIUM";
     /// Any scene with a medium inside some object.
     const EXTRA_FEATURES: &'static [&'static str] = &["MEDIA"];

@@ -7,6 +7,7 @@ use crate::shared::ray::Hit;
 use crate::material::texture;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
 use crate::scene::file::checked;
 use glam::Vec3;
@@ -22,7 +23,15 @@ pub struct Metal {
     pub fuzz: f32,
 }
 
+material_params! {
+    /// Beside the albedo (`GpuMaterial::with_albedo`).
+    pub struct MetalParams {
+        fuzz: f32,
+    }
+}
+
 impl MaterialModel for Metal {
+    type Params = MetalParams;
     const FEATURE: &'static str = "METAL";
     /// Textured albedos.
     const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
@@ -68,10 +77,10 @@ impl MaterialModel for Metal {
         })
     }
 
-    /// albedo (and texture_*); param: fuzz.
+    /// albedo (and texture_*); its [`MetalParams`].
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            param: self.fuzz,
+            params: MetalParams { fuzz: self.fuzz }.words(),
             ..GpuMaterial::with_albedo(&self.albedo)
         }
     }

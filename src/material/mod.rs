@@ -3,15 +3,16 @@
 //! packed for the GPU; its WGSL twin is `shaders/materials/<file name>.wgsl`. The path loops on
 //! both backends see only the interface below and never name a material.
 //!
-//! Adding a material: write its file here and its WGSL twin, add one line to `registry!` below
-//! (which gives it its scene-file `type` name, kernel kind and feature), document it in
-//! `scenes/README.md`.
+//! Adding a material: write its file here (with its GPU parameters as a `material_params!`
+//! struct) and its WGSL twin, add one line to `registry!` below (which gives it its scene-file
+//! `type` name, kernel kind and feature), document it in `scenes/README.md`.
 
 use crate::scene::alpha::Alpha;
 use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::MaterialParams;
 use crate::shared::ray::Hit;
 use crate::shared::sampler::Sampler;
 use glam::Vec3;
@@ -22,6 +23,9 @@ use glam::Vec3;
 /// `<name>_emitted` in `shaders/materials/<name>.wgsl`; both draw the same random numbers in
 /// the same order.
 pub trait MaterialModel {
+    /// Its own GPU parameters (`GpuMaterial::params`), declared with `material_params!`; its
+    /// WGSL twin reads them with `<name>_params(m)`.
+    type Params: MaterialParams;
     /// The kernel feature that includes its WGSL twin: the file name in upper case.
     const FEATURE: &'static str;
     /// Features its WGSL twin's `//#if` blocks may test beyond [`Self::FEATURE`].
@@ -104,7 +108,8 @@ pub trait MaterialModel {
     fn pdf(&self, _wo: Vec3, _wi: Vec3, _hit: &Hit) -> f32 {
         0.0
     }
-    /// Its GPU form; `kind` is filled in from the registry.
+    /// Its GPU form, its [`Self::Params`] packed in `params`; `kind` is filled in from the
+    /// registry.
     fn gpu(&self) -> GpuMaterial;
 }
 
@@ -123,6 +128,8 @@ pub struct MaterialKind {
     pub invisible: bool,
     /// The WGSL twin.
     pub wgsl: &'static str,
+    /// The WGSL of its parameters' struct, reader and writer (`MaterialParams::wgsl`).
+    pub params_wgsl: fn(&str) -> String,
 }
 
 macro_rules! registry {
@@ -152,6 +159,7 @@ macro_rules! registry {
             samples_lights_per_instance: <$ty as MaterialModel>::SAMPLES_LIGHTS_PER_INSTANCE,
             invisible: <$ty as MaterialModel>::INVISIBLE,
             wgsl: include_str!(concat!("../../shaders/materials/", stringify!($module), ".wgsl")),
+            params_wgsl: <<$ty as MaterialModel>::Params as MaterialParams>::wgsl,
         },)+];
 
         // Each method passes to the material's own.

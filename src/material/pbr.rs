@@ -26,6 +26,7 @@ use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::ray::{Hit, below_surface};
 use crate::shared::sampler::Sampler;
 use glam::Vec3;
@@ -208,7 +209,27 @@ impl Pbr {
     }
 }
 
+material_params! {
+    /// Beside the base colour (`GpuMaterial::with_albedo`) and the metallic-roughness image
+    /// (`GpuMaterial::metallic_roughness_*`, which the kernel applies per hit: `pbr_with_texel`).
+    pub struct PbrParams {
+        metallic: f32,
+        transmission: f32,
+        ior: f32,
+        /// GGX alpha; 0: smooth.
+        alpha: f32,
+        /// The coat's K (`Coat::internal_reflectance`).
+        internal_reflectance: f32,
+        /// Roughness before the metallic-roughness image scales it (`alpha` is what it is
+        /// without one).
+        roughness: f32,
+        /// 1: next-event estimation samples lights here.
+        samples_lights: u32,
+    }
+}
+
 impl MaterialModel for Pbr {
+    type Params = PbrParams;
     const FEATURE: &'static str = "PBR";
     /// Rough; glass in the mix; textured base colours.
     const EXTRA_FEATURES: &'static [&'static str] =
@@ -380,25 +401,25 @@ impl MaterialModel for Pbr {
         pdf
     }
 
-    /// albedo (and texture_*): base colour; param: ior; alpha: GGX alpha (0: smooth);
-    /// internal_reflectance: the coat's K; emission: metallic, transmission, and 1 where it
-    /// samples lights (else 0); metallic_roughness_*: its image, roughness: its roughness.
+    /// albedo (and texture_*): base colour; metallic_roughness_*: its image; its
+    /// [`PbrParams`].
     fn gpu(&self) -> GpuMaterial {
         let size = self
             .metallic_roughness
             .map_or([0.0; 2], |i| [i.width as f32, i.height as f32]);
         GpuMaterial {
-            param: self.ior,
-            alpha: self.coat.alpha,
-            internal_reflectance: self.coat.internal_reflectance,
-            emission: [
-                self.metallic,
-                self.transmission,
-                if self.samples_lights() { 1.0 } else { 0.0 },
-            ],
+            params: PbrParams {
+                metallic: self.metallic,
+                transmission: self.transmission,
+                ior: self.ior,
+                alpha: self.coat.alpha,
+                internal_reflectance: self.coat.internal_reflectance,
+                roughness: self.roughness,
+                samples_lights: self.samples_lights() as u32,
+            }
+            .words(),
             metallic_roughness_size: size,
             metallic_roughness_lookup: self.metallic_roughness.map_or(0, |i| i.lookup.bits()),
-            roughness: self.roughness,
             ..GpuMaterial::with_albedo(&self.base_color)
         }
     }

@@ -13,6 +13,7 @@ use crate::material::texture;
 use crate::scene::file::checked;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
+use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::ray::Hit;
 use crate::shared::sampler::Sampler;
 use glam::Vec3;
@@ -76,7 +77,19 @@ impl Plastic {
     }
 }
 
+material_params! {
+    /// Beside the albedo (`GpuMaterial::with_albedo`): its coat's.
+    pub struct PlasticParams {
+        ior: f32,
+        /// GGX alpha; 0: smooth.
+        alpha: f32,
+        /// The coat's K (`Coat::internal_reflectance`).
+        internal_reflectance: f32,
+    }
+}
+
 impl MaterialModel for Plastic {
+    type Params = PlasticParams;
     const FEATURE: &'static str = "PLASTIC";
     /// Textured albedos (shaders/microfacet.wgsl is included for it without a feature).
     const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
@@ -123,12 +136,15 @@ impl MaterialModel for Plastic {
             .pdf(texture::value(&self.albedo, hit), wo, wi, hit)
     }
 
-    /// albedo (and texture_*); param: ior; alpha: GGX alpha (0: smooth); internal_reflectance.
+    /// albedo (and texture_*); its [`PlasticParams`].
     fn gpu(&self) -> GpuMaterial {
         GpuMaterial {
-            param: self.ior,
-            alpha: self.coat.alpha,
-            internal_reflectance: self.coat.internal_reflectance,
+            params: PlasticParams {
+                ior: self.ior,
+                alpha: self.coat.alpha,
+                internal_reflectance: self.coat.internal_reflectance,
+            }
+            .words(),
             ..GpuMaterial::with_albedo(&self.albedo)
         }
     }

@@ -63,6 +63,14 @@ impl WgslType for [f32; 2] {
     }
 }
 
+impl WgslType for [[u32; 4]; 2] {
+    const WGSL: &'static str = "array<vec4u, 2>";
+    fn literal(&self) -> String {
+        let [a, b] = self.map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]));
+        format!("array<vec4u, 2>({a}, {b})")
+    }
+}
+
 impl WgslType for [u32; 2] {
     const WGSL: &'static str = "vec2u";
     fn literal(&self) -> String {
@@ -322,12 +330,14 @@ gpu_struct! {
 
 gpu_struct! {
     pub struct GpuMaterial as "Material" {
-        // What albedo, emission and param hold is each material's own (its `gpu` method says).
+        /// The colour its texture gives where it has none (see `texture`): what the kinds that
+        /// read a texture (`albedo_at`) take it from.
         albedo: [f32; 3],
         /// Index in `material::KINDS`; WGSL `MAT_<FEATURE>`.
         kind: u32,
-        emission: [f32; 3],
-        param: f32,
+        /// The kind's own parameters (its `material_params!` struct, see `shared::params`),
+        /// read in WGSL by `<name>_params(m)`.
+        params: [[u32; 4]; super::params::PARAM_WORDS / 4],
         /// The medium inside the object (see `material::Medium`); density 0: none.
         medium_albedo: [f32; 3],
         medium_density: f32,
@@ -340,38 +350,31 @@ gpu_struct! {
         texture_scale: f32,
         texture_image: u32,
         texture_odd: [f32; 3],
-        /// GGX alpha of materials on microfacets (0: smooth).
-        alpha: f32,
+        /// How the albedo's image is read (`ImageLookup::bits`).
+        texture_lookup: u32,
         /// See `scene::texture::Checker::shift`.
         texture_shift: [f32; 3],
-        /// A coat's internal diffuse reflectance (`material::Plastic`).
-        internal_reflectance: f32,
-        /// Its normal map's width and height (0: none; `scene::normal_map`), where its texels
-        /// start in the images array, and its scale.
-        normal_map_size: [f32; 2],
+        /// Its normal map (`scene::normal_map`): where its texels start in the images array,
+        /// its width and height (0: none), its scale and how it is read.
         normal_map_image: u32,
+        normal_map_size: [f32; 2],
         normal_map_scale: f32,
-        /// How the albedo's and the normal map's images are read (`ImageLookup::bits`).
-        texture_lookup: u32,
         normal_map_lookup: u32,
         /// A metallic-roughness image's width and height (0: none; `material::Pbr`), where
         /// its texels start in the images array, and how it is read.
         metallic_roughness_size: [f32; 2],
         metallic_roughness_image: u32,
         metallic_roughness_lookup: u32,
-        /// Roughness before the metallic-roughness image scales it (`alpha` is what it is
-        /// without one).
-        roughness: f32,
-        /// See-through surfaces (`scene::alpha`): the alpha factor, the alpha image's size (0:
-        /// none), where its texels start and how it is read, the mode (`ALPHA_*`; opaque 0)
-        /// and MASK's cutoff.
+        /// See-through surfaces (`scene::alpha`): the alpha factor, where the alpha image's
+        /// texels start, its size (0: none) and how it is read, the mode (`ALPHA_*`; opaque
+        /// 0) and MASK's cutoff.
         alpha_factor: f32,
-        alpha_size: [f32; 2],
         alpha_image: u32,
+        alpha_size: [f32; 2],
         alpha_lookup: u32,
         alpha_mode: u32,
         alpha_cutoff: f32,
-        _pad: [u32; 2],
+        _pad: u32,
     }
 }
 

@@ -8,6 +8,7 @@
 pub mod constants;
 pub mod exact_sum;
 pub mod layout;
+pub mod params;
 pub mod primitive;
 pub mod ray;
 pub mod rng;
