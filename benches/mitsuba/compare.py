@@ -463,13 +463,14 @@ def run_mitsuba(args, mi_path):
 
 
 # Every scene class `--all` measures: (row, scene file, width, height, Mitsuba's spp, reference
-# spp). Sizes keep a reference under a few minutes on two cores; the BVH scenes are smaller.
+# spp: its noise at most a third of Mitsuba's error). Sizes keep a reference under a few minutes
+# on two cores; the BVH scenes are smaller.
 # Not here: scenes/meshes.toml (its glTF lamp has no translation) and showcase (the original
 # project's fuzzed metal has no Mitsuba twin).
 ALL_ROWS = [
-    ("`cornell` (surfaces, inlined kernel)", "scenes/cornell.toml", 256, 256, 1024, 8192),
+    ("`cornell` (surfaces, inlined kernel)", "scenes/cornell.toml", 256, 256, 1024, 16384),
     ("`cornell-smoke` lifted (media)", "benches/mitsuba/cornell-smoke-lifted.toml", 256, 256, 1024, 8192),
-    ("`scenes/textured.toml` (images, HDR environment)", "scenes/textured.toml", 240, 136, 1024, 8192),
+    ("`scenes/textured.toml` (images, HDR environment)", "scenes/textured.toml", 240, 136, 1024, 16384),
     ("`cornell` + 1 M-triangle knot (BVH)", "benches/mitsuba/cornell-knot.toml", 128, 128, 256, 4096),
 ]
 
