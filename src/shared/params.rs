@@ -9,23 +9,6 @@
 /// The 32-bit words `GpuMaterial::params` holds: enough for the largest kind's parameters.
 pub const PARAM_WORDS: usize = 8;
 
-/// A field type of a material's parameters: its WGSL type (its words are its size in `u32`s).
-pub trait ParamField: bytemuck::Pod {
-    const WGSL: &'static str;
-}
-
-impl ParamField for f32 {
-    const WGSL: &'static str = "f32";
-}
-
-impl ParamField for u32 {
-    const WGSL: &'static str = "u32";
-}
-
-impl ParamField for [f32; 3] {
-    const WGSL: &'static str = "vec3f";
-}
-
 /// What [`material_params!`] gives a material's parameters.
 pub trait MaterialParams: bytemuck::Pod {
     /// The WGSL struct's name: the Rust one.
@@ -97,8 +80,8 @@ impl MaterialParams for NoParams {
 }
 
 /// Defines a material's parameters: a `#[repr(C)]` Pod struct of `f32`, `u32` and `[f32; 3]`
-/// fields (no padding: they pack into words in order), at most [`PARAM_WORDS`] words, and its
-/// [`MaterialParams`].
+/// fields (no padding: they pack into words in order; WGSL types as `layout::WgslType` names
+/// them), at most [`PARAM_WORDS`] words, and its [`MaterialParams`].
 macro_rules! material_params {
     (
         $(#[$meta:meta])*
@@ -123,7 +106,7 @@ macro_rules! material_params {
             fn fields() -> &'static [(&'static str, &'static str, usize)] {
                 &[$((
                     stringify!($field),
-                    <$ty as $crate::shared::params::ParamField>::WGSL,
+                    <$ty as $crate::shared::layout::WgslType>::WGSL,
                     std::mem::size_of::<$ty>() / 4,
                 ),)*]
             }

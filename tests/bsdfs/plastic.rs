@@ -245,45 +245,47 @@ fn layered_albedo(albedo: f32, ior: f32, roughness: f32, wo: Vec3, n: u32) -> (f
         medium: None,
     });
     let (outside, inside) = (hit(Vec3::Z), common::surface_hit(-Vec3::Z, false));
-    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-    for i in 0..n {
+    mean_and_error(n, |i| {
         let mut s = Sampler::independent(i, 1, 9);
-        let mut weight = 0.0;
-        if let Some(mut b) = glass.sample(wo, &outside, &mut s) {
-            let mut w = b.weight.x as f64;
-            // Into the layer, and back to the coat from the base (cosine-distributed up) until
-            // the light crosses the coat upward or is lost.
-            while b.lobe.0 != 0 && b.wi.z < 0.0 && w > 1e-9 {
-                w *= albedo as f64;
-                let up = cosine_up(s.next_f32(), s.next_f32());
-                let Some(next) = glass.sample(-up, &inside, &mut s) else {
-                    w = 0.0;
-                    break;
-                };
-                b = next;
-                w *= b.weight.x as f64;
-            }
-            if b.lobe.0 != 0 && b.wi.z > 0.0 {
-                weight = w;
-            }
+        let Some(mut b) = glass.sample(wo, &outside, &mut s) else {
+            return 0.0;
+        };
+        let mut w = b.weight.x as f64;
+        // Into the layer, and back to the coat from the base (cosine-distributed up) until the
+        // light crosses the coat upward or is lost.
+        while b.lobe.0 != 0 && b.wi.z < 0.0 && w > 1e-9 {
+            w *= albedo as f64;
+            let up = cosine_up(s.next_f32(), s.next_f32());
+            let Some(next) = glass.sample(-up, &inside, &mut s) else {
+                return 0.0;
+            };
+            b = next;
+            w *= b.weight.x as f64;
         }
-        sum += weight;
-        sum2 += weight * weight;
-    }
-    let mean = sum / n as f64;
-    (mean, ((sum2 / n as f64 - mean * mean) / n as f64).sqrt())
+        if b.lobe.0 != 0 && b.wi.z > 0.0 {
+            w
+        } else {
+            0.0
+        }
+    })
 }
 
 /// Plastic's mean sampled weight from `wo` (its closed-form directional albedo) and its
 /// standard error.
 fn closed_form_albedo(albedo: f32, ior: f32, roughness: f32, wo: Vec3, n: u32) -> (f64, f64) {
     let m = plastic(Vec3::splat(albedo), ior, roughness);
+    mean_and_error(n, |i| {
+        let mut s = Sampler::independent(i, 0, 8);
+        m.sample(wo, &hit(Vec3::Z), &mut s)
+            .map_or(0.0, |b| b.weight.x as f64)
+    })
+}
+
+/// The mean of `sample(i)` over i < n and its standard error.
+fn mean_and_error(n: u32, mut sample: impl FnMut(u32) -> f64) -> (f64, f64) {
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for i in 0..n {
-        let mut s = Sampler::independent(i, 0, 8);
-        let w = m
-            .sample(wo, &hit(Vec3::Z), &mut s)
-            .map_or(0.0, |b| b.weight.x as f64);
+        let w = sample(i);
         sum += w;
         sum2 += w * w;
     }
