@@ -110,10 +110,10 @@ fn with_albedo_at(m: Material, hit: Hit) -> Material {
     out.texture = TEXTURE_NONE;
 //#if METALLIC_ROUGHNESS
 //#if PBR
-    if m.metallic_roughness_size.x > 0.0 {
-        let texel = image_at(m.metallic_roughness_image, m.metallic_roughness_size, m.metallic_roughness_lookup, hit.uv);
+    if m.kind == MAT_PBR && m.parameter_image_size.x > 0.0 {
+        let texel = image_at(m.parameter_image, m.parameter_image_size, m.parameter_image_lookup, hit.uv);
         out = pbr_with_texel(out, texel);
-        out.metallic_roughness_size = vec2f(0.0);
+        out.parameter_image_size = vec2f(0.0);
     }
 //#endif
 //#endif

@@ -395,7 +395,7 @@ material = "lamp"
 /// spp, Welch z + Sidak at family-wise 0.01); negative control: the floor's roughness 2% higher
 /// on the GPU is told apart.
 #[test]
-fn metallic_roughness_images_render_alike_on_both_backends() {
+fn parameter_images_render_alike_on_both_backends() {
     let Some(gpu) = renderer() else { return };
     let scene = textured_lights(METALLIC_ROUGHNESS);
     let flat = FlatScene::new(&scene, 8, 8).expect("valid");

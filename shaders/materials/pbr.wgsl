@@ -58,7 +58,7 @@ fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     let base = albedo_at(m, hit);
     var f = vec3f(0.0);
     if w_coat > 0.0 {
-        f += w_coat * coat_eval(base, p.ior, p.alpha, p.internal_reflectance, false, wo, wi, hit);
+        f += w_coat * coat_eval(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, wo, wi, hit);
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
@@ -80,7 +80,7 @@ fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
     let base = albedo_at(m, hit);
     var pdf = 0.0;
     if w_coat > 0.0 {
-        pdf += w_coat * coat_pdf(base, p.ior, p.alpha, wo, wi, hit);
+        pdf += w_coat * coat_pdf(base, p.ior, p.alpha, NO_COAT_TABLE, wo, wi, hit);
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
@@ -104,7 +104,7 @@ fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>)
         let v = sampler_next(sampler);
         let u1 = sampler_next(sampler);
         let u2 = sampler_next(sampler);
-        out = coat_sample(base, p.ior, p.alpha, p.internal_reflectance, false, wo, hit, v, u1, u2);
+        out = coat_sample(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, wo, hit, v, u1, u2);
     } else if u < w_coat + w_glass {
 //#if DIELECTRIC
         out = glass_sample(pbr_glass(p), wo, hit, sampler);

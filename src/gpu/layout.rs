@@ -147,6 +147,14 @@ fn wgsl_constants() -> String {
         ("OFFSET_FLOAT_SCALE", OFFSET_FLOAT_SCALE.literal()),
         ("OFFSET_INT_SCALE", OFFSET_INT_SCALE.literal()),
         ("SKY_ZENITH", crate::shared::constants::SKY_ZENITH.literal()),
+        (
+            "COAT_TABLE_SIZE",
+            (crate::material::coat_table::COAT_TABLE_SIZE as u32).literal(),
+        ),
+        (
+            "NO_COAT_TABLE",
+            crate::material::coat_table::NO_COAT_TABLE.literal(),
+        ),
         ("REPLICAS", crate::shared::sampler::REPLICAS.literal()),
         (
             "GROUP_DIMENSIONS",
@@ -379,7 +387,7 @@ impl SceneBuffers {
                     gpu.normal_map_image = images.texels_of(map.image);
                 }
                 if let Some(image) = m.parameter_image() {
-                    gpu.metallic_roughness_image = images.texels_of(image);
+                    gpu.parameter_image = images.texels_of(image);
                 }
                 if let Some(image) = m.alpha().and_then(|a| a.image) {
                     gpu.alpha_image = images.texels_of(image);

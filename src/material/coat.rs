@@ -2,18 +2,22 @@
 //! `plastic`, and the dielectric part of `pbr`. The coat reflects `F(wo.m) D G2 / (4 cos_o
 //! cos_i)` (a mirror's F(cos_o) when smooth); the base, seen through it, is
 //!
-//! `f_d = albedo (1 - F(cos_o)) (1 - F(cos_i)) / (pi eta^2 (1 - s K))`
+//! `f_d = albedo (1 - O(cos_o)) (1 - O(cos_i)) / (pi eta^2 (1 - s K))`
 //!
-//! with F the smooth coat's Fresnel reflectance from outside, eta its index and K = 1 - (1 -
-//! Fbar) / eta^2 its internal diffuse reflectance (Fbar the cosine-weighted mean of F: the
-//! identity between a boundary's mean reflectances from both sides). `s` is the albedo when the
-//! coat *saturates* (light bouncing between coat and base, the geometric series of Mitsuba 3's
-//! `plastic` with `nonlinear`, after Weidlich and Wilkie 2007), 1 when it does not (the base's
-//! colour kept, as glTF's metallic-roughness model and Mitsuba's default keep it). Either way a
-//! white base under a smooth coat reflects everything: F(cos_o) + (1 - F(cos_o)) = 1. A rough
-//! coat's own reflection is taken as reaching no further than the smooth coat's F(cos_o), which
-//! the white furnace tests check, so it loses what its microfacets lose and no more.
+//! with eta the coat's index, O its opacity (the share of light met from outside that does not
+//! cross it) and K its internal diffuse reflectance. For a smooth coat (and pbr's, rough or not)
+//! O is Fresnel's F and K = 1 - (1 - Fbar) / eta^2 (Fbar the cosine-weighted mean of F: the
+//! identity between a boundary's mean reflectances from both sides). For plastic's rough coat,
+//! 1 - O is the albedo of rough glass's transmission lobe and K the mean albedo of its reflection
+//! lobe from inside, both tabulated ([`CoatTable`]), as Mitsuba 3's `roughplastic` has them. `s` is the albedo when the coat *saturates* (light
+//! bouncing between coat and base, the geometric series of Mitsuba 3's `plastic` with
+//! `nonlinear`, after Weidlich and Wilkie 2007), 1 when it does not (the base's colour kept, as
+//! glTF's metallic-roughness model and Mitsuba's default keep it). Either way a white base under
+//! a smooth coat reflects everything: F(cos_o) + (1 - F(cos_o)) = 1. Rough, the coat loses what
+//! its microfacets lose in single scattering, at each crossing inside it too, which the white
+//! furnace tests bound.
 
+use super::coat_table::CoatTable;
 use super::fresnel::{fresnel, refract_cos};
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::{BsdfSample, Lobe, reflect};
@@ -26,9 +30,11 @@ pub struct Coat {
     pub ior: f32,
     /// GGX alpha; 0: smooth.
     pub alpha: f32,
-    /// K, from `ior`.
+    /// K, from `ior` (and the table, where there is one).
     pub internal_reflectance: f32,
     pub saturates: bool,
+    /// A rough coat's tabulated reflectance (plastic's), else none: smooth Fresnel's.
+    pub table: Option<&'static CoatTable>,
 }
 
 impl Coat {
@@ -40,6 +46,33 @@ impl Coat {
             alpha: Coat::alpha_of(roughness),
             internal_reflectance: 1.0 - (1.0 - fresnel_mean(ior)) / (ior * ior),
             saturates,
+            table: None,
+        }
+    }
+
+    /// The coat letting through, where rough, what rough glass's transmission lobe does (its
+    /// [`CoatTable`]); smooth, it is unchanged.
+    pub fn tabulated(self) -> Self {
+        match self.ggx() {
+            Some(ggx) => {
+                let table = CoatTable::of(self.ior, ggx.alpha);
+                Coat {
+                    internal_reflectance: table.internal_reflectance,
+                    table: Some(table),
+                    ..self
+                }
+            }
+            None => self,
+        }
+    }
+
+    /// The coat's opacity at incidence cosine `cos` from outside, the share of light that does
+    /// not cross it: its table's, else smooth Fresnel's.
+    #[inline]
+    fn opacity(&self, cos: f32) -> f32 {
+        match self.table {
+            Some(table) => table.opacity(cos),
+            None => coat_fresnel(cos, self.ior),
         }
     }
 
@@ -86,7 +119,7 @@ impl Coat {
         if !(wo_local.z > MIN_COSINE) {
             return None;
         }
-        let f_o = coat_fresnel(wo_local.z, self.ior);
+        let f_o = self.opacity(wo_local.z);
         let chance = Coat::chance(f_o, albedo);
         let coat = u < chance;
         let wi = match (coat, self.ggx()) {
@@ -140,8 +173,8 @@ impl Coat {
         if !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
             return Vec3::ZERO;
         }
-        let f_o = coat_fresnel(wo_local.z, self.ior);
-        let base = self.base(albedo, f_o, coat_fresnel(wi_local.z, self.ior))
+        let f_o = self.opacity(wo_local.z);
+        let base = self.base(albedo, f_o, self.opacity(wi_local.z))
             * (wi_local.z * std::f32::consts::FRAC_1_PI);
         let Some(ggx) = self.ggx() else {
             return base;
@@ -159,7 +192,7 @@ impl Coat {
         if !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
             return 0.0;
         }
-        let chance = Coat::chance(coat_fresnel(wo_local.z, self.ior), albedo);
+        let chance = Coat::chance(self.opacity(wo_local.z), albedo);
         let base = (1.0 - chance) * cosine_pdf(hit, wi);
         let Some(ggx) = self.ggx() else {
             return base;

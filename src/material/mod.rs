@@ -258,6 +258,7 @@ macro_rules! registry {
 
 pub mod bsdf;
 pub mod coat;
+pub mod coat_table;
 pub mod fresnel;
 pub mod microfacet;
 pub mod texture;

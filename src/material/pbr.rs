@@ -418,8 +418,8 @@ impl MaterialModel for Pbr {
                 samples_lights: self.samples_lights() as u32,
             }
             .words(),
-            metallic_roughness_size: size,
-            metallic_roughness_lookup: self.metallic_roughness.map_or(0, |i| i.lookup.bits()),
+            parameter_image_size: size,
+            parameter_image_lookup: self.metallic_roughness.map_or(0, |i| i.lookup.bits()),
             ..GpuMaterial::with_albedo(&self.base_color)
         }
     }

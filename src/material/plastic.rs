@@ -1,16 +1,19 @@
 //! Plastic (twin: `shaders/materials/plastic.wgsl`): a clear dielectric coat, smooth or on GGX
 //! microfacets, over a lambertian base, the light reflected back and forth between the two
-//! summed in closed form (a saturating [`Coat`]; its file gives the model), two-sided. Random
-//! numbers per sample: 3.
+//! summed in closed form (a saturating [`Coat`]; its file gives the model), two-sided. A rough
+//! coat lets through what rough glass's transmission lobe does (its `CoatTable`), as Mitsuba 3's
+//! `roughplastic` does. Random numbers per sample: 3.
 //!
 //! Why closed form rather than pbrt-v4's stochastic layering: `eval` and `pdf` are then exact
 //! functions of (wo, wi), as light sampling, MIS and the kernel-against-CPU tests need, at the
 //! cost of a lambertian base and a clear coat.
 
 use super::coat::Coat;
+use super::coat_table::COAT_TABLE_SIZE;
 use super::{BsdfSample, MaterialModel};
 use crate::material::texture;
 use crate::scene::file::checked;
+use crate::scene::image::Image;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
@@ -72,7 +75,7 @@ impl Plastic {
             albedo,
             ior,
             roughness,
-            coat: Coat::new(ior, roughness, true),
+            coat: Coat::new(ior, roughness, true).tabulated(),
         }
     }
 }
@@ -92,7 +95,9 @@ impl MaterialModel for Plastic {
     type Params = PlasticParams;
     const FEATURE: &'static str = "PLASTIC";
     /// Textured albedos (shaders/microfacet.wgsl is included for it without a feature).
-    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+    /// and a rough coat's table.
+    const EXTRA_FEATURES: &'static [&'static str] =
+        &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE", "COAT_TABLE"];
     const SAMPLES_LIGHTS: bool = true;
 
     fn validate(&self) -> Result<(), String> {
@@ -106,7 +111,13 @@ impl MaterialModel for Plastic {
     }
 
     fn extra_features(&self) -> Vec<&'static str> {
-        self.albedo.feature().into_iter().collect()
+        let table = self.coat.table.map(|_| "COAT_TABLE");
+        self.albedo.feature().into_iter().chain(table).collect()
+    }
+
+    /// A rough coat's table (`CoatTable`).
+    fn parameter_image(&self) -> Option<&'static Image> {
+        self.coat.table.map(|t| &t.image)
     }
 
     fn relocated(self, origin: glam::DVec3) -> Self {
@@ -136,9 +147,12 @@ impl MaterialModel for Plastic {
             .pdf(texture::value(&self.albedo, hit), wo, wi, hit)
     }
 
-    /// albedo (and texture_*); its [`PlasticParams`].
+    /// albedo (and texture_*); a rough coat's table as its parameter image; its
+    /// [`PlasticParams`].
     fn gpu(&self) -> GpuMaterial {
+        let table_size = self.coat.table.map_or(0.0, |_| COAT_TABLE_SIZE as f32);
         GpuMaterial {
+            parameter_image_size: [table_size, 1.0],
             params: PlasticParams {
                 ior: self.ior,
                 alpha: self.coat.alpha,

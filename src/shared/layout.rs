@@ -360,11 +360,12 @@ gpu_struct! {
         normal_map_size: [f32; 2],
         normal_map_scale: f32,
         normal_map_lookup: u32,
-        /// A metallic-roughness image's width and height (0: none; `material::Pbr`), where
-        /// its texels start in the images array, and how it is read.
-        metallic_roughness_size: [f32; 2],
-        metallic_roughness_image: u32,
-        metallic_roughness_lookup: u32,
+        /// The kind's image of parameters (`MaterialModel::parameter_image`: pbr's
+        /// metallic-roughness texture, a rough plastic's coat table): its width and height (0:
+        /// none), where its texels start in the images array, and how it is read.
+        parameter_image_size: [f32; 2],
+        parameter_image: u32,
+        parameter_image_lookup: u32,
         /// See-through surfaces (`scene::alpha`): the alpha factor, where the alpha image's
         /// texels start, its size (0: none) and how it is read, the mode (`ALPHA_*`; opaque
         /// 0) and MASK's cutoff.
