@@ -103,7 +103,7 @@ fn albedo_at(m: Material, hit: Hit) -> vec3f {
 // m with its albedo looked up at hit once, for the several uses a path vertex makes of it (light
 // sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe. And
 // with pbr's metallic and alpha scaled by its metallic-roughness image there (pbr_with_texel;
-// only pbr has one).
+// a rough plastic's parameter image is its coat table, read by cosine).
 fn with_albedo_at(m: Material, hit: Hit) -> Material {
     var out = m;
     out.albedo = albedo_at(m, hit);

@@ -73,8 +73,8 @@ pub trait MaterialModel {
     fn normal_map(&self) -> Option<&NormalMap> {
         None
     }
-    /// An image of per-point parameters, if it has one (`pbr`'s metallic-roughness texture):
-    /// the GPU's image array holds it.
+    /// An image of parameters, if it has one (`pbr`'s metallic-roughness texture, per point;
+    /// a rough `plastic`'s coat table, per cosine): the GPU's image array holds it.
     fn parameter_image(&self) -> Option<&'static Image> {
         None
     }

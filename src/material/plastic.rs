@@ -54,6 +54,10 @@ impl TryFrom<PlasticDoc> for Plastic {
         if !(doc.ior > 0.0) {
             return Err(format!("ior must be > 0, got {}", doc.ior));
         }
+        // Before the coat's table is built from it.
+        if !(0.0..=1.0).contains(&doc.roughness) {
+            return Err(format!("roughness must be in [0, 1], got {}", doc.roughness));
+        }
         Ok(Plastic::new(doc.albedo, doc.ior, doc.roughness))
     }
 }
@@ -69,7 +73,7 @@ impl From<Plastic> for PlasticDoc {
 }
 
 impl Plastic {
-    /// A coat of index `ior` (> 0) and `roughness` over a base of `albedo`.
+    /// A coat of index `ior` (> 0) and `roughness` (in [0, 1]) over a base of `albedo`.
     pub fn new(albedo: Texture, ior: f32, roughness: f32) -> Self {
         Plastic {
             albedo,
@@ -94,8 +98,8 @@ material_params! {
 impl MaterialModel for Plastic {
     type Params = PlasticParams;
     const FEATURE: &'static str = "PLASTIC";
-    /// Textured albedos (shaders/microfacet.wgsl is included for it without a feature).
-    /// and a rough coat's table.
+    /// Textured albedos and a rough coat's table (shaders/microfacet.wgsl is included for it
+    /// without a feature).
     const EXTRA_FEATURES: &'static [&'static str] =
         &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE", "COAT_TABLE"];
     const SAMPLES_LIGHTS: bool = true;

@@ -274,7 +274,7 @@ fn plastic_coat_crosses_as_rough_glass_does() {
 /// differ by more at roughness 1 (printed), where the comparison with Mitsuba's images parts.
 #[test]
 fn plastic_coat_tables_are_mitsubas_with_its_masking() {
-    use rt_gpu::material::coat_table::{CoatTable, Lobe, Masking, lobe_albedo};
+    use rt_gpu::material::coat_table::{BoundaryLobe, CoatTable, Masking, lobe_albedo};
     use rt_gpu::material::microfacet::Ggx;
     const MITSUBA: [(f32, f64, f64); 3] = [
         (0.3, 0.55735, 0.87054),
@@ -291,12 +291,12 @@ fn plastic_coat_tables_are_mitsubas_with_its_masking() {
         let k = (0..64)
             .map(|i| {
                 let mu = (i as f32 / 63.0).max(1e-6);
-                2.0 * mu as f64 * albedo(Lobe::Reflection, 1.0 / 1.5, mu, 128)
+                2.0 * mu as f64 * albedo(BoundaryLobe::Reflection, 1.0 / 1.5, mu, 128)
             })
             .sum::<f64>()
             / 64.0;
-        let tt =
-            albedo(Lobe::Transmission, 1.5, 1.0, 32) * albedo(Lobe::Transmission, 1.5, 0.5, 32);
+        let tt = albedo(BoundaryLobe::Transmission, 1.5, 1.0, 32)
+            * albedo(BoundaryLobe::Transmission, 1.5, 0.5, 32);
         assert!(
             close(k, mitsuba_k) && close(tt, mitsuba_tt),
             "roughness {roughness}: K {k:.5} (Mitsuba {mitsuba_k}), T(1) T(0.5) {tt:.5} (Mitsuba {mitsuba_tt})"
