@@ -469,15 +469,20 @@ pub const BOX_FAR_WIDENING: f32 = 1.0 + 2.0 * (3.0 * 5.960_464_5e-8 / (1.0 - 3.0
 pub(crate) mod tests {
     use super::*;
 
-    /// `n` boxes scattered in a 100-unit cube, the same every call.
-    pub(crate) fn random_items(n: usize) -> Vec<Item> {
-        let mut state = 12345u64;
-        let mut next = move || {
+    /// Numbers in [0, 1), the same sequence for the same `seed`.
+    pub(crate) fn numbers(seed: u64) -> impl FnMut() -> f32 {
+        let mut state = seed;
+        move || {
             state = state
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        }
+    }
+
+    /// `n` boxes scattered in a 100-unit cube, the same every call.
+    pub(crate) fn random_items(n: usize) -> Vec<Item> {
+        let mut next = numbers(12345);
         (0..n as u32)
             .map(|primitive| {
                 let c = Vec3::new(next(), next(), next()) * 100.0;

@@ -24,6 +24,7 @@ pub mod scene;
 pub mod shared;
 #[cfg(feature = "viewer")]
 pub mod viewer;
+pub mod wide_bvh;
 
 thread_local! {
     static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };

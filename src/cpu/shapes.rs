@@ -302,9 +302,10 @@ fn consider_instance(
         dir: instance.vector_to_local(ray.dir),
     };
     let primitive = PrimitiveRef::Instance(index);
-    super::accel::traverse(
+    super::accel::traverse_wide(
+        &scene.wide_bvh,
         &scene.bvh,
-        instance.root,
+        scene.wide_bvh.instance_roots[index as usize],
         &local,
         closest,
         |packed, closest| {
@@ -378,11 +379,19 @@ fn passes_through(
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
-    super::accel::traverse(&scene.bvh, 0, ray, &mut closest, |packed, closest| {
-        if let Some(p) = PrimitiveRef::unpacked(packed) {
-            consider(scene, p, ray, closest, &mut found);
-        }
-    });
+    let (wide, root) = (&scene.wide_bvh, scene.wide_bvh.root);
+    super::accel::traverse_wide(
+        wide,
+        &scene.bvh,
+        root,
+        ray,
+        &mut closest,
+        |packed, closest| {
+            if let Some(p) = PrimitiveRef::unpacked(packed) {
+                consider(scene, p, ray, closest, &mut found);
+            }
+        },
+    );
     let Candidate {
         primitive,
         outward,

@@ -231,6 +231,8 @@ pub struct FlatScene {
     /// primitives than testing each); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
     pub bvh: crate::accel::Bvh,
+    /// The same hierarchy collapsed to four children per node, which the CPU traverses.
+    pub wide_bvh: crate::wide_bvh::WideBvh,
     /// Every emitting sphere, quad and triangle, and last an environment background, for next-event
     /// estimation (see [`Light`]).
     pub lights: Vec<Light>,
@@ -400,7 +402,7 @@ impl FlatScene {
     /// Builds `bvh`: each instanced mesh's hierarchy (in mesh coordinates), then the top level
     /// over the placed primitives and the instances (bounded by their meshes' root boxes,
     /// placed), then the meshes' nodes appended after the top level's; sets each instance's
-    /// bounds and root.
+    /// bounds and root; and collapses it all into `wide_bvh`.
     pub fn build_bvh(&mut self) {
         use crate::accel::Bvh;
         let mesh_bvhs: Vec<Bvh> = self
@@ -427,6 +429,8 @@ impl FlatScene {
         for instance in &mut self.instances {
             instance.root = roots[instance.mesh as usize];
         }
+        let instance_roots = self.instances.iter().map(|i| i.root);
+        self.wide_bvh = crate::wide_bvh::WideBvh::new(&self.bvh, instance_roots);
     }
 
     /// Most instances one leaf of the BVH's top level holds (0 without instances).
@@ -1130,6 +1134,7 @@ impl<'a> Flattener<'a> {
             instances: self.instances,
             instance_depth: 0,
             bvh: crate::accel::Bvh::default(),
+            wide_bvh: crate::wide_bvh::WideBvh::default(),
             lights: Vec::new(),
             medium_crossings: 0,
             uv_textures: false,
