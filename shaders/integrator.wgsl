@@ -229,26 +229,9 @@ fn escaped(bsdf_pdf: f32, dir: vec3f) -> vec3f {
     return background(dir);
 }
 
-// A path under way (twin: the loop of radiance in src/cpu/integrator.rs, one iteration per
-// extend_path call). The render kernel advances each invocation's path a segment at a time and
-// starts its pixel's next sample as soon as one ends, rather than looping over a sample's
-// segments inside a loop over samples: SIMD lanes step together, so with nested loops a lane
-// whose path ended early idled until its group's longest path ended (path regeneration, Novak,
-// Havran and Dachsbacher 2010).
-struct Path {
-    ray: Ray,
-    total: vec3f,
-    throughput: vec3f,
-    // Segments traced so far.
-    segment: u32,
-    // The medium the ray is in: 1 + the index of the material filled with it; 0: none.
-    medium: u32,
-    // The pdf with which the BSDF (or phase function) chose `ray` from `origin`; 0 when light
-    // sampling could not have chosen it (camera rays, delta BSDFs; always without NEE), so
-    // light it finds counts in full.
-    bsdf_pdf: f32,
-    origin: vec3f,
-}
+// Path, a path under way (twin: the loop of radiance in src/cpu/integrator.rs, one iteration per
+// extend_path call, advanced a segment at a time: path regeneration), is generated from
+// src/gpu/kernel_state.rs.
 
 fn start_path(primary: Ray) -> Path {
     return Path(primary, vec3f(0.0), vec3f(1.0), 0u, 0u, 0.0, primary.origin);

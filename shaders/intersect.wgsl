@@ -30,21 +30,8 @@ fn quad_distance(q: Quad, ray: Ray) -> f32 {
 }
 //#endif
 
-// The closest hit found so far along a ray, and what its shape needs to complete the hit
-// (see surface below).
-struct Closest {
-    outward: vec3f,
-    t: f32,
-    center: vec3f,      // sphere
-    radius: f32,        // sphere
-    plane_offset: f32,  // quad
-    primitive: u32,     // packed, as in Hit
-    material: u32,
-    found: bool,
-    uv: vec2f,          // quad: (a, b), for UV textures
-    weights: vec2f,     // triangle: barycentric weights of its second and third corners
-    triangle: u32,      // instance: which of its mesh's triangles (index in triangles)
-}
+// Closest, the closest hit found so far along a ray and what its shape needs to complete the
+// hit, is generated from src/gpu/kernel_state.rs.
 
 // Nothing found yet: every hit is nearer.
 const NO_CLOSEST = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);

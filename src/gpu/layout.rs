@@ -191,6 +191,8 @@ pub fn wgsl_shared() -> String {
     out.push_str(&wgsl_declarations());
     out.push('\n');
     out.push_str(&crate::material::BsdfSample::wgsl_declaration());
+    out.push('\n');
+    out.push_str(&super::kernel_state::wgsl_declarations());
     out
 }
 

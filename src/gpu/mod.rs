@@ -1,5 +1,5 @@
 //! The GPU backend's host side: device setup (`context`), the buffer layout shared with WGSL
-//! (`layout`), kernel composition (`shader`), dispatch sizing (`dispatch`), buffers,
+//! (`layout`) and the kernel's own state structs (`kernel_state`), kernel composition (`shader`), dispatch sizing (`dispatch`), buffers,
 //! dispatches and readback (`renderer`, `tile`), a render kept on the device (`live`) and the
 //! viewer's display pass (`display`). The rendering math
 //! itself lives in `shaders/`.
@@ -9,6 +9,7 @@ pub mod bindings;
 pub mod context;
 pub mod dispatch;
 pub mod display;
+pub mod kernel_state;
 pub mod layout;
 pub mod live;
 pub mod renderer;

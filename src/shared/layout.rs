@@ -190,6 +190,11 @@ macro_rules! kernel_struct {
             $($(#[$field_meta])* pub $field: $ty,)*
         }
 
+        /// Another kernel struct may hold it.
+        impl $crate::shared::layout::WgslLocalType for $name {
+            const WGSL: &'static str = $wgsl;
+        }
+
         impl $name {
             /// Its WGSL declaration.
             pub fn wgsl_declaration() -> String {
