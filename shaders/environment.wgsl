@@ -1,5 +1,6 @@
 // The environment light (twin: src/cpu/environment.rs): what an escaped ray sees, and
-// directions sampled in proportion to luminance x sin(theta), with their solid-angle pdf. Its
+// directions sampled in proportion to filtered luminance x sin(theta), with their solid-angle
+// pdf (the distribution is built on the host: scene::environment::Distribution). Its
 // texels and alias tables are in `images` (see ImageArray in src/gpu/layout.rs).
 
 //#if ENVIRONMENT

@@ -67,8 +67,9 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f64 {
     0.2126 * r as f64 + 0.7152 * g as f64 + 0.0722 * b as f64
 }
 
-/// A piecewise-constant density over the image, texel by texel, in proportion to luminance
-/// times sin(theta) (the solid angle a texel spans), sampled with alias tables (Walker 1977;
+/// A piecewise-constant density over the image, texel by texel, in proportion to the mean over
+/// the texel of the luminance as looked up (bilinearly filtered) times sin(theta) (the solid
+/// angle a texel spans), sampled with alias tables (Walker 1977;
 /// Vose 1991): the first number picks a row from the rows' table, the second a column from that
 /// row's table, each in constant time, and their remainders place the direction across the
 /// texel. (One table over all texels would ask one f32 number to tell apart more texels than
@@ -144,12 +145,35 @@ impl AliasTable {
 impl Distribution {
     pub fn new(image: &Image) -> Self {
         let (w, h) = (image.width as usize, image.height as usize);
+        let lum: Vec<f64> = (0..w * h)
+            .map(|i| {
+                let t = image.texel((i % w) as u32, (i / w) as u32);
+                luminance(t.x, t.y, t.z)
+            })
+            .collect();
+        // Over each texel, the mean of the radiance as it is looked up, filtered bilinearly
+        // (wrapping across, clamped at the poles): 1/8, 3/4, 1/8 of the texel and its
+        // neighbours on each axis. A texel beside a small bright sun receives some of the sun's
+        // light through the filter; weighed by its own value alone it would be picked too
+        // rarely for that light, and each pick would be a firefly.
+        const SIDE: f64 = 0.125;
+        const CENTRE: f64 = 0.75;
+        let across: Vec<f64> = (0..w * h)
+            .map(|i| {
+                let (x, row) = (i % w, i - i % w);
+                let (left, right) = ((x + w - 1) % w, (x + 1) % w);
+                SIDE * lum[row + left] + CENTRE * lum[i] + SIDE * lum[row + right]
+            })
+            .collect();
         let mut weights = Vec::with_capacity(w * h);
         for y in 0..h {
             let sin_theta = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+            let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
             for x in 0..w {
-                let t = image.texel(x as u32, y as u32);
-                weights.push(luminance(t.x, t.y, t.z) * sin_theta);
+                let filtered = SIDE * across[up * w + x]
+                    + CENTRE * across[y * w + x]
+                    + SIDE * across[down * w + x];
+                weights.push(filtered * sin_theta);
             }
         }
         let total: f64 = weights.iter().sum();
@@ -223,8 +247,10 @@ mod tests {
                 );
             }
         }
+        // Filtered, a ramp keeps its values inside; at the top row the pole's clamp leaves
+        // texel (1, 0) 7/8 of its 2 and 1/8 of the 6 below: 2.5.
         let middle = d.density[5] / d.density[1];
-        assert!((middle - 6.0 / 2.0 / (std::f32::consts::PI / 6.0).sin()).abs() < 1e-4);
+        assert!((middle - 6.0 / 2.5 / (std::f32::consts::PI / 6.0).sin()).abs() < 1e-4);
         // The integral of a white image is 4 pi, up to the midpoint rule's error.
         let white = Image::from_linear("white", 8, 4, vec![1.0; 96]).unwrap();
         let d = Distribution::new(&white);
@@ -234,6 +260,39 @@ mod tests {
         let d = Distribution::new(&black);
         assert_eq!(d.density, vec![1.0; 4]);
         assert_eq!(d.integral, 0.0);
+    }
+
+    /// A bright texel in a black image shares its weight with its neighbours as the bilinear
+    /// filter shares its light: each side 1/8 of the texel's 3/4 on an axis (wrapping across),
+    /// nothing two texels away.
+    #[test]
+    fn a_bright_texel_shares_its_weight_with_its_neighbours() {
+        let (w, h) = (8usize, 5usize);
+        for bright in [(3, 2), (0, 2)] {
+            let texels: Vec<f32> = (0..w * h)
+                .flat_map(|i| [if (i % w, i / w) == bright { 1.0 } else { 0.0 }; 3])
+                .collect();
+            let image = Image::from_linear("sun", w as u32, h as u32, texels).unwrap();
+            let d = Distribution::new(&image);
+            let at = |x: usize, y: usize| d.density[y * w + x] as f64;
+            let (x, y) = bright;
+            let (left, right) = ((x + w - 1) % w, (x + 1) % w);
+            let centre = at(x, y);
+            for side in [left, right] {
+                assert!(
+                    (at(side, y) / centre - 1.0 / 6.0).abs() < 1e-6,
+                    "{bright:?}"
+                );
+            }
+            let sin = |row: usize| (std::f64::consts::PI * (row as f64 + 0.5) / h as f64).sin();
+            let below = at(x, y + 1) / centre;
+            assert!(
+                (below - sin(y + 1) / sin(y) / 6.0).abs() < 1e-6,
+                "{bright:?}"
+            );
+            assert_eq!(at((x + 2) % w, y), 0.0);
+            assert_eq!(at(x, y + 2), 0.0);
+        }
     }
 
     #[test]
@@ -254,7 +313,6 @@ mod tests {
                 remainder.1 += down as f64 / (m * m) as f64;
             }
         }
-        assert_eq!(counts[0], 0);
         for (i, (count, density)) in counts.iter().zip(&d.density).enumerate() {
             let expected = *density as f64 / 6.0;
             assert!(
