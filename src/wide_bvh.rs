@@ -5,6 +5,7 @@
 //! hierarchy.
 
 use crate::accel::{Bvh, Node};
+use std::collections::HashMap;
 
 /// A child: `EMPTY`, a leaf (`LEAF` | the index of the binary hierarchy's leaf node) or the
 /// index of another wide node.
@@ -43,13 +44,13 @@ impl WideBvh {
             return wide;
         }
         wide.root = wide.collapse(bvh, 0);
-        let mut collapsed: Vec<(u32, u32)> = Vec::new();
+        let mut collapsed: HashMap<u32, u32> = HashMap::new();
         for root in instance_roots {
-            let reference = match collapsed.iter().find(|(binary, _)| *binary == root) {
-                Some(&(_, reference)) => reference,
+            let reference = match collapsed.get(&root) {
+                Some(&reference) => reference,
                 None => {
                     let reference = wide.collapse(bvh, root);
-                    collapsed.push((root, reference));
+                    collapsed.insert(root, reference);
                     reference
                 }
             };
@@ -64,10 +65,11 @@ impl WideBvh {
         if node.is_leaf() {
             return LEAF | index;
         }
-        let mut children = vec![index + 1, node.offset];
-        while children.len() < 4 {
+        let mut children = [index + 1, node.offset, EMPTY, EMPTY];
+        let mut count = 2;
+        while count < 4 {
             // Open the interior child of largest surface area: the likeliest to be entered.
-            let widest = (0..children.len())
+            let widest = (0..count)
                 .filter(|&i| !bvh.nodes[children[i] as usize].is_leaf())
                 .max_by(|&a, &b| {
                     let area_of = |i: usize| area(&bvh.nodes[children[i] as usize]);
@@ -76,7 +78,8 @@ impl WideBvh {
             let Some(i) = widest else { break };
             let opened = children[i];
             children[i] = opened + 1;
-            children.push(bvh.nodes[opened as usize].offset);
+            children[count] = bvh.nodes[opened as usize].offset;
+            count += 1;
         }
         let at = self.nodes.len();
         self.nodes.push(WideNode {
@@ -84,7 +87,7 @@ impl WideBvh {
             max: [[f32::INFINITY; 4]; 3],
             children: [EMPTY; 4],
         });
-        for (lane, &child) in children.iter().enumerate() {
+        for (lane, &child) in children[..count].iter().enumerate() {
             let box_of = &bvh.nodes[child as usize];
             let reference = self.collapse(bvh, child);
             let node = &mut self.nodes[at];

@@ -1,7 +1,9 @@
-//! Traversal of the scene's BVH (twin: `shaders/accel.wgsl`): depth-first; an interior node
-//! tests both children's boxes, enters the nearer (by where the ray enters them) and pushes the
-//! other with its entry distance; a popped child whose box now lies beyond the closest hit is
-//! skipped without being read.
+//! Traversal of the scene's BVH: depth-first; an interior node tests its children's boxes,
+//! enters the nearest (by where the ray enters them) and pushes the others with their entry
+//! distances; a popped child whose box now lies beyond the closest hit is skipped without being
+//! read. `traverse` walks the binary hierarchy as the kernel does (twin: `shaders/accel.wgsl`);
+//! the CPU renders with `traverse_wide`, over it collapsed to four children per node, which
+//! finds the same closest hits.
 
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, box_entry, inverse_direction};
 use crate::shared::ray::Ray;

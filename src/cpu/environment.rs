@@ -1,5 +1,5 @@
 //! The environment light (twin: `shaders/environment.wgsl`): what an escaped ray sees, and
-//! directions sampled in proportion to luminance x sin(theta) (see `scene::environment`), with
+//! directions sampled in proportion to filtered luminance x sin(theta) (see `scene::environment`), with
 //! their solid-angle pdf.
 
 use crate::material::texture::bilinear;
