@@ -26,7 +26,7 @@ pub const NO_COAT_TABLE: u32 = u32::MAX;
 
 /// Quadrature nodes per axis of the visible normals' two numbers, more from inside, where total
 /// internal reflection puts a kink in the integrand, and over each side of the critical cosine in
-/// K's outer integral: doubling each moves K and T by at most 1e-4, and a table takes about 10 ms.
+/// K's outer integral: doubling each moves K and T by at most 1e-4 (docs/benchmarks.md).
 const OUTSIDE_NODES: usize = 32;
 const INSIDE_NODES: usize = 64;
 const COSINE_NODES: usize = 32;
