@@ -1,6 +1,7 @@
-// BVH traversal (twin: src/cpu/accel.rs): depth-first; an interior node tests both children's
-// boxes, enters the nearer by entry distance and pushes the other, with that distance, on a
-// stack in private memory. Nodes are read as `gpu_bvh` in src/gpu/layout.rs lays them out:
+// BVH traversal (twin: the binary `traverse` in src/cpu/accel.rs's tests, which the CPU's wide
+// traversal is held to): depth-first; an interior node tests both children's boxes, enters the
+// nearer by entry distance and pushes the other, with that distance, on a stack in private
+// memory. Nodes are read as `gpu_bvh` in src/gpu/layout.rs lays them out:
 // an interior node holds its children's boxes and references, so entering a node is one read
 // and a leaf's primitives are known from its reference.
 //

@@ -1,75 +1,13 @@
 //! Traversal of the scene's BVH: depth-first; an interior node tests its children's boxes,
 //! enters the nearest (by where the ray enters them) and pushes the others with their entry
 //! distances; a popped child whose box now lies beyond the closest hit is skipped without being
-//! read. `traverse` walks the binary hierarchy as the kernel does (twin: `shaders/accel.wgsl`);
-//! the CPU renders with `traverse_wide`, over it collapsed to four children per node, which
-//! finds the same closest hits.
+//! read. The CPU traverses the hierarchy collapsed to four children per node (`traverse_wide`);
+//! the binary walk the kernel does (`shaders/accel.wgsl`) is kept in the tests, as the reference
+//! the wide one must agree with.
 
-use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, box_entry, inverse_direction};
+use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, inverse_direction};
 use crate::shared::ray::Ray;
 use crate::wide_bvh::{EMPTY, LEAF, WideBvh, WideNode};
-
-/// Calls `test(packed primitive, closest)` for every primitive in a leaf, below node `root`,
-/// whose box the ray meets before `closest` (and for a leaf root's, unconditionally); `test`
-/// shortens `closest` when it finds a nearer hit. The scene's hierarchy starts at node 0, an
-/// instanced mesh's at its instance's root.
-#[inline]
-pub fn traverse(
-    bvh: &Bvh,
-    root: u32,
-    ray: &Ray,
-    closest: &mut f32,
-    mut test: impl FnMut(u32, &mut f32),
-) {
-    if bvh.nodes.is_empty() {
-        return;
-    }
-    let inverse = inverse_direction(ray.dir);
-    let entry = |index: u32, closest: f32| {
-        let node = &bvh.nodes[index as usize];
-        box_entry(node.min, node.max, ray.origin, inverse, closest)
-    };
-    let mut stack = [(0u32, 0f32); MAX_DEPTH];
-    let mut top = 0;
-    let mut index = root;
-    loop {
-        let node = &bvh.nodes[index as usize];
-        if node.is_leaf() {
-            let first = node.offset as usize;
-            for &p in &bvh.primitives[first..first + node.count as usize] {
-                test(p, closest);
-            }
-        } else {
-            let (first, second) = (index + 1, node.offset);
-            match (entry(first, *closest), entry(second, *closest)) {
-                (Some(t_first), Some(t_second)) => {
-                    let (near, far, t_far) = if t_second < t_first {
-                        (second, first, t_first)
-                    } else {
-                        (first, second, t_second)
-                    };
-                    stack[top] = (far, t_far);
-                    top += 1;
-                    index = near;
-                    continue;
-                }
-                (Some(_), None) => {
-                    index = first;
-                    continue;
-                }
-                (None, Some(_)) => {
-                    index = second;
-                    continue;
-                }
-                (None, None) => {}
-            }
-        }
-        match pop_within(&stack, &mut top, *closest) {
-            Some(pending) => index = pending,
-            None => return,
-        }
-    }
-}
 
 /// The last pushed node whose box, entered at the distance pushed with it, the ray still meets
 /// before `closest` (as box_entry would test it now), popping those it passes over.
@@ -85,9 +23,9 @@ fn pop_within(stack: &[(u32, f32)], top: &mut usize, closest: f32) -> Option<u32
     None
 }
 
-/// [`traverse`] over the hierarchy collapsed to four children per node (`wide_bvh`), below
+/// The binary walk (see the tests' `traverse`) over the hierarchy collapsed to four children per node (`wide_bvh`), below
 /// child reference `root`: primitives met in another order (and so others skipped), but the same
-/// closest hit, as each box test is [`box_entry`]'s arithmetic lane by lane and ties between hits
+/// closest hit, as each box test is `accel::box_entry`'s arithmetic lane by lane and ties between hits
 /// resolve by primitive. A node's children
 /// are entered nearest first, the others pushed with their entry distances.
 #[inline]
@@ -163,7 +101,7 @@ impl FourBoxes {
     }
 
     /// Where the ray enters each of `node`'s boxes, and as bits which it meets before
-    /// `t_max`: [`box_entry`] in each lane whose child is not `EMPTY`.
+    /// `t_max`: `accel::box_entry` in each lane whose child is not `EMPTY`.
     #[inline]
     #[cfg(target_arch = "x86_64")]
     fn entries(&self, node: &WideNode, t_max: f32) -> ([f32; 4], u32) {
@@ -201,7 +139,7 @@ impl FourBoxes {
             let min = glam::Vec3::new(node.min[0][lane], node.min[1][lane], node.min[2][lane]);
             let max = glam::Vec3::new(node.max[0][lane], node.max[1][lane], node.max[2][lane]);
             let (origin, inverse) = (self.origin.into(), self.inverse.into());
-            if let Some(near) = box_entry(min, max, origin, inverse, t_max) {
+            if let Some(near) = crate::accel::box_entry(min, max, origin, inverse, t_max) {
                 entries[lane] = near;
                 met |= 1 << lane;
             }
@@ -213,6 +151,70 @@ impl FourBoxes {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::box_entry;
+
+    /// The kernel's binary walk (twin: `shaders/accel.wgsl`): the reference for `traverse_wide`.
+    /// Calls `test(packed primitive, closest)` for every primitive in a leaf, below node `root`,
+    /// whose box the ray meets before `closest` (and for a leaf root's, unconditionally); `test`
+    /// shortens `closest` when it finds a nearer hit. The scene's hierarchy starts at node 0, an
+    /// instanced mesh's at its instance's root.
+    fn traverse(
+        bvh: &Bvh,
+        root: u32,
+        ray: &Ray,
+        closest: &mut f32,
+        mut test: impl FnMut(u32, &mut f32),
+    ) {
+        if bvh.nodes.is_empty() {
+            return;
+        }
+        let inverse = inverse_direction(ray.dir);
+        let entry = |index: u32, closest: f32| {
+            let node = &bvh.nodes[index as usize];
+            box_entry(node.min, node.max, ray.origin, inverse, closest)
+        };
+        let mut stack = [(0u32, 0f32); MAX_DEPTH];
+        let mut top = 0;
+        let mut index = root;
+        loop {
+            let node = &bvh.nodes[index as usize];
+            if node.is_leaf() {
+                let first = node.offset as usize;
+                for &p in &bvh.primitives[first..first + node.count as usize] {
+                    test(p, closest);
+                }
+            } else {
+                let (first, second) = (index + 1, node.offset);
+                match (entry(first, *closest), entry(second, *closest)) {
+                    (Some(t_first), Some(t_second)) => {
+                        let (near, far, t_far) = if t_second < t_first {
+                            (second, first, t_first)
+                        } else {
+                            (first, second, t_second)
+                        };
+                        stack[top] = (far, t_far);
+                        top += 1;
+                        index = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        index = first;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        index = second;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            match pop_within(&stack, &mut top, *closest) {
+                Some(pending) => index = pending,
+                None => return,
+            }
+        }
+    }
+
     use crate::accel::tests::{numbers, random_items};
     use crate::wide_bvh::WideBvh;
     use glam::Vec3;

@@ -1,8 +1,8 @@
 //! The GPU backend's host side: device setup (`context`), the buffer layout shared with WGSL
-//! (`layout`) and the kernel's own state structs (`kernel_state`), kernel composition (`shader`), dispatch sizing (`dispatch`), buffers,
-//! dispatches and readback (`renderer`, `tile`), a render kept on the device (`live`) and the
-//! viewer's display pass (`display`). The rendering math
-//! itself lives in `shaders/`.
+//! (`layout`) and the kernel's own state structs (`kernel_state`), kernel composition
+//! (`shader`), dispatch sizing (`dispatch`), buffers, dispatches and readback (`renderer`,
+//! `tile`), a render kept on the device (`live`) and the viewer's display pass (`display`). The
+//! rendering math itself lives in `shaders/`.
 
 pub mod backend;
 pub mod bindings;

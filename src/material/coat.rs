@@ -9,13 +9,13 @@
 //! O is Fresnel's F and K = 1 - (1 - Fbar) / eta^2 (Fbar the cosine-weighted mean of F: the
 //! identity between a boundary's mean reflectances from both sides). For plastic's rough coat,
 //! 1 - O is the albedo of rough glass's transmission lobe and K the mean albedo of its reflection
-//! lobe from inside, both tabulated ([`CoatTable`]), as Mitsuba 3's `roughplastic` has them. `s` is the albedo when the coat *saturates* (light
-//! bouncing between coat and base, the geometric series of Mitsuba 3's `plastic` with
-//! `nonlinear`, after Weidlich and Wilkie 2007), 1 when it does not (the base's colour kept, as
-//! glTF's metallic-roughness model and Mitsuba's default keep it). Either way a white base under
-//! a smooth coat reflects everything: F(cos_o) + (1 - F(cos_o)) = 1. Rough, the coat loses what
-//! its microfacets lose in single scattering, at each crossing inside it too, which the white
-//! furnace tests bound.
+//! lobe from inside, both tabulated ([`CoatTable`]), as Mitsuba 3's `roughplastic` has them.
+//! `s` is the albedo when the coat *saturates* (light bouncing between coat and base, the
+//! geometric series of Mitsuba 3's `plastic` with `nonlinear`, after Weidlich and Wilkie 2007),
+//! 1 when it does not (the base's colour kept, as glTF's metallic-roughness model and Mitsuba's
+//! default keep it). Either way a white base under a smooth coat reflects everything: F(cos_o) +
+//! (1 - F(cos_o)) = 1. Rough, the coat loses what its microfacets lose in single scattering, at
+//! each crossing inside it too, which the white furnace tests bound.
 
 use super::coat_table::CoatTable;
 use super::fresnel::{fresnel, refract_cos};
@@ -33,7 +33,7 @@ pub struct Coat {
     /// K, from `ior` (and the table, where there is one).
     pub internal_reflectance: f32,
     pub saturates: bool,
-    /// A rough coat's tabulated reflectance (plastic's), else none: smooth Fresnel's.
+    /// A rough coat's tabulated opacity and K (plastic's), else none: smooth Fresnel's.
     pub table: Option<&'static CoatTable>,
 }
 

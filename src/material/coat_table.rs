@@ -3,12 +3,13 @@
 //! that boundary's single-scattering lobes lose. Tabulated are 1 - T(mu), T the directional
 //! albedo of its transmission lobe met from outside, at [`COAT_TABLE_SIZE`] cosines (the coat's
 //! opacity, light reflected or lost: plastic's closed form takes it where a smooth coat takes
-//! Fresnel's F), and K, the cosine-weighted mean albedo of its reflection lobe met
-//! from inside. This is Mitsuba 3's `roughplastic` (its tables of 64 cosines, linear between
-//! them), with rt-gpu's height-correlated masking, and K integrated over the cosine where
-//! Mitsuba takes the plain mean of its 64 samples (about 1.5% lower at roughness 0.3). Each albedo is an expectation over visible
-//! normals of its lobe's weight ((1 - F) G2 / G1(wo) refracted, F G2 / G1(wo) reflected), in
-//! f64 by Gauss-Legendre quadrature over the two numbers that sample them.
+//! Fresnel's F), and K, the cosine-weighted mean albedo of its reflection lobe met from inside.
+//! This is Mitsuba 3's `roughplastic` (its tables of 64 cosines, linear between them), with
+//! rt-gpu's height-correlated masking, and K integrated over the cosine where Mitsuba takes the
+//! plain mean of its 64 samples (about 1.5% lower at roughness 0.3). Each albedo is an
+//! expectation over visible normals of its lobe's weight ((1 - F) G2 / G1(wo) refracted,
+//! F G2 / G1(wo) reflected), in f64 by Gauss-Legendre quadrature over the two numbers that
+//! sample them.
 
 use super::coat::coat_fresnel;
 use super::fresnel::refract_cos;

@@ -47,6 +47,13 @@ fn per_test_level(comparisons: f64) -> f64 {
     1.0 - (1.0 - 0.01f64).powf(1.0 / comparisons)
 }
 
+/// The |z| beyond which one of `comparisons` two-sided z tests fails, at family-wise 0.01,
+/// Sidak-corrected.
+fn z_threshold(comparisons: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    Normal::standard().inverse_cdf(1.0 - per_test_level(comparisons) / 2.0)
+}
+
 /// A normal and a wo at `degrees` from it, at azimuth 40 degrees in its frame.
 fn tilted(degrees: f32) -> (Vec3, Vec3) {
     let normal = Vec3::new(0.3, 0.8, -0.52).normalize();

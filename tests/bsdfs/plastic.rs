@@ -217,9 +217,8 @@ fn plastic_white_furnace() {
 fn plastic_coat_crosses_as_rough_glass_does() {
     use rt_gpu::material::Dielectric;
     use rt_gpu::material::coat_table::CoatTable;
-    use statrs::distribution::{ContinuousCDF, Normal};
     const N: u32 = 200_000;
-    let threshold = Normal::standard().inverse_cdf(1.0 - per_test_level(30.0) / 2.0);
+    let threshold = z_threshold(30.0);
     let (outside, inside) = (hit(Vec3::Z), common::surface_hit(Vec3::Z, false));
     let mut worst: f64 = 0.0;
     for roughness in [0.3, 0.7, 1.0] {
@@ -418,9 +417,8 @@ fn mean_and_error(n: u32, mut sample: impl FnMut(u32) -> f64) -> (f64, f64) {
     ignore = "CPU-only and slow: the default build runs it"
 )]
 fn plastic_is_a_random_walk_through_its_layers() {
-    use statrs::distribution::{ContinuousCDF, Normal};
     const N: u32 = 200_000;
-    let threshold = Normal::standard().inverse_cdf(1.0 - per_test_level(64.0) / 2.0);
+    let threshold = z_threshold(64.0);
     let z = |(a, sa): (f64, f64), (b, sb): (f64, f64)| (a - b) / (sa * sa + sb * sb).sqrt();
     let mut worst: f64 = 0.0;
     for roughness in [0.0, 0.3, 0.7, 1.0] {
