@@ -45,16 +45,8 @@ fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<fu
         consider_triangle(triangles[index], index, ray, *sh, c);
     }
 //#endif
-//#if QUADS
-    if kind == KIND_QUAD {
-        consider_quad(quads[index], index, ray, c);
-    }
-//#endif
-//#if SPHERES
-    if kind == KIND_SPHERE {
-        consider_sphere(spheres[index], index, ray, false, c);
-    }
-//#endif
+    // The shapes' (generated: src/gpu/shape_dispatch.rs).
+    consider_shape(kind, index, ray, c);
 }
 
 //#if TRIANGLES

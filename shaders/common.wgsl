@@ -1,5 +1,5 @@
 // Data shared by every kernel module: the scene buffers and the per-dispatch parameters. Their
-// structs (Ray, Hit, Sphere, Quad, Light, Material, Params, FirstBounce) and the constants both sides share
+// structs (Ray, Hit, Light, Material, Params, FirstBounce) and the constants both sides share
 // are generated from src/shared/layout.rs and src/gpu/layout.rs ahead of this file, the binding
 // numbers (BINDING_*) from src/gpu/bindings.rs.
 
@@ -22,26 +22,15 @@ fn image_value(i: u32) -> vec4f {
     return bitcast<vec4f>(texel_at(image_texels, i));
 }
 //#endif
-// Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
+// The shapes' arrays (spheres, quads, ...) are declared with their dispatch (generated:
+// src/gpu/shape_dispatch.rs). Scenes small enough live in uniform buffers, which drivers such as lavapipe read far faster
 // than storage buffers in these loops; SCENE_CAPACITY is set by the host for each scene.
 //#if UNIFORM_SCENE
-//#if SPHERES
-@group(0) @binding(BINDING_SPHERES) var<uniform> spheres: array<Sphere, SCENE_CAPACITY>;
-//#endif
-//#if QUADS
-@group(0) @binding(BINDING_QUADS) var<uniform> quads: array<Quad, SCENE_CAPACITY>;
-//#endif
 @group(0) @binding(BINDING_MATERIALS) var<uniform> materials: array<Material, SCENE_CAPACITY>;
 //#if NEE
 @group(0) @binding(BINDING_LIGHTS) var<uniform> lights: array<Light, SCENE_CAPACITY>;
 //#endif
 //#else
-//#if SPHERES
-@group(0) @binding(BINDING_SPHERES) var<storage, read> spheres: array<Sphere>;
-//#endif
-//#if QUADS
-@group(0) @binding(BINDING_QUADS) var<storage, read> quads: array<Quad>;
-//#endif
 @group(0) @binding(BINDING_MATERIALS) var<storage, read> materials: array<Material>;
 //#if NEE
 @group(0) @binding(BINDING_LIGHTS) var<storage, read> lights: array<Light>;

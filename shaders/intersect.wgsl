@@ -8,36 +8,14 @@ fn primitive_index(primitive: u32) -> u32 {
     return primitive & ((1u << PRIMITIVE_INDEX_BITS) - 1u);
 }
 
-//#if QUADS
-// Distance along the ray to quad q, or -1 for a miss. Branch-free: SIMD drivers run every
-// branch for some lane anyway. Rays parallel to the plane (|denom| < 1e-8) miss; their
-// division is replaced by a harmless one. From the ray's origin to the corner first: exact
-// far from the world's origin, where n . q - n . o would cancel. A quad counts as hit up to
-// edge_tolerance (a fraction of each edge) past its edges, so that rays cannot slip between
-// the quads meeting at a box edge (see src/scene/flat.rs).
-fn quad_distance(q: Quad, ray: Ray) -> f32 {
-    let denom = dot(q.normal, ray.dir);
-    let facing = abs(denom) >= 1e-8;
-    let to_corner = q.q - ray.origin;
-    let t = dot(q.normal, to_corner) / select(1.0, denom, facing);
-    let planar = t * ray.dir - to_corner;
-    let alpha = dot(planar, q.alpha_axis);
-    let beta = dot(planar, q.beta_axis);
-    let lo = -q.edge_tolerance;
-    let hi = 1.0 + q.edge_tolerance;
-    let inside = alpha >= lo && alpha <= hi && beta >= lo && beta <= hi;
-    return select(-1.0, t, facing && inside);
-}
-//#endif
-
 // Closest, the closest hit found so far along a ray and what its shape needs to complete the
 // hit, is generated from src/gpu/kernel_state.rs.
 
 // Nothing found yet: every hit is nearer.
-const NO_CLOSEST = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec3f(0.0), 0.0, 0.0, 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
+const NO_CLOSEST = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec4f(0.0), 0u, 0u, false, vec2f(0.0), vec2f(0.0), 0u);
 
 // Whether a hit at t on primitive `packed` replaces the closest so far: nearer, or as near and
-// earlier in the order spheres, quads, triangles (coincident surfaces resolve the same whatever
+// earlier in the order of packed references (coincident surfaces resolve the same whatever
 // order a BVH traversal meets them in; see consider in src/cpu/shapes.rs).
 fn replaces(t: f32, packed: u32, c: ptr<function, Closest>) -> bool {
     return t > 0.0 && (t < (*c).t || (t == (*c).t && (!(*c).found || packed < (*c).primitive)));
@@ -92,56 +70,13 @@ struct Surface {
     error: f32,
 }
 
-//#if SPHERES
-// Distance along the ray to the nearest crossing of sphere s ahead of its origin, or -1.
-fn sphere_distance(s: Sphere, ray: Ray) -> f32 {
-    let oc = s.center - ray.origin;
-    let h = dot(ray.dir, oc);
-    // r^2 - |oc - h d|^2: no cancellation for small or distant spheres.
-    let perpendicular = oc - h * ray.dir;
-    let disc = s.radius * s.radius - dot(perpendicular, perpendicular);
-    let sq = sqrt(max(disc, 0.0));
-    let near = h - sq;
-    return select(-1.0, select(h + sq, near, near > 0.0), disc >= 0.0);
+// along_ray projected onto the plane dot(n, p) = d (unit n): a flat shape's hit point put back
+// onto it (twin: shape::plane_surface).
+fn plane_surface(along_ray: vec3f, n: vec3f, d: f32) -> Surface {
+    let point = along_ray - (dot(n, along_ray) - d) * n;
+    let p = abs(point);
+    return Surface(point, POINT_ERROR * (max(p.x, max(p.y, p.z)) + abs(d)));
 }
-
-// `in_order`: met in the order of `replaces_in_order` (a constant where called).
-fn consider_sphere(s: Sphere, index: u32, ray: Ray, in_order: bool, c: ptr<function, Closest>) {
-    let t = sphere_distance(s, ray);
-    if select(replaces(t, (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index, c), replaces_in_order(t, c), in_order) {
-        (*c).t = t;
-        (*c).found = true;
-        (*c).primitive = (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index;
-        (*c).material = s.material;
-        (*c).outward = (ray.origin + t * ray.dir - s.center) / s.radius;
-        (*c).center = s.center;
-        (*c).radius = s.radius;
-    }
-}
-//#endif
-
-//#if QUADS
-fn consider_quad(q: Quad, index: u32, ray: Ray, c: ptr<function, Closest>) {
-    consider_quad_at(quad_distance(q, ray), q, index, ray, false, c);
-}
-
-// Quad q met at t (-1: missed); kernels with the scene inlined compute t with their own copy of
-// quad_distance per quad, its constant zeros left out (see inline_scene in src/gpu/shader.rs).
-fn consider_quad_at(t: f32, q: Quad, index: u32, ray: Ray, in_order: bool, c: ptr<function, Closest>) {
-    if select(replaces(t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index, c), replaces_in_order(t, c), in_order) {
-        (*c).t = t;
-        (*c).found = true;
-        (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index;
-        (*c).material = q.material;
-        (*c).outward = q.normal;
-        (*c).plane_offset = q.d;
-//#if UV_CHECKER || IMAGE_TEXTURE
-        let along_corner = ray.origin + t * ray.dir - q.q;
-        (*c).uv = vec2f(dot(along_corner, q.alpha_axis), dot(along_corner, q.beta_axis));
-//#endif
-    }
-}
-//#endif
 
 //#if INLINE_SCENE
 // Where a ray first meets a box's surface: `t` (-1: nowhere ahead) and which of its six quads
@@ -329,12 +264,8 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     let n = normalize(c.outward);
     let front = dot(ray.dir, n) < 0.0;
     let along_ray = ray.origin + c.t * ray.dir;
-    var surface = quad_surface(c, along_ray, n);
-//#if SPHERES
-    if primitive_kind(c.primitive) == KIND_SPHERE {
-        surface = sphere_surface(c, along_ray);
-    }
-//#endif
+    // The shapes' (generated: shape_surface in src/gpu/shape_dispatch.rs), else a triangle's.
+    var surface = shape_surface(c, along_ray, n);
 //#if TRIANGLES
     if primitive_kind(c.primitive) == KIND_TRIANGLE {
         surface = triangle_surface(c);
@@ -367,12 +298,7 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
 //#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
-    (*hit).uv = c.uv;
-//#if SPHERES
-    if primitive_kind(c.primitive) == KIND_SPHERE {
-        (*hit).uv = sphere_uv((surface.point - c.center) / abs(c.radius));
-    }
-//#endif
+    (*hit).uv = shape_hit_uv(c, surface.point);
 //#if TRIANGLES
     if primitive_kind(c.primitive) == KIND_TRIANGLE || primitive_kind(c.primitive) == KIND_INSTANCE {
         (*hit).uv = c.weights;
@@ -461,23 +387,6 @@ fn below_surface(hit: Hit, dir: vec3f) -> bool {
 //#else
     return false;
 //#endif
-}
-
-// The hit point put back onto the surface and a bound on its error, per shape (see
-// src/cpu/shapes.rs).
-//#if SPHERES
-fn sphere_surface(c: Closest, along_ray: vec3f) -> Surface {
-    let from_center = along_ray - c.center;
-    let point = c.center + from_center * (abs(c.radius) / length(from_center));
-    let ce = abs(c.center);
-    return Surface(point, POINT_ERROR * (max(ce.x, max(ce.y, ce.z)) + abs(c.radius)));
-}
-//#endif
-
-fn quad_surface(c: Closest, along_ray: vec3f, n: vec3f) -> Surface {
-    let point = along_ray - (dot(n, along_ray) - c.plane_offset) * n;
-    let p = abs(point);
-    return Surface(point, POINT_ERROR * (max(p.x, max(p.y, p.z)) + abs(c.plane_offset)));
 }
 
 // Moves a ray origin off a surface by a few units in the last place along n (Ray Tracing Gems,

@@ -26,22 +26,13 @@ fn pick_light(u: f32) -> u32 {
 // 1 + the light index of a (packed) primitive, or 0.
 fn light_of(primitive: u32) -> u32 {
     let index = primitive_index(primitive);
-//#if SPHERES
-    if primitive_kind(primitive) == KIND_SPHERE {
-        return spheres[index].light;
-    }
-//#endif
-//#if QUADS
-    if primitive_kind(primitive) == KIND_QUAD {
-        return quads[index].light;
-    }
-//#endif
 //#if TRIANGLES
     if primitive_kind(primitive) == KIND_TRIANGLE {
         return triangles[index].light;
     }
 //#endif
-    return 0u;
+    // The shapes' (generated: src/gpu/shape_dispatch.rs).
+    return shape_light_of(primitive);
 }
 
 fn light_at(i: u32) -> Light {
@@ -49,33 +40,28 @@ fn light_at(i: u32) -> Light {
 }
 //#endif
 
-// The cone a sphere subtends from x: unit axis and 1 - cos(half angle); w = 0 when x is
-// inside the sphere or the cone is too thin to represent.
-fn sphere_cone(center: vec3f, radius: f32, x: vec3f) -> vec4f {
-    let to_center = center - x;
-    let d2 = dot(to_center, to_center);
-    let r2 = radius * radius;
-    if !(d2 > r2) {
-        return vec4f(0.0);
-    }
-    let sin2_max = r2 / d2;
-    // 1 - sqrt(1 - s) without cancellation for small cones.
-    let one_minus_cos = sin2_max / (1.0 + sqrt(1.0 - sin2_max));
-    if !(one_minus_cos > 0.0) {
-        return vec4f(0.0);
-    }
-    return vec4f(to_center / sqrt(d2), one_minus_cos);
-}
-
-// Solid-angle pdf of picking quad light l (size: 1 / area) and its point p from x, seen along
-// unit dir.
-fn quad_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
+// Solid-angle pdf of picking flat light l (size: 1 / area), uniform on its area, and its point p
+// from x, seen along unit dir (twin: shape::area_pdf).
+fn area_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
     let cos_light = abs(dot(l.normal, dir));
     if !(cos_light > MIN_LIGHT_COSINE) {
         return 0.0;
     }
     let to_p = p - x;
     return l.pick * l.size * dot(to_p, to_p) / cos_light;
+}
+
+// A sample of flat light l at its point p, seen from x.
+fn area_light_sample(l: Light, x: vec3f, p: vec3f) -> LightSample {
+    var out = LightSample(vec3f(0.0, 1.0, 0.0), 0.0, x);
+    let to_light = p - x;
+    let dist2 = dot(to_light, to_light);
+    if dist2 > 0.0 {
+        out.dir = to_light / sqrt(dist2);
+        out.pdf = area_pdf(l, x, p, out.dir);
+        out.point = p;
+    }
+    return out;
 }
 
 // Solid-angle pdf of light sampling choosing the direction from x that reaches l at p.
@@ -91,14 +77,13 @@ fn light_pdf(l: Light, x: vec3f, p: vec3f, dir: vec3f) -> f32 {
         return 0.0;
     }
 //#endif
-    if l.kind == KIND_SPHERE {
-        let cone = sphere_cone(l.position, l.size, x);
-        if cone.w > 0.0 {
-            return l.pick / (2.0 * PI * cone.w);
-        }
-        return 0.0;
+//#if TRIANGLES
+    if l.kind == KIND_TRIANGLE {
+        return area_pdf(l, x, p, dir);
     }
-    return quad_pdf(l, x, p, dir);
+//#endif
+    // The shapes' (generated: src/gpu/shape_dispatch.rs).
+    return shape_light_pdf(l, x, p, dir);
 }
 
 //#if PUNCTUAL
@@ -162,45 +147,17 @@ fn sample_light(l: Light, x: vec3f, u1: f32, u2: f32) -> LightSample {
         return out;
     }
 //#endif
-//#if SPHERES
-    if l.kind == KIND_SPHERE {
-        let cone = sphere_cone(l.position, l.size, x);
-        if cone.w > 0.0 {
-            let axis = cone.xyz;
-            let a = u1 * cone.w;
-            let cos_theta = 1.0 - a;
-            let sin_theta = sqrt(max(a * (2.0 - a), 0.0));
-            let phi = PI * (2.0 * u2 - 1.0);
-            let frame = basis(axis);
-            out.dir = normalize(cos_theta * axis + sin_theta * (cos(phi) * frame.t + sin(phi) * frame.b));
-            out.pdf = l.pick / (2.0 * PI * cone.w);
-            // Where it meets the sphere (a direction in the cone, from outside: the near root; at
-            // the cone's rim, where rounding can miss, the closest approach).
-            let dist = sphere_distance(Sphere(l.position, l.size, 0u, 0u), Ray(x, out.dir));
-            out.point = x + select(dot(out.dir, l.position - x), dist, dist > 0.0) * out.dir;
-        }
-        return out;
-    }
-//#endif
-    // A quad or a triangle: uniform on its area.
-    var a = u1;
-    var b = u2;
 //#if TRIANGLES
+    // Uniform on its area: (1 - sqrt(u1)) on the corner's weight.
     if l.kind == KIND_TRIANGLE {
         let s = sqrt(u1);
-        a = s * (1.0 - u2);
-        b = s * u2;
+        let a = s * (1.0 - u2);
+        let b = s * u2;
+        return area_light_sample(l, x, l.position + a * l.u + b * l.v);
     }
 //#endif
-    let p = l.position + a * l.u + b * l.v;
-    let to_light = p - x;
-    let dist2 = dot(to_light, to_light);
-    if dist2 > 0.0 {
-        out.dir = to_light / sqrt(dist2);
-        out.pdf = quad_pdf(l, x, p, out.dir);
-        out.point = p;
-    }
-    return out;
+    // The shapes' (generated: src/gpu/shape_dispatch.rs).
+    return shape_light_sample(l, x, u1, u2);
 }
 
 // Power heuristic (beta = 2) weight of a strategy with pdf own against other, on values

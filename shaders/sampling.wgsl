@@ -26,13 +26,12 @@ fn basis(n: vec3f) -> Basis {
     );
 }
 
-//#if LENS
+// Uniform on the unit disk (the lens, disk lights).
 fn unit_disk(u1: f32, u2: f32) -> vec2f {
     let r = sqrt(u1);
     let phi = PI * (2.0 * u2 - 1.0);
     return vec2f(r * cos(phi), r * sin(phi));
 }
-//#endif
 
 // Cosine-weighted about a hit's shading normal: pdf = cos / pi (so a lambertian BSDF x cos =
 // albedo x pdf), 0 below the surface.

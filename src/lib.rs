@@ -21,6 +21,7 @@ pub mod plot;
 pub mod progressive;
 pub mod render;
 pub mod scene;
+pub mod shape;
 pub mod shared;
 #[cfg(feature = "viewer")]
 pub mod viewer;

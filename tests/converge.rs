@@ -95,20 +95,8 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
         Background::Sky,
         vec![Material::lambertian(Vec3::new(0.7, 0.5, 0.3))],
         vec![
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::ZERO,
-                    radius: 0.7,
-                },
-                0,
-            ),
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::new(0.0, -100.7, 0.0),
-                    radius: 100.0,
-                },
-                0,
-            ),
+            common::object(Shape::sphere(Vec3::ZERO, 0.7), 0),
+            common::object(Shape::sphere(Vec3::new(0.0, -100.7, 0.0), 100.0), 0),
         ],
     );
     let dir = tempfile::tempdir().expect("tempdir");

@@ -221,13 +221,7 @@ fn a_white_environment_is_a_furnace() {
             40.0,
             Background::Environment(Environment::new(white, 1.0, 0.0).unwrap()),
             vec![Material::lambertian(Vec3::splat(albedo))],
-            vec![common::object(
-                Shape::Sphere {
-                    center: Vec3::ZERO,
-                    radius: 1.0,
-                },
-                0,
-            )],
+            vec![common::object(Shape::sphere(Vec3::ZERO, 1.0), 0)],
         )
     };
     let gpu = renderer();
@@ -424,7 +418,10 @@ fn gpu_image_lookups_match_the_cpu() {
             shading: Vec3::Y,
             front_face: true,
             material: *material,
-            primitive: rt_gpu::shared::primitive::PrimitiveRef::Quad(0),
+            primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {
+                kind: rt_gpu::shape::Quad::KIND,
+                index: 0,
+            },
             uv,
         };
         let cpu = rt_gpu::material::texture::value(texture, &hit(*uv));

@@ -35,13 +35,7 @@ fn lambertian_sphere_under_constant_sky_shows_albedo_times_background() {
         30.0,
         Background::Constant(sky),
         vec![Material::lambertian(albedo)],
-        vec![common::object(
-            Shape::Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-            },
-            0,
-        )],
+        vec![common::object(Shape::sphere(Vec3::ZERO, 1.0), 0)],
     );
     let (w, h) = (24, 24);
     let flat = FlatScene::new(&scene, w, h).expect("valid");
@@ -102,13 +96,7 @@ fn closed_emitting_sphere_gives_the_geometric_series() {
             emission,
             normal_map: None,
         })],
-        vec![common::object(
-            Shape::Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-            },
-            0,
-        )],
+        vec![common::object(Shape::sphere(Vec3::ZERO, 1.0), 0)],
     );
     for max_depth in [1, 3, 8] {
         let film = common::render_cpu(&scene, &common::opts(12, 10, 8, max_depth, 11));

@@ -60,6 +60,8 @@ const TOKENS: &[&str] = &[
     "\\u0000",
     "[[object]]\n",
     "[object.sphere]\n",
+    "[object.disk]\n",
+    "normal = [0, 0, 0]",
     "[render]\n",
     "[materials]\n",
     "[camera]\n",
@@ -126,7 +128,7 @@ fn check(text: &str) -> Result<(), String> {
     #[cfg(feature = "gpu")]
     rt_gpu::gpu::shader::compose(&Features::of(&flat), &flat)
         .map_err(|e| format!("no kernel source: {e}"))?;
-    if flat.spheres.len() + flat.quads.len() <= 400 {
+    if flat.shapes.len() <= 400 {
         let film = rt_gpu::cpu::render(&flat, &RenderOptions::new(3, 2, 1, 4), &|| {});
         if !film.pixels.iter().all(|p| p.mean().is_finite()) {
             return Err("a pixel is not finite".into());

@@ -134,13 +134,7 @@ fn sphere_hits_from_outside_and_inside() {
         assert!((t - 2.0).abs() < 1e-5, "{t}");
     }
     // The full hit record from inside: the normal faces the ray, and it is the back face.
-    let scene = flat_with(vec![common::object(
-        Shape::Sphere {
-            center: s.center,
-            radius: s.radius,
-        },
-        0,
-    )]);
+    let scene = flat_with(vec![common::object(Shape::sphere(s.center, s.radius), 0)]);
     let hit = intersect(&scene, &ray([0.0, 0.0, -5.0], [0.0, 1.0, 0.0])).expect("hit");
     assert!(!hit.front_face);
     assert!((hit.normal - Vec3::NEG_Y).length() < 1e-6);
@@ -176,7 +170,7 @@ fn rotated_translated_box_matches_hand_computed_points() {
             translate: Vec3::new(265.0, 0.0, 295.0),
         },
     }]);
-    assert_eq!(flat.quads.len(), 6);
+    assert_eq!(flat.shapes.quads.len(), 6);
     let (c, s) = (15f32.to_radians().cos(), 15f32.to_radians().sin());
     let world = |x: f32, z: f32| Vec3::new(c * x + s * z + 265.0, 0.0, -s * x + c * z + 295.0);
 

@@ -258,8 +258,11 @@ fn invalid_shaders_and_scenes_are_clear_errors() {
 #[test]
 fn general_and_specialised_kernels_agree() {
     let Some(gpu) = renderer() else { return };
-    for name in ["cornell", "spheres"] {
-        let scene = builtin(name).expect("built-in");
+    for name in ["cornell", "spheres", "cornell+disks"] {
+        let scene = match name {
+            "cornell+disks" => common::cornell_with_disks(),
+            _ => builtin(name).expect("built-in"),
+        };
         let opts = common::opts(24, 20, 16, 10, 3);
         let (special, differing) = specialised_against_general(&gpu, &scene, &opts);
         assert!(

@@ -38,8 +38,10 @@ fn rust_structs_match_wgsl_sizes_and_offsets() {
     let source = compose(&all_features(), &small_scene()).expect("composes");
     let (module, _) = validate(&source).unwrap_or_else(|e| panic!("{e}"));
     // The declarations are generated from the Rust structs; naga lays them out independently.
-    let layouts = rt_gpu::shared::layout::shared_layouts();
-    assert_eq!(layouts.len(), 10);
+    let mut layouts = rt_gpu::shared::layout::shared_layouts();
+    assert_eq!(layouts.len(), 8);
+    layouts.extend(rt_gpu::shape::layouts());
+    assert_eq!(layouts.len(), 8 + rt_gpu::shape::KINDS.len());
     for layout in layouts {
         assert_layout_matches(&module, layout);
     }

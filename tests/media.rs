@@ -62,11 +62,11 @@ fn transmittance_through_slabs_is_exponential() {
             slab(Vec3::new(-5.0, -5.0, 3.0), Vec3::new(5.0, 5.0, 3.5), 1),
             // The light faces -z, toward the slabs and the camera.
             common::object(
-                Shape::Quad {
-                    q: Vec3::new(-1.0, -1.0, 6.0),
-                    u: Vec3::new(0.0, 2.0, 0.0),
-                    v: Vec3::new(2.0, 0.0, 0.0),
-                },
+                Shape::quad(
+                    Vec3::new(-1.0, -1.0, 6.0),
+                    Vec3::new(0.0, 2.0, 0.0),
+                    Vec3::new(2.0, 0.0, 0.0),
+                ),
                 2,
             ),
         ],
@@ -80,8 +80,8 @@ fn transmittance_through_slabs_is_exponential() {
         .iter()
         .position(|m| matches!(m, Material::Light(_)))
         .expect("light") as u32;
-    assert_eq!(flat.quads.iter().filter(|q| q.light == 1).count(), 1);
-    assert_eq!(flat.quads[12].material, light_material);
+    assert_eq!(flat.shapes.quads.iter().filter(|q| q.light == 1).count(), 1);
+    assert_eq!(flat.shapes.quads[12].material, light_material);
     let first_medium = flat
         .materials
         .iter()
@@ -194,20 +194,8 @@ fn an_albedo_one_medium_in_an_emitting_furnace_is_invisible() {
             Background::Constant(Vec3::ZERO),
             vec![walls, filled],
             vec![
-                common::object(
-                    Shape::Sphere {
-                        center: Vec3::ZERO,
-                        radius: -10.0,
-                    },
-                    0,
-                ),
-                common::object(
-                    Shape::Sphere {
-                        center: Vec3::ZERO,
-                        radius: 1.0,
-                    },
-                    1,
-                ),
+                common::object(Shape::sphere(Vec3::ZERO, -10.0), 0),
+                common::object(Shape::sphere(Vec3::ZERO, 1.0), 1),
             ],
         );
         let check = |film: &Film, what: &str| {
@@ -532,13 +520,7 @@ fn only_scenes_with_media_get_media_code() {
         ],
         vec![
             slab(Vec3::splat(-1.0), Vec3::splat(1.0), 0),
-            common::object(
-                Shape::Sphere {
-                    center: Vec3::new(0.0, 3.0, 0.0),
-                    radius: 0.5,
-                },
-                1,
-            ),
+            common::object(Shape::sphere(Vec3::new(0.0, 3.0, 0.0), 0.5), 1),
         ],
     );
     for (name, scene, media) in [

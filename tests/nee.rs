@@ -21,6 +21,8 @@ use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::{Light, LightShape, Quad, Sphere, Triangle};
 use rt_gpu::scene::{Material, Scene, Shape};
+use rt_gpu::shape::disk::hit_disk;
+use rt_gpu::shape::{Disk, SurfaceShape};
 use rt_gpu::shared::ray::Ray;
 
 fn add_material(scene: &mut Scene, name: &str, material: Material) -> u32 {
@@ -44,10 +46,7 @@ fn cornell_with_sphere_light() -> Scene {
         }),
     );
     scene.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(150.0, 400.0, 380.0),
-            radius: 70.0,
-        },
+        Shape::sphere(Vec3::new(150.0, 400.0, 380.0), 70.0),
         glow,
     ));
     scene
@@ -77,18 +76,15 @@ fn spheres_with_lights() -> Scene {
     );
     // Facing down: u x v = -y.
     scene.objects.push(object(
-        Shape::Quad {
-            q: Vec3::new(-1.0, 3.0, -2.0),
-            u: Vec3::new(0.0, 0.0, 2.0),
-            v: Vec3::new(2.0, 0.0, 0.0),
-        },
+        Shape::quad(
+            Vec3::new(-1.0, 3.0, -2.0),
+            Vec3::new(0.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, 0.0),
+        ),
         lamp,
     ));
     scene.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(0.7, -0.35, -0.6),
-            radius: 0.15,
-        },
+        Shape::sphere(Vec3::new(0.7, -0.35, -0.6), 0.15),
         ember,
     ));
     scene
@@ -112,7 +108,7 @@ fn small(seed: u32, nee: bool, spp: u32) -> RenderOptions {
 }
 
 /// nee and naive converge to the same image (CPU), on the Cornell box, the empty Cornell box,
-/// spheres with lights, and a scene with a sphere light.
+/// spheres with lights, a scene with a sphere light, and one with disks (a disk lamp).
 #[test]
 fn nee_and_naive_agree() {
     let cases = [
@@ -137,6 +133,12 @@ fn nee_and_naive_agree() {
         (
             "cornell+sphere light",
             cornell_with_sphere_light(),
+            small(1, false, 8192),
+            small(2, true, 1024),
+        ),
+        (
+            "cornell+disks",
+            common::cornell_with_disks(),
             small(1, false, 8192),
             small(2, true, 1024),
         ),
@@ -220,6 +222,12 @@ fn gpu_nee_matches_cpu_nee() {
             small(1, true, 1024),
             3,
         ),
+        (
+            "cornell+disks",
+            common::cornell_with_disks(),
+            small(1, true, 1024),
+            0,
+        ),
     ];
     for (name, scene, cpu_opts, roulette_depth) in cases {
         let cpu_opts = RenderOptions {
@@ -274,44 +282,120 @@ fn tilted_quad() -> Quad {
 
 const X: Vec3 = Vec3::new(0.3, -0.2, 0.1);
 
-fn quad_light(quad: &Quad) -> Light {
+/// Where a ray meets a light under test, if it does.
+type LightHit = Box<dyn Fn(&Ray) -> Option<f32>>;
+
+/// A light under test: itself, where rays from `X` meet it, and what bounds the cone of
+/// directions toward it (its centre, and its rim's points or, for a sphere, its cone).
+struct TestLight {
+    light: Light,
+    hit: LightHit,
+    centre: Vec3,
+    rim: Vec<Vec3>,
+    /// Whether `p` lies on the light's surface.
+    on_light: Box<dyn Fn(Vec3) -> bool>,
+}
+
+/// `shape` of primitive kind `kind` as the flat scene makes it a light.
+fn shape_light<S: SurfaceShape + 'static>(shape: S, kind: u32) -> Light {
+    let (_, light) = shape.as_light();
     Light {
-        shape: LightShape::Quad {
-            corner: quad.q,
-            u: quad.u,
-            v: quad.v,
-            normal: quad.normal,
-            inv_area: 1.0 / quad.u.cross(quad.v).length(),
-        },
+        shape: LightShape::Surface { kind, light },
         cdf: 1.0,
         pick: 1.0,
+    }
+}
+
+fn quad_light(quad: Quad) -> TestLight {
+    TestLight {
+        light: shape_light(quad, Quad::KIND),
+        hit: Box::new(move |ray| hit_quad(&quad, ray, 0.0, f32::INFINITY)),
+        centre: quad.q + 0.5 * (quad.u + quad.v),
+        rim: vec![
+            quad.q,
+            quad.q + quad.u,
+            quad.q + quad.v,
+            quad.q + quad.u + quad.v,
+        ],
+        on_light: Box::new(move |p| (p - quad.q).dot(quad.normal).abs() < 1e-5),
     }
 }
 
 /// Half of `quad`: the triangle (q, q + u, q + v).
-fn triangle_light(quad: &Quad) -> Light {
-    Light {
-        shape: LightShape::Triangle {
-            corner: quad.q,
-            u: quad.u,
-            v: quad.v,
-            normal: quad.normal,
-            inv_area: 2.0 / quad.u.cross(quad.v).length(),
+fn triangle_light(quad: Quad) -> TestLight {
+    let triangle = Triangle {
+        p0: quad.q,
+        p1: quad.q + quad.u,
+        p2: quad.q + quad.v,
+        material: 0,
+        light: 1,
+    };
+    TestLight {
+        light: Light {
+            shape: LightShape::Triangle {
+                corner: quad.q,
+                u: quad.u,
+                v: quad.v,
+                normal: quad.normal,
+                inv_area: 2.0 / quad.u.cross(quad.v).length(),
+            },
+            cdf: 1.0,
+            pick: 1.0,
         },
-        cdf: 1.0,
-        pick: 1.0,
+        hit: Box::new(move |ray| {
+            hit_triangle(&triangle, ray, 0.0, f32::INFINITY).map(|(t, _, _)| t)
+        }),
+        centre: quad.q + (quad.u + quad.v) / 3.0,
+        rim: vec![quad.q, quad.q + quad.u, quad.q + quad.v],
+        on_light: Box::new(move |p| (p - quad.q).dot(quad.normal).abs() < 1e-5),
     }
 }
 
-fn sphere_light() -> Light {
-    Light {
-        shape: LightShape::Sphere {
-            center: Vec3::new(1.0, 2.0, -1.5),
-            radius: 0.6,
-        },
-        cdf: 1.0,
-        pick: 1.0,
+fn sphere_light() -> TestLight {
+    let sphere = Sphere {
+        center: Vec3::new(1.0, 2.0, -1.5),
+        radius: 0.6,
+        material: 0,
+        light: 1,
+    };
+    TestLight {
+        light: shape_light(sphere, Sphere::KIND),
+        hit: Box::new(move |ray| hit_sphere(&sphere, ray, 0.0, f32::INFINITY)),
+        centre: sphere.center,
+        rim: Vec::new(),
+        on_light: Box::new(move |p| ((p - sphere.center).length() - sphere.radius).abs() < 1e-5),
     }
+}
+
+/// A tilted disk seen obliquely from `X`.
+fn disk_light() -> TestLight {
+    let disk = Disk::new(Vec3::new(0.2, 1.2, -0.4), Vec3::new(0.3, -1.0, 0.5), 0.7, 0);
+    let rim = (0..256)
+        .map(|i| {
+            let angle = i as f32 / 256.0 * std::f32::consts::TAU;
+            disk.center + disk.radius * (angle.cos() * disk.tangent + angle.sin() * disk.bitangent)
+        })
+        .collect();
+    TestLight {
+        light: shape_light(disk, Disk::KIND),
+        hit: Box::new(move |ray| hit_disk(&disk, ray, 0.0, f32::INFINITY)),
+        centre: disk.center,
+        rim,
+        on_light: Box::new(move |p| {
+            (p - disk.center).dot(disk.normal).abs() < 1e-5
+                && (p - disk.center).length() < disk.radius * (1.0 + 1e-5)
+        }),
+    }
+}
+
+/// Every kind of area light.
+fn test_lights() -> [(&'static str, TestLight); 4] {
+    [
+        ("quad", quad_light(tilted_quad())),
+        ("triangle", triangle_light(tilted_quad())),
+        ("sphere", sphere_light()),
+        ("disk", disk_light()),
+    ]
 }
 
 /// Pearson's chi-square p-value of 1 000 000 directions from `sample` against `lights::pdf` for
@@ -319,66 +403,28 @@ fn sphere_light() -> Light {
 /// about the axis to its centre, and phi), expected counts from integrating the pdf over each
 /// cell (24 x 24 points per cell), cells expected below 5 pooled. Also checks that the pdf
 /// integrates to 1 and that every direction lands in the grid.
-fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) -> f64 {
+fn chi_square_p(name: &str, test: &TestLight, sample: impl Fn(f32, f32) -> Vec3) -> f64 {
     use std::f64::consts::PI;
-    let quad = tilted_quad();
+    let light = &test.light;
     let reaches = |dir: Vec3| -> Option<Vec3> {
         let ray = Ray { origin: X, dir };
-        let t = match light.shape {
-            LightShape::Sphere { center, radius } => {
-                let s = Sphere {
-                    center,
-                    radius,
-                    material: 0,
-                    light: 1,
-                };
-                hit_sphere(&s, &ray, 0.0, f32::INFINITY)
-            }
-            LightShape::Quad { .. } => hit_quad(&quad, &ray, 0.0, f32::INFINITY),
-            LightShape::Triangle { corner, u, v, .. } => {
-                let triangle = Triangle {
-                    p0: corner,
-                    p1: corner + u,
-                    p2: corner + v,
-                    material: 0,
-                    light: 1,
-                };
-                hit_triangle(&triangle, &ray, 0.0, f32::INFINITY).map(|(t, _, _)| t)
-            }
-            LightShape::Environment(_) => unreachable!("tests/environment.rs"),
-            LightShape::Point { .. } | LightShape::Directional { .. } => {
-                unreachable!("delta lights have no pdf: tests/punctual.rs")
-            }
-        };
-        t.map(|t| ray.at(t))
+        (test.hit)(&ray).map(|t| ray.at(t))
     };
     let pdf = |dir: Vec3| reaches(dir).map_or(0.0, |p| lights::pdf(light, X, p, dir)) as f64;
-    let centre = match light.shape {
-        LightShape::Sphere { center, .. } => center,
-        LightShape::Quad { corner, u, v, .. } => corner + 0.5 * (u + v),
-        LightShape::Triangle { corner, u, v, .. } => corner + (u + v) / 3.0,
-        LightShape::Environment(_) => unreachable!("tests/environment.rs"),
-        LightShape::Point { .. } | LightShape::Directional { .. } => {
-            unreachable!("delta lights have no pdf: tests/punctual.rs")
-        }
-    };
-    let axis = (centre - X).normalize();
+    let axis = (test.centre - X).normalize();
     let (t, b) = rt_gpu::shared::warp::basis(axis);
     let c_max = 1.2
         * match light.shape {
-            LightShape::Sphere { center, radius } => {
-                lights::sphere_cone(center, radius, X).expect("outside").1 as f64
+            LightShape::Surface { light: l, .. } if test.rim.is_empty() => {
+                lights::sphere_cone(l.position, l.size, X)
+                    .expect("outside")
+                    .1 as f64
             }
-            LightShape::Quad { corner, u, v, .. } | LightShape::Triangle { corner, u, v, .. } => {
-                [Vec3::ZERO, u, v, u + v]
-                    .iter()
-                    .map(|&c| 1.0 - axis.dot((corner + c - X).normalize()) as f64)
-                    .fold(0.0, f64::max)
-            }
-            LightShape::Environment(_) => unreachable!("tests/environment.rs"),
-            LightShape::Point { .. } | LightShape::Directional { .. } => {
-                unreachable!("delta lights have no pdf: tests/punctual.rs")
-            }
+            _ => test
+                .rim
+                .iter()
+                .map(|&c| 1.0 - axis.dot((c - X).normalize()) as f64)
+                .fold(0.0, f64::max),
         };
     let (n_theta, n_phi, sub) = (24usize, 24usize, 24usize);
     let cell_solid_angle = c_max * 2.0 * PI / (n_theta * n_phi) as f64;
@@ -428,31 +474,27 @@ fn chi_square_p(name: &str, light: &Light, sample: impl Fn(f32, f32) -> Vec3) ->
 }
 
 /// Light-sampled directions follow the pdf that MIS weighs them with: a chi-square test per
-/// light kind (quad, sphere), each at significance 0.001 (Bonferroni: 0.002 for the pair).
+/// light kind (quad, triangle, sphere, disk), each at significance 0.001 (Bonferroni: 0.004
+/// for the four).
 /// The pdf each sample reports must equal `lights::pdf` of its direction, and its point must be
 /// on the light along that direction.
 #[test]
 fn light_sampling_directions_follow_their_pdf() {
-    let quad = tilted_quad();
-    for (name, light) in [
-        ("quad", quad_light(&quad)),
-        ("triangle", triangle_light(&quad)),
-        ("sphere", sphere_light()),
-    ] {
-        let p = chi_square_p(name, &light, |u1, u2| {
-            let s = lights::sample(&light, X, u1, u2).expect("samples");
+    for (name, test) in test_lights() {
+        let light = &test.light;
+        let p = chi_square_p(name, &test, |u1, u2| {
+            let s = lights::sample(light, X, u1, u2).expect("samples");
             // The point it reports is on the light, along the direction.
-            let on_light = if let LightShape::Sphere { center, radius } = light.shape {
-                ((s.point - center).length() - radius).abs() < 1e-5
-            } else {
-                (s.point - quad.q).dot(quad.normal).abs() < 1e-5
-            };
-            assert!(on_light, "{name}: {} is not on the light", s.point);
+            assert!(
+                (test.on_light)(s.point),
+                "{name}: {} is not on the light",
+                s.point
+            );
             assert!(
                 (s.point - X).normalize().dot(s.dir) > 1.0 - 1e-6,
                 "{name}: point off the ray"
             );
-            let expected = lights::pdf(&light, X, s.point, s.dir);
+            let expected = lights::pdf(light, X, s.point, s.dir);
             assert!(
                 (s.pdf - expected).abs() <= 1e-3 * s.pdf,
                 "{name}: sample says pdf {}, lights::pdf says {expected}",
@@ -468,17 +510,12 @@ fn light_sampling_directions_follow_their_pdf() {
 }
 
 /// Negative control: the chi-square test rejects a sampler 2% off in its first coordinate
-/// (u1 -> u1^1.02) for either light kind.
+/// (u1 -> u1^1.02) for every light kind.
 #[test]
 fn light_sampling_test_detects_a_slightly_wrong_warp() {
-    let quad = tilted_quad();
-    for (name, light) in [
-        ("quad", quad_light(&quad)),
-        ("triangle", triangle_light(&quad)),
-        ("sphere", sphere_light()),
-    ] {
-        let p = chi_square_p(name, &light, |u1, u2| {
-            lights::sample(&light, X, u1.powf(1.02), u2)
+    for (name, test) in test_lights() {
+        let p = chi_square_p(name, &test, |u1, u2| {
+            lights::sample(&test.light, X, u1.powf(1.02), u2)
                 .expect("samples")
                 .dir
         });

@@ -109,13 +109,7 @@ fn the_loop_budget_message_names_both_limits() {
     scene.material_names.push("smoke".into());
     let smoke = scene.materials.len() as u32 - 1;
     scene.objects.extend((0..300).map(|i| {
-        let mut o = common::object(
-            rt_gpu::scene::Shape::Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-            },
-            smoke,
-        );
+        let mut o = common::object(rt_gpu::scene::Shape::sphere(Vec3::ZERO, 1.0), smoke);
         o.transform.translate = Vec3::new(i as f32 * 3.0, 50.0, 0.0);
         o
     }));
@@ -162,11 +156,11 @@ fn grass(count: u32) -> rt_gpu::scene::Scene {
                 0,
             ),
             common::object(
-                rt_gpu::scene::Shape::Quad {
-                    q: Vec3::new(-4.0, -4.0, 4.0),
-                    u: Vec3::new(8.0, 0.0, 0.0),
-                    v: Vec3::new(0.0, 8.0, 0.0),
-                },
+                rt_gpu::scene::Shape::quad(
+                    Vec3::new(-4.0, -4.0, 4.0),
+                    Vec3::new(8.0, 0.0, 0.0),
+                    Vec3::new(0.0, 8.0, 0.0),
+                ),
                 0,
             ),
         ],

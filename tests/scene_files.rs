@@ -54,6 +54,50 @@ fn export_round_trips() {
     }
 }
 
+/// A disk's syntax: it parses, writes back as it was read, and a disk of no normal or of a
+/// negative radius is refused with a located error naming the problem.
+#[test]
+fn disks_parse_write_back_and_are_checked() {
+    let sphere = "sphere = { center = [0, 0, 0], radius = 0.5 }";
+    let disk = |fields: &str| {
+        GOOD.replace(
+            sphere,
+            &format!("disk = {{ center = [0, 0, 0], {fields} }}"),
+        )
+    };
+    let scene = parse(&disk("normal = [0, 0, 2], radius = 0.5"), "d.toml", "d").expect("parses");
+    assert_eq!(
+        scene.objects[0].shape,
+        Shape::Surface(rt_gpu::shape::SurfaceParams::Disk(
+            rt_gpu::shape::DiskParams {
+                center: glam::Vec3::ZERO,
+                normal: glam::Vec3::new(0.0, 0.0, 2.0),
+                radius: 0.5
+            }
+        ))
+    );
+    let again = parse(&to_toml(&scene), "d.toml", "d").expect("parses");
+    assert_eq!(resolved(&again), resolved(&scene));
+    for (fields, message) in [
+        (
+            "normal = [0, 0, 0], radius = 1",
+            "disk normal must be finite and non-zero",
+        ),
+        (
+            "normal = [0, 1, 0], radius = -1",
+            "disk radius -1 is outside",
+        ),
+        ("normal = [0, 1, 0]", "missing field `radius`"),
+    ] {
+        let error = common::scene_error(&disk(fields));
+        assert!(error.contains(message), "{fields}: {error}");
+        assert!(
+            error.contains("bad.toml:"),
+            "{fields}: not located: {error}"
+        );
+    }
+}
+
 const GOOD: &str = r#"
 [camera]
 look_from = [0, 0, 1]
@@ -314,10 +358,7 @@ fn object_by_object_parsing_keeps_positions_and_meaning() {
     assert_eq!(scene.objects.len(), 2);
     assert_eq!(
         scene.objects[1].shape,
-        rt_gpu::scene::Shape::Sphere {
-            center: glam::Vec3::X,
-            radius: 2.0
-        }
+        rt_gpu::scene::Shape::sphere(glam::Vec3::X, 2.0)
     );
 }
 
@@ -335,7 +376,7 @@ fn the_documented_example_parses() {
         || parse(&doc[start..end], "scenes/README.md", "example"),
     )
     .unwrap_or_else(|e| panic!("{e}"));
-    // Three shapes and the knot of scenes/models/knot.obj.
-    assert_eq!(scene.objects.len(), 4);
+    // Four shapes (a sphere, a quad, a disk, a box) and the knot of scenes/models/knot.obj.
+    assert_eq!(scene.objects.len(), 5);
     assert_eq!(scene.materials.len(), 16);
 }

@@ -23,6 +23,7 @@ use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Background, Material, Scene, Shape, Transform};
+use rt_gpu::shape::{DiskParams, QuadParams, SphereParams, SurfaceParams};
 use rt_gpu::shared::ray::Ray;
 
 fn assert_finite(name: &str, film: &Film) {
@@ -104,13 +105,8 @@ fn unit_box(rotate_y_degrees: f32, translate: Vec3) -> Scene {
 fn parallel_tangent_and_edge_rays() {
     let gpu = renderer();
     let mut s = unit_box(0.0, Vec3::ZERO);
-    s.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(5.0, 0.0, 0.0),
-            radius: 1.0,
-        },
-        0,
-    ));
+    s.objects
+        .push(object(Shape::sphere(Vec3::new(5.0, 0.0, 0.0), 1.0), 0));
     let flat = FlatScene::new(&s, 8, 8).expect("valid");
     let x = Vec3::X;
     let cases: Vec<(&str, Vec3, Vec3, Option<Vec3>)> = vec![
@@ -315,15 +311,19 @@ fn scaled(scene: &Scene, s: f32, offset: Vec3) -> Scene {
     let mut out = scene.clone();
     for o in &mut out.objects {
         o.shape = match o.shape {
-            Shape::Sphere { center, radius } => Shape::Sphere {
-                center: center * s,
-                radius: radius * s,
-            },
-            Shape::Quad { q, u, v } => Shape::Quad {
-                q: q * s,
-                u: u * s,
-                v: v * s,
-            },
+            Shape::Surface(SurfaceParams::Sphere(SphereParams { center, radius })) => {
+                Shape::sphere(center * s, radius * s)
+            }
+            Shape::Surface(SurfaceParams::Quad(QuadParams { q, u, v })) => {
+                Shape::quad(q * s, u * s, v * s)
+            }
+            Shape::Surface(SurfaceParams::Disk(d)) => {
+                Shape::Surface(SurfaceParams::Disk(DiskParams {
+                    center: d.center * s,
+                    radius: d.radius * s,
+                    ..d
+                }))
+            }
             Shape::Cuboid { min, max } => Shape::Cuboid {
                 min: min * s,
                 max: max * s,
@@ -425,7 +425,7 @@ fn glass_of_index_one_vanishes() {
     let mut without = cornell.clone();
     without
         .objects
-        .retain(|o| !matches!(o.shape, Shape::Sphere { .. }));
+        .retain(|o| !matches!(o.shape, Shape::Surface(SurfaceParams::Sphere(_))));
     assert_eq!(without.objects.len() + 1, cornell.objects.len());
     let invisible = with_glass_ior(&cornell, 1.0);
     let opts = nee_opts(16, 16, 4096, 10, 1);
@@ -475,9 +475,8 @@ fn extreme_glass_is_finite_and_agrees() {
         Material::Dielectric(rt_gpu::material::Dielectric::clear(1.5)),
         Material::lambertian(Vec3::new(0.8, 0.3, 0.2)),
     ];
-    let sphere = |center: Vec3, radius: f32, material: u32| {
-        object(Shape::Sphere { center, radius }, material)
-    };
+    let sphere =
+        |center: Vec3, radius: f32, material: u32| object(Shape::sphere(center, radius), material);
     let inside = scene(
         Vec3::ZERO,
         Vec3::new(0.0, 0.0, -1.0),
@@ -601,9 +600,8 @@ fn closed_furnaces_never_gain_energy() {
         emission: Vec3::splat(e),
         normal_map: None,
     });
-    let sphere = |center: Vec3, radius: f32, material: u32| {
-        object(Shape::Sphere { center, radius }, material)
-    };
+    let sphere =
+        |center: Vec3, radius: f32, material: u32| object(Shape::sphere(center, radius), material);
     let furnace = scene(
         Vec3::ZERO,
         Vec3::new(0.0, 0.0, -1.0),
@@ -692,20 +690,20 @@ fn tiny_bright_lights_and_edge_on_lights() {
         ],
         vec![
             object(
-                Shape::Quad {
-                    q: Vec3::new(-2.0, 0.0, -2.0),
-                    u: Vec3::new(0.0, 0.0, 4.0),
-                    v: Vec3::new(4.0, 0.0, 0.0),
-                },
+                Shape::quad(
+                    Vec3::new(-2.0, 0.0, -2.0),
+                    Vec3::new(0.0, 0.0, 4.0),
+                    Vec3::new(4.0, 0.0, 0.0),
+                ),
                 0,
             ),
             // Facing down: u x v = -y.
             object(
-                Shape::Quad {
-                    q: Vec3::new(-side / 2.0, height, -side / 2.0),
-                    u: Vec3::new(side, 0.0, 0.0),
-                    v: Vec3::new(0.0, 0.0, side),
-                },
+                Shape::quad(
+                    Vec3::new(-side / 2.0, height, -side / 2.0),
+                    Vec3::new(side, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, side),
+                ),
                 1,
             ),
         ],
@@ -824,13 +822,7 @@ fn a_million_samples_accumulate_accurately() {
         5.0,
         Background::Sky,
         vec![Material::lambertian(Vec3::new(0.7, 0.6, 0.5))],
-        vec![object(
-            Shape::Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-            },
-            0,
-        )],
+        vec![object(Shape::sphere(Vec3::ZERO, 1.0), 0)],
     );
     let opts = common::opts(2, 2, 1_000_000, 2, 4);
     let cpu = render_cpu(&sky_sphere, &opts);

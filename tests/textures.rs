@@ -224,7 +224,10 @@ fn gpu_texture_lookups_match_the_cpu() {
             shading: Vec3::Y,
             front_face: true,
             material: *material,
-            primitive: rt_gpu::shared::primitive::PrimitiveRef::Quad(0),
+            primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {
+                kind: rt_gpu::shape::Quad::KIND,
+                index: 0,
+            },
             uv: *uv,
         };
         let cpu_value = rt_gpu::material::texture::value(texture, &hit);
@@ -338,7 +341,10 @@ fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
             shading: Vec3::Z,
             front_face: true,
             material: *material,
-            primitive: rt_gpu::shared::primitive::PrimitiveRef::Quad(0),
+            primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {
+                kind: rt_gpu::shape::Quad::KIND,
+                index: 0,
+            },
             uv: *uv,
         };
         let cpu_value = rt_gpu::material::texture::value(&l.albedo, &hit);

@@ -1,55 +1,14 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
-use crate::scene::flat::{FlatScene, Instance, Quad, Sphere, Triangle};
+use crate::scene::flat::{FlatScene, Instance, Triangle};
 use crate::scene::normal_map::NormalMap;
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
 use crate::shared::ray::{Hit, POINT_ERROR, Ray};
 use crate::shared::rng::alpha_number;
 use glam::{Vec2, Vec3, Vec4};
 
-/// Distance along the ray to `sphere` within (t_min, t_max), if any.
-#[inline]
-pub fn hit_sphere(sphere: &Sphere, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-    let oc = sphere.center - ray.origin;
-    let h = ray.dir.dot(oc);
-    // r^2 - |oc - h d|^2 rather than h^2 - (|oc|^2 - r^2): no cancellation when the sphere is
-    // small or far away (Ray Tracing Gems, chapter 7).
-    let perpendicular = oc - h * ray.dir;
-    let disc = sphere.radius * sphere.radius - perpendicular.length_squared();
-    if disc < 0.0 {
-        return None;
-    }
-    let sq = disc.sqrt();
-    let near = h - sq;
-    if near > t_min && near < t_max {
-        return Some(near);
-    }
-    let far = h + sq;
-    (far > t_min && far < t_max).then_some(far)
-}
-
-/// Distance along the ray to `quad` within (t_min, t_max), if any. Rays parallel to its plane
-/// miss: they have no single crossing point.
-#[inline]
-pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-    let denom = quad.normal.dot(ray.dir);
-    if denom.abs() < 1e-8 {
-        return None;
-    }
-    // From the ray's origin to the quad's corner first: far from the world's origin the two
-    // are close and their difference exact, where n . q - n . o would cancel catastrophically.
-    let to_corner = quad.q - ray.origin;
-    let t = quad.normal.dot(to_corner) / denom;
-    if !(t > t_min && t < t_max) {
-        return None;
-    }
-    let planar = t * ray.dir - to_corner;
-    let alpha = planar.dot(quad.alpha_axis);
-    let beta = planar.dot(quad.beta_axis);
-    let (lo, hi) = (-quad.edge_tolerance, 1.0 + quad.edge_tolerance);
-    let inside = |a: f32| (lo..=hi).contains(&a);
-    (inside(alpha) && inside(beta)).then_some(t)
-}
+pub use crate::shape::quad::hit_quad;
+pub use crate::shape::sphere::hit_sphere;
 
 /// Distance along the ray to `triangle` within (t_min, t_max) and the barycentric weights of
 /// its second and third corners there, if it is hit. Watertight (Woop, Benthin and Wald 2013,
@@ -99,107 +58,6 @@ pub fn hit_triangle(
         return None;
     }
     Some((t, e1 / det, e2 / det))
-}
-
-/// What the closest-hit search needs of each shape (instances aside, which hold triangles):
-/// its intersection, its outward normal, and its surface at the hit. Twins: the shape's
-/// functions in `shaders/intersect.wgsl`.
-trait SurfaceShape {
-    /// Distance along the ray within (0, t_max) and the surface weights there (a triangle's
-    /// barycentric weights of its second and third corners; zero for other shapes), if hit.
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)>;
-    /// The outward normal at distance `t` along the ray, not yet of unit length.
-    fn outward(&self, ray: &Ray, t: f32) -> Vec3;
-    fn material(&self) -> u32;
-    /// The hit `along_ray` (= o + t d) put back onto the surface, and a bound on its error.
-    fn surface(&self, along_ray: Vec3, weights: Vec2) -> (Vec3, f32);
-    /// Surface coordinates for textures at `point` (on the surface) or `along_ray`.
-    fn uv(&self, point: Vec3, along_ray: Vec3, weights: Vec2) -> Vec2;
-}
-
-impl SurfaceShape for Sphere {
-    #[inline]
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
-        hit_sphere(self, ray, 0.0, t_max).map(|t| (t, Vec2::ZERO))
-    }
-    #[inline]
-    fn outward(&self, ray: &Ray, t: f32) -> Vec3 {
-        (ray.at(t) - self.center) / self.radius
-    }
-    fn material(&self) -> u32 {
-        self.material
-    }
-    fn surface(&self, along_ray: Vec3, _weights: Vec2) -> (Vec3, f32) {
-        sphere_surface(self, along_ray)
-    }
-    fn uv(&self, point: Vec3, _along_ray: Vec3, _weights: Vec2) -> Vec2 {
-        crate::material::texture::sphere_uv((point - self.center) / self.radius.abs())
-    }
-}
-
-impl SurfaceShape for Quad {
-    #[inline]
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
-        hit_quad(self, ray, 0.0, t_max).map(|t| (t, Vec2::ZERO))
-    }
-    #[inline]
-    fn outward(&self, _ray: &Ray, _t: f32) -> Vec3 {
-        self.normal
-    }
-    fn material(&self) -> u32 {
-        self.material
-    }
-    fn surface(&self, along_ray: Vec3, _weights: Vec2) -> (Vec3, f32) {
-        quad_surface(self, along_ray)
-    }
-    fn uv(&self, _point: Vec3, along_ray: Vec3, _weights: Vec2) -> Vec2 {
-        let d = along_ray - self.q;
-        Vec2::new(d.dot(self.alpha_axis), d.dot(self.beta_axis))
-    }
-}
-
-impl SurfaceShape for Triangle {
-    #[inline]
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
-        hit_triangle(self, ray, 0.0, t_max).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
-    }
-    #[inline]
-    fn outward(&self, _ray: &Ray, _t: f32) -> Vec3 {
-        (self.p1 - self.p0).cross(self.p2 - self.p0)
-    }
-    fn material(&self) -> u32 {
-        self.material
-    }
-    fn surface(&self, _along_ray: Vec3, weights: Vec2) -> (Vec3, f32) {
-        triangle_surface(self, weights)
-    }
-    fn uv(&self, _point: Vec3, _along_ray: Vec3, weights: Vec2) -> Vec2 {
-        weights
-    }
-}
-
-/// `shape`'s hit within (0, t_max): its distance, outward normal (not unit) and weights.
-#[inline]
-fn test<S: SurfaceShape>(shape: &S, ray: &Ray, t_max: f32) -> Option<(f32, Vec3, Vec2)> {
-    let (t, weights) = shape.hit(ray, t_max)?;
-    Some((t, shape.outward(ray, t), weights))
-}
-
-/// The closest hit's material, point and error bound, and surface coordinates (zero unless
-/// the scene's textures need them).
-fn complete<S: SurfaceShape>(
-    shape: &S,
-    scene: &FlatScene,
-    along_ray: Vec3,
-    weights: Vec2,
-) -> (u32, (Vec3, f32), Vec2) {
-    let (point, error) = shape.surface(along_ray, weights);
-    let uv = if scene.uv_textures {
-        shape.uv(point, along_ray, weights)
-    } else {
-        Vec2::ZERO
-    };
-    (shape.material(), (point, error), uv)
 }
 
 /// What the closest-hit search keeps of the best primitive so far.
@@ -252,9 +110,17 @@ fn consider(
 ) {
     let t_max = reach(*closest);
     let tested = match p {
-        PrimitiveRef::Sphere(i) => test(&scene.spheres[i as usize], ray, t_max),
-        PrimitiveRef::Quad(i) => test(&scene.quads[i as usize], ray, t_max),
-        PrimitiveRef::Triangle(i) => test(&scene.triangles[i as usize], ray, t_max),
+        PrimitiveRef::Shape { kind, index } => scene
+            .shapes
+            .hit(kind, index, ray, t_max)
+            .map(|(t, outward)| (t, outward, Vec2::ZERO)),
+        PrimitiveRef::Triangle(i) => {
+            let tri = &scene.triangles[i as usize];
+            hit_triangle(tri, ray, 0.0, t_max).map(|(t, b1, b2)| {
+                let outward = (tri.p1 - tri.p0).cross(tri.p2 - tri.p0);
+                (t, outward, Vec2::new(b1, b2))
+            })
+        }
         PrimitiveRef::Instance(i) => return consider_instance(scene, i, ray, closest, found),
     };
     let Some((t, outward, weights)) = tested else {
@@ -377,6 +243,36 @@ fn passes_through(
 
 /// The closest hit along `ray` beyond its origin.
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
+    let (t, found) = closest(scene, ray)?;
+    let outward = match found.primitive {
+        // By the inverse transpose: a mirroring placement turns the winding's normal around
+        // with it, as flattening's swapped corners do.
+        PrimitiveRef::Instance(i) => {
+            let tri = &scene.triangles[found.triangle as usize];
+            let instance = &scene.instances[i as usize];
+            instance.normal_to_world((tri.p1 - tri.p0).cross(tri.p2 - tri.p0))
+        }
+        _ => found.outward,
+    }
+    .normalize();
+    let (material, (point, error), uv) = surface(scene, &found, ray.at(t));
+    let shading = shading(scene, &found, material, uv, outward);
+    let front_face = ray.dir.dot(outward) < 0.0;
+    Some(Hit {
+        t,
+        point,
+        error,
+        normal: if front_face { outward } else { -outward },
+        shading: if front_face { shading } else { -shading },
+        front_face,
+        material,
+        primitive: found.primitive,
+        uv,
+    })
+}
+
+/// The closest primitive along `ray` beyond its origin, and its distance.
+fn closest(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
     let (wide, root) = (&scene.wide_bvh, scene.wide_bvh.root);
@@ -387,68 +283,55 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         ray,
         &mut closest,
         |packed, closest| {
-            if let Some(p) = PrimitiveRef::unpacked(packed) {
-                consider(scene, p, ray, closest, &mut found);
-            }
+            let primitive = PrimitiveRef::unpacked(packed);
+            consider(scene, primitive, ray, closest, &mut found);
         },
     );
-    let Candidate {
-        primitive,
-        outward,
-        weights,
-        triangle,
-    } = found?;
-    let instanced = |i: u32| {
-        (
-            &scene.instances[i as usize],
-            &scene.triangles[triangle as usize],
-        )
-    };
-    let outward = match primitive {
-        // By the inverse transpose: a mirroring placement turns the winding's normal around
-        // with it, as flattening's swapped corners do.
-        PrimitiveRef::Instance(i) => {
-            let (instance, tri) = instanced(i);
-            instance.normal_to_world((tri.p1 - tri.p0).cross(tri.p2 - tri.p0))
-        }
-        _ => outward,
-    }
-    .normalize();
-    let along_ray = ray.at(closest);
-    // The hit point, and a bound on its distance from the true surface point, which the origin
-    // of a ray leaving it must clear. o + t d carries the rounding of the ray's origin and of
-    // t (which cancels in the sphere's near root), and that can dwarf the point's own
-    // coordinates (a floor at y = 0 seen from 1e6 away), so the point is put back onto the
-    // surface, whose own rounding follows the shape's coordinates.
-    let (material, (point, error), uv) = match primitive {
-        PrimitiveRef::Instance(i) => {
-            let (instance, tri) = instanced(i);
-            let surface = instanced_triangle_surface(instance, tri, weights);
-            let uv = if scene.uv_textures {
-                weights
-            } else {
-                Vec2::ZERO
-            };
-            (instance.material, surface, uv)
-        }
-        PrimitiveRef::Sphere(i) => complete(&scene.spheres[i as usize], scene, along_ray, weights),
-        PrimitiveRef::Quad(i) => complete(&scene.quads[i as usize], scene, along_ray, weights),
-        PrimitiveRef::Triangle(i) => {
-            complete(&scene.triangles[i as usize], scene, along_ray, weights)
-        }
+    found.map(|found| (closest, found))
+}
+
+/// The material of the hit on `found` at `along_ray` (= o + t d), the hit point and a bound on
+/// its distance from the true surface point, which the origin of a ray leaving it must clear,
+/// and its surface coordinates (zero unless the scene's textures need them). o + t d carries
+/// the rounding of the ray's origin and of t (which cancels in the sphere's near root), and
+/// that can dwarf the point's own coordinates (a floor at y = 0 seen from 1e6 away), so the
+/// point is put back onto the surface, whose own rounding follows the shape's coordinates.
+fn surface(scene: &FlatScene, found: &Candidate, along_ray: Vec3) -> (u32, (Vec3, f32), Vec2) {
+    let weights = found.weights;
+    let weights_uv = if scene.uv_textures {
+        weights
+    } else {
+        Vec2::ZERO
     };
     // Corner texture coordinates, where the scene's meshes have them, replace the weights.
-    let uv = match primitive {
-        PrimitiveRef::Triangle(i) if !scene.triangle_uvs.is_empty() => {
-            interpolated_uv(&scene.triangle_uvs[i as usize], weights)
-        }
-        PrimitiveRef::Instance(_) if !scene.triangle_uvs.is_empty() => {
-            interpolated_uv(&scene.triangle_uvs[triangle as usize], weights)
-        }
-        _ => uv,
+    let corner_uv = |triangle: u32| match scene.triangle_uvs.get(triangle as usize) {
+        Some(uvs) => interpolated_uv(uvs, weights),
+        None => weights_uv,
     };
-    let front_face = ray.dir.dot(outward) < 0.0;
-    let shading = match primitive {
+    match found.primitive {
+        PrimitiveRef::Shape { kind, index } => {
+            scene
+                .shapes
+                .complete(kind, index, along_ray, scene.uv_textures)
+        }
+        PrimitiveRef::Triangle(i) => {
+            let tri = &scene.triangles[i as usize];
+            (tri.material, triangle_surface(tri, weights), corner_uv(i))
+        }
+        PrimitiveRef::Instance(i) => {
+            let instance = &scene.instances[i as usize];
+            let tri = &scene.triangles[found.triangle as usize];
+            let surface = instanced_triangle_surface(instance, tri, weights);
+            (instance.material, surface, corner_uv(found.triangle))
+        }
+    }
+}
+
+/// The shading normal of the hit on `found`, on the side of its unit geometric normal
+/// `outward`: a mesh's corner normals interpolated, bent by its material's normal map.
+fn shading(scene: &FlatScene, found: &Candidate, material: u32, uv: Vec2, outward: Vec3) -> Vec3 {
+    let weights = found.weights;
+    let shading = match found.primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
             shading_normal(&scene.triangle_normals[i as usize], weights, outward)
         }
@@ -456,7 +339,7 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
             // Each corner's normal placed as flattening places it (a corner whose normal the
             // placement collapses takes the face's).
             let instance = &scene.instances[i as usize];
-            let corners = scene.triangle_normals[triangle as usize].map(|n| {
+            let corners = scene.triangle_normals[found.triangle as usize].map(|n| {
                 match instance.normal_to_world(n).normalize_or_zero() {
                     Vec3::ZERO => outward,
                     n => n,
@@ -467,7 +350,7 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         _ => outward,
     };
     // Meshes copied into the scene only: normal-mapped meshes are never instanced.
-    let shading = match primitive {
+    match found.primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_tangents.is_empty() => {
             match scene.materials[material as usize].normal_map() {
                 Some(map) => {
@@ -478,18 +361,7 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
             }
         }
         _ => shading,
-    };
-    Some(Hit {
-        t: closest,
-        point,
-        error,
-        normal: if front_face { outward } else { -outward },
-        shading: if front_face { shading } else { -shading },
-        front_face,
-        material,
-        primitive,
-        uv,
-    })
+    }
 }
 
 /// The corner normals `normals` interpolated at barycentric weights (1 - b1 - b2, b1, b2), unit,
@@ -548,23 +420,6 @@ pub fn normal_mapped(
 pub fn interpolated_uv(uvs: &[Vec2; 3], weights: Vec2) -> Vec2 {
     let (b1, b2) = (weights.x, weights.y);
     (1.0 - b1 - b2) * uvs[0] + b1 * uvs[1] + b2 * uvs[2]
-}
-
-/// A point near `sphere`'s surface put back onto it, and a bound on the result's error.
-#[inline]
-pub fn sphere_surface(sphere: &Sphere, along_ray: Vec3) -> (Vec3, f32) {
-    let from_center = along_ray - sphere.center;
-    let point = sphere.center + from_center * (sphere.radius.abs() / from_center.length());
-    let scale = sphere.center.abs().max_element() + sphere.radius.abs();
-    (point, POINT_ERROR * scale)
-}
-
-/// A point near `quad`'s plane put back onto it, and a bound on the result's error.
-#[inline]
-pub fn quad_surface(quad: &Quad, along_ray: Vec3) -> (Vec3, f32) {
-    let point = along_ray - (quad.normal.dot(along_ray) - quad.d) * quad.normal;
-    let scale = point.abs().max_element() + quad.d.abs();
-    (point, POINT_ERROR * scale)
 }
 
 /// A triangle's point with barycentric weights (1 - b1 - b2, b1, b2), and a bound on its error:

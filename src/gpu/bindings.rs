@@ -1,4 +1,4 @@
-//! The kernel's bindings, in one table: each resource's number (WGSL binds it as
+//! The kernel's bindings, in one table (and after it, one per shape: `shape_binding`): each resource's number (WGSL binds it as
 //! `@binding(BINDING_<NAME>)`, a constant generated from this table), what kind of resource it
 //! is for a kernel's features (hence the bind group layout), and, by the same names, what the
 //! renderer puts in the bind group.
@@ -30,8 +30,6 @@ macro_rules! bindings {
 
 bindings! {
     Params => "BINDING_PARAMS",
-    Spheres => "BINDING_SPHERES",
-    Quads => "BINDING_QUADS",
     Materials => "BINDING_MATERIALS",
     Accum => "BINDING_ACCUM",
     /// The debug entry points' output (`first_bounce`, `trace_rays`, `look_up_albedo`, ...).
@@ -71,13 +69,11 @@ impl Binding {
         let read_only = Storage { read_only: true };
         match self {
             Binding::Params => buffer(Uniform),
-            Binding::Spheres | Binding::Quads | Binding::Materials | Binding::Lights => {
-                buffer(if features.uniform_scene {
-                    Uniform
-                } else {
-                    read_only
-                })
-            }
+            Binding::Materials | Binding::Lights => buffer(if features.uniform_scene {
+                Uniform
+            } else {
+                read_only
+            }),
             Binding::Accum | Binding::Bounces => buffer(Storage { read_only: false }),
             Binding::Dispatch
             | Binding::Triangles
@@ -106,9 +102,23 @@ impl Binding {
     }
 }
 
-/// The bind group layout's entries of a kernel composed with `features`.
+/// The number of the array of the shape at `position` in `shape::KINDS`: after [`BINDINGS`].
+pub fn shape_binding(position: usize) -> u32 {
+    (BINDINGS.len() + position) as u32
+}
+
+/// The bind group layout's entries of a kernel composed with `features`: [`BINDINGS`], then each
+/// shape's array, bound as the scene's other arrays are.
 pub fn layout_entries(features: &Features) -> Vec<wgpu::BindGroupLayoutEntry> {
-    BINDINGS.iter().map(|b| b.layout_entry(features)).collect()
+    let shapes = (0..crate::shape::KINDS.len()).map(|position| wgpu::BindGroupLayoutEntry {
+        binding: shape_binding(position),
+        ..Binding::Materials.layout_entry(features)
+    });
+    BINDINGS
+        .iter()
+        .map(|b| b.layout_entry(features))
+        .chain(shapes)
+        .collect()
 }
 
 #[cfg(test)]

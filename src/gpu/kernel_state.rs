@@ -5,7 +5,7 @@
 use crate::shared::layout::kernel_struct;
 use crate::shared::primitive::PrimitiveRef;
 use crate::shared::ray::Ray;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 kernel_struct! {
     /// The closest hit found so far along a ray, and what its shape needs to complete the hit
@@ -14,17 +14,14 @@ kernel_struct! {
     pub struct Closest as "Closest" {
         outward: Vec3,
         t: f32,
-        /// A sphere's centre.
-        center: Vec3,
-        /// A sphere's radius.
-        radius: f32,
-        /// A quad's plane offset.
-        plane_offset: f32,
+        /// What the shape hit keeps to complete the hit (its `<name>_surface`, `<name>_hit_uv`):
+        /// a sphere's centre and radius, a quad's or disk's plane offset in `w`.
+        shape: Vec4,
         /// Packed, as in `Hit`.
         primitive: PrimitiveRef,
         material: u32,
         found: bool,
-        /// A quad's (a, b), for UV textures.
+        /// A quad's (a, b), a disk's polar coordinates, for UV textures.
         uv: Vec2,
         /// A triangle's barycentric weights of its second and third corners.
         weights: Vec2,

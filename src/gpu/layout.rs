@@ -66,7 +66,7 @@ pub fn bvh_root(bvh: &crate::accel::Bvh) -> u32 {
 
 /// Constants the CPU reference and the kernel share, as WGSL `const` declarations.
 fn wgsl_constants() -> String {
-    use crate::shared::primitive::{KIND_QUAD, KIND_SPHERE, PRIMITIVE_INDEX_BITS};
+    use crate::shared::primitive::PRIMITIVE_INDEX_BITS;
     use crate::shared::ray::{
         OFFSET_FLOAT_SCALE, OFFSET_INT_SCALE, OFFSET_NEAR_ORIGIN, POINT_ERROR,
     };
@@ -85,7 +85,6 @@ fn wgsl_constants() -> String {
         ("ACCUM_EVEN_SUM", ACCUM_EVEN_SUM.literal()),
         ("ACCUM_ODD_SUM", ACCUM_ODD_SUM.literal()),
         ("PRIMITIVE_INDEX_BITS", PRIMITIVE_INDEX_BITS.literal()),
-        ("KIND_SPHERE", KIND_SPHERE.literal()),
         ("TEXTURE_NONE", TEXTURE_NONE.literal()),
         ("TEXTURE_CHECKER", TEXTURE_CHECKER.literal()),
         ("TEXTURE_UV_CHECKER", TEXTURE_UV_CHECKER.literal()),
@@ -112,7 +111,6 @@ fn wgsl_constants() -> String {
         ("KIND_POINT", KIND_POINT.literal()),
         ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
         ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
-        ("KIND_QUAD", KIND_QUAD.literal()),
         (
             "KIND_TRIANGLE",
             crate::shared::primitive::KIND_TRIANGLE.literal(),
@@ -167,8 +165,14 @@ fn wgsl_constants() -> String {
         .map(|b| (b.wgsl_name().to_string(), b.number().literal()));
     let lobes = crate::material::Lobe::wgsl_constants()
         .map(|(name, bits)| (name.to_string(), bits.literal()));
+    let shapes = super::shape_dispatch::kind_constants();
     let mut out = String::new();
-    for (name, value) in kinds.chain(constants).chain(bindings).chain(lobes) {
+    for (name, value) in kinds
+        .chain(constants)
+        .chain(shapes)
+        .chain(bindings)
+        .chain(lobes)
+    {
         let ty = if value.starts_with("vec3f") {
             "vec3f"
         } else if value.ends_with('u') {
@@ -189,6 +193,7 @@ pub fn wgsl_shared() -> String {
     );
     out.push_str(&wgsl_constants());
     out.push_str(&wgsl_declarations());
+    out.push_str(&crate::shape::wgsl_declarations());
     out.push('\n');
     out.push_str(&crate::material::BsdfSample::wgsl_declaration());
     out.push('\n');
@@ -198,8 +203,8 @@ pub fn wgsl_shared() -> String {
 
 /// Scene buffers as uploaded. Empty arrays hold one zeroed element: a binding cannot be empty.
 pub struct SceneBuffers {
-    pub spheres: Vec<GpuSphere>,
-    pub quads: Vec<GpuQuad>,
+    /// Each shape kind's records (in the order of `shape::KINDS`), as bytes.
+    pub shapes: Vec<ShapeRecords>,
     pub triangles: Vec<GpuTriangle>,
     /// Per triangle its three corner normals, nine floats (the kernel's `triangle_normals`),
     /// when the scene has shading normals.
@@ -348,31 +353,7 @@ pub fn geometry_bytes(scene: &FlatScene) -> usize {
 
 impl SceneBuffers {
     pub fn new(scene: &FlatScene) -> Self {
-        let mut spheres: Vec<GpuSphere> = scene
-            .spheres
-            .iter()
-            .map(|s| GpuSphere {
-                center: s.center.to_array(),
-                radius: s.radius,
-                material: s.material,
-                light: s.light,
-                _pad: [0; 2],
-            })
-            .collect();
-        let mut quads: Vec<GpuQuad> = scene
-            .quads
-            .iter()
-            .map(|q| GpuQuad {
-                q: q.q.to_array(),
-                d: q.d,
-                normal: q.normal.to_array(),
-                material: q.material,
-                alpha_axis: q.alpha_axis.to_array(),
-                beta_axis: q.beta_axis.to_array(),
-                light: q.light,
-                edge_tolerance: q.edge_tolerance,
-            })
-            .collect();
+        let shapes = ShapeRecords::of(scene);
         // Where each image goes (its values are gathered only for the upload).
         let images = ImageArray::plan(scene);
         let mut materials: Vec<GpuMaterial> = scene
@@ -467,12 +448,6 @@ impl SceneBuffers {
         if bvh_primitives.is_empty() {
             bvh_primitives.push(0);
         }
-        if spheres.is_empty() {
-            spheres.push(GpuSphere::default());
-        }
-        if quads.is_empty() {
-            quads.push(GpuQuad::default());
-        }
         if materials.is_empty() {
             materials.push(GpuMaterial::default());
         }
@@ -481,8 +456,7 @@ impl SceneBuffers {
             lights.push(GpuLight::default());
         }
         SceneBuffers {
-            spheres,
-            quads,
+            shapes,
             triangles,
             triangle_normals,
             triangle_uvs,
@@ -497,39 +471,69 @@ impl SceneBuffers {
     }
 }
 
+/// One shape kind's array as the kernel reads it.
+pub struct ShapeRecords {
+    /// The records, or one zeroed record where there are none (a binding cannot be empty).
+    pub bytes: Vec<u8>,
+    /// How many bytes a record takes.
+    pub record: usize,
+    /// How many of the records are the scene's.
+    pub count: usize,
+}
+
+impl ShapeRecords {
+    /// Every shape kind's, in the order of `shape::KINDS`.
+    fn of(scene: &FlatScene) -> Vec<ShapeRecords> {
+        use crate::shape::{ShapeKind, ShapeVisitor, SurfaceShape};
+        struct Records(Vec<ShapeRecords>);
+        impl ShapeVisitor for Records {
+            fn visit<S: SurfaceShape>(&mut self, _: &'static ShapeKind, shapes: &[S]) {
+                let mut records: Vec<S::Gpu> = shapes.iter().map(S::gpu).collect();
+                if records.is_empty() {
+                    records.push(S::Gpu::default());
+                }
+                self.0.push(ShapeRecords {
+                    bytes: bytemuck::cast_slice(&records).to_vec(),
+                    record: std::mem::size_of::<S::Gpu>(),
+                    count: shapes.len(),
+                });
+            }
+        }
+        let mut records = Records(Vec::new());
+        scene.shapes.visit(&mut records);
+        records.0
+    }
+
+    /// Padded with zeroed records to `capacity` (a uniform array's fixed length).
+    pub fn resize(&mut self, capacity: usize) {
+        self.bytes.resize(capacity * self.record, 0);
+    }
+}
+
 /// A light as the kernel reads it: a tagged union of the `LightShape`s.
 fn gpu_light(l: &Light) -> GpuLight {
-    use crate::shared::primitive::{KIND_QUAD, KIND_SPHERE};
     let mut out = GpuLight {
         cdf: l.cdf,
         pick: l.pick,
         ..Default::default()
     };
     match l.shape {
-        LightShape::Sphere { center, radius } => {
-            out.kind = KIND_SPHERE;
-            out.position = center.to_array();
-            out.size = radius;
+        LightShape::Surface { kind, light } => {
+            out.kind = kind;
+            out.position = light.position.to_array();
+            out.u = light.u.to_array();
+            out.v = light.v.to_array();
+            out.normal = light.normal.to_array();
+            out.size = light.size;
         }
-        LightShape::Quad {
-            corner,
-            u,
-            v,
-            normal,
-            inv_area,
-        }
-        | LightShape::Triangle {
+        LightShape::Triangle {
             corner,
             u,
             v,
             normal,
             inv_area,
         } => {
-            out.kind = if matches!(l.shape, LightShape::Quad { .. }) {
-                KIND_QUAD
-            } else {
-                crate::shared::primitive::KIND_TRIANGLE
-            };
+            out.kind = crate::shared::primitive::KIND_TRIANGLE;
             out.position = corner.to_array();
             out.u = u.to_array();
             out.v = v.to_array();

@@ -14,6 +14,7 @@ pub mod layout;
 pub mod live;
 pub mod renderer;
 pub mod shader;
+pub mod shape_dispatch;
 mod tile;
 
 pub use backend::GpuBackend;

@@ -1,6 +1,6 @@
 //! Dispatching the kernel: buffers, tiles, sample slices, timing and readback into a [`Film`].
 
-use super::bindings::{BINDINGS, Binding, layout_entries};
+use super::bindings::{BINDINGS, Binding, layout_entries, shape_binding};
 use super::context::{GpuContext, GpuError};
 use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{ImageArray, SceneBuffers, base_params, whole_image_dispatch};
@@ -131,8 +131,8 @@ pub struct Timings {
 /// say), its BVH's nodes (a texture, or a uniform buffer for small hierarchies) and its images
 /// (a texture).
 pub(super) struct SceneBindings {
-    spheres: wgpu::Buffer,
-    quads: wgpu::Buffer,
+    /// Each shape kind's array, in the order of `shape::KINDS`.
+    shapes: Vec<wgpu::Buffer>,
     materials: wgpu::Buffer,
     lights: wgpu::Buffer,
     triangles: wgpu::Buffer,
@@ -204,7 +204,9 @@ impl GpuRenderer {
         // - Node references (`gpu_bvh`): interior ones < the interior-node count; a leaf's
         //   first + count <= bvh.primitives.len() <= BVH_LEAF_OFFSET_LIMIT, and its count fits
         //   its bits (both checked in `check_fits`). Packed primitive indices are < their
-        //   kind's length; instance roots are references of their mesh's root.
+        //   kind's length, and a shape's array is read only under its kind (`consider_shape`,
+        //   `shape_light_of` in `shape_dispatch`), declared for every kind the scene has;
+        //   instance roots are references of their mesh's root.
         // - Texels: node texels 4i..4i+3 and image texels lie below `texel_rows` rows x TEXEL_ROW
         //   (`check_fits`); image x and y are clamped to the image (`wrap`, `alias_pick`,
         //   `environment_pdf_at`) at the offsets `ImageArray` placed it.
@@ -272,8 +274,9 @@ impl GpuRenderer {
         let (node_rows, image_rows) = self.check_fits(scene, &buffers)?;
         let usage = if features.uniform_scene {
             let capacity = features.scene_capacity.max(1) as usize;
-            buffers.spheres.resize(capacity, Default::default());
-            buffers.quads.resize(capacity, Default::default());
+            for shapes in &mut buffers.shapes {
+                shapes.resize(capacity);
+            }
             buffers.materials.resize(capacity, Default::default());
             buffers.lights.resize(capacity, Default::default());
             wgpu::BufferUsages::UNIFORM
@@ -312,8 +315,9 @@ impl GpuRenderer {
         let storage =
             |label, contents: &[u8]| self.buffer_with(label, contents, wgpu::BufferUsages::STORAGE);
         Ok(SceneBindings {
-            spheres: make("spheres", bytemuck::cast_slice(&buffers.spheres)),
-            quads: make("quads", bytemuck::cast_slice(&buffers.quads)),
+            shapes: (buffers.shapes.iter().zip(crate::shape::KINDS))
+                .map(|(records, kind)| make(kind.array, &records.bytes))
+                .collect(),
             materials: make("materials", bytemuck::cast_slice(&buffers.materials)),
             lights: make("lights", bytemuck::cast_slice(&buffers.lights)),
             triangles: storage("triangles", bytemuck::cast_slice(&buffers.triangles)),
@@ -352,6 +356,8 @@ impl GpuRenderer {
             .limits
             .max_storage_buffer_binding_size
             .min(self.ctx.limits.max_buffer_size);
+        let shapes = (buffers.shapes.iter().zip(crate::shape::KINDS))
+            .map(|(records, kind)| (kind.array, records.bytes.len()));
         let geometry = [
             ("triangles", std::mem::size_of_val(&buffers.triangles[..])),
             (
@@ -367,11 +373,9 @@ impl GpuRenderer {
                 std::mem::size_of_val(&buffers.triangle_tangents[..]),
             ),
             ("instances", std::mem::size_of_val(&buffers.instances[..])),
-            ("spheres", std::mem::size_of_val(&buffers.spheres[..])),
-            ("quads", std::mem::size_of_val(&buffers.quads[..])),
             ("lights", std::mem::size_of_val(&buffers.lights[..])),
         ];
-        for (what, bytes) in geometry {
+        for (what, bytes) in geometry.into_iter().chain(shapes) {
             if bytes as u64 > limit {
                 return Err(GpuError::TooLarge(format!(
                     "the scene's {what} take {} MB, more than this GPU binds at once ({} MB): use fewer triangles, or --backend cpu",
@@ -466,8 +470,6 @@ impl GpuRenderer {
     ) -> wgpu::BindGroup {
         let resource = |binding: Binding| match binding {
             Binding::Params => params.as_entire_binding(),
-            Binding::Spheres => scene.spheres.as_entire_binding(),
-            Binding::Quads => scene.quads.as_entire_binding(),
             Binding::Materials => scene.materials.as_entire_binding(),
             Binding::Accum => accum.as_entire_binding(),
             Binding::Bounces => debug.as_entire_binding(),
@@ -485,12 +487,22 @@ impl GpuRenderer {
             Binding::TriangleTangents => scene.triangle_tangents.as_entire_binding(),
             Binding::Instances => scene.instances.as_entire_binding(),
         };
+        let shapes =
+            scene
+                .shapes
+                .iter()
+                .enumerate()
+                .map(|(position, buffer)| wgpu::BindGroupEntry {
+                    binding: shape_binding(position),
+                    resource: buffer.as_entire_binding(),
+                });
         let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
             .iter()
             .map(|&b| wgpu::BindGroupEntry {
                 binding: b.number(),
                 resource: resource(b),
             })
+            .chain(shapes)
             .collect();
         self.ctx
             .device

@@ -8,7 +8,9 @@ use crate::material::{self, KINDS, MaterialKind};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
 use crate::scene::flat::FlatScene;
-use crate::shared::layout::{GpuQuad, GpuSphere, WgslStruct, WgslType, float_literal};
+use crate::shape::quad::GpuQuad;
+use crate::shape::{self, Quad, ShapeKind, ShapeVisitor, SurfaceShape};
+use crate::shared::layout::{WgslStruct, WgslType, float_literal};
 
 /// The kernel's modules, in dependency order.
 const MODULES: &[(&str, &str)] = &[
@@ -60,8 +62,8 @@ const MODULES: &[(&str, &str)] = &[
 /// What a scene needs from the kernel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Features {
-    pub spheres: bool,
-    pub quads: bool,
+    /// The shape kinds the kernel holds, as bits in the order of `shape::KINDS`.
+    pub shapes: u32,
     pub triangles: bool,
     /// Triangles shaded with interpolated vertex normals.
     pub shading_normals: bool,
@@ -99,7 +101,7 @@ pub struct Features {
     pub bvh_capacity: u32,
     /// With `uniform_bvh`, the primitive references' array length in vec4u (four each).
     pub bvh_primitive_capacity: u32,
-    /// Spheres and quads written into the kernel as constants, tested in straight-line code:
+    /// The shapes written into the kernel as constants, tested in straight-line code:
     /// no loads, no loops, and the compiler folds the zeros of axis-aligned quads.
     pub inline_scene: bool,
 }
@@ -108,9 +110,7 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 18] = [
-    ("SPHERES", |f| &mut f.spheres),
-    ("QUADS", |f| &mut f.quads),
+const SWITCHES: [Switch; 16] = [
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
     ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
@@ -128,21 +128,21 @@ const SWITCHES: [Switch; 18] = [
     ("UNIFORM_BVH", |f| &mut f.uniform_bvh),
     ("INLINE_SCENE", |f| &mut f.inline_scene),
 ];
-/// How many of [`SWITCHES`] come before the material features in [`Features::flags`].
-const GEOMETRY_SWITCHES: usize = 8;
+/// How many of [`SWITCHES`] come before the material features in [`Features::flags`] (after
+/// the shapes').
+const GEOMETRY_SWITCHES: usize = 6;
 
-/// Most spheres plus quads a kernel takes as constants.
+/// Most shapes a kernel takes as constants.
 pub const MAX_INLINE_PRIMITIVES: usize = 64;
 
 /// The largest uniform binding every WebGPU device offers.
 pub const MAX_UNIFORM_BYTES: u64 = 64 * 1024;
 /// The largest element of the scene arrays that go into uniform buffers together.
 pub const LARGEST_ELEMENT_BYTES: u64 = {
-    use crate::shared::layout::{GpuLight, GpuMaterial, GpuQuad, GpuSphere};
+    use crate::shared::layout::{GpuLight, GpuMaterial};
     use std::mem::size_of;
     let sizes = [
-        size_of::<GpuSphere>(),
-        size_of::<GpuQuad>(),
+        shape::LARGEST_GPU_RECORD,
         size_of::<GpuMaterial>(),
         size_of::<GpuLight>(),
     ];
@@ -164,12 +164,8 @@ impl Features {
         // Only materials some primitive uses: a scene may define more than it places. Each
         // used material once (its features are worked out, not looked up).
         let mut used = vec![false; scene.materials.len()];
-        for m in scene
-            .spheres
-            .iter()
-            .map(|s| s.material)
-            .chain(scene.quads.iter().map(|q| q.material))
-            .chain(scene.triangles.iter().map(|t| t.material))
+        for m in
+            (scene.shapes.materials().into_iter()).chain(scene.triangles.iter().map(|t| t.material))
         {
             used[m as usize] = true;
         }
@@ -180,10 +176,9 @@ impl Features {
             }
         }
         // Uniform arrays have a fixed size: the next power of two (fewer distinct kernels).
-        let longest = scene
-            .spheres
-            .len()
-            .max(scene.quads.len())
+        let longest = (shape::KINDS.iter())
+            .map(|k| scene.shapes.count(k))
+            .fold(0, usize::max)
             .max(scene.materials.len())
             .max(scene.lights.len());
         let capacity = (longest.max(1) as u64).next_power_of_two();
@@ -196,15 +191,16 @@ impl Features {
         // keeps a variant of the inlined kernel at every dispatch (see docs/benchmarks.md).
         let inline_scene = scene.triangles.is_empty()
             && !matches!(scene.background, Background::Environment(_))
-            && scene.spheres.len() + scene.quads.len() <= MAX_INLINE_PRIMITIVES
+            && scene.shapes.len() <= MAX_INLINE_PRIMITIVES
             && scene.materials.len() <= MAX_INLINE_PRIMITIVES
             && scene.lights.len() <= MAX_INLINE_PRIMITIVES;
         // Any other scene goes through its BVH, faster even on lavapipe than a loop over a few
         // hundred primitives.
         let bvh = !inline_scene;
         Features {
-            spheres: !scene.spheres.is_empty(),
-            quads: !scene.quads.is_empty(),
+            shapes: (shape::KINDS.iter().enumerate())
+                .filter(|(_, k)| scene.shapes.count(k) > 0)
+                .fold(0, |bits, (position, _)| bits | 1 << position),
             triangles: !scene.triangles.is_empty(),
             shading_normals: !scene.triangle_normals.is_empty(),
             triangle_uvs: !scene.triangle_uvs.is_empty(),
@@ -241,8 +237,7 @@ impl Features {
     pub fn everything(scene: &FlatScene) -> Self {
         let own = Features::of(scene);
         Features {
-            spheres: true,
-            quads: true,
+            shapes: (1 << shape::KINDS.len()) - 1,
             triangles: true,
             bvh: true,
             materials: (1 << material::features().len()) - 1,
@@ -286,14 +281,20 @@ impl Features {
     /// [`SWITCHES`]).
     pub fn flags(&self) -> Vec<(&'static str, bool)> {
         let mut copy = *self;
-        let mut flags: Vec<(&'static str, bool)> = SWITCHES
-            .iter()
-            .map(|(name, switch)| (*name, *switch(&mut copy)))
+        let shapes = (shape::KINDS.iter().enumerate())
+            .map(|(position, k)| (k.feature, self.shapes & 1 << position != 0));
+        let mut flags: Vec<(&'static str, bool)> = shapes
+            .chain(
+                SWITCHES
+                    .iter()
+                    .map(|(name, switch)| (*name, *switch(&mut copy))),
+            )
             .collect();
         let materials = material::features()
             .into_iter()
             .map(|name| (name, self.materials & material_bit(name) != 0));
-        flags.splice(GEOMETRY_SWITCHES..GEOMETRY_SWITCHES, materials);
+        let geometry = shape::KINDS.len() + GEOMETRY_SWITCHES;
+        flags.splice(geometry..geometry, materials);
         flags
     }
 
@@ -301,6 +302,14 @@ impl Features {
     pub fn set(&mut self, name: &str, on: bool) -> Result<(), String> {
         if let Some((_, switch)) = SWITCHES.iter().find(|(n, _)| *n == name) {
             *switch(self) = on;
+            return Ok(());
+        }
+        if let Some(position) = shape::KINDS.iter().position(|k| k.feature == name) {
+            self.shapes = if on {
+                self.shapes | 1 << position
+            } else {
+                self.shapes & !(1 << position)
+            };
             return Ok(());
         }
         let bit = material_bit(name);
@@ -391,6 +400,9 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
             }
             out.push_str(&material_dispatch(features));
         }
+        if *name == "intersect.wgsl" {
+            out.push_str(&super::shape_dispatch::wgsl(features)?);
+        }
     }
     if features.inline_scene {
         out.push_str(&inline_scene(scene, features));
@@ -463,22 +475,20 @@ fn material_dispatch(features: &Features) -> String {
     out
 }
 
-/// `inline_scene`: every primitive tested in order (spheres, then quads, as the CPU does), each
-/// with its index among its kind, a box's six quads as one (`box_test`); with nee, for shadow
-/// rays (`intersect_emitter`), the same tests keeping only the closest's distance and index
-/// (`inline_scene_first`) and the full tests of the emitting primitives alone
-/// (`inline_emitters`).
+/// `inline_scene`: every primitive tested in the order of their packed references (the shapes
+/// by kind, each with its index among its kind, as the CPU orders them), a box's six quads as
+/// one (`box_test`); with nee, for shadow rays (`intersect_emitter`), the same tests keeping
+/// only the closest's distance and index (`inline_scene_first`) and the full tests of the
+/// emitting primitives alone (`inline_emitters`). Quads have tests of their own here (their
+/// constant zeros folded, boxes as slabs); every other shape is its twin's
+/// `consider_<name>` with the shape as a constant.
 fn inline_scene(scene: &FlatScene, features: &Features) -> String {
-    let buffers = SceneBuffers::new(scene);
-    let spheres = if features.spheres {
-        &buffers.spheres[..scene.spheres.len()]
+    let constants = shape_constants(scene);
+    let held = |k: &ShapeKind| features.has(k.feature);
+    let quads: Vec<GpuQuad> = if features.shapes & 1 << quad_position() != 0 {
+        scene.shapes.quads.iter().map(SurfaceShape::gpu).collect()
     } else {
-        &[]
-    };
-    let quads = if features.quads {
-        &buffers.quads[..scene.quads.len()]
-    } else {
-        &[]
+        Vec::new()
     };
     // Boxes tested as one, by their first quad. Not where hits need UV coordinates: a box
     // test finds which face it hit, not where on it.
@@ -493,11 +503,8 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
             .iter()
             .any(|&first| (first as usize..first as usize + 6).contains(&i))
     };
-    let full_sphere = |i: usize, s: &GpuSphere| {
-        format!(
-            "    consider_sphere({}, {i}u, ray, true, c);\n",
-            s.wgsl_constructor()
-        )
+    let full = |k: &ShapeKind, i: usize, constant: &str| {
+        format!("    consider_{}({constant}, {i}u, ray, true, c);\n", k.name)
     };
     let full_quad = |i: usize, q: &GpuQuad| {
         format!(
@@ -507,45 +514,58 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
     };
     let mut out = String::from("\n// ---- the scene's primitives, generated ----\n");
     out.push_str("fn inline_scene(ray: Ray, c: ptr<function, Closest>) {\n");
-    for (i, s) in spheres.iter().enumerate() {
-        out.push_str(&full_sphere(i, s));
-    }
-    for (i, q) in quads.iter().enumerate() {
-        if let Some(b) = box_at(i) {
-            out.push_str(&format!("    consider_box_{b}(ray, c);\n"));
-        } else if !in_box(i) {
-            out.push_str(&full_quad(i, q));
+    for (k, shapes) in shape::KINDS.iter().zip(&constants).filter(|(k, _)| held(k)) {
+        if k.kind != Quad::KIND {
+            for (i, (constant, _)) in shapes.iter().enumerate() {
+                out.push_str(&full(k, i, constant));
+            }
+            continue;
+        }
+        for (i, q) in quads.iter().enumerate() {
+            if let Some(b) = box_at(i) {
+                out.push_str(&format!("    consider_box_{b}(ray, c);\n"));
+            } else if !in_box(i) {
+                out.push_str(&full_quad(i, q));
+            }
         }
     }
     out.push_str("}\n");
     if features.nee {
         out.push_str("\nfn inline_scene_first(ray: Ray, c: ptr<function, Closest>) {\n");
-        for (i, s) in spheres.iter().enumerate() {
-            out.push_str(&format!(
-                "    consider_first(sphere_distance({}, ray), (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | {i}u, c);\n",
-                s.wgsl_constructor()
-            ));
-        }
-        for i in 0..quads.len() {
-            if let Some(b) = box_at(i) {
-                out.push_str(&format!(
-                    "    let box_{b} = box_test_{b}(ray);\n    consider_first(box_{b}.t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | ({i}u + box_{b}.face), c);\n"
-                ));
-            } else if !in_box(i) {
-                out.push_str(&format!(
-                    "    consider_first(quad_distance_{i}(ray), (KIND_QUAD << PRIMITIVE_INDEX_BITS) | {i}u, c);\n"
-                ));
+        for (k, shapes) in shape::KINDS.iter().zip(&constants).filter(|(k, _)| held(k)) {
+            let kind = format!("KIND_{}", k.name.to_uppercase());
+            if k.kind != Quad::KIND {
+                for (i, (constant, _)) in shapes.iter().enumerate() {
+                    out.push_str(&format!(
+                        "    consider_first({}_distance({constant}, ray), ({kind} << PRIMITIVE_INDEX_BITS) | {i}u, c);\n",
+                        k.name
+                    ));
+                }
+                continue;
+            }
+            for i in 0..quads.len() {
+                if let Some(b) = box_at(i) {
+                    out.push_str(&format!(
+                        "    let box_{b} = box_test_{b}(ray);\n    consider_first(box_{b}.t, ({kind} << PRIMITIVE_INDEX_BITS) | ({i}u + box_{b}.face), c);\n"
+                    ));
+                } else if !in_box(i) {
+                    out.push_str(&format!(
+                        "    consider_first(quad_distance_{i}(ray), ({kind} << PRIMITIVE_INDEX_BITS) | {i}u, c);\n"
+                    ));
+                }
             }
         }
         out.push_str("}\n\nfn inline_emitters(ray: Ray, c: ptr<function, Closest>) {\n");
-        for (i, s) in spheres.iter().enumerate() {
-            if s.light > 0 {
-                out.push_str(&full_sphere(i, s));
-            }
-        }
-        for (i, q) in quads.iter().enumerate() {
-            if q.light > 0 {
-                out.push_str(&full_quad(i, q));
+        for (k, shapes) in shape::KINDS.iter().zip(&constants).filter(|(k, _)| held(k)) {
+            for (i, (constant, light)) in shapes.iter().enumerate() {
+                if *light == 0 {
+                    continue;
+                }
+                if k.kind == Quad::KIND {
+                    out.push_str(&full_quad(i, &quads[i]));
+                } else {
+                    out.push_str(&full(k, i, constant));
+                }
             }
         }
         out.push_str("}\n");
@@ -560,6 +580,28 @@ fn inline_scene(scene: &FlatScene, features: &Features) -> String {
         out.push_str(&box_test(b, first, &quads[first..first + 6]));
     }
     out
+}
+
+/// Quads' position in `shape::KINDS` (which `inline_scene` tests its own way).
+fn quad_position() -> usize {
+    (shape::KINDS.iter())
+        .position(|k| k.kind == Quad::KIND)
+        .expect("quads are a shape")
+}
+
+/// Each shape kind's shapes (in the order of `shape::KINDS`) as WGSL constants, with their
+/// light indices.
+fn shape_constants(scene: &FlatScene) -> Vec<Vec<(String, u32)>> {
+    struct Constants(Vec<Vec<(String, u32)>>);
+    impl ShapeVisitor for Constants {
+        fn visit<S: SurfaceShape>(&mut self, _: &'static ShapeKind, shapes: &[S]) {
+            let constant = |s: &S| (s.gpu().wgsl_constructor(), s.light());
+            self.0.push(shapes.iter().map(constant).collect());
+        }
+    }
+    let mut constants = Constants(Vec::new());
+    scene.shapes.visit(&mut constants);
+    constants.0
 }
 
 /// A box's six quads (`faces`, from quad `first` on) tested as one (`slab_hit` in
@@ -612,7 +654,7 @@ fn consider_box_{b}(ray: Ray, c: ptr<function, Closest>) {{
         (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | ({first}u + hit.face);
         (*c).material = {material};
         (*c).outward = {outward};
-        (*c).plane_offset = {offset};
+        (*c).shape.w = {offset};
     }}
 }}
 ",
@@ -755,7 +797,7 @@ fn inline_lights(scene: &FlatScene) -> String {
     out
 }
 
-fn preprocess(source: &str, features: &Features) -> Result<String, String> {
+pub(super) fn preprocess(source: &str, features: &Features) -> Result<String, String> {
     // Each open block: (whether its branch is kept, whether the enclosing text is kept).
     let mut stack: Vec<(bool, bool)> = Vec::new();
     let mut keep = true;

@@ -160,7 +160,10 @@ mod tests {
             shading: Vec3::Y,
             front_face: true,
             material: 0,
-            primitive: PrimitiveRef::Quad(0),
+            primitive: PrimitiveRef::Shape {
+                kind: crate::shape::Quad::KIND,
+                index: 0,
+            },
             uv,
         }
     }

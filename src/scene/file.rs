@@ -487,6 +487,17 @@ pub mod checked {
         }
     }
 
+    /// Three finite numbers `[x, y, z]`: a point or a vector.
+    pub mod vector {
+        use super::*;
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+            V3::deserialize(d).map(V3::vec)
+        }
+        pub fn serialize<S: Serializer>(v: &Vec3, s: S) -> Result<S::Ok, S::Error> {
+            V3::from(*v).serialize(s)
+        }
+    }
+
     /// For `skip_serializing_if`: an all-zero colour is the default.
     pub fn is_black(v: &Vec3) -> bool {
         *v == Vec3::ZERO
@@ -581,44 +592,54 @@ struct CameraDoc {
     focus_distance: Option<Num>,
 }
 
-/// (Its `Spanned` fields are moved to whole-text positions in `parse`: add new ones there.)
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct ObjectDoc {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    sphere: Option<SphereDoc>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    quad: Option<QuadDoc>,
-    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
-    cuboid: Option<BoxDoc>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    mesh: Option<MeshDoc>,
-    /// A mesh's scale: a number or [x, y, z], applied before rotation and translation.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    scale: Option<ScaleDoc>,
-    /// Optional only for a glTF mesh, whose own materials are used without it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    material: Option<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    rotate_y: Option<Num>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    translate: Option<Spanned<V3>>,
-}
+/// Defines `ObjectDoc`, an `[[object]]` table, with a key per shape of `shape::with_shapes!`
+/// (its file's name), and its conversions to and from those shapes.
+macro_rules! object_doc {
+    ($($module:ident :: $ty:ident ($params:ident) => $array:ident,)+) => {
+        /// (Its `Spanned` fields are moved to whole-text positions in `parse`: add new ones there.)
+        #[derive(Default, Deserialize, Serialize)]
+        #[serde(deny_unknown_fields)]
+        struct ObjectDoc {
+            $(
+                #[serde(default, skip_serializing_if = "Option::is_none")]
+                $module: Option<crate::shape::$params>,
+            )+
+            #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
+            cuboid: Option<BoxDoc>,
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            mesh: Option<MeshDoc>,
+            /// A mesh's scale: a number or [x, y, z], applied before rotation and translation.
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            scale: Option<ScaleDoc>,
+            /// Optional only for a glTF mesh, whose own materials are used without it.
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            material: Option<String>,
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            rotate_y: Option<Num>,
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            translate: Option<Spanned<V3>>,
+        }
 
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct SphereDoc {
-    center: V3,
-    radius: Num,
-}
+        impl ObjectDoc {
+            /// The shapes of `crate::shape` it names.
+            fn surfaces(&self) -> Vec<Shape> {
+                let mut out = Vec::new();
+                $(if let Some(p) = self.$module {
+                    out.push(Shape::Surface(crate::shape::SurfaceParams::$ty(p)));
+                })+
+                out
+            }
 
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct QuadDoc {
-    q: V3,
-    u: V3,
-    v: V3,
+            /// Names `params` as its shape.
+            fn set_surface(&mut self, params: crate::shape::SurfaceParams) {
+                match params {
+                    $(crate::shape::SurfaceParams::$ty(p) => self.$module = Some(p),)+
+                }
+            }
+        }
+    };
 }
+crate::shape::with_shapes!(object_doc);
 
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -749,31 +770,15 @@ impl SceneDoc {
             .iter()
             .map(|o| {
                 let mut doc = ObjectDoc {
-                    sphere: None,
-                    quad: None,
-                    cuboid: None,
-                    mesh: None,
-                    scale: None,
                     material: Some(names[o.material as usize].clone()),
                     rotate_y: (o.transform.rotate_y_degrees != 0.0)
                         .then_some(Num(o.transform.rotate_y_degrees)),
                     translate: (o.transform.translate != Vec3::ZERO)
                         .then(|| Spanned::new(0..0, V3::from(o.transform.translate))),
+                    ..ObjectDoc::default()
                 };
                 match o.shape {
-                    Shape::Sphere { center, radius } => {
-                        doc.sphere = Some(SphereDoc {
-                            center: V3::from(center),
-                            radius: Num(radius),
-                        })
-                    }
-                    Shape::Quad { q, u, v } => {
-                        doc.quad = Some(QuadDoc {
-                            q: V3::from(q),
-                            u: V3::from(u),
-                            v: V3::from(v),
-                        })
-                    }
+                    Shape::Surface(params) => doc.set_surface(params),
                     Shape::Cuboid { min, max } => {
                         doc.cuboid = Some(BoxDoc {
                             min: V3::from(min),
@@ -944,20 +949,7 @@ fn object_shapes(
     o: &ObjectDoc,
     span: &Option<Range<usize>>,
 ) -> Result<Vec<(Shape, Option<&'static super::mesh::Mesh>)>, Located> {
-    let mut shapes = Vec::new();
-    if let Some(s) = &o.sphere {
-        shapes.push(Shape::Sphere {
-            center: s.center.vec(),
-            radius: s.radius.0,
-        });
-    }
-    if let Some(q) = &o.quad {
-        shapes.push(Shape::Quad {
-            q: q.q.vec(),
-            u: q.u.vec(),
-            v: q.v.vec(),
-        });
-    }
+    let mut shapes = o.surfaces();
     if let Some(b) = &o.cuboid {
         shapes.push(Shape::Cuboid {
             min: b.min.vec(),
@@ -995,7 +987,12 @@ fn object_shapes(
         return Err((
             span.clone(),
             format!(
-                "an [[object]] needs exactly one of `sphere`, `quad`, `box` or `mesh`, found {one_kind}"
+                "an [[object]] needs exactly one of {}, `box` or `mesh`, found {one_kind}",
+                crate::shape::KINDS
+                    .iter()
+                    .map(|k| format!("`{}`", k.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         ));
     }

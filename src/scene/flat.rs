@@ -7,67 +7,13 @@
 use super::mesh::Mesh;
 use super::texture::Texture;
 use super::{Background, Material, Scene, SceneError, Shape};
-use crate::shared::primitive::{MAX_PRIMITIVES_PER_KIND, PrimitiveRef};
+use crate::shape::{ShapeKind, ShapeVisitor, ShapeVisitorMut, SurfaceShape};
+use crate::shared::primitive::{
+    KIND_INSTANCE, KIND_TRIANGLE, MAX_PRIMITIVES_PER_KIND, PrimitiveRef,
+};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sphere {
-    pub center: Vec3,
-    /// Negative for an inward-facing (hollow) sphere.
-    pub radius: f32,
-    pub material: u32,
-    /// 1 + this sphere's index in [`FlatScene::lights`]; 0 when it does not emit.
-    pub light: u32,
-}
-
-/// The parallelogram `q + a u + b v`, with its plane `normal . p = d` and two axes precomputed
-/// so that a hit costs one division and two dot products: for a point p in the plane,
-/// a = (p - q) . alpha_axis and b = (p - q) . beta_axis, where with n = u x v and
-/// w = n / |n|^2, alpha_axis = v x w and beta_axis = w x u.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Quad {
-    pub q: Vec3,
-    pub u: Vec3,
-    pub v: Vec3,
-    pub normal: Vec3,
-    pub d: f32,
-    pub alpha_axis: Vec3,
-    pub beta_axis: Vec3,
-    pub material: u32,
-    /// 1 + this quad's index in [`FlatScene::lights`]; 0 when it does not emit.
-    pub light: u32,
-    /// How far past its edges, as a fraction of each edge, the quad still counts as hit: the
-    /// quads meeting at a box edge have their corners rounded independently, by a few units in
-    /// the last place of their coordinates, and rays must not slip between them.
-    pub edge_tolerance: f32,
-}
-
-impl Quad {
-    pub fn new(q: Vec3, u: Vec3, v: Vec3, material: u32) -> Self {
-        let n = u.cross(v);
-        let normal = n.normalize();
-        let w = n / n.length_squared();
-        Quad {
-            q,
-            u,
-            v,
-            normal,
-            d: normal.dot(q),
-            alpha_axis: v.cross(w),
-            beta_axis: w.cross(u),
-            material,
-            light: 0,
-            edge_tolerance: edge_tolerance(q, u, v),
-        }
-    }
-}
-
-/// Eight units in the last place of the quad's largest coordinate, as a fraction of its shorter
-/// edge, and at least 1e-5.
-fn edge_tolerance(q: Vec3, u: Vec3, v: Vec3) -> f32 {
-    let magnitude = q.abs().max_element() + u.abs().max_element() + v.abs().max_element();
-    (8.0 * f32::EPSILON * magnitude / u.length().min(v.length())).max(1e-5)
-}
+pub use crate::shape::{Disk, Quad, Shapes, Sphere};
 
 /// A triangle `p0 p1 p2`, its front face counter-clockwise (along `(p1 - p0) x (p2 - p0)`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -197,10 +143,10 @@ pub struct FlatScene {
     pub camera: CameraFrame,
     pub background: Background,
     /// The materials the primitives use (not every one the scene defines), which `material`
-    /// fields of spheres and quads index.
+    /// fields of shapes and triangles index.
     pub materials: Vec<Material>,
-    pub spheres: Vec<Sphere>,
-    pub quads: Vec<Quad>,
+    /// Spheres, quads, disks: every primitive but triangles, an array per kind.
+    pub shapes: Shapes,
     /// The triangles placed in the scene, then from `instanced_triangles` on those of meshes
     /// placed as instances, in their meshes' own coordinates.
     pub triangles: Vec<Triangle>,
@@ -266,16 +212,10 @@ pub struct Light {
 /// How a light is sampled.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightShape {
-    /// Uniformly in the cone it subtends; `radius` is |radius| (a hollow sphere emits too).
-    Sphere { center: Vec3, radius: f32 },
-    /// Uniformly on its area, `corner + a u + b v`.
-    Quad {
-        corner: Vec3,
-        u: Vec3,
-        v: Vec3,
-        /// Unit normal `u x v / |u x v|`.
-        normal: Vec3,
-        inv_area: f32,
+    /// A shape of `crate::shape` of primitive kind `kind`, sampled as that shape samples it.
+    Surface {
+        kind: u32,
+        light: crate::shape::SurfaceLight,
     },
     /// Uniformly on its area, `corner + a u + b v` with a, b >= 0, a + b <= 1.
     Triangle {
@@ -441,7 +381,7 @@ impl FlatScene {
         let instances_in = |n: &crate::accel::Node| {
             let leaf = &self.bvh.primitives[n.offset as usize..][..n.count as usize];
             let instance =
-                |p: &&u32| matches!(PrimitiveRef::unpacked(**p), Some(PrimitiveRef::Instance(_)));
+                |p: &&u32| matches!(PrimitiveRef::unpacked(**p), PrimitiveRef::Instance(_));
             leaf.iter().filter(instance).count() as u32
         };
         self.bvh.nodes[..first_mesh_node as usize]
@@ -460,35 +400,35 @@ impl FlatScene {
 
     /// Primitives stored (an instanced mesh's triangles once, however often it is placed).
     pub fn primitive_count(&self) -> usize {
-        self.spheres.len() + self.quads.len() + self.triangles.len()
+        self.shapes.len() + self.triangles.len()
     }
 
     /// Every primitive's bounds, padded for the rounding of the intersection tests: what the
     /// BVH is built over.
     pub fn bvh_items(&self) -> Vec<crate::accel::Item> {
         use crate::accel::Item;
-        let mut items = Vec::with_capacity(self.primitive_count());
-        for (i, s) in self.spheres.iter().enumerate() {
-            let r = Vec3::splat(s.radius.abs());
-            let (min, max) = pad(s.center - r, s.center + r, 0.0);
-            items.push(Item {
-                min,
-                max,
-                primitive: PrimitiveRef::Sphere(i as u32).packed(),
-            });
+        struct Items(Vec<Item>);
+        impl ShapeVisitor for Items {
+            fn visit<S: SurfaceShape>(&mut self, kind: &'static ShapeKind, shapes: &[S]) {
+                self.0.extend(shapes.iter().enumerate().map(|(i, s)| {
+                    let [min, max] = s.padded_bounds();
+                    let index = i as u32;
+                    let primitive = PrimitiveRef::Shape {
+                        kind: kind.kind,
+                        index,
+                    }
+                    .packed();
+                    Item {
+                        min,
+                        max,
+                        primitive,
+                    }
+                }));
+            }
         }
-        for (i, q) in self.quads.iter().enumerate() {
-            let corners = [q.q, q.q + q.u, q.q + q.v, q.q + q.u + q.v];
-            let min = corners.iter().fold(Vec3::MAX, |m, c| m.min(*c));
-            let max = corners.iter().fold(Vec3::MIN, |m, c| m.max(*c));
-            let tolerance = q.edge_tolerance * (q.u.abs() + q.v.abs()).max_element();
-            let (min, max) = pad(min, max, tolerance);
-            items.push(Item {
-                min,
-                max,
-                primitive: PrimitiveRef::Quad(i as u32).packed(),
-            });
-        }
+        let mut items = Items(Vec::with_capacity(self.primitive_count()));
+        self.shapes.visit(&mut items);
+        let mut items = items.0;
         items.extend(triangle_items(
             &self.triangles[..self.instanced_triangles],
             0,
@@ -502,28 +442,32 @@ impl FlatScene {
         items
     }
 
-    /// Every primitive in the BVH's top level: spheres, quads, placed triangles, instances.
+    /// Every primitive in the BVH's top level, in the order of their packed references: the
+    /// shapes, placed triangles, instances (shapes of later kinds, disks, last).
     pub fn primitives(&self) -> impl Iterator<Item = PrimitiveRef> + '_ {
-        (0..self.spheres.len() as u32)
-            .map(PrimitiveRef::Sphere)
-            .chain((0..self.quads.len() as u32).map(PrimitiveRef::Quad))
-            .chain((0..self.instanced_triangles as u32).map(PrimitiveRef::Triangle))
-            .chain((0..self.instances.len() as u32).map(PrimitiveRef::Instance))
+        let mut kinds: Vec<(u32, u32)> = crate::shape::KINDS
+            .iter()
+            .map(|k| (k.kind, self.shapes.count(k) as u32))
+            .collect();
+        kinds.push((KIND_TRIANGLE, self.instanced_triangles as u32));
+        kinds.push((KIND_INSTANCE, self.instances.len() as u32));
+        kinds.sort_by_key(|(kind, _)| *kind);
+        kinds
+            .into_iter()
+            .flat_map(|(kind, count)| (0..count).map(move |index| PrimitiveRef::new(kind, index)))
     }
 
     fn count_medium_crossings(&self) -> u32 {
-        let invisible = |m: u32| self.materials[m as usize].is_invisible() as u32;
-        let bounds = 2 * self
-            .spheres
-            .iter()
-            .map(|s| invisible(s.material))
-            .sum::<u32>()
-            + self
-                .quads
-                .iter()
-                .map(|q| invisible(q.material))
-                .sum::<u32>();
-        if bounds == 0 { 0 } else { bounds + 2 }
+        struct Crossings<'a>(&'a [Material], u32);
+        impl ShapeVisitor for Crossings<'_> {
+            fn visit<S: SurfaceShape>(&mut self, _: &'static ShapeKind, shapes: &[S]) {
+                let invisible = |s: &S| self.0[s.material() as usize].is_invisible() as u32;
+                self.1 += S::CROSSINGS * shapes.iter().map(invisible).sum::<u32>();
+            }
+        }
+        let mut crossings = Crossings(&self.materials, 0);
+        self.shapes.visit(&mut crossings);
+        if crossings.1 == 0 { 0 } else { crossings.1 + 2 }
     }
 
     /// Whether some primitive's material holds a medium.
@@ -544,8 +488,7 @@ impl FlatScene {
     #[inline]
     pub fn light_of(&self, p: PrimitiveRef) -> u32 {
         match p {
-            PrimitiveRef::Sphere(i) => self.spheres[i as usize].light,
-            PrimitiveRef::Quad(i) => self.quads[i as usize].light,
+            PrimitiveRef::Shape { kind, index } => self.shapes.light(kind, index),
             PrimitiveRef::Triangle(i) => self.triangles[i as usize].light,
             PrimitiveRef::Instance(_) => 0,
         }
@@ -564,19 +507,19 @@ impl FlatScene {
     /// without any): how large a disc the environment's light crosses, for weighing it against
     /// the other lights.
     pub fn bounding_radius(&self) -> f64 {
-        let spheres = self.spheres.iter().flat_map(|s| {
-            let r = Vec3::splat(s.radius.abs());
-            [s.center - r, s.center + r]
-        });
-        let quads = self
-            .quads
-            .iter()
-            .flat_map(|q| [q.q, q.q + q.u, q.q + q.v, q.q + q.u + q.v]);
+        struct Corners(Vec<Vec3>);
+        impl ShapeVisitor for Corners {
+            fn visit<S: SurfaceShape>(&mut self, _: &'static ShapeKind, shapes: &[S]) {
+                self.0.extend(shapes.iter().flat_map(|s| s.bounds()));
+            }
+        }
+        let mut shapes = Corners(Vec::new());
+        self.shapes.visit(&mut shapes);
         let triangles = self.triangles[..self.instanced_triangles]
             .iter()
             .flat_map(|t| [t.p0, t.p1, t.p2]);
         let instances = self.instances.iter().flat_map(|i| i.bounds);
-        let (min, max) = spheres.chain(quads).chain(triangles).chain(instances).fold(
+        let (min, max) = shapes.0.into_iter().chain(triangles).chain(instances).fold(
             (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
             |(min, max), p| (min.min(p.as_dvec3()), max.max(p.as_dvec3())),
         );
@@ -584,17 +527,22 @@ impl FlatScene {
         if r > 0.0 && r.is_finite() { r } else { 1.0 }
     }
 
-    /// Fills `lights` with every emitting primitive (spheres, then quads) and the environment,
+    /// Fills `lights` with every emitting primitive (the shapes in the order of `shapes!`, then
+    /// triangles), the punctual lights and the environment,
     /// and links each primitive to its light. Lights are picked in proportion to their power,
     /// pi * luminance * area (twice that for two-sided ones).
     pub fn collect_lights(&mut self, punctual: &[super::punctual::Punctual]) {
         let mut lights = Vec::new();
         let mut powers = Vec::new();
         let materials = &self.materials;
-        add_area_lights(&mut self.spheres, materials, &mut lights, &mut powers);
-        add_area_lights(&mut self.quads, materials, &mut lights, &mut powers);
+        let mut area_lights = AreaLights {
+            materials,
+            lights: &mut lights,
+            powers: &mut powers,
+        };
+        self.shapes.visit_mut(&mut area_lights);
         let placed_triangles = &mut self.triangles[..self.instanced_triangles];
-        add_area_lights(placed_triangles, materials, &mut lights, &mut powers);
+        area_lights.add(placed_triangles, |t| t.light_shape());
         let radius = self.bounding_radius();
         for light in punctual {
             let (power, shape) = punctual_light(light, self.origin, radius);
@@ -694,61 +642,83 @@ fn punctual_light(
     }
 }
 
-/// A primitive that is an area light when its material emits: one light-building path for
-/// every shape (`add_area_lights`).
-trait AreaLight {
+/// Appends the primitives whose material emits to `lights`, with their power (pi x luminance x
+/// area x emitting sides) in `powers`, and records each one's light index: one light-building
+/// path for shapes and triangles.
+struct AreaLights<'a> {
+    materials: &'a [Material],
+    lights: &'a mut Vec<Light>,
+    powers: &'a mut Vec<f64>,
+}
+
+impl AreaLights<'_> {
+    /// Adds those of `primitives` that emit, whose area and light `light_shape` gives.
+    fn add<P: Emitter>(
+        &mut self,
+        primitives: &mut [P],
+        light_shape: impl Fn(&P) -> (f64, LightShape),
+    ) {
+        let luminance = |c: Vec3| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64;
+        for primitive in primitives {
+            primitive.set_light(0);
+            let Some((radiance, two_sided)) =
+                self.materials[primitive.material() as usize].area_light()
+            else {
+                continue;
+            };
+            let (area, shape) = light_shape(primitive);
+            let sides = if two_sided { 2.0 } else { 1.0 };
+            self.powers
+                .push(std::f64::consts::PI * luminance(radiance) * area * sides);
+            self.lights.push(Light {
+                shape,
+                cdf: 0.0,
+                pick: 0.0,
+            });
+            primitive.set_light(self.lights.len() as u32);
+        }
+    }
+}
+
+impl ShapeVisitorMut for AreaLights<'_> {
+    fn visit<S: SurfaceShape>(&mut self, kind: &'static ShapeKind, shapes: &mut [S]) {
+        self.add(shapes, |s| {
+            let (area, light) = s.as_light();
+            let shape = LightShape::Surface {
+                kind: kind.kind,
+                light,
+            };
+            (area, shape)
+        });
+    }
+}
+
+/// A primitive that may emit: its material and its light index.
+trait Emitter {
     fn material(&self) -> u32;
-    /// 1 + its index in the light list; 0 when it does not emit.
-    fn light_mut(&mut self) -> &mut u32;
-    /// Its area, and its shape as a light.
-    fn light_shape(&self) -> (f64, LightShape);
+    fn set_light(&mut self, light: u32);
 }
 
-impl AreaLight for Sphere {
+impl<S: SurfaceShape> Emitter for S {
     fn material(&self) -> u32 {
-        self.material
+        SurfaceShape::material(self)
     }
-    fn light_mut(&mut self) -> &mut u32 {
-        &mut self.light
-    }
-    fn light_shape(&self) -> (f64, LightShape) {
-        let r = self.radius.abs();
-        let area = 4.0 * std::f64::consts::PI * (r as f64).powi(2);
-        let shape = LightShape::Sphere {
-            center: self.center,
-            radius: r,
-        };
-        (area, shape)
+    fn set_light(&mut self, light: u32) {
+        SurfaceShape::set_light(self, light)
     }
 }
 
-impl AreaLight for Quad {
+impl Emitter for Triangle {
     fn material(&self) -> u32 {
         self.material
     }
-    fn light_mut(&mut self) -> &mut u32 {
-        &mut self.light
-    }
-    fn light_shape(&self) -> (f64, LightShape) {
-        let area = self.u.cross(self.v).length();
-        let shape = LightShape::Quad {
-            corner: self.q,
-            u: self.u,
-            v: self.v,
-            normal: self.normal,
-            inv_area: 1.0 / area,
-        };
-        (area as f64, shape)
+    fn set_light(&mut self, light: u32) {
+        self.light = light;
     }
 }
 
-impl AreaLight for Triangle {
-    fn material(&self) -> u32 {
-        self.material
-    }
-    fn light_mut(&mut self) -> &mut u32 {
-        &mut self.light
-    }
+impl Triangle {
+    /// Its area, and itself as a light.
     fn light_shape(&self) -> (f64, LightShape) {
         let area = self.area();
         let (u, v) = (self.p1 - self.p0, self.p2 - self.p0);
@@ -763,45 +733,9 @@ impl AreaLight for Triangle {
     }
 }
 
-/// Appends the primitives whose material emits to `lights`, with their power (pi x luminance x
-/// area x emitting sides) in `powers`, and records each one's light index.
-fn add_area_lights<P: AreaLight>(
-    primitives: &mut [P],
-    materials: &[Material],
-    lights: &mut Vec<Light>,
-    powers: &mut Vec<f64>,
-) {
-    let luminance = |c: Vec3| (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64;
-    for primitive in primitives {
-        *primitive.light_mut() = 0;
-        let Some((radiance, two_sided)) = materials[primitive.material() as usize].area_light()
-        else {
-            continue;
-        };
-        let (area, shape) = primitive.light_shape();
-        let sides = if two_sided { 2.0 } else { 1.0 };
-        powers.push(std::f64::consts::PI * luminance(radiance) * area * sides);
-        lights.push(Light {
-            shape,
-            cdf: 0.0,
-            pick: 0.0,
-        });
-        *primitive.light_mut() = lights.len() as u32;
-    }
-}
-
-/// A box padded by a few ulps of its largest coordinate (spheres' bounds are rounded) and by
-/// `extra` (quads count as hit a little past their edges).
-fn pad(min: Vec3, max: Vec3, extra: f32) -> (Vec3, Vec3) {
-    let ulps = 4.0 * f32::EPSILON * min.abs().max(max.abs()).max_element();
-    let p = Vec3::splat(ulps + extra);
-    (min - p, max + p)
-}
-
-/// BVH items of `triangles`, the first numbered `first`.
 fn triangle_items(triangles: &[Triangle], first: u32) -> Vec<crate::accel::Item> {
     let item = |(i, t): (usize, &Triangle)| {
-        let (min, max) = pad(t.p0.min(t.p1).min(t.p2), t.p0.max(t.p1).max(t.p2), 0.0);
+        let [min, max] = crate::shape::pad(t.p0.min(t.p1).min(t.p2), t.p0.max(t.p1).max(t.p2), 0.0);
         crate::accel::Item {
             min,
             max,
@@ -827,8 +761,7 @@ struct Flattener<'a> {
     /// Whether every triangle gets corner texture coordinates: some mesh of the scene has them
     /// and some material reads them.
     textured: bool,
-    spheres: Vec<Sphere>,
-    quads: Vec<Quad>,
+    shapes: Shapes,
     boxes: Vec<u32>,
     triangles: Vec<Triangle>,
     triangle_normals: Vec<[Vec3; 3]>,
@@ -876,8 +809,7 @@ impl<'a> Flattener<'a> {
             placements: Default::default(),
             smooth,
             textured,
-            spheres: Vec::new(),
-            quads: Vec::new(),
+            shapes: Shapes::default(),
             boxes: Vec::new(),
             triangles: Vec::new(),
             triangle_normals: Vec::new(),
@@ -919,22 +851,11 @@ impl<'a> Flattener<'a> {
         let t = object.transform;
         let place = |p: Vec3| t.apply_point_relative(p, origin);
         match object.shape {
-            Shape::Sphere { center, radius } => self.spheres.push(Sphere {
-                center: place(center),
-                radius,
-                material,
-                light: 0,
-            }),
-            Shape::Quad { q, u, v } => self.quads.push(Quad::new(
-                place(q),
-                t.rotate_vector(u),
-                t.rotate_vector(v),
-                material,
-            )),
+            Shape::Surface(params) => params.place(&t, origin, material, &mut self.shapes),
             Shape::Cuboid { min, max } => {
-                self.boxes.push(self.quads.len() as u32);
+                self.boxes.push(self.shapes.quads.len() as u32);
                 for [q, u, v] in box_faces(min, max) {
-                    self.quads.push(Quad::new(
+                    self.shapes.quads.push(Quad::new(
                         place(q),
                         t.rotate_vector(u),
                         t.rotate_vector(v),
@@ -1109,13 +1030,16 @@ impl<'a> Flattener<'a> {
             // Instanced meshes have no normal map: zero tangents, never read.
             triangle_tangents.resize(triangles.len(), [Vec4::ZERO; 3]);
         }
-        if self.spheres.len() > MAX_PRIMITIVES_PER_KIND
-            || self.quads.len() > MAX_PRIMITIVES_PER_KIND
+        let most_shapes = (crate::shape::KINDS.iter())
+            .map(|k| self.shapes.count(k))
+            .max()
+            .unwrap_or(0);
+        if most_shapes > MAX_PRIMITIVES_PER_KIND
             || triangles.len() > MAX_PRIMITIVES_PER_KIND
             || self.instances.len() > MAX_PRIMITIVES_PER_KIND
         {
             return Err(SceneError::Invalid(format!(
-                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads, triangles and mesh placements"
+                "a scene may have at most {MAX_PRIMITIVES_PER_KIND} spheres, as many quads, disks, triangles and mesh placements"
             )));
         }
         Ok(FlatScene {
@@ -1123,8 +1047,7 @@ impl<'a> Flattener<'a> {
             camera,
             background: self.scene.background,
             materials,
-            spheres: self.spheres,
-            quads: self.quads,
+            shapes: self.shapes,
             triangles,
             triangle_normals,
             triangle_uvs,
@@ -1264,19 +1187,20 @@ mod tests {
 
     #[test]
     fn primitive_refs_pack_and_unpack() {
+        let sphere = |index| PrimitiveRef::Shape { kind: 0, index };
+        let quad = |index| PrimitiveRef::Shape { kind: 1, index };
         for p in [
-            PrimitiveRef::Sphere(0),
-            PrimitiveRef::Sphere(MAX_PRIMITIVES_PER_KIND as u32 - 1),
-            PrimitiveRef::Quad(0),
-            PrimitiveRef::Quad(12345),
+            sphere(0),
+            sphere(MAX_PRIMITIVES_PER_KIND as u32 - 1),
+            quad(0),
+            quad(12345),
+            PrimitiveRef::Triangle(7),
+            PrimitiveRef::Instance(8),
+            PrimitiveRef::Shape { kind: 4, index: 9 },
         ] {
-            assert_eq!(PrimitiveRef::unpacked(p.packed()), Some(p));
+            assert_eq!(PrimitiveRef::unpacked(p.packed()), p);
         }
-        assert_ne!(
-            PrimitiveRef::Sphere(3).packed(),
-            PrimitiveRef::Quad(3).packed()
-        );
-        assert_eq!(PrimitiveRef::unpacked(u32::MAX), None);
+        assert_ne!(sphere(3).packed(), quad(3).packed());
     }
 
     #[test]

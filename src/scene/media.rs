@@ -4,6 +4,7 @@
 //! camera must be outside all of them.
 
 use super::{Object, Scene, Shape};
+use crate::shape::{SphereParams, SurfaceParams};
 use glam::DVec3;
 
 /// A closed object's interior in world space (f64: the checks are exact to far below what the
@@ -28,10 +29,14 @@ impl Region {
         let t = object.transform;
         let place = |p: glam::Vec3| t.apply_point_relative(p, DVec3::ZERO).as_dvec3();
         match object.shape {
-            Shape::Sphere { center, radius } if radius > 0.0 => Some(Region::Ball {
-                center: place(center),
-                radius: radius as f64,
-            }),
+            Shape::Surface(SurfaceParams::Sphere(SphereParams { center, radius }))
+                if radius > 0.0 =>
+            {
+                Some(Region::Ball {
+                    center: place(center),
+                    radius: radius as f64,
+                })
+            }
             Shape::Cuboid { min, max } => Some(Region::Block {
                 center: place((min + max) * 0.5),
                 half: (max.as_dvec3() - min.as_dvec3()) * 0.5,
@@ -151,10 +156,11 @@ pub fn check(scene: &Scene) -> Result<(), (usize, String)> {
             .get(object.material as usize)
             .map_or("?", String::as_str);
         let Some(region) = Region::of(object) else {
-            let shape = match object.shape {
-                Shape::Quad { .. } => "an open quad",
-                Shape::Mesh { .. } => "a mesh",
-                _ => "an inward-facing sphere",
+            let shape: String = match object.shape {
+                Shape::Surface(SurfaceParams::Sphere(_)) => "an inward-facing sphere".into(),
+                Shape::Surface(params) => format!("an open {}", params.name()),
+                Shape::Mesh { .. } => "a mesh".into(),
+                Shape::Cuboid { .. } => "a box".into(),
             };
             return Err((
                 i,

@@ -70,10 +70,8 @@ impl Transform {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
-    /// A negative radius flips the normal inward (a hollow bubble inside glass).
-    Sphere { center: Vec3, radius: f32 },
-    /// The parallelogram `q + a u + b v`, a, b in [0, 1]; its front face is along `u x v`.
-    Quad { q: Vec3, u: Vec3, v: Vec3 },
+    /// A sphere, a quad, a disk: a shape of `crate::shape`, as the scene describes it.
+    Surface(crate::shape::SurfaceParams),
     /// An axis-aligned box made of six outward-facing quads.
     Cuboid { min: Vec3, max: Vec3 },
     /// A triangle mesh scaled per axis (before the object's rotation and translation).
@@ -247,33 +245,23 @@ fn within_extent(p: Vec3) -> bool {
 }
 
 impl Shape {
+    /// The sphere of `radius` (negative: facing inward) about `center`.
+    pub fn sphere(center: Vec3, radius: f32) -> Self {
+        Shape::Surface(crate::shape::SurfaceParams::Sphere(
+            crate::shape::SphereParams { center, radius },
+        ))
+    }
+
+    /// The parallelogram `q + a u + b v`, a, b in [0, 1]; its front face is along `u x v`.
+    pub fn quad(q: Vec3, u: Vec3, v: Vec3) -> Self {
+        Shape::Surface(crate::shape::SurfaceParams::Quad(
+            crate::shape::QuadParams { q, u, v },
+        ))
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         match *self {
-            Shape::Sphere { center, radius } => {
-                if !center.is_finite() || !radius.is_finite() || radius == 0.0 {
-                    return Err(format!(
-                        "sphere radius must be finite and non-zero, got {radius}"
-                    ));
-                }
-                if !(radius.abs() >= MIN_SIZE && radius.abs() <= MAX_EXTENT) {
-                    return Err(format!(
-                        "sphere radius {radius} is outside what f32 geometry handles: use sizes between {MIN_SIZE:e} and {MAX_EXTENT:e}"
-                    ));
-                }
-            }
-            Shape::Quad { q, u, v } => {
-                let area = u.cross(v).length();
-                if !q.is_finite() || !(area > 0.0) || !area.is_finite() {
-                    return Err("quad has zero area: its edges u and v are parallel or zero".into());
-                }
-                let (lu, lv) = (u.length(), v.length());
-                let sized = lu.min(lv) >= MIN_SIZE && lu.max(lv) <= MAX_EXTENT;
-                if !(sized && area >= MIN_SIZE * MIN_SIZE) {
-                    return Err(format!(
-                        "quad edges of length {lu} and {lv} (area {area}) are outside what f32 geometry handles: use sizes between {MIN_SIZE:e} and {MAX_EXTENT:e}"
-                    ));
-                }
-            }
+            Shape::Surface(params) => params.validate()?,
             Shape::Mesh { mesh, scale } => {
                 let size = scale.abs() * mesh.extent;
                 if !scale.is_finite() || scale.abs().min_element() < MIN_SIZE {
@@ -304,16 +292,9 @@ impl Shape {
                 }
             }
         }
-        let position = match *self {
-            Shape::Sphere { center, .. } => center,
-            Shape::Quad { q, .. } => q,
-            Shape::Cuboid { min, .. } => min,
-            Shape::Mesh { .. } => unreachable!("meshes return above"),
-        };
-        let far = match *self {
-            Shape::Sphere { center, radius } => center.abs() + Vec3::splat(radius.abs()),
-            Shape::Quad { q, u, v } => q.abs() + u.abs() + v.abs(),
-            Shape::Cuboid { max, .. } => max,
+        let (position, far) = match *self {
+            Shape::Surface(params) => params.reach(),
+            Shape::Cuboid { min, max } => (min, max),
             Shape::Mesh { .. } => unreachable!("meshes return above"),
         };
         if !within_extent(position) || !within_extent(far) {

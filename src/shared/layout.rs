@@ -167,6 +167,10 @@ impl WgslLocalType for bool {
 impl WgslLocalType for glam::Vec2 {
     const WGSL: &'static str = "vec2f";
 }
+impl WgslLocalType for glam::Vec4 {
+    const WGSL: &'static str = "vec4f";
+}
+
 impl WgslLocalType for glam::Vec3 {
     const WGSL: &'static str = "vec3f";
 }
@@ -210,36 +214,8 @@ macro_rules! kernel_struct {
         }
     };
 }
+pub(crate) use gpu_struct;
 pub(crate) use kernel_struct;
-
-gpu_struct! {
-    pub struct GpuSphere as "Sphere" {
-        center: [f32; 3],
-        /// Negative: the normal faces inward.
-        radius: f32,
-        material: u32,
-        /// 1 + its index in the light list; 0 when it does not emit.
-        light: u32,
-        _pad: [u32; 2],
-    }
-}
-
-gpu_struct! {
-    /// The parallelogram q + a u + b v, a, b in [0, 1] (see `scene::flat::Quad` for the axes).
-    pub struct GpuQuad as "Quad" {
-        q: [f32; 3],
-        /// Plane: dot(normal, p) = d.
-        d: f32,
-        normal: [f32; 3],
-        material: u32,
-        alpha_axis: [f32; 3],
-        /// 1 + its index in the light list; 0 when it does not emit.
-        light: u32,
-        beta_axis: [f32; 3],
-        /// Counts as hit this far (a fraction of each edge) past its edges.
-        edge_tolerance: f32,
-    }
-}
 
 gpu_struct! {
     /// A triangle p0 p1 p2, front face counter-clockwise (see `scene::flat::Triangle`).
@@ -311,24 +287,23 @@ pub fn texel_rows(texels: u64) -> u64 {
 }
 
 gpu_struct! {
-    /// A light for next-event estimation (see `scene::flat::Light`): a quad (uniform on its
-    /// area) or a sphere (uniform in the cone it subtends), told apart by `kind`.
+    /// A light for next-event estimation (see `scene::flat::Light`), told apart by `kind`: a
+    /// shape's (its `SurfaceLight`, as its file says: a sphere's centre and |radius| in
+    /// `position` and `size`; a quad's corner, edges, unit normal and 1 / area; a disk's centre,
+    /// axes times radius, normal and 1 / area), a triangle's (as a quad's), a punctual light's,
+    /// or the environment's.
     pub struct GpuLight as "Light" {
-        /// Quad corner, or sphere centre.
         position: [f32; 3],
         /// Chance of picking this light or one before it.
         cdf: f32,
-        /// Quad edges.
         u: [f32; 3],
         /// Chance of picking this light.
         pick: f32,
         v: [f32; 3],
-        /// `KIND_SPHERE`, `KIND_QUAD` or `KIND_TRIANGLE` (as `PrimitiveRef`), or
-        /// `KIND_ENVIRONMENT`: which shape, and so what `size` means.
+        /// A shape's primitive kind, `KIND_TRIANGLE`, `KIND_POINT`, `KIND_DIRECTIONAL` or
+        /// `KIND_ENVIRONMENT`: which light, and so what the other fields mean.
         kind: u32,
-        /// Quad unit normal.
         normal: [f32; 3],
-        /// Sphere: |radius|; quad and triangle: 1 / area.
         size: f32,
     }
 }
@@ -508,7 +483,7 @@ gpu_struct! {
 /// A shared struct's WGSL name, Rust size, and the offsets of its fields other than padding.
 pub type StructLayout = (&'static str, usize, Vec<(&'static str, usize)>);
 
-fn layout_of<T: WgslStruct>() -> StructLayout {
+pub fn layout_of<T: WgslStruct>() -> StructLayout {
     let (size, fields) = T::rust_layout();
     let fields = fields
         .into_iter()
@@ -527,8 +502,6 @@ pub fn display_layout() -> StructLayout {
 /// generated WGSL.
 pub fn shared_layouts() -> Vec<StructLayout> {
     vec![
-        layout_of::<GpuSphere>(),
-        layout_of::<GpuQuad>(),
         layout_of::<GpuTriangle>(),
         layout_of::<GpuBvhNode>(),
         layout_of::<GpuInstance>(),
@@ -547,8 +520,6 @@ pub fn wgsl_declarations() -> String {
     for declaration in [
         super::ray::Ray::wgsl_declaration(),
         super::ray::Hit::wgsl_declaration(),
-        GpuSphere::wgsl_declaration(),
-        GpuQuad::wgsl_declaration(),
         GpuTriangle::wgsl_declaration(),
         GpuBvhNode::wgsl_declaration(),
         GpuInstance::wgsl_declaration(),

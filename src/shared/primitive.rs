@@ -4,8 +4,11 @@
 /// A primitive of a flat scene: its kind and its index among the primitives of that kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PrimitiveRef {
-    Sphere(u32),
-    Quad(u32),
+    /// One of the shapes of `crate::shape` (sphere, quad, disk, ...), by its kind.
+    Shape {
+        kind: u32,
+        index: u32,
+    },
     Triangle(u32),
     /// A placed mesh (in the top level of the BVH; a hit on one of its triangles is reported as
     /// a hit on the instance).
@@ -17,31 +20,35 @@ pub enum PrimitiveRef {
 pub const PRIMITIVE_INDEX_BITS: u32 = 28;
 /// Most primitives of one kind a scene may have.
 pub const MAX_PRIMITIVES_PER_KIND: usize = 1 << PRIMITIVE_INDEX_BITS;
-pub const KIND_SPHERE: u32 = 0;
-pub const KIND_QUAD: u32 = 1;
+/// Kinds a packed reference can hold.
+pub const PRIMITIVE_KINDS: u32 = 1 << (32 - PRIMITIVE_INDEX_BITS);
+/// The kinds of meshes' primitives; the shapes' kinds are the others (`shape::kind_at`).
 pub const KIND_TRIANGLE: u32 = 2;
 pub const KIND_INSTANCE: u32 = 3;
 
 impl PrimitiveRef {
     /// One number for both backends: kind << PRIMITIVE_INDEX_BITS | index.
     pub fn packed(self) -> u32 {
-        match self {
-            PrimitiveRef::Sphere(i) => KIND_SPHERE << PRIMITIVE_INDEX_BITS | i,
-            PrimitiveRef::Quad(i) => KIND_QUAD << PRIMITIVE_INDEX_BITS | i,
-            PrimitiveRef::Triangle(i) => KIND_TRIANGLE << PRIMITIVE_INDEX_BITS | i,
-            PrimitiveRef::Instance(i) => KIND_INSTANCE << PRIMITIVE_INDEX_BITS | i,
-        }
+        let (kind, index) = match self {
+            PrimitiveRef::Shape { kind, index } => (kind, index),
+            PrimitiveRef::Triangle(i) => (KIND_TRIANGLE, i),
+            PrimitiveRef::Instance(i) => (KIND_INSTANCE, i),
+        };
+        kind << PRIMITIVE_INDEX_BITS | index
     }
 
-    /// The reference `packed` came from, if it is one.
-    pub fn unpacked(packed: u32) -> Option<Self> {
+    /// The primitive of `kind` (a shape's, `KIND_TRIANGLE` or `KIND_INSTANCE`) and `index`.
+    pub fn new(kind: u32, index: u32) -> Self {
+        Self::unpacked(kind << PRIMITIVE_INDEX_BITS | index)
+    }
+
+    /// The reference `packed` came from.
+    pub fn unpacked(packed: u32) -> Self {
         let index = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
         match packed >> PRIMITIVE_INDEX_BITS {
-            KIND_SPHERE => Some(PrimitiveRef::Sphere(index)),
-            KIND_QUAD => Some(PrimitiveRef::Quad(index)),
-            KIND_TRIANGLE => Some(PrimitiveRef::Triangle(index)),
-            KIND_INSTANCE => Some(PrimitiveRef::Instance(index)),
-            _ => None,
+            KIND_TRIANGLE => PrimitiveRef::Triangle(index),
+            KIND_INSTANCE => PrimitiveRef::Instance(index),
+            kind => PrimitiveRef::Shape { kind, index },
         }
     }
 }

@@ -60,31 +60,19 @@ fn cornell_with_microfacets() -> Scene {
     scene.objects[short].material = gold;
     scene.objects[short + 1].material = silver;
     scene.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(400.0, 380.0, 200.0),
-            radius: 70.0,
-        },
+        Shape::sphere(Vec3::new(400.0, 380.0, 200.0), 70.0),
         copper,
     ));
     scene.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(70.0, 45.0, 60.0),
-            radius: 45.0,
-        },
+        Shape::sphere(Vec3::new(70.0, 45.0, 60.0), 45.0),
         frosted,
     ));
     scene.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(300.0, 40.0, 40.0),
-            radius: 40.0,
-        },
+        Shape::sphere(Vec3::new(300.0, 40.0, 40.0), 40.0),
         varnish,
     ));
     scene.objects.push(object(
-        Shape::Sphere {
-            center: Vec3::new(500.0, 50.0, 200.0),
-            radius: 50.0,
-        },
+        Shape::sphere(Vec3::new(500.0, 50.0, 200.0), 50.0),
         brass,
     ));
     scene
@@ -212,10 +200,7 @@ fn microfacet_kernel_matches_cpu() {
     // Every material is used, so that the kernel holds them.
     for m in first..scene.materials.len() as u32 {
         scene.objects.push(object(
-            Shape::Sphere {
-                center: Vec3::new(20.0 + 10.0 * (m - first) as f32, 20.0, 20.0),
-                radius: 2.0,
-            },
+            Shape::sphere(Vec3::new(20.0 + 10.0 * (m - first) as f32, 20.0, 20.0), 2.0),
             m,
         ));
     }
