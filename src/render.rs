@@ -40,7 +40,7 @@ pub struct AutoBackend {
 /// `--backend auto`: a hardware GPU runs the kernel. On a software adapter (lavapipe,
 /// SwiftShader, WARP: wgpu's `DeviceType::Cpu`, the CPU's own cores) the kernel runs only a
 /// scene it holds inlined as constants, where it was measured faster than the CPU backend on
-/// the same cores; a scene traced through its BVH goes to the CPU backend, 3-8x faster there
+/// the same cores; a scene traced through its BVH goes to the CPU backend, faster there
 /// (docs/benchmarks.md, 2026-12-02). With no adapter, or no `gpu` feature, the CPU backend.
 pub fn auto_backend(gpu: &GpuChoice, scene: &FlatScene) -> AutoBackend {
     let cpu = |reason: String| AutoBackend {
