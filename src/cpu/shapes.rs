@@ -2,6 +2,7 @@
 
 use crate::scene::flat::{FlatScene, Instance, Triangle};
 use crate::scene::normal_map::NormalMap;
+use crate::shape::{ShapeKind, ShapeVisitor, SurfaceShape};
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
 use crate::shared::ray::{Hit, POINT_ERROR, Ray};
 use crate::shared::rng::alpha_number;
@@ -273,6 +274,28 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
 
 /// The closest primitive along `ray` beyond its origin, and its distance.
 fn closest(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
+    if scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty() {
+        closest_in_turn(scene, ray)
+    } else {
+        closest_through_bvh(scene, ray)
+    }
+}
+
+/// [`closest`] testing every shape in turn.
+fn closest_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
+    let mut closest = f32::INFINITY;
+    let mut found: Option<Candidate> = None;
+    let mut in_turn = InTurn {
+        ray,
+        closest: &mut closest,
+        found: &mut found,
+    };
+    scene.shapes.visit(&mut in_turn);
+    found.map(|found| (closest, found))
+}
+
+/// [`closest`] through the scene's BVH.
+fn closest_through_bvh(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
     let (wide, root) = (&scene.wide_bvh, scene.wide_bvh.root);
@@ -288,6 +311,43 @@ fn closest(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
         },
     );
     found.map(|found| (closest, found))
+}
+
+/// Most primitives a scene of shapes alone may have for its rays to test them all in turn
+/// rather than through its BVH: for a handful, the hierarchy's box tests cost more than the
+/// primitives' own (docs/benchmarks.md).
+const MAX_TESTED_IN_TURN: usize = 8;
+
+/// Every shape tested in turn, in the order of their packed references (which `replaces`
+/// would impose anyway), as `consider` tests one.
+struct InTurn<'a> {
+    ray: &'a Ray,
+    closest: &'a mut f32,
+    found: &'a mut Option<Candidate>,
+}
+
+impl ShapeVisitor for InTurn<'_> {
+    #[inline]
+    fn visit<S: SurfaceShape>(&mut self, kind: &'static ShapeKind, shapes: &[S]) {
+        for (index, shape) in shapes.iter().enumerate() {
+            let Some(t) = shape.hit(self.ray, reach(*self.closest)) else {
+                continue;
+            };
+            let primitive = PrimitiveRef::Shape {
+                kind: kind.kind,
+                index: index as u32,
+            };
+            if replaces(t, (primitive.packed(), 0), *self.closest, self.found) {
+                *self.closest = t;
+                *self.found = Some(Candidate {
+                    primitive,
+                    outward: shape.outward(self.ray, t),
+                    weights: Vec2::ZERO,
+                    triangle: 0,
+                });
+            }
+        }
+    }
 }
 
 /// The material of the hit on `found` at `along_ray` (= o + t d), the hit point and a bound on
@@ -447,4 +507,44 @@ pub fn instanced_triangle_surface(instance: &Instance, t: &Triangle, weights: Ve
     let [m0, m1, m2] = [t.p0, t.p1, t.p2].map(|p| instance.magnitude_to_world(p));
     let scale = (b0.abs() * m0 + b1.abs() * m1 + b2.abs() * m2).max_element();
     (point, 2.0 * POINT_ERROR * scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shared::rng::Rng;
+
+    /// Testing a few shapes in turn finds the hits the BVH finds, to the bit, over random rays
+    /// from inside and outside the scenes.
+    #[test]
+    fn shapes_in_turn_hit_as_through_the_bvh() {
+        for name in ["spheres", "cornell-empty", "textured"] {
+            let scene = match name {
+                "textured" => crate::scene::file::load(std::path::Path::new(concat!(
+                    env!("CARGO_MANIFEST_DIR"),
+                    "/scenes/textured.toml"
+                )))
+                .expect("scenes/textured.toml"),
+                _ => crate::scene::builtin::builtin(name).expect("built-in"),
+            };
+            let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+            assert!(flat.bvh.primitives.len() <= MAX_TESTED_IN_TURN, "{name}");
+            let radius = flat.bounding_radius() as f32;
+            let mut hits = 0;
+            for i in 0..20_000 {
+                let mut rng = Rng::for_sample(i, 0, 7);
+                let mut point = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                let origin = (2.0 * point() - Vec3::ONE) * 1.5 * radius;
+                let dir = (2.0 * point() - Vec3::ONE).normalize_or(Vec3::Y);
+                let ray = Ray { origin, dir };
+                let in_turn =
+                    closest_in_turn(&flat, &ray).map(|(t, c)| (t, c.primitive, c.outward));
+                let through =
+                    closest_through_bvh(&flat, &ray).map(|(t, c)| (t, c.primitive, c.outward));
+                assert_eq!(in_turn, through, "{name}: {ray:?}");
+                hits += in_turn.is_some() as u32;
+            }
+            assert!(hits > 1_000, "{name}: only {hits} rays hit");
+        }
+    }
 }
