@@ -4,7 +4,7 @@
 /// A primitive of a flat scene: its kind and its index among the primitives of that kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PrimitiveRef {
-    /// One of the shapes of `crate::shape` (sphere, quad, disk, ...), by its kind.
+    /// A sphere, a quad, a disk, ...: a shape of the registry in src/shape/, by its kind.
     Shape {
         kind: u32,
         index: u32,
