@@ -335,54 +335,10 @@ pub fn triangulated(scene: &Scene) -> Scene {
     out
 }
 
-/// The Cornell box with disks: a tilted one-sided disk lamp under the ceiling (cone of its own,
-/// light-sampled uniformly on its area) and a tilted disk of a UV checker standing in the box
-/// (its polar texture coordinates), both seen from front and back.
+/// `scenes/disks.toml`: the Cornell box with a tilted one-sided disk lamp under its ceiling
+/// (light-sampled uniformly on its area) and a tilted disk of a UV checker standing in it (its
+/// polar texture coordinates), both seen from front and back.
 pub fn cornell_with_disks() -> Scene {
-    let mut scene = rt_gpu::scene::builtin::builtin("cornell").expect("built-in");
-    let glow = add_material(
-        &mut scene,
-        "disk lamp",
-        Material::Light(rt_gpu::material::Light {
-            radiance: Vec3::new(2.0, 1.5, 1.0).into(),
-            strength: 1.0,
-            two_sided: false,
-        }),
-    );
-    let checker = rt_gpu::scene::texture::Texture::UvChecker(rt_gpu::scene::texture::Checker {
-        scale: 6.0,
-        even: Vec3::new(0.8, 0.7, 0.2),
-        odd: Vec3::new(0.1, 0.3, 0.6),
-        shift: Vec3::ZERO,
-    });
-    let plate = add_material(
-        &mut scene,
-        "plate",
-        Material::Lambertian(rt_gpu::material::Lambertian {
-            albedo: checker,
-            emission: Vec3::ZERO,
-            normal_map: None,
-        }),
-    );
-    scene.objects.push(object(
-        Shape::Surface(rt_gpu::shape::SurfaceParams::Disk(
-            rt_gpu::shape::DiskParams {
-                center: Vec3::new(300.0, 470.0, 300.0),
-                normal: Vec3::new(0.3, -1.0, -0.4),
-                radius: 110.0,
-            },
-        )),
-        glow,
-    ));
-    scene.objects.push(object(
-        Shape::Surface(rt_gpu::shape::SurfaceParams::Disk(
-            rt_gpu::shape::DiskParams {
-                center: Vec3::new(200.0, 200.0, 150.0),
-                normal: Vec3::new(0.5, 0.4, -1.0),
-                radius: 90.0,
-            },
-        )),
-        plate,
-    ));
-    scene
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/disks.toml");
+    rt_gpu::scene::file::load(&path).expect("scenes/disks.toml")
 }
