@@ -1,9 +1,9 @@
 //! The surfaces a flat scene holds besides meshes (spheres, quads, disks), behind one interface,
-//! as materials are (`crate::material`): each shape's file holds its flat form, its CPU
-//! intersection and surface, its sampling as an area light and its GPU record; its WGSL twin
-//! `shaders/shapes/<name>.wgsl` defines the same functions. `shapes!` below lists them once, and
-//! from that list come their primitive kinds, the flat scene's arrays ([`Shapes`]), the CPU's
-//! dispatch and the kernel's (`gpu::shape_dispatch`).
+//! as materials are (`crate::material`): each shape's file holds its scene syntax, its flat
+//! form, its CPU intersection and surface, its sampling as an area light and its GPU record; its
+//! WGSL twin `shaders/shapes/<name>.wgsl` defines the same functions. `with_shapes!` below lists
+//! them once, and from that list come their primitive kinds, the scene's `SurfaceParams`, the
+//! flat scene's arrays ([`Shapes`]), the CPU's dispatch and the kernel's (`gpu::shape_dispatch`).
 //!
 //! To add a shape: its file here (its scene syntax and `impl ShapeParams`, its flat form and
 //! `impl SurfaceShape`), its WGSL twin, one line in `with_shapes!`.
@@ -14,8 +14,7 @@ pub mod sphere;
 
 use crate::scene::Transform;
 use crate::shared::constants::MIN_LIGHT_COSINE;
-use crate::shared::layout::KIND_ENVIRONMENT;
-use crate::shared::layout::WgslStruct;
+use crate::shared::layout::{KIND_ENVIRONMENT, WgslStruct};
 use crate::shared::primitive::{KIND_INSTANCE, KIND_TRIANGLE, PRIMITIVE_KINDS};
 use crate::shared::ray::Ray;
 use glam::{DVec3, Vec2, Vec3};
