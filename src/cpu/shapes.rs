@@ -319,7 +319,8 @@ fn closest_through_bvh(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)>
 const MAX_TESTED_IN_TURN: usize = 8;
 
 /// Every shape tested in turn, in the order of their packed references (which `replaces`
-/// would impose anyway), as `consider` tests one.
+/// would impose anyway), as `consider` tests one but monomorphised per kind: no dispatch on
+/// the kind per primitive, which for these few primitives costs measurably.
 struct InTurn<'a> {
     ray: &'a Ray,
     closest: &'a mut f32,
