@@ -1,16 +1,21 @@
 //! The scene's BVH collapsed to four children per node, which the CPU traverses (`cpu/accel.rs`)
 //! testing a node's four boxes at once with SIMD, as Embree does: a binary node's two children
 //! are replaced by its largest interior child's two until four are reached. Leaves stay the
-//! binary hierarchy's, so the primitives and their order are the same; the GPU keeps the binary
-//! hierarchy.
+//! binary hierarchy's, so the primitives and their order are the same; a leaf of triangles
+//! alone (at most four, `accel::MAX_LEAF`) becomes a [`TriangleBlock`], its corners copied
+//! beside each other, so that it is one load and one four-lane test rather than a chase through
+//! the primitive list into the scene's triangles. The GPU keeps the binary hierarchy.
 
 use crate::accel::{Bvh, Node};
+use crate::shared::primitive::PRIMITIVE_INDEX_BITS;
+use glam::Vec3;
 use std::collections::HashMap;
 
-/// A child: `EMPTY`, a leaf (`LEAF` | the index of the binary hierarchy's leaf node) or the
-/// index of another wide node.
+/// A child: `EMPTY`, a leaf (`LEAF` | the index of the binary hierarchy's leaf node, or `LEAF |
+/// TRIANGLES` | the index of its [`TriangleBlock`]) or the index of another wide node.
 pub const EMPTY: u32 = u32::MAX;
 pub const LEAF: u32 = 1 << 31;
+pub const TRIANGLES: u32 = 1 << 30;
 
 /// Four children's boxes, one array per bound and axis so that SIMD lanes load them at once.
 /// An empty child's box is +inf on every bound; traversal skips it by its `EMPTY` reference.
@@ -22,9 +27,21 @@ pub struct WideNode {
     pub children: [u32; 4],
 }
 
+/// The triangles of one leaf, in its order, one array per corner and axis (`corners[corner]
+/// [axis][lane]`) so that SIMD lanes load them at once. A lane past the leaf's triangles holds
+/// `EMPTY` and a triangle of zeros.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct TriangleBlock {
+    pub corners: [[[f32; 4]; 3]; 3],
+    /// Each lane's triangle: its index in `FlatScene::triangles`.
+    pub triangles: [u32; 4],
+}
+
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct WideBvh {
     pub nodes: Vec<WideNode>,
+    pub blocks: Vec<TriangleBlock>,
     /// The scene's root as a child reference (`EMPTY` without primitives).
     pub root: u32,
     /// Each instance's root, by instance index.
@@ -33,23 +50,30 @@ pub struct WideBvh {
 
 impl WideBvh {
     /// Collapses `bvh`, whose scene root is node 0, and the roots of its instanced meshes'
-    /// hierarchies (binary node indices, one per instance; shared roots collapse once).
-    pub fn new(bvh: &Bvh, instance_roots: impl IntoIterator<Item = u32>) -> Self {
+    /// hierarchies (binary node indices, one per instance; shared roots collapse once);
+    /// `corners` gives a packed primitive reference's corners where it is a triangle.
+    pub fn new(
+        bvh: &Bvh,
+        instance_roots: impl IntoIterator<Item = u32>,
+        corners: impl Fn(u32) -> Option<[Vec3; 3]>,
+    ) -> Self {
         let mut wide = WideBvh {
             nodes: Vec::with_capacity(bvh.nodes.len() / 2 + 1),
+            blocks: Vec::new(),
             root: EMPTY,
             instance_roots: Vec::new(),
         };
         if bvh.nodes.is_empty() {
             return wide;
         }
-        wide.root = wide.collapse(bvh, 0);
+        let small = SmallSubtrees::new(bvh, &corners);
+        wide.root = wide.collapse(bvh, 0, &small, &corners);
         let mut collapsed: HashMap<u32, u32> = HashMap::new();
         for root in instance_roots {
             let reference = match collapsed.get(&root) {
                 Some(&reference) => reference,
                 None => {
-                    let reference = wide.collapse(bvh, root);
+                    let reference = wide.collapse(bvh, root, &small, &corners);
                     collapsed.insert(root, reference);
                     reference
                 }
@@ -59,9 +83,19 @@ impl WideBvh {
         wide
     }
 
-    /// The child reference of binary node `index`, its subtree collapsed (depth first).
-    fn collapse(&mut self, bvh: &Bvh, index: u32) -> u32 {
+    /// The child reference of binary node `index`, its subtree collapsed (depth first); a
+    /// subtree of at most four triangles is one block.
+    fn collapse(
+        &mut self,
+        bvh: &Bvh,
+        index: u32,
+        small: &SmallSubtrees,
+        corners: &impl Fn(u32) -> Option<[Vec3; 3]>,
+    ) -> u32 {
         let node = &bvh.nodes[index as usize];
+        if small.fits_block(index) {
+            return self.block(bvh, index, corners);
+        }
         if node.is_leaf() {
             return LEAF | index;
         }
@@ -69,12 +103,12 @@ impl WideBvh {
         let mut count = 2;
         while count < 4 {
             // Open the interior child of largest surface area: the likeliest to be entered.
-            let widest = (0..count)
-                .filter(|&i| !bvh.nodes[children[i] as usize].is_leaf())
-                .max_by(|&a, &b| {
-                    let area_of = |i: usize| area(&bvh.nodes[children[i] as usize]);
-                    area_of(a).total_cmp(&area_of(b))
-                });
+            let opens =
+                |child: u32| !bvh.nodes[child as usize].is_leaf() && !small.fits_block(child);
+            let widest = (0..count).filter(|&i| opens(children[i])).max_by(|&a, &b| {
+                let area_of = |i: usize| area(&bvh.nodes[children[i] as usize]);
+                area_of(a).total_cmp(&area_of(b))
+            });
             let Some(i) = widest else { break };
             let opened = children[i];
             children[i] = opened + 1;
@@ -89,7 +123,7 @@ impl WideBvh {
         });
         for (lane, &child) in children[..count].iter().enumerate() {
             let box_of = &bvh.nodes[child as usize];
-            let reference = self.collapse(bvh, child);
+            let reference = self.collapse(bvh, child, small, corners);
             let node = &mut self.nodes[at];
             for axis in 0..3 {
                 node.min[axis][lane] = box_of.min[axis];
@@ -98,6 +132,73 @@ impl WideBvh {
             node.children[lane] = reference;
         }
         at as u32
+    }
+
+    /// The block of the triangles below binary node `index` (at most four, in leaf order).
+    fn block(&mut self, bvh: &Bvh, index: u32, corners: &impl Fn(u32) -> Option<[Vec3; 3]>) -> u32 {
+        let mut block = TriangleBlock {
+            corners: [[[0.0; 4]; 3]; 3],
+            triangles: [EMPTY; 4],
+        };
+        let mut lane = 0;
+        let mut pending = vec![index];
+        while let Some(at) = pending.pop() {
+            let node = &bvh.nodes[at as usize];
+            if !node.is_leaf() {
+                pending.extend([node.offset, at + 1]);
+                continue;
+            }
+            let first = node.offset as usize;
+            for &packed in &bvh.primitives[first..first + node.count as usize] {
+                let points = corners(packed).expect("a block's primitives are triangles");
+                for (corner, p) in points.iter().enumerate() {
+                    for axis in 0..3 {
+                        block.corners[corner][axis][lane] = p[axis];
+                    }
+                }
+                block.triangles[lane] = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
+                lane += 1;
+            }
+        }
+        self.blocks.push(block);
+        LEAF | TRIANGLES | (self.blocks.len() - 1) as u32
+    }
+}
+
+/// Which subtrees of a binary hierarchy hold at most four primitives, all triangles: those
+/// become one block, whose four-lane test costs about what one triangle's does.
+struct SmallSubtrees {
+    /// Per node: its subtree's primitives, all triangles, capped at `TOO_MANY`.
+    triangles: Vec<u8>,
+}
+
+impl SmallSubtrees {
+    const TOO_MANY: u8 = 5;
+
+    fn new(bvh: &Bvh, corners: &impl Fn(u32) -> Option<[Vec3; 3]>) -> Self {
+        let mut triangles = vec![0u8; bvh.nodes.len()];
+        // Children follow their parent (depth-first order), so they are counted first.
+        for (index, node) in bvh.nodes.iter().enumerate().rev() {
+            triangles[index] = if node.is_leaf() {
+                let first = node.offset as usize;
+                let leaf = &bvh.primitives[first..first + node.count as usize];
+                if leaf.len() < Self::TOO_MANY as usize
+                    && leaf.iter().all(|&p| corners(p).is_some())
+                {
+                    leaf.len() as u8
+                } else {
+                    Self::TOO_MANY
+                }
+            } else {
+                let (first, second) = (triangles[index + 1], triangles[node.offset as usize]);
+                first.saturating_add(second).min(Self::TOO_MANY)
+            };
+        }
+        SmallSubtrees { triangles }
+    }
+
+    fn fits_block(&self, index: u32) -> bool {
+        (1..Self::TOO_MANY).contains(&self.triangles[index as usize])
     }
 }
 
@@ -116,7 +217,7 @@ mod tests {
     #[test]
     fn collapsing_keeps_every_leaf_once() {
         let bvh = Bvh::build(&mut random_items(5000));
-        let wide = WideBvh::new(&bvh, []);
+        let wide = WideBvh::new(&bvh, [], |_| None);
         let mut leaves = Vec::new();
         let mut stack = vec![wide.root];
         while let Some(reference) = stack.pop() {

@@ -5,9 +5,10 @@
 //! the binary walk the kernel does (`shaders/accel.wgsl`) is kept in the tests, as the reference
 //! the wide one must agree with.
 
+use super::four_triangles::ShearedRay;
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, inverse_direction};
 use crate::shared::ray::Ray;
-use crate::wide_bvh::{EMPTY, LEAF, WideBvh, WideNode};
+use crate::wide_bvh::{EMPTY, LEAF, TRIANGLES, WideBvh, WideNode};
 
 /// The last pushed node whose box, entered at the distance pushed with it, the ray still meets
 /// before `closest` (as box_entry would test it now), popping those it passes over.
@@ -23,11 +24,35 @@ fn pop_within(stack: &[(u32, f32)], top: &mut usize, closest: f32) -> Option<u32
     None
 }
 
-/// The binary walk (see the tests' `traverse`) over the hierarchy collapsed to four children per node (`wide_bvh`), below
-/// child reference `root`: primitives met in another order (and so others skipped), but the same
-/// closest hit, as each box test is `accel::box_entry`'s arithmetic lane by lane and ties between hits
-/// resolve by primitive. A node's children
-/// are entered nearest first, the others pushed with their entry distances.
+/// What a traversal does at its leaves.
+pub trait Leaves {
+    /// Tests packed primitive `packed` (of a leaf kept as a list), shortening `closest` when it
+    /// finds a nearer hit.
+    fn primitive(&mut self, packed: u32, closest: &mut f32);
+    /// Triangle `triangle` (its index in `FlatScene::triangles`) of a block is hit at distance
+    /// `t` with weights `b1`, `b2` of its second and third corners, as `hit_triangle` gives
+    /// them: within [`reach`] of `closest` as it was when the block was tested, which an
+    /// earlier lane may since have shortened.
+    fn triangle(&mut self, triangle: u32, hit: (f32, f32, f32), closest: &mut f32);
+}
+
+/// Up to and including `closest`: the `t_max` a closest-hit search tests primitives with, so
+/// that a hit exactly as near can still win its tie-break.
+#[inline]
+pub fn reach(closest: f32) -> f32 {
+    if closest.is_finite() {
+        closest.next_up()
+    } else {
+        closest
+    }
+}
+
+/// The binary walk (see the tests' `traverse`) over the hierarchy collapsed to four children
+/// per node (`wide_bvh`), below child reference `root`: primitives met in another order (and
+/// so others skipped), but the same closest hit, as each box test is `accel::box_entry`'s
+/// arithmetic lane by lane, each triangle block's test `hit_triangle`'s, and ties between hits
+/// resolve by primitive. A node's children are entered nearest first, the others pushed with
+/// their entry distances.
 #[inline]
 pub fn traverse_wide(
     wide: &WideBvh,
@@ -35,22 +60,35 @@ pub fn traverse_wide(
     root: u32,
     ray: &Ray,
     closest: &mut f32,
-    mut test: impl FnMut(u32, &mut f32),
+    leaves: &mut impl Leaves,
 ) {
     if root == EMPTY {
         return;
     }
     let boxes = FourBoxes::new(ray);
+    let sheared = ShearedRay::new(ray);
     // Each level pushes at most three children.
     let mut stack = [(0u32, 0f32); 3 * MAX_DEPTH + 1];
     let mut top = 0;
     let mut reference = root;
     loop {
         if reference & LEAF != 0 {
-            let leaf = &bvh.nodes[(reference & !LEAF) as usize];
-            let first = leaf.offset as usize;
-            for &p in &bvh.primitives[first..first + leaf.count as usize] {
-                test(p, closest);
+            if reference & TRIANGLES != 0 {
+                let block = &wide.blocks[(reference & !(LEAF | TRIANGLES)) as usize];
+                let hits = sheared.hits(block, reach(*closest));
+                let mut lanes = hits.hit;
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let hit = (hits.t[lane], hits.b1[lane], hits.b2[lane]);
+                    leaves.triangle(block.triangles[lane], hit, closest);
+                }
+            } else {
+                let leaf = &bvh.nodes[(reference & !LEAF) as usize];
+                let first = leaf.offset as usize;
+                for &p in &bvh.primitives[first..first + leaf.count as usize] {
+                    leaves.primitive(p, closest);
+                }
             }
         } else {
             let node = &wide.nodes[reference as usize];
@@ -219,6 +257,18 @@ mod tests {
     use crate::wide_bvh::WideBvh;
     use glam::Vec3;
 
+    /// Leaves of boxes, tested by a closure.
+    struct Boxes<F>(F);
+
+    impl<F: FnMut(u32, &mut f32)> Leaves for Boxes<F> {
+        fn primitive(&mut self, packed: u32, closest: &mut f32) {
+            (self.0)(packed, closest)
+        }
+        fn triangle(&mut self, _: u32, _: (f32, f32, f32), _: &mut f32) {
+            unreachable!("no triangle blocks among boxes")
+        }
+    }
+
     /// Both traversals find the same nearest box among 3 000 (a stand-in for primitives, whose
     /// hits lie in their boxes; entry distance, then lower index), for 20 000 rays from inside
     /// and outside the scene in every direction, though they test them in different orders.
@@ -226,7 +276,7 @@ mod tests {
     fn the_wide_traversal_finds_what_the_binary_one_does() {
         let items = random_items(3000);
         let bvh = Bvh::build(&mut items.clone());
-        let wide = WideBvh::new(&bvh, []);
+        let wide = WideBvh::new(&bvh, [], |_| None);
         let mut next = numbers(7);
         for _ in 0..20_000 {
             let origin = Vec3::new(next(), next(), next()) * 160.0 - 30.0;
@@ -247,9 +297,8 @@ mod tests {
             let mut closest = f32::INFINITY;
             traverse(&bvh, 0, &ray, &mut closest, |p, c| hit(p, c, &mut binary));
             let mut closest = f32::INFINITY;
-            traverse_wide(&wide, &bvh, wide.root, &ray, &mut closest, |p, c| {
-                hit(p, c, &mut four)
-            });
+            let mut boxes = Boxes(|p, c: &mut f32| hit(p, c, &mut four));
+            traverse_wide(&wide, &bvh, wide.root, &ray, &mut closest, &mut boxes);
             assert_eq!(binary, four, "ray {ray:?}");
         }
     }

@@ -1,5 +1,6 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
+use super::accel::{Leaves, reach};
 use crate::scene::flat::{FlatScene, Instance, Triangle};
 use crate::scene::normal_map::NormalMap;
 use crate::shape::{ShapeKind, ShapeVisitor, SurfaceShape};
@@ -65,7 +66,8 @@ pub fn hit_triangle(
 #[derive(Clone, Copy)]
 struct Candidate {
     primitive: PrimitiveRef,
-    /// The outward normal, not yet of unit length.
+    /// A shape's outward normal, not yet of unit length (a triangle's is found from its corners
+    /// once it is known to be the closest: the search need not read them).
     outward: Vec3,
     /// A triangle's barycentric weights of its second and third corners.
     weights: Vec2,
@@ -85,16 +87,6 @@ impl Candidate {
 #[inline]
 fn replaces(t: f32, key: (u32, u32), closest: f32, found: &Option<Candidate>) -> bool {
     t < closest || (t == closest && found.is_none_or(|f| key < f.key()))
-}
-
-/// Up to and including `closest`, for the tie-break in [`replaces`].
-#[inline]
-fn reach(closest: f32) -> f32 {
-    if closest.is_finite() {
-        closest.next_up()
-    } else {
-        closest
-    }
 }
 
 /// Tests primitive `p` against the ray, keeping it if it is closer than `closest`, or as close
@@ -117,16 +109,26 @@ fn consider(
             .map(|(t, outward)| (t, outward, Vec2::ZERO)),
         PrimitiveRef::Triangle(i) => {
             let tri = &scene.triangles[i as usize];
-            hit_triangle(tri, ray, 0.0, t_max).map(|(t, b1, b2)| {
-                let outward = (tri.p1 - tri.p0).cross(tri.p2 - tri.p0);
-                (t, outward, Vec2::new(b1, b2))
-            })
+            hit_triangle(tri, ray, 0.0, t_max).map(|(t, b1, b2)| (t, Vec3::ZERO, Vec2::new(b1, b2)))
         }
         PrimitiveRef::Instance(i) => return consider_instance(scene, i, ray, closest, found),
     };
-    let Some((t, outward, weights)) = tested else {
-        return;
-    };
+    if let Some(hit) = tested {
+        keep(scene, p, hit, ray, closest, found);
+    }
+}
+
+/// Keeps primitive `p`, hit at `(t, outward normal, weights)`, if it replaces the closest so
+/// far and is not seen through there.
+#[inline]
+fn keep(
+    scene: &FlatScene,
+    p: PrimitiveRef,
+    (t, outward, weights): (f32, Vec3, Vec2),
+    ray: &Ray,
+    closest: &mut f32,
+    found: &mut Option<Candidate>,
+) {
     if !replaces(t, (p.packed(), 0), *closest, found) {
         return;
     }
@@ -152,6 +154,31 @@ fn consider(
     });
 }
 
+/// The closest-hit search through the scene's top level: each leaf's primitives considered in
+/// turn, a block of placed triangles kept lane by lane.
+struct TopLevel<'a> {
+    scene: &'a FlatScene,
+    ray: &'a Ray,
+    found: &'a mut Option<Candidate>,
+}
+
+impl Leaves for TopLevel<'_> {
+    #[inline]
+    fn primitive(&mut self, packed: u32, closest: &mut f32) {
+        let primitive = PrimitiveRef::unpacked(packed);
+        consider(self.scene, primitive, self.ray, closest, self.found);
+    }
+
+    #[inline]
+    fn triangle(&mut self, triangle: u32, (t, b1, b2): (f32, f32, f32), closest: &mut f32) {
+        if t < reach(*closest) {
+            let hit = (t, Vec3::ZERO, Vec2::new(b1, b2));
+            let p = PrimitiveRef::Triangle(triangle);
+            keep(self.scene, p, hit, self.ray, closest, self.found);
+        }
+    }
+}
+
 /// Tests the triangles of instance `index` against the ray, transformed into its mesh's
 /// coordinates (its direction not renormalised, so that distances along it stay those of
 /// `ray`), as `consider` does a primitive's. Its normal is found once the closest hit is known.
@@ -163,49 +190,90 @@ fn consider_instance(
     closest: &mut f32,
     found: &mut Option<Candidate>,
 ) {
-    let instance = &scene.instances[index as usize];
-    let local = Ray {
+    let local = local_ray(&scene.instances[index as usize], ray);
+    let mut search = InInstance::new(scene, index, &local, found);
+    let (wide, root) = (
+        &scene.wide_bvh,
+        scene.wide_bvh.instance_roots[index as usize],
+    );
+    super::accel::traverse_wide(wide, &scene.bvh, root, &local, closest, &mut search);
+}
+
+/// The closest-hit search through instance `index`'s mesh, along the ray in its coordinates.
+struct InInstance<'a> {
+    scene: &'a FlatScene,
+    index: u32,
+    material: u32,
+    local: &'a Ray,
+    found: &'a mut Option<Candidate>,
+}
+
+/// `ray` in the coordinates of `instance`'s mesh, its direction not renormalised.
+fn local_ray(instance: &Instance, ray: &Ray) -> Ray {
+    Ray {
         origin: instance.point_to_local(ray.origin),
         dir: instance.vector_to_local(ray.dir),
-    };
-    let primitive = PrimitiveRef::Instance(index);
-    super::accel::traverse_wide(
-        &scene.wide_bvh,
-        &scene.bvh,
-        scene.wide_bvh.instance_roots[index as usize],
-        &local,
-        closest,
-        |packed, closest| {
-            let triangle = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
-            let tri = &scene.triangles[triangle as usize];
-            let Some((t, b1, b2)) = hit_triangle(tri, &local, 0.0, reach(*closest)) else {
-                return;
-            };
-            if !replaces(t, (primitive.packed(), triangle), *closest, found) {
-                return;
-            }
-            let key = (primitive.packed(), triangle);
-            if scene.see_through
-                && passes_through(
-                    scene,
-                    instance.material,
-                    triangle,
-                    Vec2::new(b1, b2),
-                    &local,
-                    key,
-                )
-            {
-                return;
-            }
-            *closest = t;
-            *found = Some(Candidate {
-                primitive,
-                outward: Vec3::ZERO,
-                weights: Vec2::new(b1, b2),
-                triangle,
-            });
-        },
-    );
+    }
+}
+
+impl<'a> InInstance<'a> {
+    fn new(
+        scene: &'a FlatScene,
+        index: u32,
+        local: &'a Ray,
+        found: &'a mut Option<Candidate>,
+    ) -> Self {
+        let material = scene.instances[index as usize].material;
+        InInstance {
+            scene,
+            index,
+            material,
+            local,
+            found,
+        }
+    }
+
+    /// Keeps triangle `triangle`, hit at `t` with weights `b1`, `b2`, as `keep` does a
+    /// primitive; coincident hits in one instance resolve by triangle.
+    #[inline]
+    fn keep(&mut self, triangle: u32, (t, b1, b2): (f32, f32, f32), closest: &mut f32) {
+        let key = (PrimitiveRef::Instance(self.index).packed(), triangle);
+        if !replaces(t, key, *closest, self.found) {
+            return;
+        }
+        let weights = Vec2::new(b1, b2);
+        let scene = self.scene;
+        if scene.see_through
+            && passes_through(scene, self.material, triangle, weights, self.local, key)
+        {
+            return;
+        }
+        *closest = t;
+        *self.found = Some(Candidate {
+            primitive: PrimitiveRef::Instance(self.index),
+            outward: Vec3::ZERO,
+            weights,
+            triangle,
+        });
+    }
+}
+
+impl Leaves for InInstance<'_> {
+    #[inline]
+    fn primitive(&mut self, packed: u32, closest: &mut f32) {
+        let triangle = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
+        let tri = &self.scene.triangles[triangle as usize];
+        if let Some(hit) = hit_triangle(tri, self.local, 0.0, reach(*closest)) {
+            self.keep(triangle, hit, closest);
+        }
+    }
+
+    #[inline]
+    fn triangle(&mut self, triangle: u32, hit: (f32, f32, f32), closest: &mut f32) {
+        if hit.0 < reach(*closest) {
+            self.keep(triangle, hit, closest);
+        }
+    }
 }
 
 /// Whether `ray` passes through triangle `triangle` (of material `material`) at barycentric
@@ -253,7 +321,11 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
             let instance = &scene.instances[i as usize];
             instance.normal_to_world((tri.p1 - tri.p0).cross(tri.p2 - tri.p0))
         }
-        _ => found.outward,
+        PrimitiveRef::Triangle(i) => {
+            let tri = &scene.triangles[i as usize];
+            (tri.p1 - tri.p0).cross(tri.p2 - tri.p0)
+        }
+        PrimitiveRef::Shape { .. } => found.outward,
     }
     .normalize();
     let (material, (point, error), uv) = surface(scene, &found, ray.at(t));
@@ -298,18 +370,13 @@ fn closest_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
 fn closest_through_bvh(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
-    let (wide, root) = (&scene.wide_bvh, scene.wide_bvh.root);
-    super::accel::traverse_wide(
-        wide,
-        &scene.bvh,
-        root,
+    let mut search = TopLevel {
+        scene,
         ray,
-        &mut closest,
-        |packed, closest| {
-            let primitive = PrimitiveRef::unpacked(packed);
-            consider(scene, primitive, ray, closest, &mut found);
-        },
-    );
+        found: &mut found,
+    };
+    let (wide, root) = (&scene.wide_bvh, scene.wide_bvh.root);
+    super::accel::traverse_wide(wide, &scene.bvh, root, ray, &mut closest, &mut search);
     found.map(|found| (closest, found))
 }
 
@@ -547,5 +614,79 @@ mod tests {
             }
             assert!(hits > 1_000, "{name}: only {hits} rays hit");
         }
+    }
+}
+
+#[cfg(test)]
+mod block_tests {
+    use super::*;
+    use crate::shared::rng::Rng;
+
+    /// The closest-hit search through the wide hierarchy, its small subtrees of triangles tested
+    /// as four-lane blocks, finds what testing every primitive and every instanced triangle one
+    /// by one finds, to the bit: in a scene of placed meshes and one of instanced ones.
+    #[test]
+    fn triangle_blocks_hit_as_every_triangle_in_turn() {
+        for file in ["scenes/meshes.toml", "scenes/knots.toml"] {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+            let scene = crate::scene::file::load(&path).expect(file);
+            let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+            assert!(!flat.wide_bvh.blocks.is_empty(), "{file}: no blocks");
+            let radius = flat.bounding_radius() as f32;
+            let mut mesh_hits = 0;
+            for i in 0..1_500 {
+                let mut rng = Rng::for_sample(i, 0, 5);
+                let mut next = || rng.next_f32();
+                let origin = Vec3::new(next(), next(), next()) * 2.0 * radius - radius;
+                // Aimed at a random triangle's centre, placed or in a random instance.
+                let pick = |n: usize, u: f32| ((u * n as f32) as usize).min(n - 1);
+                let placed = flat.instanced_triangles;
+                let (triangle, to_world) = if flat.instances.is_empty() {
+                    (pick(placed, next()), None)
+                } else {
+                    let instance = &flat.instances[pick(flat.instances.len(), next())];
+                    let range = flat.instanced_meshes[instance.mesh as usize].clone();
+                    (range.start + pick(range.len(), next()), Some(instance))
+                };
+                let t = &flat.triangles[triangle];
+                let centre = (t.p0 + t.p1 + t.p2) / 3.0;
+                let target = to_world.map_or(centre, |i| i.point_to_world(centre));
+                let ray = Ray {
+                    origin,
+                    dir: (target - origin).normalize_or(Vec3::Y),
+                };
+                let key = |(t, c): (f32, Candidate)| {
+                    (t.to_bits(), c.key(), c.weights.to_array().map(f32::to_bits))
+                };
+                let through = closest_through_bvh(&flat, &ray);
+                let in_turn = every_triangle_in_turn(&flat, &ray);
+                mesh_hits += through.is_some_and(|(_, c)| {
+                    c.triangle != 0 || matches!(c.primitive, PrimitiveRef::Triangle(_))
+                }) as u32;
+                assert_eq!(through.map(key), in_turn.map(key), "{file}: {ray:?}");
+            }
+            assert!(mesh_hits > 500, "{file}: only {mesh_hits} rays hit a mesh");
+        }
+    }
+
+    /// The closest hit by testing every top-level primitive, and every triangle of an instance,
+    /// one by one with `hit_triangle`.
+    fn every_triangle_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
+        let (mut closest, mut found) = (f32::INFINITY, None);
+        for &packed in &scene.bvh.primitives[..] {
+            match PrimitiveRef::unpacked(packed) {
+                PrimitiveRef::Instance(index) => {
+                    let instance = &scene.instances[index as usize];
+                    let local = local_ray(instance, ray);
+                    let mut search = InInstance::new(scene, index, &local, &mut found);
+                    for triangle in scene.instanced_meshes[instance.mesh as usize].clone() {
+                        let packed = PrimitiveRef::Triangle(triangle as u32).packed();
+                        search.primitive(packed, &mut closest);
+                    }
+                }
+                p => consider(scene, p, ray, &mut closest, &mut found),
+            }
+        }
+        found.map(|found| (closest, found))
     }
 }

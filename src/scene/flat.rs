@@ -370,7 +370,15 @@ impl FlatScene {
             instance.root = roots[instance.mesh as usize];
         }
         let instance_roots = self.instances.iter().map(|i| i.root);
-        self.wide_bvh = crate::wide_bvh::WideBvh::new(&self.bvh, instance_roots);
+        let triangles = &self.triangles;
+        let corners = |packed| match PrimitiveRef::unpacked(packed) {
+            PrimitiveRef::Triangle(i) => {
+                let t = &triangles[i as usize];
+                Some([t.p0, t.p1, t.p2])
+            }
+            _ => None,
+        };
+        self.wide_bvh = crate::wide_bvh::WideBvh::new(&self.bvh, instance_roots, corners);
     }
 
     /// Most instances one leaf of the BVH's top level holds (0 without instances).
