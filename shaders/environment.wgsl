@@ -13,8 +13,8 @@ fn environment_local(dir: vec3f) -> vec3f {
 
 // Image coordinates (s across, t down) of unit local direction.
 fn environment_coordinates(local: vec3f) -> vec2f {
-    let s = (atan2(-local.z, local.x) + PI) / (2.0 * PI);
-    let t = acos(clamp(local.y, -1.0, 1.0)) / PI;
+    let s = (polynomial_atan2(-local.z, local.x) + PI) / (2.0 * PI);
+    let t = polynomial_acos(local.y) / PI;
     return vec2f(s, t);
 }
 

@@ -11,8 +11,8 @@ fn parity(x: f32) -> f32 {
 //#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
 // A sphere's (longitude, latitude) at unit outward direction n (Ray Tracing: The Next Week).
 fn sphere_uv(n: vec3f) -> vec2f {
-    let u = (atan2(-n.z, n.x) + PI) / (2.0 * PI);
-    let v = acos(clamp(-n.y, -1.0, 1.0)) / PI;
+    let u = (polynomial_atan2(-n.z, n.x) + PI) / (2.0 * PI);
+    let v = polynomial_acos(-n.y) / PI;
     return vec2f(u, v);
 }
 //#endif

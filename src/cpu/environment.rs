@@ -4,6 +4,7 @@
 
 use crate::material::texture::bilinear;
 use crate::scene::environment::Environment;
+use crate::shared::angles;
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -17,8 +18,8 @@ fn to_local(env: &Environment, dir: Vec3) -> Vec3 {
 /// Image coordinates (s across, t down) of unit `local` direction.
 #[inline]
 fn image_coordinates(local: Vec3) -> (f32, f32) {
-    let s = ((-local.z).atan2(local.x) + PI) / (2.0 * PI);
-    let t = local.y.clamp(-1.0, 1.0).acos() / PI;
+    let s = (angles::atan2(-local.z, local.x) + PI) / (2.0 * PI);
+    let t = angles::acos(local.y) / PI;
     (s, t)
 }
 

@@ -18,6 +18,7 @@ const MODULES: &[(&str, &str)] = &[
     ("rng.wgsl", include_str!("../../shaders/rng.wgsl")),
     ("sampler.wgsl", include_str!("../../shaders/sampler.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
+    ("angles.wgsl", include_str!("../../shaders/angles.wgsl")),
     (
         "microfacet.wgsl",
         include_str!("../../shaders/microfacet.wgsl"),

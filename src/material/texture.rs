@@ -107,8 +107,8 @@ fn pick(parities: f32, even: Vec3, odd: Vec3) -> Vec3 {
 /// the south pole (v = acos(-y) / pi), as in Ray Tracing: The Next Week.
 #[inline]
 pub fn sphere_uv(n: Vec3) -> Vec2 {
-    let u = ((-n.z).atan2(n.x) + PI) / (2.0 * PI);
-    let v = (-n.y).clamp(-1.0, 1.0).acos() / PI;
+    let u = (crate::shared::angles::atan2(-n.z, n.x) + PI) / (2.0 * PI);
+    let v = crate::shared::angles::acos(-n.y) / PI;
     Vec2::new(u, v)
 }
 

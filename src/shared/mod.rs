@@ -5,6 +5,7 @@
 //! (`layout`). It imports nothing of the crate but `options` (plain data): the CPU reference,
 //! the kernel's host side and the materials all build on it.
 
+pub mod angles;
 pub mod constants;
 pub mod exact_sum;
 pub mod layout;
