@@ -16,8 +16,8 @@ fn atan_unit(a: f32) -> f32 {
     return a + a * (t * p);
 }
 
-// The angle of (x, y) from +x, in [-pi, pi]; 0 at the origin. y's sign bit picks the side, as
-// in the twin: (-1, -0) is at -pi.
+// The angle of (x, y) from +x, in [-pi, pi]; 0 at the origin. Off it, y's sign bit picks the
+// side, as in the twin: (-1, -0) is at -pi.
 fn polynomial_atan2(y: f32, x: f32) -> f32 {
     let ax = abs(x);
     let ay = abs(y);

@@ -97,6 +97,7 @@ impl WideBvh {
             return self.block(bvh, index, corners);
         }
         if node.is_leaf() {
+            debug_assert!(index < TRIANGLES, "a leaf's index would read as a block's");
             return LEAF | index;
         }
         let mut children = [index + 1, node.offset, EMPTY, EMPTY];

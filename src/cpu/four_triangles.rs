@@ -86,11 +86,11 @@ impl ShearedRay {
             let scaled = _mm_add_ps(_mm_add_ps(term(e0, p0.2), term(e1, p1.2)), term(e2, p2.2));
             let t = _mm_div_ps(scaled, det);
             let within = _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(t_max)));
-            let used = _mm_castsi128_ps(_mm_cmpeq_epi32(
+            let empty = _mm_castsi128_ps(_mm_cmpeq_epi32(
                 _mm_load_si128(block.triangles.as_ptr() as *const __m128i),
                 _mm_set1_epi32(EMPTY as i32),
             ));
-            let rejected = _mm_or_ps(_mm_or_ps(mixed, _mm_cmpeq_ps(det, zero)), used);
+            let rejected = _mm_or_ps(_mm_or_ps(mixed, _mm_cmpeq_ps(det, zero)), empty);
             let hit = _mm_movemask_ps(_mm_andnot_ps(rejected, within)) as u32;
             let mut out = BlockHits {
                 t: [0.0; 4],

@@ -29,8 +29,9 @@ fn atan_unit(a: f32) -> f32 {
     a + a * (t * horner(t, &P))
 }
 
-/// The angle of (x, y) from +x, in [-pi, pi]; 0 at the origin. As libm's, y's sign bit picks
-/// the side: (-1, -0) is at -pi, (-1, 0) at pi.
+/// The angle of (x, y) from +x, in [-pi, pi]. Off the origin, y's sign bit picks the side as
+/// libm's does: (-1, -0) is at -pi, (-1, 0) at pi; at the origin, 0 (libm: +-0 or +-pi by the
+/// signs of zeros, which unit directions never are both).
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
