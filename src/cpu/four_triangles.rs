@@ -6,12 +6,12 @@
 
 use crate::shared::ray::Ray;
 use crate::wide_bvh::{EMPTY, TriangleBlock};
+use glam::Vec3;
 
-/// A ray in the frame of the watertight test: its origin, the axes that become x, y and z (z
-/// the dominant one) and the shear (`-d.x / d.z`, `-d.y / d.z`, `1 / d.z` in that frame).
+/// A ray in the frame of the watertight test: the ray, the axes that become x, y and z (z the
+/// dominant one) and the shear (`-d.x / d.z`, `-d.y / d.z`, `1 / d.z` in that frame).
 pub struct ShearedRay {
     ray: Ray,
-    origin: [f32; 3],
     axes: [usize; 3],
     shear: [f32; 3],
 }
@@ -26,6 +26,7 @@ pub struct BlockHits {
 }
 
 impl ShearedRay {
+    #[inline]
     pub fn new(ray: &Ray) -> Self {
         let a = ray.dir.abs();
         let kz = if a.x > a.y && a.x > a.z {
@@ -39,7 +40,6 @@ impl ShearedRay {
         let d = axes.map(|k| ray.dir[k]);
         ShearedRay {
             ray: *ray,
-            origin: ray.origin.to_array(),
             axes,
             shear: [-d[0] / d[2], -d[1] / d[2], 1.0 / d[2]],
         }
@@ -54,7 +54,7 @@ impl ShearedRay {
         // own 16-byte-aligned arrays.
         unsafe {
             let [kx, ky, kz] = self.axes;
-            let splat = |k: usize| _mm_set1_ps(self.origin[k]);
+            let splat = |k: usize| _mm_set1_ps(self.ray.origin[k]);
             let (ox, oy, oz) = (splat(kx), splat(ky), splat(kz));
             let (sx, sy, sz) = (
                 _mm_set1_ps(self.shear[0]),
@@ -125,7 +125,7 @@ impl ShearedRay {
         for lane in (0..4).filter(|&lane| block.triangles[lane] != EMPTY) {
             let corner = |c: usize| {
                 let q = &block.corners[c];
-                glam::Vec3::new(q[0][lane], q[1][lane], q[2][lane])
+                Vec3::new(q[0][lane], q[1][lane], q[2][lane])
             };
             let triangle = crate::scene::flat::Triangle {
                 p0: corner(0),
@@ -150,7 +150,6 @@ impl ShearedRay {
 mod tests {
     use super::*;
     use crate::shared::rng::Rng;
-    use glam::Vec3;
 
     /// Four lanes at once give each triangle `hit_triangle`'s answer to the bit: over random
     /// rays against blocks of random triangles, of triangles sharing an edge the ray crosses or
