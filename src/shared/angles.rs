@@ -1,8 +1,8 @@
 //! Angles of directions (twin: `shaders/angles.wgsl`): atan2 and acos as short polynomials,
-//! within 5e-7 rad of the exact angle (two f32 steps at pi; tested against f64). Every escaped ray and every
-//! textured sphere hit turns a direction into image coordinates with them, and libm's f32
-//! atan2 (about 20 ns here) weighed 9% of `scenes/textured.toml`'s profile; both backends
-//! evaluate the same polynomials, in the same order.
+//! within 5e-7 rad of the exact angle (two f32 steps at pi; tested against f64), because every
+//! escaped ray and textured sphere hit needs them and libm's f32 atan2 is slow on the CPU (the
+//! profile is in docs/benchmarks.md); both backends evaluate the same polynomials, in the same
+//! order.
 
 use std::f32::consts::{FRAC_PI_2, PI};
 
