@@ -49,28 +49,18 @@ pub struct PixelStats {
 
 impl PixelStats {
     /// Adds a sample whose index is unknown (replica statistics stay empty). The sample must be
-    /// valid ([`is_valid_sample`]).
-    #[inline]
+    /// valid ([`is_valid_sample`]). A renderer adding many gathers them in a [`PixelRun`].
     pub fn add(&mut self, sample: Vec3) {
-        let x = sample.as_dvec3();
-        let before = self.mean();
-        self.n += 1;
-        for (s, c) in self.sum.iter_mut().zip(sample.to_array()) {
-            s.add_f32(c);
-        }
-        self.m2 += (x - before) * (x - self.mean());
+        let mut run = PixelRun::default();
+        run.add(sample);
+        self.merge(run.stats());
     }
 
     /// Adds sample number `index` of the pixel.
-    #[inline]
     pub fn add_indexed(&mut self, sample: Vec3, index: u32) {
-        self.add(sample);
-        if index % 2 == 1 {
-            self.odd_n += 1;
-            for (s, c) in self.odd_sum.iter_mut().zip(sample.to_array()) {
-                s.add_f32(c);
-            }
-        }
+        let mut run = PixelRun::default();
+        run.add_indexed(sample, index);
+        self.merge(run.stats());
     }
 
     /// The mean of the samples (zero without any).
@@ -153,6 +143,51 @@ impl PixelStats {
         } else {
             self.variance() / self.n as f64
         }
+    }
+}
+
+/// A pixel's samples as one render adds them, one at a time: the sums exact as in
+/// [`PixelStats`], and Welford's update on a running f64 mean rather than on the mean of the
+/// exact sums, which converting twice per sample made a tenth of the render of a scene with short
+/// paths (docs/benchmarks.md).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelRun {
+    stats: PixelStats,
+    mean: DVec3,
+}
+
+impl PixelRun {
+    /// Adds a sample whose index is unknown (replica statistics stay empty). The sample must be
+    /// valid ([`is_valid_sample`]).
+    #[inline]
+    pub fn add(&mut self, sample: Vec3) {
+        let x = sample.as_dvec3();
+        let stats = &mut self.stats;
+        stats.n += 1;
+        for (s, c) in stats.sum.iter_mut().zip(sample.to_array()) {
+            s.add_f32(c);
+        }
+        let delta = x - self.mean;
+        self.mean += delta / stats.n as f64;
+        stats.m2 += delta * (x - self.mean);
+    }
+
+    /// Adds sample number `index` of the pixel.
+    #[inline]
+    pub fn add_indexed(&mut self, sample: Vec3, index: u32) {
+        self.add(sample);
+        if index % 2 == 1 {
+            let stats = &mut self.stats;
+            stats.odd_n += 1;
+            for (s, c) in stats.odd_sum.iter_mut().zip(sample.to_array()) {
+                s.add_f32(c);
+            }
+        }
+    }
+
+    /// The statistics of the samples added so far.
+    pub fn stats(&self) -> &PixelStats {
+        &self.stats
     }
 }
 

@@ -13,7 +13,7 @@ pub mod medium;
 pub mod shapes;
 
 use crate::backend::{RenderBackend, Rendered};
-use crate::film::{Film, PixelStats, is_valid_sample};
+use crate::film::{Film, PixelRun, PixelStats, is_valid_sample};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
 use crate::shared::sampler::Sampler;
@@ -94,6 +94,7 @@ fn render_pixel(
 ) -> u64 {
     let pixel = y * opts.width + x;
     let mut invalid = 0;
+    let mut run = PixelRun::default();
     for sample in opts.first_sample..opts.first_sample + opts.spp {
         let mut sampler = Sampler::for_sample(opts.sampler, pixel, sample, opts.seed);
         let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut sampler);
@@ -104,10 +105,11 @@ fn render_pixel(
         }
         // Only stratified renders need their replicas' statistics (see film.rs).
         if opts.sampler == SamplerKind::Sobol {
-            stats.add_indexed(radiance, sample);
+            run.add_indexed(radiance, sample);
         } else {
-            stats.add(radiance);
+            run.add(radiance);
         }
     }
+    stats.merge(run.stats());
     invalid
 }

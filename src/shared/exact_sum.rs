@@ -42,17 +42,16 @@ impl ExactSum {
         let (mantissa, position) = decompose(value);
         let (limb, shift) = ((position / 64) as usize, position % 64);
         let wide = (mantissa as u128) << shift;
-        self.add_at(limb, wide as u64);
-        // The highest position is 253 (limb 3): limb + 1 always exists.
-        self.add_at(limb + 1, (wide >> 64) as u64);
-    }
-
-    fn add_at(&mut self, mut limb: usize, addend: u64) {
-        let (sum, mut carry) = self.limbs[limb].overflowing_add(addend);
-        self.limbs[limb] = sum;
-        while carry && limb + 1 < LIMBS {
-            limb += 1;
-            (self.limbs[limb], carry) = self.limbs[limb].overflowing_add(1);
+        // The highest position is 253 (limb 3): limbs `limb` and `limb + 1` always exist, and
+        // are added to as one 128-bit integer, whose carry out is rare.
+        let low = self.limbs[limb] as u128 | (self.limbs[limb + 1] as u128) << 64;
+        let (sum, mut carry) = low.overflowing_add(wide);
+        self.limbs[limb] = sum as u64;
+        self.limbs[limb + 1] = (sum >> 64) as u64;
+        let mut above = limb + 2;
+        while carry && above < LIMBS {
+            (self.limbs[above], carry) = self.limbs[above].overflowing_add(1);
+            above += 1;
         }
     }
 
