@@ -75,10 +75,18 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var invalid = accum[slot + ACCUM_INVALID];
     let packed_exponents = accum[slot + ACCUM_M2_EXPONENT];
     var m2_exponent = (vec3u(packed_exponents) >> vec3u(0u, 8u, 16u)) & vec3u(0xffu);
-    var even_sum = load_wide(slot + ACCUM_EVEN_SUM);
+    // Samples add to windows (film.wgsl), which join the exact sums when the dispatch ends.
+    var base = vec3u(NO_BASE);
+    var even_window = Window();
 //#if SOBOL
-    var odd_sum = load_wide(slot + ACCUM_ODD_SUM);
+    var odd_window = Window();
 //#endif
+    // A sample that fits no window ends the pixel's dispatch and is added after the loop, once
+    // (the next dispatch continues the pixel): lavapipe runs every branch of the loop for all
+    // its SIMD lanes, so a rare one still costs every iteration.
+    var unfit = false;
+    var unfit_sample = vec3f(0.0);
+    var unfit_index = 0u;
     // Samples first_sample + count onward, until the pixel holds samples_before + sample_count:
     // a pixel left short by an earlier dispatch continues where it stopped, so the image does
     // not depend on how the render was sliced.
@@ -135,18 +143,22 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
             let delta = scaled - mean;
             mean += delta / f32(count + 1u);
             m2 += delta * (scaled - mean);
+            let a = decompose(l);
+            let nonzero = (a.lo | a.hi) != vec3u(0u);
+            base = select(base, window_base(a), nonzero & (base == vec3u(NO_BASE)));
+            unfit = !all(fits_window(a, base));
+            unfit_sample = l;
+            unfit_index = index;
 //#if SOBOL
             // Only stratified renders need their replicas' statistics.
-            if (index & 1u) == 1u {
-                odd_sum = wide_add(odd_sum, l);
-            } else {
-                even_sum = wide_add(even_sum, l);
-            }
+            let odd = (index & 1u) == 1u;
+            even_window = window_add(even_window, base, only_if(a, !(odd || unfit)));
+            odd_window = window_add(odd_window, base, only_if(a, odd && !unfit));
 //#else
-            even_sum = wide_add(even_sum, l);
+            even_window = window_add(even_window, base, only_if(a, !unfit));
 //#endif
             count += 1u;
-            if count >= wanted {
+            if count >= wanted || unfit {
                 break;
             }
             index = d.first_sample + count;
@@ -162,10 +174,21 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     store3(slot + ACCUM_M2, bitcast<vec3u>(m2));
     accum[slot + ACCUM_INVALID] = invalid;
     accum[slot + ACCUM_M2_EXPONENT] = m2_exponent.x | (m2_exponent.y << 8u) | (m2_exponent.z << 16u);
-    store_wide(slot + ACCUM_EVEN_SUM, even_sum);
+    var even_sum = wide_add_window(load_wide(slot + ACCUM_EVEN_SUM), base, even_window);
 //#if SOBOL
+    var odd_sum = wide_add_window(load_wide(slot + ACCUM_ODD_SUM), base, odd_window);
+    if unfit && (unfit_index & 1u) == 1u {
+        odd_sum = wide_add(odd_sum, unfit_sample);
+    } else if unfit {
+        even_sum = wide_add(even_sum, unfit_sample);
+    }
     store_wide(slot + ACCUM_ODD_SUM, odd_sum);
+//#else
+    if unfit {
+        even_sum = wide_add(even_sum, unfit_sample);
+    }
 //#endif
+    store_wide(slot + ACCUM_EVEN_SUM, even_sum);
 }
 
 //#if DEBUG

@@ -210,3 +210,111 @@ material = "white"
         assert!(verdict.passed(), "{verdict:?}");
     }
 }
+
+/// Emitters in vertical stripes, `per_pixel` to a pixel of a `width` x 8 image, of the
+/// `radiances` in turn (a stripe of `None` is black), seen directly.
+#[cfg(feature = "gpu")]
+fn stripes(width: u32, per_pixel: u32, radiances: &[Option<&str>]) -> Scene {
+    let mut text = format!(
+        "[render]\nwidth = {width}\nheight = 8\nmax_depth = 1\nbackground = [0, 0, 0]\n\
+         [camera]\nlook_from = [0, 0, -10]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\n\
+         vfov = 11.42\n[materials]\nblack = {{ type = \"lambertian\", albedo = [0, 0, 0] }}\n"
+    );
+    for (i, r) in radiances.iter().enumerate() {
+        if let Some(r) = r {
+            text += &format!("light{i} = {{ type = \"light\", radiance = {r} }}\n");
+        }
+    }
+    // The view is 2 units high, so a pixel is 0.25 wide; the stripes overhang both sides.
+    let stripe = 0.25 / per_pixel as f32;
+    let count = (width + 2) * per_pixel;
+    for k in 0..count {
+        let i = k as usize % radiances.len();
+        let material = match radiances[i] {
+            Some(_) => format!("light{i}"),
+            None => "black".to_string(),
+        };
+        let x = -(width as f32 + 2.0) * 0.125 + k as f32 * stripe;
+        text += &format!(
+            "[[object]]\nquad = {{ q = [{x}, -1.5, 0], u = [0, 3, 0], v = [{stripe}, 0, 0] }}\n\
+             material = \"{material}\"\n"
+        );
+    }
+    rt_gpu::scene::file::parse(&text, "stripes.toml", "stripes").expect("parses")
+}
+
+#[cfg(feature = "gpu")]
+/// The kernel's exact sums do not depend on how many samples one dispatch takes: a dispatch of
+/// one sample adds each to the sum on its own, longer ones gather them in windows first
+/// (film.wgsl). Each pixel's samples come from stripes between 1e-30 and 1e30, so windows both
+/// carry between their words and meet samples that fit none; in the second scene a pixel's
+/// samples are 1e-12 and 3.99 (2^-40 and the top bit of a word), 2048 to a dispatch, so a window's
+/// fourth word overflows into its fifth. Both samplers (the independent one keeps no odd sums).
+#[test]
+fn the_kernels_sums_are_exact_whatever_the_samples_per_dispatch() {
+    let Some(gpu) = renderer() else { return };
+    let wide_range = stripes(
+        16,
+        3,
+        &[
+            Some("[1e-30, 1, 3e9]"),
+            Some("[1, 3e9, 1e20]"),
+            Some("[3e9, 1e20, 1e30]"),
+            Some("[1e20, 1e30, 1e-30]"),
+            Some("[1e30, 1e-30, 1e-10]"),
+            Some("[1e-10, 0.3, 1]"),
+            None,
+        ],
+    );
+    let top_bits = stripes(
+        4,
+        2,
+        &[Some("[1e-12, 1e-12, 1e-12]"), Some("[3.99, 3.99, 3.99]")],
+    );
+    for (name, scene, spp) in [
+        ("wide range", wide_range, 512),
+        ("top bits", top_bits, 2048),
+    ] {
+        for sampler in [
+            rt_gpu::options::SamplerKind::Sobol,
+            rt_gpu::options::SamplerKind::Independent,
+        ] {
+            let width = scene.defaults.width;
+            let opts = RenderOptions {
+                sampler,
+                ..nee_opts(width, 8, spp, 1, 3)
+            };
+            let tuning = |samples_per_dispatch| Tuning {
+                samples_per_dispatch,
+                ..Tuning::default()
+            };
+            let single = render_gpu(&gpu, &scene, &opts, &tuning(Some(1)));
+            finite(name, &single);
+            for per_dispatch in [None, Some(5), Some(spp)] {
+                let film = render_gpu(&gpu, &scene, &opts, &tuning(per_dispatch));
+                for (i, (a, b)) in single.pixels.iter().zip(&film.pixels).enumerate() {
+                    assert_eq!(
+                        (a.n, a.sum, a.odd_n, a.odd_sum),
+                        (b.n, b.sum, b.odd_n, b.odd_sum),
+                        "{name}, {sampler:?}, {per_dispatch:?} samples a dispatch: pixel {i}"
+                    );
+                }
+            }
+            // The CPU's film of the same samples has the same sums, but for the odd ray that a
+            // last bit sends across a stripe's edge on one backend only.
+            let cpu = render_cpu(&scene, &opts);
+            let same = cpu
+                .pixels
+                .iter()
+                .zip(&single.pixels)
+                .filter(|(a, b)| (a.sum, a.odd_sum) == (b.sum, b.odd_sum))
+                .count();
+            let all = cpu.pixels.len();
+            eprintln!("{name}, {sampler:?}: {same} of {all} pixels sum as the CPU's to the bit");
+            assert!(
+                4 * same >= 3 * all,
+                "{name}, {sampler:?}: {same} of {all} as the CPU's"
+            );
+        }
+    }
+}

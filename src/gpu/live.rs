@@ -119,14 +119,12 @@ impl LiveRender {
         &self.tile.accum
     }
 
-    /// Brings every pixel to `spp()` samples: a BVH kernel on lavapipe ends a pixel's samples
-    /// short near its loop budget, and the next dispatch continues them.
+    /// Brings every pixel to `spp()` samples: a dispatch can leave a pixel short (see
+    /// `TileRenderer::finish_short_pixels`), and the next one continues it.
     pub fn complete(&mut self) -> Result<(), GpuError> {
         self.tile.opts.spp = self.spp;
-        if self.kernel.features.bvh {
-            self.tile
-                .finish_short_pixels(0, self.tile.opts.height, &mut Timings::default())?;
-        }
+        self.tile
+            .finish_short_pixels(0, self.tile.opts.height, &mut Timings::default())?;
         Ok(())
     }
 

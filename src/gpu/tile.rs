@@ -161,9 +161,10 @@ impl TileRenderer {
         Ok(gpu_seconds)
     }
 
-    /// A BVH kernel stops a pixel's samples short when its traversals near the loop budget
-    /// (each dispatch gives every pixel at least one sample): dispatches again until every
-    /// pixel of the tile has them all; returns their GPU seconds.
+    /// A dispatch can leave a pixel short of its samples: a BVH kernel's when its traversals
+    /// near the loop budget, any kernel's after a sample that fits none of its summing windows
+    /// (shaders/film.wgsl). Each dispatch gives every pixel at least one sample; this dispatches
+    /// again until every pixel of the tile has them all, and returns their GPU seconds.
     pub(super) fn finish_short_pixels(
         &self,
         y0: u32,
