@@ -86,6 +86,11 @@ fn filtered(image: &Image, lookup: ImageLookup, s: f32, t: f32) -> Vec3 {
 /// for coordinates so large that rounding leaves them outside).
 #[inline]
 fn wrap(i: f32, n: f32) -> u32 {
+    // Nearly every index is inside already, where the formula gives i itself: its division
+    // was a fifth of a bilinear lookup's time.
+    if (0.0..n).contains(&i) {
+        return i as u32;
+    }
     (i - n * (i / n).floor()).clamp(0.0, n - 1.0) as u32
 }
 
