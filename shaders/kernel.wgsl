@@ -96,7 +96,8 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     if count < wanted {
         var fresh = true;
         var index = d.first_sample + count;
-        var sampler = sampler_for_sample(pixel, index, d.seed);
+        let seeds = replica_seeds(pixel, d.seed);
+        var sampler = sampler_with_seeds(seeds, pixel, index, d.seed);
         var path = start_path(generate_ray(x, y, &sampler));
 //#if BVH
         // Every loop of a sample other than BVH traversals is bounded by the host; traversals
@@ -162,7 +163,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
                 break;
             }
             index = d.first_sample + count;
-            sampler = sampler_for_sample(pixel, index, d.seed);
+            sampler = sampler_with_seeds(seeds, pixel, index, d.seed);
             path = start_path(generate_ray(x, y, &sampler));
 //#if BVH
             loop_iterations += params.sample_loop_cost;

@@ -51,17 +51,34 @@ fn sampler_start_group(s: ptr<function, Sampler>) {
 
 //#endif
 
-fn sampler_for_sample(pixel: u32, sample: u32, seed: u32) -> Sampler {
+// The seeds of a pixel's two replicas (REPLICAS is 2), which the kernel hashes once per
+// pixel rather than once per sample: on lavapipe the code that starts a sample runs at every
+// path segment. Independent samples use none.
+fn replica_seeds(pixel: u32, seed: u32) -> vec2u {
+//#if SOBOL
+    let hashed = pcg_hash(pixel ^ 0x5b0b5eedu);
+    return vec2u(pcg_hash(seed + pcg_hash(hashed)), pcg_hash(seed + pcg_hash(1u + hashed)));
+//#else
+    return vec2u(0u);
+//#endif
+}
+
+// The numbers of sample `sample` of pixel `pixel` under `seed`, whose replicas' seeds are
+// `seeds` (`replica_seeds`).
+fn sampler_with_seeds(seeds: vec2u, pixel: u32, sample: u32, seed: u32) -> Sampler {
     var s = Sampler(0u, 0u, sample / REPLICAS, 0u, 0u, vec2u(0u), 0u);
 //#if SOBOL
     // Sobol samples draw no PCG numbers: their stream is left unset, as on the CPU.
-    let replica = sample % REPLICAS;
-    s.pixel_seed = pcg_hash(seed + pcg_hash(replica + pcg_hash(pixel ^ 0x5b0b5eedu)));
+    s.pixel_seed = select(seeds.x, seeds.y, sample % REPLICAS == 1u);
     sampler_start_group(&s);
 //#else
     s.rng = rng_for_sample(pixel, sample, seed);
 //#endif
     return s;
+}
+
+fn sampler_for_sample(pixel: u32, sample: u32, seed: u32) -> Sampler {
+    return sampler_with_seeds(replica_seeds(pixel, seed), pixel, sample, seed);
 }
 
 // Starts the numbers of a new purpose: a fresh group of dimensions.

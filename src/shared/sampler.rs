@@ -23,6 +23,8 @@ use crate::shared::rng::{Rng, pcg_hash};
 
 /// Independently scrambled sequences a pixel's samples are dealt into, in turn.
 pub const REPLICAS: u32 = 2;
+// shaders/sampler.wgsl's `replica_seeds` hashes the seeds of two.
+const _: () = assert!(REPLICAS == 2);
 /// Dimensions per group: Sobol's first two, a (0, 2)-sequence, computed without a loop.
 pub const GROUP_DIMENSIONS: u32 = 2;
 
