@@ -90,7 +90,9 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     // Samples first_sample + count onward, until the pixel holds samples_before + sample_count:
     // a pixel left short by an earlier dispatch continues where it stopped, so the image does
     // not depend on how the render was sliced.
-    let wanted = d.samples_before + d.sample_count;
+    // At most sample_count samples an invocation however short the pixel is, as the host sized
+    // them to lavapipe's loop budget (a non-BVH kernel counts no iterations of its own).
+    let wanted = min(d.samples_before + d.sample_count, count + d.sample_count);
     // One iteration per path segment (integrator.wgsl): a lane whose path ends adds its sample
     // and starts the next at once, while its group's other lanes go on with theirs.
     if count < wanted {

@@ -123,8 +123,12 @@ impl LiveRender {
     /// `TileRenderer::finish_short_pixels`), and the next one continues it.
     pub fn complete(&mut self) -> Result<(), GpuError> {
         self.tile.opts.spp = self.spp;
-        self.tile
-            .finish_short_pixels(0, self.tile.opts.height, &mut Timings::default())?;
+        self.tile.finish_short_pixels(
+            0,
+            self.tile.opts.height,
+            self.max_slice,
+            &mut Timings::default(),
+        )?;
         Ok(())
     }
 

@@ -577,7 +577,7 @@ impl GpuRenderer {
             let rows = sizer.next_tile_rows(height - y0);
             tiles.clear();
             gpu_seconds += tiles.sample(y0, rows, &mut sizer, &mut timings, on_progress)?;
-            gpu_seconds += tiles.finish_short_pixels(y0, rows, &mut timings)?;
+            gpu_seconds += tiles.finish_short_pixels(y0, rows, sizer.max_slice(), &mut timings)?;
             tiles.read_into(&mut film, y0, rows)?;
             y0 += rows;
         }

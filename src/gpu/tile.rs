@@ -164,11 +164,13 @@ impl TileRenderer {
     /// A dispatch can leave a pixel short of its samples: a BVH kernel's when its traversals
     /// near the loop budget, any kernel's after a sample that fits none of its summing windows
     /// (shaders/film.wgsl). Each dispatch gives every pixel at least one sample; this dispatches
-    /// again until every pixel of the tile has them all, and returns their GPU seconds.
+    /// again, at most `max_slice` samples a pixel each time, until every pixel of the tile has
+    /// them all, and returns their GPU seconds.
     pub(super) fn finish_short_pixels(
         &self,
         y0: u32,
         rows: u32,
+        max_slice: u32,
         timings: &mut Timings,
     ) -> Result<f64, GpuError> {
         let spp = self.opts.spp;
@@ -189,7 +191,8 @@ impl TileRenderer {
                     "tile y0 {y0}: {short} pixels short of {spp} samples, dispatching again"
                 );
             }
-            let (seconds, gpu) = self.dispatch(y0, rows, spp, 0)?;
+            let slice = max_slice.clamp(1, spp);
+            let (seconds, gpu) = self.dispatch(y0, rows, spp - slice, slice)?;
             gpu_seconds += gpu;
             timings.dispatches += 1;
             timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
