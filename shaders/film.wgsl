@@ -56,9 +56,8 @@ fn add_word(word: vec3u, part: vec3u, carry: ptr<function, vec3u>) -> vec3u {
 // Samples of one pixel summed exactly in five words from word `base` of a wide sum: a pixel's
 // samples nearly always start in one of three neighbouring words (every sample within a factor
 // of 2^32 of the first fits, and some up to 2^64 away), so each adds to four words and a carry
-// rather than rippling through all ten;
-// `wide_add_window` puts a window into its wide sum when a sample falls outside or the
-// dispatch ends. The fifth word takes at most one carry a sample, and cannot overflow.
+// rather than rippling through all ten; `wide_add_window` puts a window into its wide sum when
+// the dispatch ends. The fifth word takes at most one carry a sample, and cannot overflow.
 struct Window {
     v0: vec3u,
     v1: vec3u,

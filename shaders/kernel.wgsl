@@ -86,12 +86,11 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     // its SIMD lanes, so a rare one still costs every iteration.
     var unfit = false;
     var unfit_sample = vec3f(0.0);
-    var unfit_index = 0u;
     // Samples first_sample + count onward, until the pixel holds samples_before + sample_count:
     // a pixel left short by an earlier dispatch continues where it stopped, so the image does
-    // not depend on how the render was sliced.
-    // At most sample_count samples an invocation however short the pixel is, as the host sized
-    // them to lavapipe's loop budget (a non-BVH kernel counts no iterations of its own).
+    // not depend on how the render was sliced. Still at most sample_count samples, however short
+    // the pixel, as the host sized them to lavapipe's loop budget (a non-BVH kernel counts no
+    // iterations of its own).
     let wanted = min(d.samples_before + d.sample_count, count + d.sample_count);
     // One iteration per path segment (integrator.wgsl): a lane whose path ends adds its sample
     // and starts the next at once, while its group's other lanes go on with theirs.
@@ -151,7 +150,6 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
             base = select(base, window_base(a), nonzero & (base == vec3u(NO_BASE)));
             unfit = !all(fits_window(a, base));
             unfit_sample = l;
-            unfit_index = index;
 //#if SOBOL
             // Only stratified renders need their replicas' statistics.
             let odd = (index & 1u) == 1u;
@@ -180,7 +178,8 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
     var even_sum = wide_add_window(load_wide(slot + ACCUM_EVEN_SUM), base, even_window);
 //#if SOBOL
     var odd_sum = wide_add_window(load_wide(slot + ACCUM_ODD_SUM), base, odd_window);
-    if unfit && (unfit_index & 1u) == 1u {
+    // An unfit sample was the pixel's last: its index is the one before `count`.
+    if unfit && ((d.first_sample + count - 1u) & 1u) == 1u {
         odd_sum = wide_add(odd_sum, unfit_sample);
     } else if unfit {
         even_sum = wide_add(even_sum, unfit_sample);
