@@ -131,6 +131,16 @@ fn shear_of(dir: vec3f) -> Shear {
 }
 
 //#if TRIANGLES
+// a * b - c * d with its sign exact (Kahan's algorithm: within 2 ulps, Jeannerod, Louvet and
+// Muller 2013), so that an edge shared by two triangles gets edge functions of exactly opposite
+// signs whatever the compiler fuses. A plain a * b - c * d is antisymmetric only unfused (as on
+// the CPU and lavapipe): NVIDIA's compiler fuses one product into the subtraction, and rays
+// aimed along the shared edge leaked between both triangles.
+fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let cd = c * d;
+    return fma(a, b, -cd) + fma(-c, d, cd);
+}
+
 // Distance along the ray to triangle tri and the barycentric weights of its second and third
 // corners there, or t = -1 for a miss: watertight (Woop, Benthin and Wald 2013; see
 // hit_triangle in src/cpu/shapes.rs).
@@ -141,9 +151,9 @@ fn triangle_hit(tri: Triangle, ray: Ray, sh: Shear) -> vec3f {
     let p0 = vec2f(q0.x + sh.s.x * q0.z, q0.y + sh.s.y * q0.z);
     let p1 = vec2f(q1.x + sh.s.x * q1.z, q1.y + sh.s.y * q1.z);
     let p2 = vec2f(q2.x + sh.s.x * q2.z, q2.y + sh.s.y * q2.z);
-    let e0 = p1.x * p2.y - p1.y * p2.x;
-    let e1 = p2.x * p0.y - p2.y * p0.x;
-    let e2 = p0.x * p1.y - p0.y * p1.x;
+    let e0 = difference_of_products(p1.x, p2.y, p1.y, p2.x);
+    let e1 = difference_of_products(p2.x, p0.y, p2.y, p0.x);
+    let e2 = difference_of_products(p0.x, p1.y, p0.y, p1.x);
     let mixed = (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0);
     let det = e0 + e1 + e2;
     let scaled = e0 * (sh.s.z * q0.z) + e1 * (sh.s.z * q1.z) + e2 * (sh.s.z * q2.z);

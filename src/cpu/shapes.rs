@@ -17,7 +17,9 @@ pub use crate::shape::sphere::hit_sphere;
 /// "Watertight Ray/Triangle Intersection"): in a frame sheared so the ray runs along +z from
 /// the origin, the 2D edge functions of an edge shared by two triangles are exact negatives of
 /// each other, so a ray crossing the edge hits at least one of them; a ray through a corner or
-/// along an edge (an edge function exactly 0) counts as a hit.
+/// along an edge (an edge function exactly 0) counts as a hit. Rust never fuses `a * b - c * d`
+/// into a multiply-add, which would break that antisymmetry; GPU compilers may, so the kernel's
+/// twin (`triangle_hit`) computes each edge function with an exact sign instead.
 #[inline]
 pub fn hit_triangle(
     triangle: &Triangle,
