@@ -8,6 +8,8 @@ use crate::scene::flat::FlatScene;
 /// What a render produced.
 pub struct Rendered {
     pub film: Film,
+    /// Rays traced (camera, bounce and shadow rays), where the backend counts them (the CPU).
+    pub rays: Option<u64>,
     /// Device time from timestamp queries, where available.
     pub gpu_seconds: Option<f64>,
     /// The longest single GPU dispatch (device time if known, else wall time).

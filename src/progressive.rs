@@ -106,6 +106,7 @@ impl Job<'_> {
         };
         let (mut gpu_seconds, mut longest_dispatch_seconds): (Option<f64>, Option<f64>) =
             (None, None);
+        let mut rays: Option<u64> = None;
         let mut seconds_per_spp: Option<f64> = None;
         let outcome = loop {
             // Checked before each pass, so that a resumed film that meets it renders no more.
@@ -177,6 +178,10 @@ impl Job<'_> {
                 (Some(a), Some(b)) => Some(a + b),
                 (a, b) => a.or(b),
             };
+            rays = match (rays, rendered.rays) {
+                (Some(a), Some(b)) => Some(a + b),
+                (a, b) => a.or(b),
+            };
             longest_dispatch_seconds =
                 match (longest_dispatch_seconds, rendered.longest_dispatch_seconds) {
                     (Some(a), Some(b)) => Some(a.max(b)),
@@ -188,6 +193,7 @@ impl Job<'_> {
         };
         let rendered = Rendered {
             film: film.unwrap_or_else(|| Film::new(opts.width, opts.height)),
+            rays,
             gpu_seconds,
             longest_dispatch_seconds,
             device: self.session.device(),

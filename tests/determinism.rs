@@ -52,3 +52,39 @@ fn sobol_renders_continue_and_merge_exactly() {
         assert!((a.odd_mean() - b.odd_mean()).abs().max_element() < 1e-9);
     }
 }
+
+/// `rt-gpu bench`'s rays per second come from the CPU's count of rays, which is exact: inside a
+/// closed box every path of the naive integrator without roulette traces `max_depth` rays, and
+/// towards an empty sky each traces one.
+#[test]
+fn the_cpu_counts_every_ray_it_traces() {
+    use glam::Vec3;
+    use rt_gpu::scene::{Background, Material, Shape};
+    let (width, height, spp, max_depth) = (6, 5, 3, 4);
+    let samples = (width * height * spp) as u64;
+    let count = |scene: &rt_gpu::scene::Scene| {
+        let opts = common::opts(width, height, spp, max_depth, 1);
+        let flat = rt_gpu::scene::flat::FlatScene::new(scene, width, height).expect("valid");
+        rt_gpu::cpu::render_counting_rays(&flat, &opts, &|| {}).1
+    };
+    let inside = common::scene(
+        Vec3::splat(0.5),
+        Vec3::new(0.5, 0.5, 0.0),
+        60.0,
+        Background::Constant(Vec3::ONE),
+        vec![Material::lambertian(Vec3::splat(0.5))],
+        vec![common::object(
+            Shape::Cuboid {
+                min: Vec3::ZERO,
+                max: Vec3::ONE,
+            },
+            0,
+        )],
+    );
+    assert_eq!(count(&inside), samples * max_depth as u64);
+    // The box behind the camera: every camera ray escapes.
+    let mut outside = inside.clone();
+    outside.camera.look_from = Vec3::new(0.5, 0.5, 2.0);
+    outside.camera.look_at = Vec3::new(0.5, 0.5, 3.0);
+    assert_eq!(count(&outside), samples);
+}

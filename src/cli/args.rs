@@ -137,7 +137,8 @@ pub enum Command {
     View(ViewArgs),
     /// List the GPU adapters wgpu can see (pick one with --adapter).
     Devices,
-    /// Measure million samples per second of each backend, side by side in one run.
+    /// Measure million samples per second of each backend, side by side in one run: the render
+    /// alone, with the setup (opening the device, compiling the kernel) timed apart.
     Bench(BenchArgs),
     /// Combine film files (from --shard, --samples or --checkpoint) of one scene and options into
     /// one image, or one film file with -o FILE.exr: bit-identical to rendering all their samples

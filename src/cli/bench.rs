@@ -7,7 +7,7 @@ use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_gpu::film::check_memory;
 use rt_gpu::options::SamplerKind;
-use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, render};
+use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, Session};
 use rt_gpu::scene::flat::FlatScene;
 use std::io::Write;
 use std::time::Instant;
@@ -46,6 +46,9 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     )?;
     let mut rates = Vec::new();
     let mut failed = Vec::new();
+    // The CPU counts its rays; the kernel, whose sample values and paths are the CPU's, is
+    // credited with the same rays per sample.
+    let mut rays_per_sample = None;
     let runs = [
         ("cpu", Backend::Cpu, false),
         ("gpu specialised kernel", Backend::Gpu, false),
@@ -57,19 +60,31 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             everything,
         };
         match timed_render(backend, &gpu, &flat, &opts) {
-            Ok((rendered, seconds)) => {
+            Ok((rendered, setup, seconds)) => {
                 let rate = samples / seconds / 1e6;
+                if let Some(rays) = rendered.rays {
+                    rays_per_sample = Some(rays as f64 / samples);
+                }
+                let mrays = |rate: f64| {
+                    rays_per_sample
+                        .map(|r| format!(" ({:.1} Mrays/s)", rate * r))
+                        .unwrap_or_default()
+                };
                 let gpu_time = rendered
                     .gpu_seconds
-                    .map(|s| format!(", {:.3} Msamples/s by GPU time", samples / s / 1e6))
+                    .map(|s| {
+                        let rate = samples / s / 1e6;
+                        format!(", {rate:.3} Msamples/s{} by GPU time", mrays(rate))
+                    })
                     .unwrap_or_default();
                 let longest = rendered
                     .longest_dispatch_seconds
                     .map(|d| format!(", longest dispatch {:.0} ms", d * 1e3))
                     .unwrap_or_default();
                 say!(
-                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{gpu_time}{longest}",
-                    rendered.device
+                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{}{gpu_time}{longest}; setup {setup:.2} s (device, kernel, warm-up)",
+                    rendered.device,
+                    mrays(rate)
                 )?;
                 rates.push((label, rate));
             }
@@ -80,6 +95,9 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         }
     }
     let rate = |name: &str| rates.iter().find(|(l, _)| *l == name).map(|(_, r)| *r);
+    if let Some(r) = rays_per_sample {
+        say!("  rays per sample (the CPU's count: camera, bounce and shadow rays): {r:.2}")?;
+    }
     if let (Some(gpu), Some(cpu)) = (rate(runs[1].0), rate(runs[0].0)) {
         say!("  gpu / cpu speed: {:.2}x", gpu / cpu)?;
     }
@@ -152,13 +170,15 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
     Ok(())
 }
 
-/// Renders with a progress bar on stderr; returns the result and wall seconds.
+/// Renders with a progress bar on stderr; returns the result, the wall seconds of making the
+/// backend ready (opening the device, compiling the kernel, a one-sample warm-up render) and of
+/// the render itself, apart: on a fast GPU the first can be a hundred times the second.
 fn timed_render(
     backend: Backend,
     gpu: &GpuChoice,
     flat: &FlatScene,
     opts: &RenderOptions,
-) -> anyhow::Result<(Rendered, f64)> {
+) -> anyhow::Result<(Rendered, f64, f64)> {
     let progress = ProgressBar::new(1000).with_style(
         ProgressStyle::with_template(
             "{spinner} {elapsed_precise} [{bar:40}] {percent}%, eta {eta}",
@@ -167,10 +187,15 @@ fn timed_render(
         .progress_chars("=> "),
     );
     let start = Instant::now();
-    let result = render(backend, gpu, flat, opts, &|f| {
-        progress.set_position((f * 1000.0) as u64)
-    });
+    let session = Session::new(backend, gpu, flat, opts.integrator)?;
+    // Drivers such as lavapipe compile a pipeline at its first dispatch: a one-sample render
+    // first, so that the timed render is the steady state.
+    let warm_up = RenderOptions { spp: 1, ..*opts };
+    session.render(flat, &warm_up, &|_| {})?;
+    let setup = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let result = session.render(flat, opts, &|f| progress.set_position((f * 1000.0) as u64));
     let seconds = start.elapsed().as_secs_f64();
     progress.finish_and_clear();
-    Ok((result?, seconds))
+    Ok((result?, setup, seconds))
 }

@@ -10,6 +10,7 @@ pub mod four_triangles;
 pub mod integrator;
 pub mod lights;
 pub mod medium;
+pub mod ray_count;
 pub mod shapes;
 
 use crate::backend::{RenderBackend, Rendered};
@@ -47,12 +48,13 @@ impl RenderBackend for CpuBackend {
         on_progress: &(dyn Fn(f64) + Sync),
     ) -> anyhow::Result<Rendered> {
         let rows = AtomicU32::new(0);
-        let film = render(scene, opts, &|| {
+        let (film, rays) = render_counting_rays(scene, opts, &|| {
             let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
             on_progress(done as f64 / opts.height as f64);
         });
         Ok(Rendered {
             film,
+            rays: Some(rays),
             gpu_seconds: None,
             longest_dispatch_seconds: None,
             device: self.device(),
@@ -63,24 +65,34 @@ impl RenderBackend for CpuBackend {
 /// Renders samples `opts.first_sample .. opts.first_sample + opts.spp` of every pixel.
 /// `on_row` is called once per finished image row (for progress bars).
 pub fn render(scene: &FlatScene, opts: &RenderOptions, on_row: &(dyn Fn() + Sync)) -> Film {
+    render_counting_rays(scene, opts, on_row).0
+}
+
+/// [`render`], and how many rays it traced (camera, bounce and shadow rays).
+pub fn render_counting_rays(
+    scene: &FlatScene,
+    opts: &RenderOptions,
+    on_row: &(dyn Fn() + Sync),
+) -> (Film, u64) {
     let width = opts.width as usize;
     let mut film = Film::new(opts.width, opts.height);
-    let invalid: u64 = film
+    let (invalid, rays) = film
         .pixels
         .par_chunks_mut(width)
         .enumerate()
         .map(|(y, row)| {
+            let rays_before = ray_count::rays_traced();
             let mut invalid = 0;
             for (x, stats) in row.iter_mut().enumerate() {
                 invalid += render_pixel(scene, opts, x as u32, y as u32, stats);
             }
             on_row();
-            invalid
+            (invalid, ray_count::rays_traced().wrapping_sub(rays_before))
         })
-        .sum();
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     film.invalid_samples = invalid;
     film.stratified = opts.sampler == SamplerKind::Sobol;
-    film
+    (film, rays)
 }
 
 /// Accumulates one pixel's samples; returns how many were invalid (non-finite or negative) and

@@ -314,6 +314,7 @@ fn passes_through(
 
 /// The closest hit along `ray` beyond its origin.
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
+    super::ray_count::count_ray();
     let (t, found) = closest(scene, ray)?;
     let outward = match found.primitive {
         // By the inverse transpose: a mirroring placement turns the winding's normal around

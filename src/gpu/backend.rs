@@ -95,6 +95,7 @@ impl RenderBackend for GpuBackend {
                 .render(&kernel, scene, opts, &Tuning::default(), on_progress)?;
         Ok(Rendered {
             film,
+            rays: None,
             gpu_seconds: timings.gpu_seconds,
             longest_dispatch_seconds: Some(timings.longest_dispatch_seconds),
             device: self.device(),
