@@ -61,7 +61,7 @@ impl LiveRender {
             opts.height,
         );
         tile.warm_up()?;
-        tile.clear();
+        tile.clear(opts.height);
         Ok(LiveRender {
             renderer: renderer.clone(),
             kernel,
@@ -85,7 +85,7 @@ impl LiveRender {
         };
         self.tile.write_params(&params);
         self.params = params;
-        self.tile.clear();
+        self.tile.clear(opts.height);
         self.spp = 0;
         Ok(())
     }
@@ -122,24 +122,29 @@ impl LiveRender {
     /// Brings every pixel to `spp()` samples: a dispatch can leave a pixel short (see
     /// `TileRenderer::finish_short_pixels`), and the next one continues it.
     pub fn complete(&mut self) -> Result<(), GpuError> {
+        self.complete_and_read().map(|_| ())
+    }
+
+    /// `complete`, and the accumulator as read at the end.
+    fn complete_and_read(&mut self) -> Result<Vec<u8>, GpuError> {
         self.tile.opts.spp = self.spp;
-        self.tile.finish_short_pixels(
+        let (_, accumulators) = self.tile.finish_short_pixels(
             0,
             self.tile.opts.height,
             self.max_slice,
             &mut Timings::default(),
         )?;
-        Ok(())
+        Ok(accumulators)
     }
 
     /// The film of samples `0..spp()`, read back (after `complete`).
     pub fn film(&mut self) -> Result<Film, GpuError> {
-        self.complete()?;
+        let accumulators = self.complete_and_read()?;
         let opts = &self.tile.opts;
         let mut film = Film::new(opts.width, opts.height);
         film.stratified = opts.sampler == SamplerKind::Sobol;
         if self.spp > 0 {
-            self.tile.read_into(&mut film, 0, opts.height)?;
+            self.tile.read_into(&mut film, 0, &accumulators)?;
         }
         Ok(film)
     }

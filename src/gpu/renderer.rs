@@ -575,10 +575,12 @@ impl GpuRenderer {
         let mut y0 = 0;
         while y0 < height {
             let rows = sizer.next_tile_rows(height - y0);
-            tiles.clear();
+            tiles.clear(rows);
             gpu_seconds += tiles.sample(y0, rows, &mut sizer, &mut timings, on_progress)?;
-            gpu_seconds += tiles.finish_short_pixels(y0, rows, sizer.max_slice(), &mut timings)?;
-            tiles.read_into(&mut film, y0, rows)?;
+            let (finishing, accumulators) =
+                tiles.finish_short_pixels(y0, rows, sizer.max_slice(), &mut timings)?;
+            gpu_seconds += finishing;
+            tiles.read_into(&mut film, y0, &accumulators)?;
             y0 += rows;
         }
         // Some backends (OpenGL) accept timestamp queries and return zeros.

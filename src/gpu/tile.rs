@@ -15,6 +15,7 @@ use crate::shared::layout::{
     ACCUM_ODD_SUM, ACCUM_WORDS, GpuDispatch, GpuParams, WORKGROUP_SIZE,
 };
 use glam::DVec3;
+use rayon::prelude::*;
 use std::io::Write;
 use std::time::Instant;
 
@@ -116,11 +117,12 @@ impl TileRenderer {
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(params));
     }
 
-    /// Empties the accumulator for the next tile.
-    pub(super) fn clear(&self) {
+    /// Empties the accumulator of the next tile's `rows` rows (the buffer holds the tallest
+    /// tile: lavapipe clears with the CPU, and a whole buffer for each short tile cost seconds).
+    pub(super) fn clear(&self, rows: u32) {
         let ctx = &self.renderer.ctx;
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.accum, 0, None);
+        encoder.clear_buffer(&self.accum, 0, Some(self.tile_bytes(rows)));
         ctx.queue.submit([encoder.finish()]);
     }
 
@@ -165,14 +167,15 @@ impl TileRenderer {
     /// near the loop budget, any kernel's after a sample that fits none of its summing windows
     /// (shaders/film.wgsl). Each dispatch gives every pixel at least one sample; this dispatches
     /// again, at most `max_slice` samples a pixel each time, until every pixel of the tile has
-    /// them all, and returns their GPU seconds.
+    /// them all. Returns their GPU seconds and the tile's accumulator as read last, for
+    /// `read_into` (one read of the tile when no pixel was short).
     pub(super) fn finish_short_pixels(
         &self,
         y0: u32,
         rows: u32,
         max_slice: u32,
         timings: &mut Timings,
-    ) -> Result<f64, GpuError> {
+    ) -> Result<(f64, Vec<u8>), GpuError> {
         let spp = self.opts.spp;
         let mut gpu_seconds = 0.0;
         for _ in 0..spp {
@@ -183,7 +186,7 @@ impl TileRenderer {
                 .filter(|px| px[ACCUM_COUNT as usize] < spp)
                 .count();
             if short == 0 {
-                break;
+                return Ok((gpu_seconds, bytes));
             }
             if self.trace {
                 let _ = writeln!(
@@ -197,7 +200,8 @@ impl TileRenderer {
             timings.dispatches += 1;
             timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
         }
-        Ok(gpu_seconds)
+        // Still short after spp dispatches: `read_into` says so.
+        Ok((gpu_seconds, self.read_tile(rows)?))
     }
 
     /// One dispatch over the tile's `rows` rows from `y0`, until each pixel holds
@@ -252,34 +256,46 @@ impl TileRenderer {
         Ok((if gpu > 0.0 { gpu } else { wall }, gpu))
     }
 
-    /// The accumulator of the tile's `rows` rows, as bytes.
-    pub(super) fn read_tile(&self, rows: u32) -> Result<Vec<u8>, GpuError> {
-        let tile_bytes = rows as u64 * self.opts.width as u64 * ACCUM_BYTES_PER_PIXEL;
-        self.renderer.read_back(&self.accum, tile_bytes)
+    /// Bytes of the accumulator of `rows` rows.
+    fn tile_bytes(&self, rows: u32) -> u64 {
+        rows as u64 * self.opts.width as u64 * ACCUM_BYTES_PER_PIXEL
     }
 
-    /// Reads the tile's pixels into `film` from row `y0`.
-    pub(super) fn read_into(&self, film: &mut Film, y0: u32, rows: u32) -> Result<(), GpuError> {
+    /// The accumulator of the tile's `rows` rows, as bytes.
+    pub(super) fn read_tile(&self, rows: u32) -> Result<Vec<u8>, GpuError> {
+        self.renderer.read_back(&self.accum, self.tile_bytes(rows))
+    }
+
+    /// Puts the tile's pixels, `bytes` as `read_tile` gave them, into `film` from row `y0`, on
+    /// all cores (a million pixels' exact sums are a fraction of a second on one).
+    pub(super) fn read_into(&self, film: &mut Film, y0: u32, bytes: &[u8]) -> Result<(), GpuError> {
         let opts = &self.opts;
-        let bytes = self.read_tile(rows)?;
-        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        let words: &[u32] = bytemuck::cast_slice(bytes);
         // The kernel keeps the odd samples' sum only for stratified renders.
         let odd_n = if self.sobol {
             (opts.first_sample as u64 + opts.spp as u64) / 2 - opts.first_sample as u64 / 2
         } else {
             0
         };
-        for (i, px) in words.chunks_exact(ACCUM_WORDS as usize).enumerate() {
-            let taken = px[ACCUM_COUNT as usize];
-            if taken != opts.spp {
-                return Err(GpuError::Runtime(format!(
-                    "the device ended the kernel early: a pixel got {taken} of {} samples",
-                    opts.spp
-                )));
-            }
-            film.pixels[y0 as usize * opts.width as usize + i] = pixel_stats(px, opts.spp, odd_n);
-            film.invalid_samples += px[ACCUM_INVALID as usize] as u64;
-        }
+        let first = y0 as usize * opts.width as usize;
+        let accumulators = words.chunks_exact(ACCUM_WORDS as usize);
+        let pixels = &mut film.pixels[first..first + accumulators.len()];
+        let invalid = pixels
+            .par_iter_mut()
+            .zip(words.par_chunks_exact(ACCUM_WORDS as usize))
+            .map(|(pixel, px)| {
+                let taken = px[ACCUM_COUNT as usize];
+                if taken != opts.spp {
+                    return Err(GpuError::Runtime(format!(
+                        "the device ended the kernel early: a pixel got {taken} of {} samples",
+                        opts.spp
+                    )));
+                }
+                *pixel = pixel_stats(px, opts.spp, odd_n);
+                Ok(px[ACCUM_INVALID as usize] as u64)
+            })
+            .try_reduce(|| 0, |a, b| Ok(a + b))?;
+        film.invalid_samples += invalid;
         Ok(())
     }
 }
