@@ -21,14 +21,64 @@ struct XServer {
 }
 
 impl Drop for XServer {
+    /// SIGTERM, not SIGKILL: Xvfb then removes its lock file and socket, which a killed one
+    /// leaves for the next server to trip over.
     fn drop(&mut self) {
-        let _ = self.child.kill();
+        let terminated = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status()
+            .is_ok_and(|s| s.success());
+        if !terminated {
+            let _ = self.child.kill();
+        }
         let _ = self.child.wait();
     }
 }
 
-/// Starts Xvfb on a free display number (it writes the number it took to the fd given).
+/// Xvfb servers start one at a time: parallel tests starting theirs at once are where a
+/// reported display was once not the test's own.
+static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Starts Xvfb on a free display number (it writes the number it took to the fd given), and
+/// makes sure a client can connect to it: Xvfbs started at once by parallel tests, beside a
+/// stale socket of an earlier server, once reported a display no client could open. Then it
+/// tries again on another.
 fn x_server() -> Option<XServer> {
+    let _one_at_a_time = STARTING.lock().unwrap_or_else(|e| e.into_inner());
+    for _ in 0..5 {
+        let x = start_x_server()?;
+        if accepts_clients(&x.display) {
+            return Some(x);
+        }
+        eprintln!(
+            "Xvfb reported display {} but it takes no client; another",
+            x.display
+        );
+    }
+    panic!("no Xvfb display that accepts clients after 5 tries")
+}
+
+/// Whether a client (xdotool, which the input test needs anyway) connects to `display`
+/// within a few seconds; true when there is no xdotool to ask.
+fn accepts_clients(display: &str) -> bool {
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        let asked = Command::new("xdotool")
+            .arg("getdisplaygeometry")
+            .env("DISPLAY", display)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status();
+        match asked {
+            Err(_) => return true,
+            Ok(status) if status.success() => return true,
+            Ok(_) if Instant::now() > deadline => return false,
+            Ok(_) => std::thread::sleep(Duration::from_millis(100)),
+        }
+    }
+}
+
+fn start_x_server() -> Option<XServer> {
     let started = Command::new("Xvfb")
         .args([
             "-displayfd",
