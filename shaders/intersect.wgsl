@@ -131,11 +131,13 @@ fn shear_of(dir: vec3f) -> Shear {
 }
 
 //#if TRIANGLES
-// a * b - c * d with its sign exact (Kahan's algorithm: within 2 ulps, Jeannerod, Louvet and
-// Muller 2013), so that an edge shared by two triangles gets edge functions of exactly opposite
-// signs whatever the compiler fuses. A plain a * b - c * d is antisymmetric only unfused (as on
-// the CPU and lavapipe): NVIDIA's compiler fuses one product into the subtraction, and rays
-// aimed along the shared edge leaked between both triangles.
+// a * b - c * d with its sign exact where fma is fused (Kahan's algorithm: within 2 ulps,
+// Jeannerod, Louvet and Muller 2013), so that an edge shared by two triangles gets edge
+// functions of exactly opposite signs. A plain a * b - c * d is antisymmetric only unfused:
+// NVIDIA's compiler fuses one product into the subtraction, and rays aimed along the shared
+// edge leaked between both triangles. Where fma is split into a product and a sum (lavapipe),
+// this is the plain difference, antisymmetric there. WGSL cannot forbid a driver that splits
+// fma and then fuses again: tests/stability.rs's closed boxes are the check on each device.
 fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
     let cd = c * d;
     return fma(a, b, -cd) + fma(-c, d, cd);

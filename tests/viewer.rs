@@ -23,14 +23,16 @@ struct XServer {
 impl Drop for XServer {
     /// SIGTERM, not SIGKILL: Xvfb then removes its lock file and socket, which a killed one
     /// leaves for the next server to trip over.
+    /// A server that has not ended within a few seconds is killed.
     fn drop(&mut self) {
-        let terminated = Command::new("kill")
+        let _ = Command::new("kill")
             .args(["-TERM", &self.child.id().to_string()])
-            .status()
-            .is_ok_and(|s| s.success());
-        if !terminated {
-            let _ = self.child.kill();
+            .status();
+        let deadline = Instant::now() + Duration::from_secs(5);
+        while matches!(self.child.try_wait(), Ok(None)) && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(20));
         }
+        let _ = self.child.kill();
         let _ = self.child.wait();
     }
 }
@@ -88,6 +90,8 @@ fn start_x_server() -> Option<XServer> {
             "1024x768x24",
             "-nolisten",
             "tcp",
+            // The client check's disconnection must not reset the server under the viewer.
+            "-noreset",
         ])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -106,9 +110,13 @@ fn start_x_server() -> Option<XServer> {
     BufReader::new(child.stdout.take().expect("piped"))
         .read_line(&mut line)
         .expect("Xvfb reports its display");
+    let number: u32 = line
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("Xvfb reported no display number: {line:?}"));
     Some(XServer {
         child,
-        display: format!(":{}", line.trim()),
+        display: format!(":{number}"),
     })
 }
 

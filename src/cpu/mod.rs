@@ -86,8 +86,10 @@ pub fn render_counting_rays(
             for (x, stats) in row.iter_mut().enumerate() {
                 invalid += render_pixel(scene, opts, x as u32, y as u32, stats);
             }
+            // Read before the caller's callback, which might trace rays of its own.
+            let rays = ray_count::rays_traced().wrapping_sub(rays_before);
             on_row();
-            (invalid, ray_count::rays_traced().wrapping_sub(rays_before))
+            (invalid, rays)
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     film.invalid_samples = invalid;

@@ -122,6 +122,9 @@ impl LiveRender {
     /// Brings every pixel to `spp()` samples: a dispatch can leave a pixel short (see
     /// `TileRenderer::finish_short_pixels`), and the next one continues it.
     pub fn complete(&mut self) -> Result<(), GpuError> {
+        if self.spp == 0 {
+            return Ok(()); // nothing to complete, nor to read back (the viewer asks every frame)
+        }
         self.complete_and_read().map(|_| ())
     }
 
@@ -139,11 +142,11 @@ impl LiveRender {
 
     /// The film of samples `0..spp()`, read back (after `complete`).
     pub fn film(&mut self) -> Result<Film, GpuError> {
-        let accumulators = self.complete_and_read()?;
-        let opts = &self.tile.opts;
+        let opts = self.tile.opts;
         let mut film = Film::new(opts.width, opts.height);
         film.stratified = opts.sampler == SamplerKind::Sobol;
         if self.spp > 0 {
+            let accumulators = self.complete_and_read()?;
             self.tile.read_into(&mut film, 0, &accumulators)?;
         }
         Ok(film)
