@@ -101,6 +101,12 @@ fn window_add(w: Window, base: vec3u, a: Addend) -> Window {
     return Window(v0, v1, v2, v3, w.v4 + c);
 }
 
+// `w` where `pick` is false, else `v`.
+fn select_window(w: Window, v: Window, pick: bool) -> Window {
+    return Window(select(w.v0, v.v0, pick), select(w.v1, v.v1, pick), select(w.v2, v.v2, pick),
+        select(w.v3, v.v3, pick), select(w.v4, v.v4, pick));
+}
+
 // Word `offset` of the window (0 past its fifth).
 fn window_word(w: Window, offset: vec3u) -> vec3u {
     return select(vec3u(0u), w.v0, offset == vec3u(0u))

@@ -31,7 +31,7 @@ fn next_event(ray: ptr<function, Ray>, medium: ptr<function, u32>, hit: ptr<func
         let found = intersect(*ray, hit);
         if *medium != 0u {
             sampler_begin(sampler);
-            let distance = free_flight(material_at(*medium - 1u).medium_density, sampler_next(sampler));
+            let distance = free_flight(material_at(*medium - 1u).medium_density, sampler_next_in_group(sampler));
             if distance < select(F32_MAX, (*hit).t, found) {
                 return Event(EVENT_IN_MEDIUM, (*ray).origin + distance * (*ray).dir);
             }
@@ -264,16 +264,16 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
         (*path).bsdf_pdf = 0.0;
         {
             sampler_begin(sampler);
-            let u0 = sampler_next(sampler);
+            let u0 = sampler_next_in_group(sampler);
             sampler_begin(sampler);
-            let u1 = sampler_next(sampler);
-            let u2 = sampler_next(sampler);
+            let u1 = sampler_next_in_group(sampler);
+            let u2 = sampler_next_in_group(sampler);
             (*path).total += (*path).throughput * medium_direct_light(event.point, (*path).ray.dir, interior.medium_g, (*path).medium, u0, u1, u2);
         }
 //#endif
         sampler_begin(sampler);
-        let u1 = sampler_next(sampler);
-        let u2 = sampler_next(sampler);
+        let u1 = sampler_next_in_group(sampler);
+        let u2 = sampler_next_in_group(sampler);
         let dir = sample_hg(interior.medium_g, (*path).ray.dir, u1, u2);
 //#if NEE
         (*path).bsdf_pdf = hg_pdf(interior.medium_g, dot((*path).ray.dir, dir));
@@ -285,7 +285,7 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
         if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
             let survival = min(max((*path).throughput.x, max((*path).throughput.y, (*path).throughput.z)), MAX_SURVIVAL);
             sampler_begin(sampler);
-            if !(sampler_next(sampler) < survival) {
+            if !(sampler_next_in_group(sampler) < survival) {
                 return false;
             }
             (*path).throughput /= survival;
@@ -329,10 +329,10 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
     if light_sampled {
         // Purposes: the light pick (1D), the point on the light (2D).
         sampler_begin(sampler);
-        let u0 = sampler_next(sampler);
+        let u0 = sampler_next_in_group(sampler);
         sampler_begin(sampler);
-        let u1 = sampler_next(sampler);
-        let u2 = sampler_next(sampler);
+        let u1 = sampler_next_in_group(sampler);
+        let u2 = sampler_next_in_group(sampler);
         (*path).total += (*path).throughput * direct_light(m, hit, (*path).ray.dir, (*path).medium, u0, u1, u2);
     }
 //#endif
@@ -359,7 +359,7 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
     if params.roulette_depth > 0u && segment + 1u >= params.roulette_depth {
         let survival = min(max((*path).throughput.x, max((*path).throughput.y, (*path).throughput.z)), MAX_SURVIVAL);
         sampler_begin(sampler);
-        if !(sampler_next(sampler) < survival) {
+        if !(sampler_next_in_group(sampler) < survival) {
             return false;
         }
         (*path).throughput /= survival;

@@ -152,9 +152,12 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
             unfit_sample = l;
 //#if SOBOL
             // Only stratified renders need their replicas' statistics.
+            // One window addition: lavapipe runs this block at every path segment, for all
+            // lanes, so two additions (one of zero) cost twice at every segment.
             let odd = (index & 1u) == 1u;
-            even_window = window_add(even_window, base, only_if(a, !(odd || unfit)));
-            odd_window = window_add(odd_window, base, only_if(a, odd && !unfit));
+            let added = window_add(select_window(even_window, odd_window, odd), base, only_if(a, !unfit));
+            even_window = select_window(added, even_window, odd);
+            odd_window = select_window(odd_window, added, odd);
 //#else
             even_window = window_add(even_window, base, only_if(a, !unfit));
 //#endif
@@ -228,6 +231,9 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
 //#else
         let m = material_at(hit.material);
 //#endif
+        // A new group, as the CPU's next number after the camera's two starts one: a
+        // material's first numbers are drawn unchecked (sampler_next_in_group).
+        sampler_begin(&sampler);
         let s = bsdf_sample(m, -ray.dir, hit, &sampler);
         out.dir = s.wi;
         out.scattered = select(0u, 1u, s.lobe != 0u);

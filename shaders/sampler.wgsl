@@ -95,6 +95,16 @@ fn sampler_next(s: ptr<function, Sampler>) -> f32 {
     if (*s).dim == GROUP_DIMENSIONS {
         sampler_begin(s);
     }
+//#endif
+    return sampler_next_in_group(s);
+}
+
+// sampler_next where the group surely has a number left: the first or second number after
+// sampler_begin or a new sample. Lavapipe runs the body of sampler_next's test for a group's
+// end for all lanes, taken or not: a group's start (two hashes, two bit reversals) at every
+// number drawn.
+fn sampler_next_in_group(s: ptr<function, Sampler>) -> f32 {
+//#if SOBOL
     // Owen scrambling, rev(LK(rev(v))), of a point kept bit-reversed.
     let seed = mix((*s).group_seed, (*s).dim);
     let bits = select((*s).point.y, (*s).point.x, (*s).dim == 0u);

@@ -35,8 +35,8 @@ fn conductor_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sam
         return out;
     }
 //#if MICROFACET
-    let u1 = sampler_next(sampler);
-    let u2 = sampler_next(sampler);
+    let u1 = sampler_next_in_group(sampler);
+    let u2 = sampler_next_in_group(sampler);
     let frame = frame_of(hit.shading);
     let wo_local = to_local(frame, wo);
     if !(wo_local.z > MIN_COSINE) {

@@ -45,7 +45,7 @@ fn glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function,
     let n = hit.shading;
     let dir_in = -wo;
     let cos_i = clamp(dot(wo, n), 0.0, 1.0);
-    let u = sampler_next(sampler);
+    let u = sampler_next_in_group(sampler);
     var wi = reflect_dir(dir_in, n);
     var reflected = true;
     let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
@@ -92,8 +92,8 @@ fn pair_fresnel(cos_o: f32, cos_i: f32, eta: f32, reflected: bool) -> f32 {
 
 fn rough_glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
-    let u1 = sampler_next(sampler);
-    let u2 = sampler_next(sampler);
+    let u1 = sampler_next_in_group(sampler);
+    let u2 = sampler_next_in_group(sampler);
     let u = sampler_next(sampler);
     let frame = frame_of(hit.shading);
     let wo_local = to_local(frame, wo);

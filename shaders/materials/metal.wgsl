@@ -5,8 +5,8 @@
 
 fn metal_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
-    let u1 = sampler_next(sampler);
-    let u2 = sampler_next(sampler);
+    let u1 = sampler_next_in_group(sampler);
+    let u2 = sampler_next_in_group(sampler);
     let fuzzed = reflect_dir(-wo, hit.shading) + metal_params(m).fuzz * unit_vector(u1, u2);
     let len2 = dot(fuzzed, fuzzed);
     if len2 > 1e-12 {

@@ -19,8 +19,8 @@ fn plastic_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
 }
 
 fn plastic_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
-    let u = sampler_next(sampler);
-    let u1 = sampler_next(sampler);
+    let u = sampler_next_in_group(sampler);
+    let u1 = sampler_next_in_group(sampler);
     let u2 = sampler_next(sampler);
     let p = plastic_params(m);
     return coat_sample(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, plastic_table(m), wo, hit, u, u1, u2);
