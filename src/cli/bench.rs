@@ -172,7 +172,8 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
 
 /// Renders with a progress bar on stderr; returns the result, the wall seconds of making the
 /// backend ready (opening the device, compiling the kernel, a one-sample warm-up render) and of
-/// the render itself, apart: on a fast GPU the first can be a hundred times the second.
+/// the render itself, apart: on a fast GPU the first can be a hundred times the second. A GPU
+/// render still uploads the scene's buffers itself, as every render does.
 fn timed_render(
     backend: Backend,
     gpu: &GpuChoice,
