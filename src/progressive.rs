@@ -174,14 +174,8 @@ impl Job<'_> {
                 Some(f) => f.merge(&rendered.film),
                 None => film = Some(rendered.film),
             }
-            gpu_seconds = match (gpu_seconds, rendered.gpu_seconds) {
-                (Some(a), Some(b)) => Some(a + b),
-                (a, b) => a.or(b),
-            };
-            rays = match (rays, rendered.rays) {
-                (Some(a), Some(b)) => Some(a + b),
-                (a, b) => a.or(b),
-            };
+            gpu_seconds = sum_of_known(gpu_seconds, rendered.gpu_seconds);
+            rays = sum_of_known(rays, rendered.rays);
             longest_dispatch_seconds =
                 match (longest_dispatch_seconds, rendered.longest_dispatch_seconds) {
                     (Some(a), Some(b)) => Some(a.max(b)),
@@ -199,6 +193,14 @@ impl Job<'_> {
             device: self.session.device(),
         };
         Ok((rendered, outcome))
+    }
+}
+
+/// The sum of the passes' figures that are known (a backend may measure none).
+fn sum_of_known<T: std::ops::Add<Output = T>>(a: Option<T>, b: Option<T>) -> Option<T> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a + b),
+        (a, b) => a.or(b),
     }
 }
 

@@ -278,8 +278,7 @@ impl TileRenderer {
             0
         };
         let first = y0 as usize * opts.width as usize;
-        let accumulators = words.chunks_exact(ACCUM_WORDS as usize);
-        let pixels = &mut film.pixels[first..first + accumulators.len()];
+        let pixels = &mut film.pixels[first..first + words.len() / ACCUM_WORDS as usize];
         let invalid = pixels
             .par_iter_mut()
             .zip(words.par_chunks_exact(ACCUM_WORDS as usize))
