@@ -1,7 +1,7 @@
 // The environment light (twin: src/cpu/environment.rs): what an escaped ray sees, and
 // directions sampled in proportion to filtered luminance x sin(theta), with their solid-angle
 // pdf (the distribution is built on the host: scene::environment::Distribution). Its
-// texels and alias tables are in `images` (see ImageArray in src/gpu/layout.rs).
+// texels and CDFs are in `images` (see ImageArray in src/gpu/layout.rs).
 
 //#if ENVIRONMENT
 // dir turned by -rotate_y: the image's own frame.
@@ -35,35 +35,40 @@ struct EnvironmentSample {
     pdf: f32,   // 0: no sample (a pole)
 }
 
-struct AliasPick {
+struct CdfPick {
     index: u32,
     rest: f32,      // u's remainder, uniform in [0, 1) again
-    density: f32,   // what the slot's vec4f says of the picked slot (columns: its texel's density)
 }
 
-// The slot of the alias table of n slots at `start` that u in [0, 1) picks (AliasTable::pick).
-fn alias_pick(start: u32, n: u32, u: f32) -> AliasPick {
-    let scaled = u * f32(n);
-    let i = min(u32(scaled), n - 1u);
-    let r = scaled - f32(i);
-    let slot = image_value(start + i);
-    if r < slot.x {
-        return AliasPick(i, min(r / slot.x, ONE_BELOW), slot.z);
+// The slot of the table of n slots at `start` (a vec4f per value: the value, and the guide's
+// slot for u = k / n as a number) that u in [0, 1) picks: the last whose value is at most u,
+// walked to from the guide's slot as Cdfs::pick does.
+fn cdf_pick(start: u32, n: u32, u: f32) -> CdfPick {
+    var i = u32(image_value(start + min(u32(u * f32(n)), n - 1u)).y);
+    while i + 1u < n && image_value(start + i + 1u).x <= u {
+        i += 1u;
     }
-    let other = min(bitcast<u32>(slot.y), n - 1u);
-    return AliasPick(other, clamp((r - slot.x) / (1.0 - slot.x), 0.0, ONE_BELOW), slot.w);
+    while i > 0u && image_value(start + i).x > u {
+        i -= 1u;
+    }
+    let low = image_value(start + i).x;
+    let high = image_value(start + i + 1u).x;
+    var rest = 0.0;
+    if high > low {
+        rest = clamp((u - low) / (high - low), 0.0, ONE_BELOW);
+    }
+    return CdfPick(i, rest);
 }
 
-// A direction from the environment's distribution: u1 picks the row from the rows' alias table,
-// u2 the column from that row's (each slot a vec4f: keep, alias as bits, and for columns the
-// texel's and its alias's densities); their remainders place the direction across the texel
+// A direction from the environment's distribution: u1 picks the row from the rows' CDF, u2 the
+// column from that row's; their remainders place the direction across the texel
 // (Distribution::pick and cpu::environment::sample).
 fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
     let w = params.environment_width;
     let h = params.environment_height;
-    let row = alias_pick(params.environment_aliases, h, u1);
-    let column = alias_pick(params.environment_aliases + h + row.index * w, w, u2);
-    let density = column.density;
+    let row = cdf_pick(params.environment_cdfs, h, u1);
+    let column = cdf_pick(params.environment_cdfs + h + 1u + row.index * (w + 1u), w, u2);
+    let density = image_value(params.environment_texels + row.index * w + column.index).w;
     let s = (f32(column.index) + column.rest) / f32(w);
     let t = (f32(row.index) + row.rest) / f32(h);
     let sin_theta = sin(PI * t);

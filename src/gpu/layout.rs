@@ -226,15 +226,15 @@ pub struct SceneBuffers {
 
 /// Every image a scene reads, in one array of vec4f (the kernel's `images`): each image's
 /// texels (one vec4f each: RGB and 0, rows from the top), the environment's with its sampling
-/// density as the fourth value, and after them the environment's alias tables (a vec4f per row,
-/// then per texel; `scene::environment::Distribution`). Positions count vec4fs.
+/// density as the fourth value, and after them the environment's CDFs (a vec4f per value, the
+/// rows' then each row's columns'; `scene::environment::Distribution`). Positions count vec4fs.
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {
     /// The values, four per vec4f (empty in a plan).
     pub values: Vec<f32>,
     /// (image, where its texels start).
     placed: Vec<(&'static Image, u32)>,
-    /// Where the environment's texels and its alias tables start.
+    /// Where the environment's texels and its CDFs start.
     pub environment: Option<[u32; 2]>,
     /// How many values it holds (at least 1: a binding cannot be empty).
     len: u64,
@@ -293,29 +293,19 @@ impl ImageArray {
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
             let texels = place(&mut out, env.image, &|i| d.density[i]);
-            // Its alias tables: the rows' (keep, alias as bits, 0, 0) per row, then each row's
-            // columns' (keep, alias as bits, own density, alias's density) per texel.
-            let aliases = len as u32;
-            let (w, h) = (env.image.width as usize, env.image.height as usize);
-            len += (h + w * h) as u64;
+            // Its CDFs, a vec4f per value: (value, the guide's slot as a number, 0, 0), the
+            // guide 0 past a table's last slot. The rows' table (height + 1), then each row's
+            // columns' (width + 1 each).
+            let cdfs = len as u32;
+            len += (d.rows.entries.len() + d.columns.entries.len()) as u64;
             if fill {
-                for y in 0..h {
-                    let alias = d.rows.alias[y];
+                for entry in d.rows.entries.iter().chain(&d.columns.entries) {
+                    // The guide is exact as f32: a side is at most MAX_IMAGE_SIDE (2^14) slots.
                     out.values
-                        .extend([d.rows.keep[y], f32::from_bits(alias), 0.0, 0.0]);
-                }
-                for i in 0..w * h {
-                    let alias = d.columns.alias[i] as usize;
-                    let row = i - i % w;
-                    out.values.extend([
-                        d.columns.keep[i],
-                        f32::from_bits(alias as u32),
-                        d.density[i],
-                        d.density[row + alias],
-                    ]);
+                        .extend([entry.value, entry.guide as f32, 0.0, 0.0]);
                 }
             }
-            out.environment = Some([texels, aliases]);
+            out.environment = Some([texels, cdfs]);
         }
         out.len = 4 * len.max(1);
         if fill && out.values.is_empty() {
@@ -600,7 +590,7 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         roulette_depth: opts.roulette_depth,
         environment_rotation: environment.0,
         environment_texels: environment.1[0],
-        environment_aliases: environment.1[1],
+        environment_cdfs: environment.1[1],
         environment_width: environment.2[0],
         environment_height: environment.2[1],
         environment_strength: environment.3,

@@ -208,7 +208,7 @@ impl GpuRenderer {
         //   `shape_light_of` in `shape_dispatch`), declared for every kind the scene has;
         //   instance roots are references of their mesh's root.
         // - Texels: node texels 4i..4i+3 and image texels lie below `texel_rows` rows x TEXEL_ROW
-        //   (`check_fits`); image x and y are clamped to the image (`wrap`, `alias_pick`,
+        //   (`check_fits`); image x and y are clamped to the image (`wrap`, `cdf_pick`,
         //   `environment_pdf_at`) at the offsets `ImageArray` placed it.
         // - Uniform arrays hold their capacities (SCENE_CAPACITY, BVH_CAPACITY,
         //   BVH_PRIMITIVE_CAPACITY) >= the counts (`Features::of`); storage arrays are exact, and
