@@ -4,9 +4,9 @@
 //! a film file, mutated as tests/fuzz_scene_files.rs mutates scenes, with tokens that have
 //! broken these loaders (accessor types and counts, node cycles, device paths, huge numbers).
 //!
-//! Passing means: no panic (nor the glTF loader's own panic guard firing: that is a panic in
-//! the `gltf` crate that the checks missed), every error one line naming the file, and every
-//! mesh that loads finite. Seeded; `RT_GPU_FUZZ_EXECUTIONS` (default 3000) and
+//! Passing means: no panic (nor the glTF or OBJ loader's own panic guard firing: that is a
+//! panic in the `gltf` crate or tobj that the checks missed), every error one line naming the
+//! file, and every mesh that loads finite. Seeded; `RT_GPU_FUZZ_EXECUTIONS` (default 3000) and
 //! `RT_GPU_FUZZ_SEED` (default 1) set the run.
 
 mod common;
@@ -121,6 +121,10 @@ fn check(path: &Path, name: &str, extension: &str) -> Result<(), String> {
             ))
         } else if e.contains("the glTF reader failed") {
             Err(format!("the gltf crate panicked: {e}"))
+        } else if e.contains("the OBJ reader failed") {
+            Err(format!(
+                "tobj panicked on a file the faces' check passed: {e}"
+            ))
         } else {
             Ok(())
         }

@@ -92,7 +92,7 @@ fn obj_polygons_negative_indices_and_missing_normals() {
 #[test]
 fn bad_mesh_files_are_one_line_errors_naming_file_and_line() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let cases: [(&str, &[u8], &str); 6] = [
+    let cases: [(&str, &[u8], &str); 7] = [
         (
             "badv.obj",
             b"v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n",
@@ -102,6 +102,12 @@ fn bad_mesh_files_are_one_line_errors_naming_file_and_line() {
             "range.obj",
             b"v 0 0 0\nv 1 0 0\nv 1 1 0\n\nf 1 2 9\n",
             "range.obj:5: a face",
+        ),
+        // A far negative index, which tobj (parsing beside the check) trusts: the check is told.
+        (
+            "far.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 -9223372036854775807\n",
+            "far.obj:4: a face (f) names a vertex (v)",
         ),
         (
             "empty.obj",
