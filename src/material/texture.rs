@@ -69,17 +69,23 @@ fn filtered(image: &Image, lookup: ImageLookup, s: f32, t: f32) -> Vec3 {
     let y = t * h - 0.5;
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let (x0, x1) = (
-        wrapped(lookup.wrap_u, x0, w),
-        wrapped(lookup.wrap_u, x0 + 1.0, w),
-    );
-    let (y0, y1) = (
-        wrapped(lookup.wrap_v, y0, h),
-        wrapped(lookup.wrap_v, y0 + 1.0, h),
-    );
+    let (x0, x1) = neighbours(lookup.wrap_u, x0, w);
+    let (y0, y1) = neighbours(lookup.wrap_v, y0, h);
     let top = image.texel(x0, y0) * (1.0 - fx) + image.texel(x1, y0) * fx;
     let bottom = image.texel(x0, y1) * (1.0 - fx) + image.texel(x1, y1) * fx;
     top * (1.0 - fy) + bottom * fy
+}
+
+/// Integer-valued texel index `i` and the next, each brought into 0..n by `mode` as
+/// [`wrapped`] brings them: where both are inside already (nearly every lookup), they are
+/// themselves whatever the mode.
+#[inline(always)]
+fn neighbours(mode: Wrap, i: f32, n: f32) -> (u32, u32) {
+    if i >= 0.0 && i + 1.0 < n {
+        let i = i as u32;
+        return (i, i + 1);
+    }
+    (wrapped(mode, i, n), wrapped(mode, i + 1.0, n))
 }
 
 /// Integer-valued `i` wrapped into 0..n, in f32 arithmetic as the kernel does it (clamped,
@@ -216,6 +222,21 @@ mod tests {
     }
 
     /// A 3x2 image whose texels hold their own (x, y, 0), read at u beyond [0, 1] each way.
+    /// The shortcut for a texel and its neighbour inside the image gives what wrapping each
+    /// does, in every mode, at and around both edges.
+    #[test]
+    fn neighbours_are_the_wrapped_texels() {
+        for mode in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
+            for n in [1.0f32, 2.0, 5.0] {
+                for i in -7..12 {
+                    let i = i as f32;
+                    let expected = (wrapped(mode, i, n), wrapped(mode, i + 1.0, n));
+                    assert_eq!(neighbours(mode, i, n), expected, "{mode:?} {i} of {n}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn images_wrap_and_filter_as_their_lookup_says() {
         use crate::scene::image_lookup::{Filter, ImageLookup, Wrap};

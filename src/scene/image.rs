@@ -81,7 +81,8 @@ impl Image {
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> glam::Vec3 {
         let i = 3 * (y as usize * self.width as usize + x as usize);
-        glam::Vec3::new(self.texels[i], self.texels[i + 1], self.texels[i + 2])
+        let rgb = &self.texels[i..i + 3];
+        glam::Vec3::new(rgb[0], rgb[1], rgb[2])
     }
 
     /// This image with every texel multiplied by `factor` channel by channel (glTF's factor x
