@@ -13,8 +13,8 @@ fn texel_at(t: texture_2d<u32>, i: u32) -> vec4u {
     return textureLoad(t, vec2u(i % TEXEL_ROW, i / TEXEL_ROW), 0);
 }
 
-// Every image the scene reads (a texel per vec4f), and the environment's alias table
-// (ImageArray in src/gpu/layout.rs).
+// Every image the scene reads (a texel per vec4f), and the environment's CDFs (ImageArray in
+// src/gpu/layout.rs).
 //#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS || ALPHA || COAT_TABLE
 @group(0) @binding(BINDING_IMAGE_TEXELS) var image_texels: texture_2d<u32>;
 

@@ -89,10 +89,25 @@ fn obj_polygons_negative_indices_and_missing_normals() {
     assert!((t.p1 - t.p0).cross(t.p2 - t.p0).z > 0.0);
 }
 
+/// A material library tobj cannot parse (it panics on a colour of two numbers) leaves the mesh
+/// without materials, as a missing one does; the scene's material applies.
+#[test]
+fn a_malformed_material_library_reads_as_none() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write(dir.path(), "bad.mtl", b"newmtl m\nKd 1 2\n");
+    let path = write(
+        dir.path(),
+        "t.obj",
+        b"mtllib bad.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    let parts = mesh::load(&path, "t.obj", None).expect("loads without materials");
+    assert!(parts.iter().all(|p| p.material.is_none()));
+}
+
 #[test]
 fn bad_mesh_files_are_one_line_errors_naming_file_and_line() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let cases: [(&str, &[u8], &str); 7] = [
+    let cases: [(&str, &[u8], &str); 8] = [
         (
             "badv.obj",
             b"v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n",
@@ -108,6 +123,11 @@ fn bad_mesh_files_are_one_line_errors_naming_file_and_line() {
             "far.obj",
             b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 -9223372036854775807\n",
             "far.obj:4: a face (f) names a vertex (v)",
+        ),
+        (
+            "min.obj",
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 -9223372036854775808\n",
+            "min.obj:4: a face (f) names a vertex (v)",
         ),
         (
             "empty.obj",

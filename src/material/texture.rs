@@ -221,7 +221,6 @@ mod tests {
         }
     }
 
-    /// A 3x2 image whose texels hold their own (x, y, 0), read at u beyond [0, 1] each way.
     /// The shortcut for a texel and its neighbour inside the image gives what wrapping each
     /// does, in every mode, at and around both edges.
     #[test]
@@ -237,6 +236,7 @@ mod tests {
         }
     }
 
+    /// A 3x2 image whose texels hold their own (x, y, 0), read at u beyond [0, 1] each way.
     #[test]
     fn images_wrap_and_filter_as_their_lookup_says() {
         use crate::scene::image_lookup::{Filter, ImageLookup, Wrap};

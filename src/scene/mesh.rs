@@ -372,7 +372,11 @@ fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
         return Err(tobj::LoadError::OpenFileFailed);
     }
     let bytes = std::fs::read(&path).map_err(|_| tobj::LoadError::ReadError)?;
-    tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes))
+    // tobj panics on some malformed lines (`Kd 1 2`): such a library reads as unreadable.
+    std::panic::catch_unwind(|| {
+        crate::quiet_panics(|| tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes)))
+    })
+    .unwrap_or(Err(tobj::LoadError::ReadError))
 }
 
 /// An MTL material as rt-gpu's, the way Blender's OBJ exporter (3.4) writes its Principled
@@ -583,7 +587,7 @@ fn check_obj_faces(text: &str) -> Result<(), (usize, String)> {
                         }
                         let valid = index
                             .parse::<i64>()
-                            .is_ok_and(|i| i != 0 && i <= counts[k] && -i <= counts[k]);
+                            .is_ok_and(|i| i != 0 && i.unsigned_abs() <= counts[k] as u64);
                         if !valid {
                             let what = ["vertex (v)", "texture coordinate (vt)", "normal (vn)"][k];
                             return Err((
