@@ -46,6 +46,12 @@ pub fn quiet_panics<T>(f: impl FnOnce() -> T) -> T {
     f()
 }
 
+/// Runs `f`, a dependency's reader that may panic on input it should refuse, with its panic
+/// quiet and caught: `None` if it panicked (nothing it built is kept, so unwind safety holds).
+pub fn caught_quietly<T>(f: impl FnOnce() -> T) -> Option<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| quiet_panics(f))).ok()
+}
+
 /// Whether a panic on this thread now is one that [`quiet_panics`] expects.
 pub fn panics_are_quiet() -> bool {
     QUIET_PANICS.with(|q| q.get())

@@ -94,8 +94,8 @@ pub struct Distribution {
 /// Cumulative distribution functions of piecewise-constant densities on [0, 1), one or several
 /// side by side: a table of `n` slots is `n + 1` entries whose values rise from 0 to 1, each
 /// entry k < n also holding a guide (Chen and Asau 1974): the slot where `u` = k / n falls,
-/// from which a pick walks a step or two instead of searching (a binary search's
-/// unpredictable steps cost a tenth of a render here). A value and its guide share an entry,
+/// from which a pick walks a step or two instead of searching (a binary search's steps are
+/// branches no predictor can learn). A value and its guide share an entry,
 /// as the kernel's vec4f does, so a pick's loads share cache lines.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct Cdfs {
@@ -367,12 +367,12 @@ mod tests {
         let d = Distribution::new(&image);
         assert!(d.density[2 * w + 4] == 0.0 && d.density[w + 1] == 0.0);
         let m = 997;
-        let mut last = (0, 0);
+        let mut last_y = 0;
         for k in 0..m {
             let u1 = k as f32 / m as f32;
             let ((_, y), _) = d.pick(w, h, u1, 0.5);
-            assert!(y >= last.1, "u1 {u1}: row {y} after {}", last.1);
-            last = (0, y);
+            assert!(y >= last_y, "u1 {u1}: row {y} after {last_y}");
+            last_y = y;
             let mut last_x = 0;
             for j in 0..m {
                 let u2 = j as f32 / m as f32;

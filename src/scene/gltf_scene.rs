@@ -248,9 +248,7 @@ fn framing_camera(min: DVec3, max: DVec3) -> Camera {
 /// read by `mesh::load` first).
 pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
     // A panic inside the `gltf` crate (it unwraps some values it validated) is one line too.
-    let read =
-        std::panic::catch_unwind(|| crate::quiet_panics(|| read_checked_extras(path, source)));
-    read.unwrap_or_else(|_| {
+    crate::caught_quietly(|| read_checked_extras(path, source)).unwrap_or_else(|| {
         Err(format!(
             "cannot read {source}: the glTF reader failed on it (a malformed file)"
         ))
