@@ -633,6 +633,56 @@ translate = [0.7, 0, 0.3]
     rt_gpu::scene::file::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A shadow ray's search for any hit before a distance (`stopped_before`) sees the same holes
+/// as the closest-hit search: over random rays through the see-through scene, its meshes placed
+/// and instanced, "stopped" exactly when `intersect`'s hit lies before the distance (beyond
+/// everything, at that hit, halfway to it); negative control: the scene with every alpha
+/// ignored is stopped where `intersect` on the see-through scene passes, for many rays.
+#[test]
+fn a_shadow_ray_passes_see_through_surfaces_where_a_path_does() {
+    use rt_gpu::cpu::shapes::{intersect, stopped_before};
+    for twice in [false, true] {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let scene = see_through_scene(dir.path(), 0.6, twice);
+        let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
+        assert!(flat.see_through && flat.instances.is_empty() != twice);
+        let mut opaque = flat.clone();
+        for m in &mut opaque.materials {
+            if let Material::Pbr(p) = m {
+                *p = p.with_alpha(None);
+            }
+        }
+        opaque.see_through = false;
+        let mut rng = rt_gpu::shared::rng::Rng::for_sample(0, 0, 17);
+        let (mut stopped, mut differ_opaque) = (0, 0);
+        for _ in 0..20_000 {
+            let mut point = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let origin = Vec3::new(3.0, 3.0, 1.0) * (point() - 0.5) + Vec3::new(0.0, 0.0, 0.8);
+            let toward = Vec3::new(2.0, 2.0, 0.6) * (point() - 0.5);
+            let ray = rt_gpu::shared::ray::Ray {
+                origin: origin - flat.origin.as_vec3(),
+                dir: (toward - origin).normalize(),
+            };
+            let closest = intersect(&flat, &ray).map_or(f32::INFINITY, |h| h.t);
+            for before in [f32::INFINITY, closest, 0.5 * closest] {
+                assert_eq!(
+                    stopped_before(&flat, &ray, before),
+                    closest < before,
+                    "{ray:?}"
+                );
+            }
+            stopped += closest.is_finite() as u32;
+            differ_opaque +=
+                (stopped_before(&opaque, &ray, f32::INFINITY) && !closest.is_finite()) as u32;
+        }
+        eprintln!("twice {twice}: {stopped} stopped, {differ_opaque} only where alpha is ignored");
+        assert!(
+            stopped > 5_000 && differ_opaque > 500,
+            "{stopped}, {differ_opaque}"
+        );
+    }
+}
+
 /// See-through surfaces render the same estimator every way: naive against nee on the CPU (a
 /// shadow ray and a path see the same holes), and the GPU against the CPU with nee (Welch z +
 /// Sidak at family-wise 0.01, tests/common/stats.rs; 24x18 at 4 096 and 2 048 spp); negative

@@ -9,19 +9,45 @@ use super::four_triangles::ShearedRay;
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, inverse_direction};
 use crate::shared::ray::Ray;
 use crate::wide_bvh::{EMPTY, LEAF, TRIANGLES, WideBvh, WideNode};
+use std::mem::MaybeUninit;
 
-/// The last pushed node whose box, entered at the distance pushed with it, the ray still meets
-/// before `closest` (as box_entry would test it now), popping those it passes over.
-#[inline]
-fn pop_within(stack: &[(u32, f32)], top: &mut usize, closest: f32) -> Option<u32> {
-    while *top > 0 {
-        *top -= 1;
-        let (pending, t_entry) = stack[*top];
-        if t_entry <= closest * BOX_FAR_WIDENING {
-            return Some(pending);
+/// Pending children of a wide traversal. Its slots are not cleared when it is made: a ray's
+/// traversal is short beside clearing all of them, which had cost a few percent of a mesh
+/// scene's render; only pushed slots are ever read.
+struct Pending {
+    slots: [MaybeUninit<(u32, f32)>; 3 * MAX_DEPTH + 1],
+    top: usize,
+}
+
+impl Pending {
+    #[inline]
+    fn new() -> Self {
+        Pending {
+            slots: [MaybeUninit::uninit(); 3 * MAX_DEPTH + 1],
+            top: 0,
         }
     }
-    None
+
+    #[inline]
+    fn push(&mut self, pending: (u32, f32)) {
+        self.slots[self.top] = MaybeUninit::new(pending);
+        self.top += 1;
+    }
+
+    /// The last pushed node whose box, entered at the distance pushed with it, the ray still
+    /// meets before `closest` (as box_entry would test it now), popping those it passes over.
+    #[inline]
+    fn pop_within(&mut self, closest: f32) -> Option<u32> {
+        while self.top > 0 {
+            self.top -= 1;
+            // SAFETY: slots below `top` were written by `push`.
+            let (pending, t_entry) = unsafe { self.slots[self.top].assume_init() };
+            if t_entry <= closest * BOX_FAR_WIDENING {
+                return Some(pending);
+            }
+        }
+        None
+    }
 }
 
 /// What a traversal does at its leaves.
@@ -34,6 +60,11 @@ pub trait Leaves {
     /// them: within [`reach`] of `closest` as it was when the block was tested, which an
     /// earlier lane may since have shortened.
     fn triangle(&mut self, triangle: u32, hit: (f32, f32, f32), closest: &mut f32);
+    /// Whether the traversal may end now (a search for any hit that has found one).
+    #[inline]
+    fn finished(&self) -> bool {
+        false
+    }
 }
 
 /// Up to and including `closest`: the `t_max` a closest-hit search tests primitives with, so
@@ -68,8 +99,7 @@ pub fn traverse_wide(
     let boxes = FourBoxes::new(ray);
     let sheared = ShearedRay::new(ray);
     // Each level pushes at most three children.
-    let mut stack = [(0u32, 0f32); 3 * MAX_DEPTH + 1];
-    let mut top = 0;
+    let mut stack = Pending::new();
     let mut reference = root;
     loop {
         if reference & LEAF != 0 {
@@ -89,6 +119,9 @@ pub fn traverse_wide(
                 for &p in &bvh.primitives[first..first + leaf.count as usize] {
                     leaves.primitive(p, closest);
                 }
+            }
+            if leaves.finished() {
+                return;
             }
         } else {
             let node = &wide.nodes[reference as usize];
@@ -110,14 +143,13 @@ pub fn traverse_wide(
             }
             if count > 0 {
                 for &pending in order[1..count].iter().rev() {
-                    stack[top] = pending;
-                    top += 1;
+                    stack.push(pending);
                 }
                 reference = order[0].0;
                 continue;
             }
         }
-        match pop_within(&stack, &mut top, *closest) {
+        match stack.pop_within(*closest) {
             Some(pending) => reference = pending,
             None => return,
         }
@@ -211,8 +243,7 @@ mod tests {
             let node = &bvh.nodes[index as usize];
             box_entry(node.min, node.max, ray.origin, inverse, closest)
         };
-        let mut stack = [(0u32, 0f32); MAX_DEPTH];
-        let mut top = 0;
+        let mut stack = Pending::new();
         let mut index = root;
         loop {
             let node = &bvh.nodes[index as usize];
@@ -230,8 +261,7 @@ mod tests {
                         } else {
                             (first, second, t_second)
                         };
-                        stack[top] = (far, t_far);
-                        top += 1;
+                        stack.push((far, t_far));
                         index = near;
                         continue;
                     }
@@ -246,7 +276,7 @@ mod tests {
                     (None, None) => {}
                 }
             }
-            match pop_within(&stack, &mut top, *closest) {
+            match stack.pop_within(*closest) {
                 Some(pending) => index = pending,
                 None => return,
             }

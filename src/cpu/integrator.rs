@@ -18,7 +18,7 @@
 use super::background::background;
 use super::lights;
 use super::medium::{free_flight, hg_pdf, sample_hg, transmittance};
-use super::shapes::intersect;
+use super::shapes::{intersect, intersect_light, stopped_before};
 use crate::material::Medium;
 use crate::options::{Integrator, RenderOptions};
 use crate::scene::Material;
@@ -352,15 +352,15 @@ pub fn light_arriving(
     let escaped = || environment.map(|env| super::environment::radiance(&env, dir));
     if medium == 0 && scene.medium_crossings == 0 {
         // No medium on the way (the loop below, without its cost).
-        let hit = intersect(scene, &ray);
-        if let Some(le) = punctual {
-            return hit.is_none_or(|h| h.t >= reach).then_some(le);
+        if at_infinity || punctual.is_some() {
+            // A light no primitive is: anything on the way blocks it.
+            if stopped_before(scene, &ray, reach) {
+                return None;
+            }
+            return punctual.or_else(escaped);
         }
-        let Some(hit) = hit else {
-            return escaped();
-        };
-        return (scene.light_of(hit.primitive) == index as u32 + 1)
-            .then(|| scene.materials[hit.material as usize].emitted(&hit));
+        let hit = intersect_light(scene, &ray, index as u32 + 1)?;
+        return Some(scene.materials[hit.material as usize].emitted(&hit));
     }
     let mut transmitted = 1.0;
     for _ in 0..=scene.medium_crossings {

@@ -96,7 +96,7 @@ fn replaces(t: f32, key: (u32, u32), closest: f32, found: &Option<Candidate>) ->
 /// resting on a floor) resolve the same whatever order a traversal meets them in, as they do
 /// when every primitive is tested in that order (the GPU's small kernels).
 #[inline]
-fn consider(
+fn consider<const FIRST: bool>(
     scene: &FlatScene,
     p: PrimitiveRef,
     ray: &Ray,
@@ -113,7 +113,9 @@ fn consider(
             let tri = &scene.triangles[i as usize];
             hit_triangle(tri, ray, 0.0, t_max).map(|(t, b1, b2)| (t, Vec3::ZERO, Vec2::new(b1, b2)))
         }
-        PrimitiveRef::Instance(i) => return consider_instance(scene, i, ray, closest, found),
+        PrimitiveRef::Instance(i) => {
+            return consider_instance::<FIRST>(scene, i, ray, closest, found);
+        }
     };
     if let Some(hit) = tested {
         keep(scene, p, hit, ray, closest, found);
@@ -157,18 +159,24 @@ fn keep(
 }
 
 /// The closest-hit search through the scene's top level: each leaf's primitives considered in
-/// turn, a block of placed triangles kept lane by lane.
-struct TopLevel<'a> {
+/// turn, a block of placed triangles kept lane by lane. With `FIRST` it ends at the first hit
+/// kept (any one: whether the ray is stopped at all, not where).
+struct TopLevel<'a, const FIRST: bool> {
     scene: &'a FlatScene,
     ray: &'a Ray,
     found: &'a mut Option<Candidate>,
 }
 
-impl Leaves for TopLevel<'_> {
+impl<const FIRST: bool> Leaves for TopLevel<'_, FIRST> {
     #[inline]
     fn primitive(&mut self, packed: u32, closest: &mut f32) {
         let primitive = PrimitiveRef::unpacked(packed);
-        consider(self.scene, primitive, self.ray, closest, self.found);
+        consider::<FIRST>(self.scene, primitive, self.ray, closest, self.found);
+    }
+
+    #[inline]
+    fn finished(&self) -> bool {
+        FIRST && self.found.is_some()
     }
 
     #[inline]
@@ -185,7 +193,7 @@ impl Leaves for TopLevel<'_> {
 /// coordinates (its direction not renormalised, so that distances along it stay those of
 /// `ray`), as `consider` does a primitive's. Its normal is found once the closest hit is known.
 #[inline]
-fn consider_instance(
+fn consider_instance<const FIRST: bool>(
     scene: &FlatScene,
     index: u32,
     ray: &Ray,
@@ -193,7 +201,7 @@ fn consider_instance(
     found: &mut Option<Candidate>,
 ) {
     let local = local_ray(&scene.instances[index as usize], ray);
-    let mut search = InInstance::new(scene, index, &local, found);
+    let mut search = InInstance::<FIRST>::new(scene, index, &local, found);
     let (wide, root) = (
         &scene.wide_bvh,
         scene.wide_bvh.instance_roots[index as usize],
@@ -201,8 +209,9 @@ fn consider_instance(
     super::accel::traverse_wide(wide, &scene.bvh, root, &local, closest, &mut search);
 }
 
-/// The closest-hit search through instance `index`'s mesh, along the ray in its coordinates.
-struct InInstance<'a> {
+/// The closest-hit search through instance `index`'s mesh, along the ray in its coordinates;
+/// with `FIRST`, ended by the first hit kept, as `TopLevel`'s.
+struct InInstance<'a, const FIRST: bool> {
     scene: &'a FlatScene,
     index: u32,
     material: u32,
@@ -218,7 +227,7 @@ fn local_ray(instance: &Instance, ray: &Ray) -> Ray {
     }
 }
 
-impl<'a> InInstance<'a> {
+impl<'a, const FIRST: bool> InInstance<'a, FIRST> {
     fn new(
         scene: &'a FlatScene,
         index: u32,
@@ -260,7 +269,12 @@ impl<'a> InInstance<'a> {
     }
 }
 
-impl Leaves for InInstance<'_> {
+impl<const FIRST: bool> Leaves for InInstance<'_, FIRST> {
+    #[inline]
+    fn finished(&self) -> bool {
+        FIRST && self.found.is_some()
+    }
+
     #[inline]
     fn primitive(&mut self, packed: u32, closest: &mut f32) {
         let triangle = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
@@ -316,6 +330,21 @@ fn passes_through(
 pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
     super::ray_count::count_ray();
     let (t, found) = closest(scene, ray)?;
+    Some(hit_on(scene, ray, t, &found))
+}
+
+/// [`intersect`]'s hit where it lies on a primitive of light `light` (its index + 1, as
+/// [`FlatScene::light_of`] numbers them), `None` where the closest hit is elsewhere or there
+/// is none: a shadow ray's test, which works out the surface only of the light it reaches.
+pub fn intersect_light(scene: &FlatScene, ray: &Ray, light: u32) -> Option<Hit> {
+    super::ray_count::count_ray();
+    let (t, found) = closest(scene, ray)?;
+    (scene.light_of(found.primitive) == light).then(|| hit_on(scene, ray, t, &found))
+}
+
+/// The hit on `found`, closest along `ray` at distance `t`: its surface worked out.
+#[inline]
+fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
     let outward = match found.primitive {
         // By the inverse transpose: a mirroring placement turns the winding's normal around
         // with it, as flattening's swapped corners do.
@@ -331,10 +360,10 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         PrimitiveRef::Shape { .. } => found.outward,
     }
     .normalize();
-    let (material, (point, error), uv) = surface(scene, &found, ray.at(t));
-    let shading = shading(scene, &found, material, uv, outward);
+    let (material, (point, error), uv) = surface(scene, found, ray.at(t));
+    let shading = shading(scene, found, material, uv, outward);
     let front_face = ray.dir.dot(outward) < 0.0;
-    Some(Hit {
+    Hit {
         t,
         point,
         error,
@@ -344,10 +373,11 @@ pub fn intersect(scene: &FlatScene, ray: &Ray) -> Option<Hit> {
         material,
         primitive: found.primitive,
         uv,
-    })
+    }
 }
 
 /// The closest primitive along `ray` beyond its origin, and its distance.
+#[inline]
 fn closest(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
     if scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty() {
         closest_in_turn(scene, ray)
@@ -357,6 +387,7 @@ fn closest(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
 }
 
 /// [`closest`] testing every shape in turn.
+#[inline]
 fn closest_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
     let mut closest = f32::INFINITY;
     let mut found: Option<Candidate> = None;
@@ -371,9 +402,38 @@ fn closest_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
 
 /// [`closest`] through the scene's BVH.
 fn closest_through_bvh(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
-    let mut closest = f32::INFINITY;
+    through_bvh::<false>(scene, ray, f32::INFINITY)
+}
+
+/// Whether anything stops `ray` before distance `before` (beyond its origin): exactly when
+/// [`intersect`] finds a hit nearer than `before`, as each primitive's test and what passes
+/// through are the same, but ended at the first such hit rather than the closest, and without
+/// working out its surface. A shadow ray's test toward a light that is not in the scene's
+/// primitives (a point, the sun, the environment).
+pub fn stopped_before(scene: &FlatScene, ray: &Ray, before: f32) -> bool {
+    super::ray_count::count_ray();
+    if scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty() {
+        return closest_in_turn(scene, ray).is_some_and(|(t, _)| t < before);
+    }
+    // Primitives are tested up to and including `closest` (`reach`): strictly before `before`.
+    let closest = if before.is_finite() {
+        before.next_down()
+    } else {
+        before
+    };
+    through_bvh::<true>(scene, ray, closest).is_some()
+}
+
+/// The search through the scene's BVH for primitives hit up to `closest`: the closest one, or
+/// with `FIRST` the first one found.
+#[inline]
+fn through_bvh<const FIRST: bool>(
+    scene: &FlatScene,
+    ray: &Ray,
+    mut closest: f32,
+) -> Option<(f32, Candidate)> {
     let mut found: Option<Candidate> = None;
-    let mut search = TopLevel {
+    let mut search = TopLevel::<FIRST> {
         scene,
         ray,
         found: &mut found,
@@ -672,6 +732,53 @@ mod block_tests {
         }
     }
 
+    /// A search for any hit before a distance says "stopped" exactly when the closest hit lies
+    /// before it: over random rays through scenes of placed and instanced meshes and of shapes
+    /// alone (tested in turn), with the distance beyond everything, at the closest hit, just
+    /// past it and halfway to it.
+    #[test]
+    fn the_first_hit_search_stops_where_the_closest_hit_lies_before() {
+        for file in [
+            "scenes/meshes.toml",
+            "scenes/knots.toml",
+            "scenes/textured.toml",
+        ] {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+            let scene = crate::scene::file::load(&path).expect(file);
+            let flat = FlatScene::new(&scene, 8, 8).expect("valid");
+            let radius = flat.bounding_radius() as f32;
+            let (mut stopped, mut passed) = (0, 0);
+            for i in 0..4_000 {
+                let mut rng = Rng::for_sample(i, 0, 9);
+                let mut next = || rng.next_f32();
+                let origin = Vec3::new(next(), next(), next()) * 2.0 * radius - radius;
+                let target = Vec3::new(next(), next(), next()) * radius - 0.5 * radius;
+                let ray = Ray {
+                    origin,
+                    dir: (target - origin).normalize_or(Vec3::Y),
+                };
+                let closest = intersect(&flat, &ray).map_or(f32::INFINITY, |h| h.t);
+                for before in [f32::INFINITY, closest, closest.next_up(), 0.5 * closest] {
+                    let expected = closest < before;
+                    assert_eq!(
+                        stopped_before(&flat, &ray, before),
+                        expected,
+                        "{file}: {ray:?} before {before}"
+                    );
+                    (stopped, passed) = if expected {
+                        (stopped + 1, passed)
+                    } else {
+                        (stopped, passed + 1)
+                    };
+                }
+            }
+            assert!(
+                stopped > 2_000 && passed > 2_000,
+                "{file}: {stopped} stopped, {passed} passed"
+            );
+        }
+    }
+
     /// The closest hit by testing every top-level primitive, and every triangle of an instance,
     /// one by one with `hit_triangle`.
     fn every_triangle_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
@@ -681,13 +788,13 @@ mod block_tests {
                 PrimitiveRef::Instance(index) => {
                     let instance = &scene.instances[index as usize];
                     let local = local_ray(instance, ray);
-                    let mut search = InInstance::new(scene, index, &local, &mut found);
+                    let mut search = InInstance::<false>::new(scene, index, &local, &mut found);
                     for triangle in scene.instanced_meshes[instance.mesh as usize].clone() {
                         let packed = PrimitiveRef::Triangle(triangle as u32).packed();
                         search.primitive(packed, &mut closest);
                     }
                 }
-                p => consider(scene, p, ray, &mut closest, &mut found),
+                p => consider::<false>(scene, p, ray, &mut closest, &mut found),
             }
         }
         found.map(|found| (closest, found))
