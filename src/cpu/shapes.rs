@@ -3,6 +3,7 @@
 use super::accel::{Leaves, reach};
 use crate::scene::flat::{FlatScene, Instance, Triangle};
 use crate::scene::normal_map::NormalMap;
+use crate::shape::sphere::Sphere;
 use crate::shape::{ShapeKind, ShapeVisitor, SurfaceShape};
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
 use crate::shared::ray::{Hit, POINT_ERROR, Ray};
@@ -460,23 +461,52 @@ struct InTurn<'a> {
 impl ShapeVisitor for InTurn<'_> {
     #[inline]
     fn visit<S: SurfaceShape>(&mut self, kind: &'static ShapeKind, shapes: &[S]) {
+        if let Some(spheres) = S::as_spheres(shapes) {
+            return self.visit_spheres(kind, spheres);
+        }
         for (index, shape) in shapes.iter().enumerate() {
-            let Some(t) = shape.hit(self.ray, reach(*self.closest)) else {
-                continue;
-            };
-            let primitive = PrimitiveRef::Shape {
-                kind: kind.kind,
-                index: index as u32,
-            };
-            if replaces(t, (primitive.packed(), 0), *self.closest, self.found) {
-                *self.closest = t;
-                *self.found = Some(Candidate {
-                    primitive,
-                    outward: shape.outward(self.ray, t),
-                    weights: Vec2::ZERO,
-                    triangle: 0,
-                });
+            if let Some(t) = shape.hit(self.ray, reach(*self.closest)) {
+                self.keep(kind, index, shape, t);
             }
+        }
+    }
+}
+
+impl InTurn<'_> {
+    /// Spheres four at a time: each lane is `hit_sphere`'s answer, kept if still within reach
+    /// of the closest hit, which an earlier lane may have shortened (the one-by-one test would
+    /// then have found nothing nearer either: a sphere's far root lies beyond its near one).
+    #[inline]
+    fn visit_spheres(&mut self, kind: &'static ShapeKind, spheres: &[Sphere]) {
+        for (block, four) in spheres.chunks(4).enumerate() {
+            let hits = super::four_spheres::hits(four, self.ray, reach(*self.closest));
+            let mut lanes = hits.hit;
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let t = hits.t[lane];
+                if t < reach(*self.closest) {
+                    self.keep(kind, 4 * block + lane, &four[lane], t);
+                }
+            }
+        }
+    }
+
+    /// Keeps shape `index` of `kind`, hit at `t`, if it replaces the closest so far.
+    #[inline]
+    fn keep<S: SurfaceShape>(&mut self, kind: &'static ShapeKind, index: usize, shape: &S, t: f32) {
+        let primitive = PrimitiveRef::Shape {
+            kind: kind.kind,
+            index: index as u32,
+        };
+        if replaces(t, (primitive.packed(), 0), *self.closest, self.found) {
+            *self.closest = t;
+            *self.found = Some(Candidate {
+                primitive,
+                outward: shape.outward(self.ray, t),
+                weights: Vec2::ZERO,
+                triangle: 0,
+            });
         }
     }
 }

@@ -45,6 +45,10 @@ pub trait SurfaceShape: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     fn hit(&self, ray: &Ray, t_max: f32) -> Option<f32>;
     /// The outward normal at distance `t` along the ray, not yet of unit length.
     fn outward(&self, ray: &Ray, t: f32) -> Vec3;
+    /// These shapes as spheres, if they are: the CPU tests spheres four at a time.
+    fn as_spheres(_shapes: &[Self]) -> Option<&[sphere::Sphere]> {
+        None
+    }
     /// The hit `along_ray` (= o + t d) put back onto the surface, and a bound on its error.
     fn surface(&self, along_ray: Vec3) -> (Vec3, f32);
     /// Surface coordinates for textures at `point` (on the surface) or `along_ray`.

@@ -54,7 +54,9 @@ impl ShapeParams for SphereParams {
     }
 }
 
+/// `repr(C)`: the centre and radius lead, as the CPU's four-sphere test loads them.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Sphere {
     pub center: Vec3,
     /// Negative for an inward-facing (hollow) sphere.
@@ -137,6 +139,9 @@ impl SurfaceShape for Sphere {
     #[inline]
     fn outward(&self, ray: &Ray, t: f32) -> Vec3 {
         (ray.at(t) - self.center) / self.radius
+    }
+    fn as_spheres(shapes: &[Self]) -> Option<&[Sphere]> {
+        Some(shapes)
     }
     /// Along the ray's direction from the centre, at the radius.
     fn surface(&self, along_ray: Vec3) -> (Vec3, f32) {

@@ -1,0 +1,157 @@
+//! Up to four spheres tested against a ray together, for scenes whose few shapes are tested
+//! in turn (`shapes::closest_in_turn`): [`crate::shape::sphere::hit_sphere`]'s operations in
+//! its order, lane by lane, so each lane's distance is bit for bit the one it gives its sphere
+//! (no fused multiply-add: the x86-64 baseline has none; SSE's square root is IEEE's, as
+//! `f32::sqrt` is).
+
+use crate::shape::sphere::{Sphere, hit_sphere};
+use crate::shared::ray::Ray;
+
+/// Where each of up to four spheres is hit within (0, `t_max`): the distance in the lanes set
+/// in `hit`.
+pub struct SphereHits {
+    pub t: [f32; 4],
+    pub hit: u32,
+}
+
+/// `spheres` (at most four) against `ray` within (0, `t_max`).
+#[inline]
+#[cfg(target_arch = "x86_64")]
+pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
+    use std::arch::x86_64::*;
+    debug_assert!(spheres.len() <= 4);
+    // A lane past the spheres repeats the first, and is masked off at the end.
+    let lane = |i: usize| spheres.get(i).unwrap_or(&spheres[0]);
+    // SAFETY: SSE is part of x86-64's baseline; `Sphere` is `repr(C)`, so its first four
+    // floats are the centre and the radius.
+    unsafe {
+        let load = |i: usize| _mm_loadu_ps(&lane(i).center.x as *const f32);
+        let (mut x, mut y, mut z, mut radius) = (load(0), load(1), load(2), load(3));
+        _MM_TRANSPOSE4_PS(&mut x, &mut y, &mut z, &mut radius);
+        let splat = |v: f32| _mm_set1_ps(v);
+        let (dx, dy, dz) = (splat(ray.dir.x), splat(ray.dir.y), splat(ray.dir.z));
+        let oc = [
+            _mm_sub_ps(x, splat(ray.origin.x)),
+            _mm_sub_ps(y, splat(ray.origin.y)),
+            _mm_sub_ps(z, splat(ray.origin.z)),
+        ];
+        // glam's dot: (x x' + y y') + z z'.
+        let dot = |a: [__m128; 3], b: [__m128; 3]| {
+            let xy = _mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1]));
+            _mm_add_ps(xy, _mm_mul_ps(a[2], b[2]))
+        };
+        let h = dot([dx, dy, dz], oc);
+        let perpendicular = [
+            _mm_sub_ps(oc[0], _mm_mul_ps(h, dx)),
+            _mm_sub_ps(oc[1], _mm_mul_ps(h, dy)),
+            _mm_sub_ps(oc[2], _mm_mul_ps(h, dz)),
+        ];
+        let disc = _mm_sub_ps(
+            _mm_mul_ps(radius, radius),
+            dot(perpendicular, perpendicular),
+        );
+        let present = (1u32 << spheres.len()) - 1;
+        let mut out = SphereHits { t: [0.0; 4], hit: 0 };
+        // Most rays miss every sphere: no root to wait for.
+        if _mm_movemask_ps(_mm_cmpge_ps(disc, _mm_setzero_ps())) as u32 & present == 0 {
+            return out;
+        }
+        // A negative discriminant's root is NaN, which no comparison below accepts.
+        let sq = _mm_sqrt_ps(disc);
+        let (near, far) = (_mm_sub_ps(h, sq), _mm_add_ps(h, sq));
+        let (zero, limit) = (_mm_setzero_ps(), splat(t_max));
+        let within = |t| _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, limit));
+        let (near_ok, far_ok) = (within(near), within(far));
+        let t = _mm_or_ps(_mm_and_ps(near_ok, near), _mm_andnot_ps(near_ok, far));
+        out.hit = _mm_movemask_ps(_mm_or_ps(near_ok, far_ok)) as u32 & present;
+        _mm_storeu_ps(out.t.as_mut_ptr(), t);
+        out
+    }
+}
+
+/// `spheres` (at most four) against `ray` within (0, `t_max`): `hit_sphere` per lane.
+#[cfg(not(target_arch = "x86_64"))]
+pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
+    hits_one_by_one(spheres, ray, t_max)
+}
+
+/// [`hits`] one sphere at a time, by `hit_sphere` itself: the reference the four-lane test is
+/// checked against, and the test where there is no SSE.
+pub fn hits_one_by_one(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
+    let mut out = SphereHits {
+        t: [0.0; 4],
+        hit: 0,
+    };
+    for (lane, sphere) in spheres.iter().enumerate() {
+        if let Some(t) = hit_sphere(sphere, ray, 0.0, t_max) {
+            out.t[lane] = t;
+            out.hit |= 1 << lane;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shared::rng::Rng;
+    use glam::Vec3;
+
+    /// Four lanes at once give each sphere `hit_sphere`'s answer to the bit: random rays from
+    /// inside and outside against blocks of one to four random spheres (hollow ones, tiny and
+    /// huge ones, far ones), grazing ones, with `t_max` beyond them, at a hit's own distance and
+    /// just past it.
+    #[test]
+    fn four_lanes_hit_as_hit_sphere_does() {
+        let mut found = 0;
+        for i in 0..40_000u32 {
+            let mut rng = Rng::for_sample(i, 0, 13);
+            let mut point =
+                || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            let count = 1 + i as usize % 4;
+            let scale = [1.0, 1e-3, 1e4, 1.0][i as usize % 4];
+            let spheres: Vec<Sphere> = (0..count)
+                .map(|k| Sphere {
+                    center: point() * scale * 2.0,
+                    radius: scale * (0.1 + point().x.abs()) * if k == 1 { -1.0 } else { 1.0 },
+                    material: 0,
+                    light: 0,
+                })
+                .collect();
+            let origin = point() * 3.0 * scale;
+            let target = spheres[i as usize % count].center;
+            let mut dir = (target - origin).normalize_or(Vec3::Z);
+            if i % 5 == 0 {
+                dir = point().normalize_or(Vec3::Y);
+            }
+            if i % 7 == 0 {
+                // Aimed at the rim: a grazing ray.
+                let s = &spheres[0];
+                let side = (s.center - origin).cross(Vec3::Y).normalize_or(Vec3::X);
+                dir = (s.center + side * s.radius.abs() - origin).normalize_or(Vec3::Z);
+            }
+            let ray = Ray { origin, dir };
+            let far = hits_one_by_one(&spheres, &ray, f32::INFINITY);
+            let nearest = (0..count)
+                .filter(|&l| far.hit & (1 << l) != 0)
+                .map(|l| far.t[l])
+                .fold(f32::INFINITY, f32::min);
+            for t_max in [f32::INFINITY, nearest, nearest.next_up(), scale] {
+                let (four, one) = (
+                    hits(&spheres, &ray, t_max),
+                    hits_one_by_one(&spheres, &ray, t_max),
+                );
+                assert_eq!(four.hit, one.hit, "{spheres:?} {ray:?} t_max {t_max}");
+                for lane in (0..count).filter(|&l| one.hit & (1 << l) != 0) {
+                    assert_eq!(
+                        four.t[lane].to_bits(),
+                        one.t[lane].to_bits(),
+                        "{ray:?} lane {lane}"
+                    );
+                }
+                found += one.hit.count_ones();
+            }
+        }
+        assert!(found > 20_000, "only {found} hits");
+    }
+}
