@@ -1,11 +1,16 @@
 //! Up to four spheres tested against a ray together, for scenes whose few shapes are tested
 //! in turn (`shapes::closest_in_turn`): [`crate::shape::sphere::hit_sphere`]'s operations in
 //! its order, lane by lane, so each lane's distance is bit for bit the one it gives its sphere
-//! (no fused multiply-add: the x86-64 baseline has none; SSE's square root is IEEE's, as
+//! (Rust never fuses a multiply and an add unasked; SSE's square root is IEEE's, as
 //! `f32::sqrt` is).
 
 use crate::shape::sphere::{Sphere, hit_sphere};
 use crate::shared::ray::Ray;
+
+// The four floats `hits` loads from a sphere: its centre, then its radius.
+const _: () = assert!(
+    std::mem::offset_of!(Sphere, center) == 0 && std::mem::offset_of!(Sphere, radius) == 12
+);
 
 /// Where each of up to four spheres is hit within (0, `t_max`): the distance in the lanes set
 /// in `hit`.
@@ -19,13 +24,14 @@ pub struct SphereHits {
 #[cfg(target_arch = "x86_64")]
 pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
     use std::arch::x86_64::*;
-    debug_assert!(spheres.len() <= 4);
+    assert!((1..=4).contains(&spheres.len()), "one to four spheres");
     // A lane past the spheres repeats the first, and is masked off at the end.
     let lane = |i: usize| spheres.get(i).unwrap_or(&spheres[0]);
-    // SAFETY: SSE is part of x86-64's baseline; `Sphere` is `repr(C)`, so its first four
-    // floats are the centre and the radius.
+    // SAFETY: SSE is part of x86-64's baseline; each load reads the first 16 of a `Sphere`'s
+    // 24 bytes through a pointer to the whole sphere: its centre and radius (`repr(C)`,
+    // checked below).
     unsafe {
-        let load = |i: usize| _mm_loadu_ps(&lane(i).center.x as *const f32);
+        let load = |i: usize| _mm_loadu_ps((lane(i) as *const Sphere).cast::<f32>());
         let (mut x, mut y, mut z, mut radius) = (load(0), load(1), load(2), load(3));
         _MM_TRANSPOSE4_PS(&mut x, &mut y, &mut z, &mut radius);
         let splat = |v: f32| _mm_set1_ps(v);
@@ -51,7 +57,10 @@ pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
             dot(perpendicular, perpendicular),
         );
         let present = (1u32 << spheres.len()) - 1;
-        let mut out = SphereHits { t: [0.0; 4], hit: 0 };
+        let mut out = SphereHits {
+            t: [0.0; 4],
+            hit: 0,
+        };
         // Most rays miss every sphere: no root to wait for.
         if _mm_movemask_ps(_mm_cmpge_ps(disc, _mm_setzero_ps())) as u32 & present == 0 {
             return out;
@@ -109,7 +118,7 @@ mod tests {
             let mut point =
                 || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
             let count = 1 + i as usize % 4;
-            let scale = [1.0, 1e-3, 1e4, 1.0][i as usize % 4];
+            let scale = [1.0, 1e-3, 1e4, 1.0][i as usize / 4 % 4];
             let spheres: Vec<Sphere> = (0..count)
                 .map(|k| Sphere {
                     center: point() * scale * 2.0,

@@ -380,7 +380,7 @@ fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
 /// The closest primitive along `ray` beyond its origin, and its distance.
 #[inline]
 fn closest(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
-    if scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty() {
+    if tested_in_turn(scene) {
         closest_in_turn(scene, ray)
     } else {
         closest_through_bvh(scene, ray)
@@ -413,7 +413,7 @@ fn closest_through_bvh(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)>
 /// primitives (a point, the sun, the environment).
 pub fn stopped_before(scene: &FlatScene, ray: &Ray, before: f32) -> bool {
     super::ray_count::count_ray();
-    if scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty() {
+    if tested_in_turn(scene) {
         return closest_in_turn(scene, ray).is_some_and(|(t, _)| t < before);
     }
     // Primitives are tested up to and including `closest` (`reach`): strictly before `before`.
@@ -442,6 +442,12 @@ fn through_bvh<const FIRST: bool>(
     let (wide, root) = (&scene.wide_bvh, scene.wide_bvh.root);
     super::accel::traverse_wide(wide, &scene.bvh, root, ray, &mut closest, &mut search);
     found.map(|found| (closest, found))
+}
+
+/// Whether `scene`'s rays test its few shapes in turn rather than through its BVH.
+#[inline]
+fn tested_in_turn(scene: &FlatScene) -> bool {
+    scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty()
 }
 
 /// Most primitives a scene of shapes alone may have for its rays to test them all in turn
