@@ -1,7 +1,8 @@
 // The environment light (twin: src/cpu/environment.rs): what an escaped ray sees, and
 // directions sampled in proportion to filtered luminance x sin(theta), with their solid-angle
 // pdf (the distribution is built on the host: scene::environment::Distribution). Its
-// texels and CDFs are in `images` (see ImageArray in src/gpu/layout.rs).
+// texels and CDFs (with its cells' densities) are in `images` (see ImageArray in
+// src/gpu/layout.rs).
 
 //#if ENVIRONMENT
 // dir turned by -rotate_y: the image's own frame.
@@ -60,15 +61,31 @@ fn cdf_pick(start: u32, n: u32, u: f32) -> CdfPick {
     return CdfPick(i, rest);
 }
 
-// A direction from the environment's distribution: u1 picks the row from the rows' CDF, u2 the
-// column from that row's; their remainders place the direction across the texel
+// Cells across a texel (and down) in the environment's distribution (cells_per_texel).
+fn environment_cells_per_texel() -> u32 {
+    if params.environment_width * params.environment_height <= SUBDIVIDED_MAX_TEXELS {
+        return 2u;
+    }
+    return 1u;
+}
+
+// Where the CDF of the environment's cells in row y starts (after the rows' CDF); entry x
+// holds cell x's density in .z.
+fn environment_row_cdf(y: u32, w: u32, h: u32) -> u32 {
+    return params.environment_cdfs + h + 1u + y * (w + 1u);
+}
+
+// A direction from the environment's distribution: u1 picks a row of cells from the rows' CDF,
+// u2 a cell from that row's; their remainders place the direction across the cell
 // (Distribution::pick and cpu::environment::sample).
 fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
-    let w = params.environment_width;
-    let h = params.environment_height;
+    let n = environment_cells_per_texel();
+    let w = params.environment_width * n;
+    let h = params.environment_height * n;
     let row = cdf_pick(params.environment_cdfs, h, u1);
-    let column = cdf_pick(params.environment_cdfs + h + 1u + row.index * (w + 1u), w, u2);
-    let density = image_value(params.environment_texels + row.index * w + column.index).w;
+    let start = environment_row_cdf(row.index, w, h);
+    let column = cdf_pick(start, w, u2);
+    let density = image_value(start + column.index).z;
     let s = (f32(column.index) + column.rest) / f32(w);
     let t = (f32(row.index) + row.rest) / f32(h);
     let sin_theta = sin(PI * t);
@@ -101,18 +118,19 @@ fn environment_pdf(dir: vec3f) -> f32 {
     return environment_pdf_at(local, environment_coordinates(local));
 }
 
-// The pdf of local direction `local` at image coordinates st: its texel's density over the
+// The pdf of local direction `local` at image coordinates st: its cell's density over the
 // solid angle's 2 pi^2 sin(theta).
 fn environment_pdf_at(local: vec3f, st: vec2f) -> f32 {
     let sin_theta = sqrt(local.x * local.x + local.z * local.z);
     if !(sin_theta > 0.0) {
         return 0.0;
     }
-    let w = params.environment_width;
-    let h = params.environment_height;
+    let n = environment_cells_per_texel();
+    let w = params.environment_width * n;
+    let h = params.environment_height * n;
     let x = min(u32(max(floor(st.x * f32(w)), 0.0)), w - 1u);
     let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
-    let density = image_value(params.environment_texels + y * w + x).w;
+    let density = image_value(environment_row_cdf(y, w, h) + x).z;
     return density / (2.0 * PI * PI * sin_theta);
 }
 //#endif

@@ -40,13 +40,13 @@ pub fn radiance(env: &Environment, dir: Vec3) -> Vec3 {
 
 /// A direction sampled from the environment's distribution with two uniform numbers, and its
 /// solid-angle pdf; `None` at the poles (where the pdf would be infinite). The numbers pick
-/// the row and the column (see `Distribution::pick`), their remainders place the direction
-/// across the texel.
+/// the row and the column of a cell (see `Distribution::pick`), their remainders place the
+/// direction across the cell.
 #[inline]
 pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
     let d = env.distribution();
-    let (w, h) = (env.image.width as usize, env.image.height as usize);
-    let ((x, y), (across, down)) = d.pick(w, h, u1, u2);
+    let (w, h) = (d.width, d.height);
+    let ((x, y), (across, down)) = d.pick(u1, u2);
     let s = (x as f32 + across) / w as f32;
     let t = (y as f32 + down) / h as f32;
     let (sin_theta, cos_theta) = (PI * t).sin_cos();
@@ -81,7 +81,7 @@ pub fn radiance_and_pdf(env: &Environment, dir: Vec3) -> (Vec3, f32) {
     (radiance_at(env, s, t), pdf_at(env, local, s, t))
 }
 
-/// The pdf of the local direction `local`, at image coordinates (s, t): its texel's density
+/// The pdf of the local direction `local`, at image coordinates (s, t): its cell's density
 /// over the solid angle's 2 pi^2 sin(theta).
 #[inline]
 fn pdf_at(env: &Environment, local: Vec3, s: f32, t: f32) -> f32 {
@@ -89,10 +89,11 @@ fn pdf_at(env: &Environment, local: Vec3, s: f32, t: f32) -> f32 {
     if !(sin_theta > 0.0) {
         return 0.0;
     }
-    let (width, height) = (env.image.width, env.image.height);
-    let x = ((s * width as f32).floor().max(0.0) as usize).min(width as usize - 1);
-    let y = ((t * height as f32).floor().max(0.0) as usize).min(height as usize - 1);
-    let density = env.distribution().density[y * width as usize + x];
+    let d = env.distribution();
+    let (width, height) = (d.width, d.height);
+    let x = ((s * width as f32).floor().max(0.0) as usize).min(width - 1);
+    let y = ((t * height as f32).floor().max(0.0) as usize).min(height - 1);
+    let density = d.density[y * width + x];
     density / (2.0 * PI * PI * sin_theta)
 }
 

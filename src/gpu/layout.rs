@@ -112,6 +112,10 @@ fn wgsl_constants() -> String {
         ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
         ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
         (
+            "SUBDIVIDED_MAX_TEXELS",
+            crate::scene::environment::SUBDIVIDED_MAX_TEXELS.literal(),
+        ),
+        (
             "KIND_TRIANGLE",
             crate::shared::primitive::KIND_TRIANGLE.literal(),
         ),
@@ -292,17 +296,28 @@ impl ImageArray {
         }
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
-            let texels = place(&mut out, env.image, &|i| d.density[i]);
-            // Its CDFs, a vec4f per value: (value, the guide's slot as a number, 0, 0), the
-            // guide 0 past a table's last slot. The rows' table (height + 1), then each row's
-            // columns' (width + 1 each).
+            let texels = place(&mut out, env.image, &|_| 0.0);
+            // Its CDFs, a vec4f per value: (value, the guide's slot as a number, density, 0),
+            // the guide 0 past a table's last slot. The rows' table (cells' rows + 1), then each
+            // row's cells' (cells across + 1 each), each entry but the last holding its cell's
+            // density, so that a pick finds it beside the value it stopped at.
             let cdfs = len as u32;
             len += (d.rows.entries.len() + d.columns.entries.len()) as u64;
             if fill {
-                for entry in d.rows.entries.iter().chain(&d.columns.entries) {
-                    // The guide is exact as f32: a side is at most MAX_IMAGE_SIDE (2^14) slots.
+                for entry in &d.rows.entries {
+                    // The guide is exact as f32: a table has at most 2^24 slots.
                     out.values
                         .extend([entry.value, entry.guide as f32, 0.0, 0.0]);
+                }
+                for (i, entry) in d.columns.entries.iter().enumerate() {
+                    let (row, k) = (i / (d.width + 1), i % (d.width + 1));
+                    let density = if k < d.width {
+                        d.density[row * d.width + k]
+                    } else {
+                        0.0
+                    };
+                    out.values
+                        .extend([entry.value, entry.guide as f32, density, 0.0]);
                 }
             }
             out.environment = Some([texels, cdfs]);

@@ -67,28 +67,61 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f64 {
     0.2126 * r as f64 + 0.7152 * g as f64 + 0.0722 * b as f64
 }
 
-/// A piecewise-constant density over the image, texel by texel, in proportion to the mean over
-/// the texel of the luminance as looked up (bilinearly filtered) times sin(theta) (the solid
-/// angle a texel spans), sampled by inverting cumulative distributions: the first number picks
-/// a row from the rows' CDF, the second a column from that row's, and their remainders place
-/// the direction across the texel. Inversion is monotone, so stratified numbers (Sobol points)
-/// give stratified directions; an alias table would scatter neighbouring numbers over distant
-/// texels and lose that (pbrt-v4 and Mitsuba invert too). (One table over all texels would ask
-/// one f32 number to tell apart more texels than its 24 bits can in a large image, and leave no
-/// bits to place the direction.) Built in f64, stored in f32; each texel's density is the
-/// product of its row's and column's steps of the stored CDFs, so that it is the chance with
-/// which the picks land on it.
+/// A piecewise-constant density over the image, each texel split into `scale` x `scale`
+/// cells, in proportion to the mean over the cell of the luminance as looked up (bilinearly
+/// filtered) times sin(theta) (the solid angle a cell spans), sampled by inverting cumulative
+/// distributions: the first number picks a row of cells from the rows' CDF, the second a cell
+/// from that row's, and their remainders place the direction across the cell. Cells finer than
+/// texels follow the filtered radiance more closely, so a sample's radiance over its pdf varies
+/// less across a bright sun (at 2 x 2 cells a texel, the error of `scenes/textured.toml`
+/// falls 6%; docs/benchmarks.md); images of more than `SUBDIVIDED_MAX_TEXELS` texels keep one
+/// cell a texel, for the tables' memory. Inversion is monotone, so stratified numbers (Sobol
+/// points) give stratified directions; an alias table would scatter neighbouring numbers over
+/// distant cells and lose that (pbrt-v4 and Mitsuba invert too). (One table over all cells
+/// would ask one f32 number to tell apart more cells than its 24 bits can in a large image,
+/// and leave no bits to place the direction.) Built in f64, stored in f32; each cell's density
+/// is the product of its row's and column's steps of the stored CDFs, so that it is the chance
+/// with which the picks land on it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Distribution {
+    /// Cells across and down: the image's width and height times [`cells_per_texel`].
+    pub width: usize,
+    pub height: usize,
     /// The rows' CDF (height + 1 values).
     pub rows: Cdfs,
-    /// Per row, its columns' CDF (width + 1 values each), row by row.
+    /// Per row, its cells' CDF (width + 1 values each), row by row.
     pub columns: Cdfs,
-    /// Per texel, row by row: its density in image coordinates (s, t) in [0, 1]^2, its share
-    /// of the whole times the number of texels.
+    /// Per cell, row by row: its density in image coordinates (s, t) in [0, 1]^2, its share
+    /// of the whole times the number of cells.
     pub density: Vec<f32>,
     /// The integral of luminance over directions (steradians), strength 1.
     pub integral: f64,
+}
+
+/// Most texels an image may have for its distribution to split each into 2 x 2 cells (the
+/// kernel's tables then take 64 bytes a texel).
+pub const SUBDIVIDED_MAX_TEXELS: u32 = 1 << 19;
+
+/// Cells across a texel (and down) in the distribution of an image of `width` x `height`
+/// texels (twin: `environment_cells_per_texel` in shaders/environment.wgsl).
+pub fn cells_per_texel(width: u32, height: u32) -> usize {
+    if width * height <= SUBDIVIDED_MAX_TEXELS {
+        2
+    } else {
+        1
+    }
+}
+
+/// The shares of the previous texel, the texel itself and the next one in the mean, over cell
+/// `i` of `n` across a texel, of a bilinear filter along one axis (tents between texels'
+/// centres): over the whole texel 1/8, 3/4, 1/8; over its halves 1/4, 3/4, 0 and 0, 3/4, 1/4.
+fn filter_shares(n: usize, i: usize) -> [f64; 3] {
+    match (n, i) {
+        (1, _) => [0.125, 0.75, 0.125],
+        (2, 0) => [0.25, 0.75, 0.0],
+        (2, _) => [0.0, 0.75, 0.25],
+        _ => unreachable!("one or two cells a texel"),
+    }
 }
 
 /// Cumulative distribution functions of piecewise-constant densities on [0, 1), one or several
@@ -180,59 +213,64 @@ impl Cdfs {
 impl Distribution {
     pub fn new(image: &Image) -> Self {
         let (w, h) = (image.width as usize, image.height as usize);
+        let n = cells_per_texel(image.width, image.height);
+        let (cw, ch) = (n * w, n * h);
         let lum: Vec<f64> = (0..w * h)
             .map(|i| {
                 let t = image.texel((i % w) as u32, (i / w) as u32);
                 luminance(t.x, t.y, t.z)
             })
             .collect();
-        // Over each texel, the mean of the radiance as it is looked up, filtered bilinearly
-        // (wrapping across, clamped at the poles): 1/8, 3/4, 1/8 of the texel and its
-        // neighbours on each axis. A texel beside a small bright sun receives some of the sun's
-        // light through the filter; weighed by its own value alone it would be picked too
-        // rarely for that light, and each pick would be a firefly.
-        const SIDE: f64 = 0.125;
-        const CENTRE: f64 = 0.75;
-        let across: Vec<f64> = (0..w * h)
+        // Over each cell, the mean of the radiance as it is looked up, filtered bilinearly
+        // (wrapping across, clamped at the poles): on each axis, shares of the texel and its
+        // neighbours. A cell beside a small bright sun receives some of the sun's light through
+        // the filter; weighed by its own texel's value alone it would be picked too rarely for
+        // that light, and each pick would be a firefly. First across: per texel row, per cell.
+        let across: Vec<f64> = (0..h * cw)
             .map(|i| {
-                let (x, row) = (i % w, i - i % w);
+                let (y, cx) = (i / cw, i % cw);
+                let (x, part) = (cx / n, cx % n);
                 let (left, right) = ((x + w - 1) % w, (x + 1) % w);
-                SIDE * lum[row + left] + CENTRE * lum[i] + SIDE * lum[row + right]
+                let [l, c, r] = filter_shares(n, part);
+                l * lum[y * w + left] + c * lum[y * w + x] + r * lum[y * w + right]
             })
             .collect();
-        let mut weights = Vec::with_capacity(w * h);
-        for y in 0..h {
-            let sin_theta = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+        let mut weights = Vec::with_capacity(cw * ch);
+        for cy in 0..ch {
+            let sin_theta = (std::f64::consts::PI * (cy as f64 + 0.5) / ch as f64).sin();
+            let (y, part) = (cy / n, cy % n);
             let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
-            for x in 0..w {
-                let filtered = SIDE * across[up * w + x]
-                    + CENTRE * across[y * w + x]
-                    + SIDE * across[down * w + x];
+            let [u, c, d] = filter_shares(n, part);
+            for cx in 0..cw {
+                let filtered =
+                    u * across[up * cw + cx] + c * across[y * cw + cx] + d * across[down * cw + cx];
                 weights.push(filtered * sin_theta);
             }
         }
         let total: f64 = weights.iter().sum();
-        let texel_solid_angle =
-            2.0 * std::f64::consts::PI / w as f64 * std::f64::consts::PI / h as f64;
-        let integral = total * texel_solid_angle;
+        let cell_solid_angle =
+            2.0 * std::f64::consts::PI / cw as f64 * std::f64::consts::PI / ch as f64;
+        let integral = total * cell_solid_angle;
         if !(total > 0.0) {
             weights.fill(1.0); // nothing to favour: uniform over the image
         }
-        let row_sums: Vec<f64> = weights.chunks_exact(w).map(|r| r.iter().sum()).collect();
+        let row_sums: Vec<f64> = weights.chunks_exact(cw).map(|r| r.iter().sum()).collect();
         let mut rows = Cdfs::default();
         rows.push(&row_sums);
         let mut columns = Cdfs::default();
-        for row in weights.chunks_exact(w) {
+        for row in weights.chunks_exact(cw) {
             columns.push(row);
         }
-        let n = (w * h) as f64;
-        let density = (0..w * h)
+        let cells = (cw * ch) as f64;
+        let density = (0..cw * ch)
             .map(|i| {
-                let (x, y) = (i % w, i / w);
-                (rows.step(0, h, y) * columns.step(y, w, x) * n) as f32
+                let (x, y) = (i % cw, i / cw);
+                (rows.step(0, ch, y) * columns.step(y, cw, x) * cells) as f32
             })
             .collect();
         Distribution {
+            width: cw,
+            height: ch,
             rows,
             columns,
             density,
@@ -240,17 +278,11 @@ impl Distribution {
         }
     }
 
-    /// The texel (x, y) that (u1, u2) in [0, 1)^2 pick, and where across it (in [0, 1)^2).
+    /// The cell (x, y) that (u1, u2) in [0, 1)^2 pick, and where across it (in [0, 1)^2).
     #[inline]
-    pub fn pick(
-        &self,
-        width: usize,
-        height: usize,
-        u1: f32,
-        u2: f32,
-    ) -> ((usize, usize), (f32, f32)) {
-        let (y, down) = self.rows.pick(0, height, u1);
-        let (x, across) = self.columns.pick(y, width, u2);
+    pub fn pick(&self, u1: f32, u2: f32) -> ((usize, usize), (f32, f32)) {
+        let (y, down) = self.rows.pick(0, self.height, u1);
+        let (x, across) = self.columns.pick(y, self.width, u2);
         ((x, y), (across, down))
     }
 }
@@ -262,24 +294,77 @@ pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 mod tests {
     use super::*;
 
+    /// Each cell's density is in proportion to the mean over it of the luminance as looked
+    /// up (bilinearly, rows clamped to their centres as `cpu::environment` clamps them) times
+    /// sin(theta) at its centre: by a midpoint rule on 4 x 4 points a cell, exact for the
+    /// bilinear lookup since cells split texels at their centres.
+    fn assert_cells_follow_the_filtered_image(image: &Image) {
+        let d = Distribution::new(image);
+        let n = cells_per_texel(image.width, image.height);
+        let (w, h) = (d.width, d.height);
+        assert_eq!(
+            (w, h),
+            (n * image.width as usize, n * image.height as usize)
+        );
+        let rows = image.height as f32;
+        let mut expected = vec![0.0f64; w * h];
+        for (i, e) in expected.iter_mut().enumerate() {
+            let (x, y) = (i % w, i / w);
+            let sin = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+            for (a, b) in (0..16).map(|k| (k % 4, k / 4)) {
+                let s = (x as f32 + (a as f32 + 0.5) / 4.0) / w as f32;
+                let t = (y as f32 + (b as f32 + 0.5) / 4.0) / h as f32;
+                let t = t.clamp(0.5 / rows, 1.0 - 0.5 / rows);
+                let v = crate::material::texture::bilinear(image, s, t);
+                *e += luminance(v.x, v.y, v.z) * sin / 16.0;
+            }
+        }
+        let total: f64 = expected.iter().sum();
+        for (i, (&density, e)) in d.density.iter().zip(&expected).enumerate() {
+            let want = e / total * (w * h) as f64;
+            // A density is the product of the stored f32 CDFs' steps, each off by up to two
+            // ulps of 1 (much of a small step near the end of a table).
+            let (x, y) = (i % w, i / w);
+            let rounding = 2.4e-7 * (1.0 / d.rows.step(0, h, y) + 1.0 / d.columns.step(y, w, x));
+            let close = if want == 0.0 {
+                density == 0.0
+            } else {
+                (density as f64 - want).abs() <= want * (1e-4 + rounding)
+            };
+            assert!(
+                close,
+                "{}x{}: cell {i}: {density} against {want}",
+                image.width, image.height
+            );
+        }
+        let mean = d.density.iter().map(|&x| x as f64).sum::<f64>() / (w * h) as f64;
+        assert!((mean - 1.0).abs() < 1e-5, "{mean}");
+    }
+
     #[test]
-    fn the_cdfs_give_each_texel_its_share() {
-        // Texels weighted 1..=12 times sin(theta) of their row: each table rises from 0 to 1
-        // in order.
+    fn cells_follow_the_filtered_image_and_the_cdfs_rise() {
+        // A ramp of texels 1..=12, and single bright texels (a sun) amid black, in the middle,
+        // at the left edge (the filter wraps across) and in the top row (clamped at the pole).
         let texels: Vec<f32> = (0..12).flat_map(|i| [1.0 + i as f32; 3]).collect();
-        let image = Image::from_linear("ramp", 4, 3, texels).unwrap();
-        let d = Distribution::new(&image);
-        let tables = std::iter::once(d.rows.values(0, 3).collect::<Vec<_>>())
-            .chain((0..3).map(|row| d.columns.values(row, 4).collect()));
-        for (table, n) in tables.zip([3, 4, 4, 4]) {
-            assert_eq!(table.len(), n + 1);
+        let ramp = Image::from_linear("ramp", 4, 3, texels).unwrap();
+        assert_cells_follow_the_filtered_image(&ramp);
+        let (w, h) = (8usize, 5usize);
+        for bright in [(3, 2), (0, 2), (5, 0)] {
+            let texels: Vec<f32> = (0..w * h)
+                .flat_map(|i| [if (i % w, i / w) == bright { 1.0 } else { 0.0 }; 3])
+                .collect();
+            let sun = Image::from_linear("sun", w as u32, h as u32, texels).unwrap();
+            assert_cells_follow_the_filtered_image(&sun);
+        }
+        // Each table rises from 0 to 1 in order.
+        let d = Distribution::new(&ramp);
+        let tables = std::iter::once(d.rows.values(0, d.height).collect::<Vec<_>>())
+            .chain((0..d.height).map(|row| d.columns.values(row, d.width).collect()));
+        for table in tables {
+            let n = table.len() - 1;
             assert_eq!((table[0], table[n]), (0.0, 1.0));
             assert!(table.windows(2).all(|w| w[0] < w[1]), "{table:?}");
         }
-        // Filtered, a ramp keeps its values inside; at the top row the pole's clamp leaves
-        // texel (1, 0) 7/8 of its 2 and 1/8 of the 6 below: 2.5.
-        let middle = d.density[5] / d.density[1];
-        assert!((middle - 6.0 / 2.5 / (std::f32::consts::PI / 6.0).sin()).abs() < 1e-4);
         // The integral of a white image is 4 pi, up to the midpoint rule's error.
         let white = Image::from_linear("white", 8, 4, vec![1.0; 96]).unwrap();
         let d = Distribution::new(&white);
@@ -287,41 +372,22 @@ mod tests {
         // A black image is sampled uniformly and has no power.
         let black = Image::from_linear("black", 2, 2, vec![0.0; 12]).unwrap();
         let d = Distribution::new(&black);
-        assert_eq!(d.density, vec![1.0; 4]);
+        assert_eq!(d.density, vec![1.0; 16]);
         assert_eq!(d.integral, 0.0);
     }
 
-    /// A bright texel in a black image shares its weight with its neighbours as the bilinear
-    /// filter shares its light: each side 1/8 of the texel's 3/4 on an axis (wrapping across),
-    /// nothing two texels away.
+    /// Images up to `SUBDIVIDED_MAX_TEXELS` texels get 2 x 2 cells a texel; larger ones one,
+    /// and their cells (texels) still follow the filtered image.
     #[test]
-    fn a_bright_texel_shares_its_weight_with_its_neighbours() {
-        let (w, h) = (8usize, 5usize);
-        for bright in [(3, 2), (0, 2)] {
-            let texels: Vec<f32> = (0..w * h)
-                .flat_map(|i| [if (i % w, i / w) == bright { 1.0 } else { 0.0 }; 3])
-                .collect();
-            let image = Image::from_linear("sun", w as u32, h as u32, texels).unwrap();
-            let d = Distribution::new(&image);
-            let at = |x: usize, y: usize| d.density[y * w + x] as f64;
-            let (x, y) = bright;
-            let (left, right) = ((x + w - 1) % w, (x + 1) % w);
-            let centre = at(x, y);
-            for side in [left, right] {
-                assert!(
-                    (at(side, y) / centre - 1.0 / 6.0).abs() < 1e-6,
-                    "{bright:?}"
-                );
-            }
-            let sin = |row: usize| (std::f64::consts::PI * (row as f64 + 0.5) / h as f64).sin();
-            let below = at(x, y + 1) / centre;
-            assert!(
-                (below - sin(y + 1) / sin(y) / 6.0).abs() < 1e-6,
-                "{bright:?}"
-            );
-            assert_eq!(at((x + 2) % w, y), 0.0);
-            assert_eq!(at(x, y + 2), 0.0);
-        }
+    fn large_images_keep_one_cell_a_texel() {
+        assert_eq!(cells_per_texel(1024, 512), 2);
+        assert_eq!(cells_per_texel(1024, 513), 1);
+        let (w, h) = (1024u32, 513u32);
+        let texels: Vec<f32> = (0..w * h)
+            .flat_map(|i| [((i * 7919) % 13) as f32; 3])
+            .collect();
+        let image = Image::from_linear("large", w, h, texels).unwrap();
+        assert_cells_follow_the_filtered_image(&image);
     }
 
     #[test]
@@ -329,35 +395,37 @@ mod tests {
         let texels: Vec<f32> = (0..6).flat_map(|i| [(i * i) as f32; 3]).collect();
         let image = Image::from_linear("squares", 3, 2, texels).unwrap();
         let d = Distribution::new(&image);
+        let cells = d.width * d.height;
         let m = 400;
-        let mut counts = [0usize; 6];
+        let mut counts = vec![0usize; cells];
         let mut remainder = (0.0, 0.0);
         for k in 0..m {
             for j in 0..m {
                 let (u1, u2) = ((k as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
-                let ((x, y), (across, down)) = d.pick(3, 2, u1, u2);
+                let ((x, y), (across, down)) = d.pick(u1, u2);
                 assert!((0.0..1.0).contains(&across) && (0.0..1.0).contains(&down));
-                counts[3 * y + x] += 1;
+                counts[d.width * y + x] += 1;
                 remainder.0 += across as f64 / (m * m) as f64;
                 remainder.1 += down as f64 / (m * m) as f64;
             }
         }
         for (i, (count, density)) in counts.iter().zip(&d.density).enumerate() {
-            let expected = *density as f64 / 6.0;
+            let expected = *density as f64 / cells as f64;
             assert!(
                 (*count as f64 / (m * m) as f64 - expected).abs() < 2e-3,
-                "texel {i}"
+                "cell {i}"
             );
         }
         assert!((remainder.0 - 0.5).abs() < 1e-2 && (remainder.1 - 0.5).abs() < 1e-2);
     }
 
     /// Inversion is monotone: larger first numbers pick rows no higher up, larger second
-    /// numbers (in one row) columns no further left, so stratified numbers stay stratified;
-    /// and a texel of weight 0 is never picked (what an alias table guarantees neither of).
+    /// numbers (in one row) cells no further left, so stratified numbers stay stratified;
+    /// and a cell of weight 0 is never picked (what an alias table guarantees neither of).
     #[test]
-    fn picks_are_monotone_and_skip_empty_texels() {
-        // Columns 0..3 and rows 1..4 black: the filter leaves column 1 and row 2 weightless.
+    fn picks_are_monotone_and_skip_empty_cells() {
+        // Texel columns 0..3 and rows 1..4 black: the filter leaves the cells of texel column
+        // 1 and texel row 2 weightless.
         let (w, h) = (8usize, 6usize);
         let black = |i: usize| i % w < 3 || (1..4).contains(&(i / w));
         let texels: Vec<f32> = (0..w * h)
@@ -365,24 +433,25 @@ mod tests {
             .collect();
         let image = Image::from_linear("gaps", w as u32, h as u32, texels).unwrap();
         let d = Distribution::new(&image);
-        assert!(d.density[2 * w + 4] == 0.0 && d.density[w + 1] == 0.0);
+        let cw = d.width;
+        assert!(d.density[4 * cw + 9] == 0.0 && d.density[2 * cw + 2] == 0.0);
         let m = 997;
         let mut last_y = 0;
         for k in 0..m {
             let u1 = k as f32 / m as f32;
-            let ((_, y), _) = d.pick(w, h, u1, 0.5);
+            let ((_, y), _) = d.pick(u1, 0.5);
             assert!(y >= last_y, "u1 {u1}: row {y} after {last_y}");
             last_y = y;
             let mut last_x = 0;
             for j in 0..m {
                 let u2 = j as f32 / m as f32;
-                let ((x, row), _) = d.pick(w, h, u1, u2);
+                let ((x, row), _) = d.pick(u1, u2);
                 assert_eq!(row, y);
-                assert!(x >= last_x && d.density[row * w + x] > 0.0, "({x}, {row})");
+                assert!(x >= last_x && d.density[row * cw + x] > 0.0, "({x}, {row})");
                 last_x = x;
                 // What the guided walk finds is the last value at most u2, as a scan finds it.
-                let cdf: Vec<f32> = d.columns.values(row, w).collect();
-                assert_eq!(x, cdf[..w].iter().rposition(|&c| c <= u2).unwrap());
+                let cdf: Vec<f32> = d.columns.values(row, cw).collect();
+                assert_eq!(x, cdf[..cw].iter().rposition(|&c| c <= u2).unwrap());
             }
         }
     }

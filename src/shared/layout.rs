@@ -395,8 +395,8 @@ gpu_struct! {
         roulette_depth: u32,
         /// The environment (see `scene::environment`): cos and sin of its rotation about y,
         environment_rotation: [f32; 2],
-        /// where its texels and its CDFs (rows, then each row's columns) start in the images
-        /// array,
+        /// where its texels and its CDFs (rows of cells, then each row's cells, with their
+        /// densities) start in the images array,
         environment_texels: u32,
         environment_cdfs: u32,
         /// its size and its strength.
