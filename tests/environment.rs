@@ -56,8 +56,9 @@ fn image_coordinates(env: &Environment, dir: Vec3) -> (f32, f32) {
 }
 
 /// Chi-square p-value of 1 000 000 directions from `sample` against `environment::pdf` of
-/// `env`, over one cell per texel (the pdf integrated over each by a 4 x 4 midpoint rule in
-/// image coordinates, where it is constant, times the solid angle's sin(theta)).
+/// `env`, over one bin per texel (the pdf integrated over each by a 4 x 4 midpoint rule in
+/// image coordinates, exact as the pdf is constant over each quarter of a texel, times the
+/// solid angle's sin(theta)).
 fn chi_square_p(env: &Environment, sample: impl Fn(f32, f32) -> Option<(Vec3, f32)>) -> f64 {
     let (w, h) = (env.image.width as usize, env.image.height as usize);
     let sub = 4;
@@ -129,7 +130,7 @@ fn environment_sampling_follows_its_pdf() {
 /// at 20 000 random directions and number pairs, within what WGSL's trigonometry may differ:
 /// atan2 (and acos) within 4096 ulp, sin and cos within 2^-11 absolute, moving image
 /// coordinates by up to about 5e-4, which the sky's gradients turn into the bounds below;
-/// where that moves a direction across a texel edge the pdf jumps (at most 0.5% of
+/// where that moves a direction across a sampling cell's edge the pdf jumps (at most 0.5% of
 /// directions). Against the sky 10% brighter, nearly every radiance differs (negative control).
 #[test]
 fn gpu_environment_matches_the_cpu() {
@@ -166,7 +167,7 @@ fn gpu_environment_matches_the_cpu() {
             (relative3(environment::radiance(&brighter, *dir), g.radiance) > RADIANCE) as usize;
         let pdf_difference = relative(environment::pdf(&env, *dir), g.pdf);
         if pdf_difference > PDF {
-            pdfs_jump += 1; // across a texel edge
+            pdfs_jump += 1; // across a cell's edge
         } else {
             pdf_error = pdf_error.max(pdf_difference);
         }
@@ -179,7 +180,7 @@ fn gpu_environment_matches_the_cpu() {
         }
     }
     eprintln!(
-        "worst relative differences: radiance {radiance_error:.1e}, pdf {pdf_error:.1e} ({pdfs_jump} of {} across a texel edge), sampled direction {direction_error:.1e} (absolute), its pdf {sample_pdf_error:.1e}; radiance differing from the sky 10% brighter: {differ_from_brighter}",
+        "worst relative differences: radiance {radiance_error:.1e}, pdf {pdf_error:.1e} ({pdfs_jump} of {} across a cell's edge), sampled direction {direction_error:.1e} (absolute), its pdf {sample_pdf_error:.1e}; radiance differing from the sky 10% brighter: {differ_from_brighter}",
         lookups.len()
     );
     assert!(

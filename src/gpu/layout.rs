@@ -229,9 +229,10 @@ pub struct SceneBuffers {
 }
 
 /// Every image a scene reads, in one array of vec4f (the kernel's `images`): each image's
-/// texels (one vec4f each: RGB and 0, rows from the top), the environment's with its sampling
-/// density as the fourth value, and after them the environment's CDFs (a vec4f per value, the
-/// rows' then each row's columns'; `scene::environment::Distribution`). Positions count vec4fs.
+/// texels (one vec4f each: RGB and 0, rows from the top), and after them the environment's
+/// CDFs (a vec4f per value: the rows of cells', then each row's cells', whose entry k below the
+/// row's width holds cell k's density in .z; `scene::environment::Distribution`). Positions
+/// count vec4fs.
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {
     /// The values, four per vec4f (empty in a plan).
@@ -264,17 +265,17 @@ impl ImageArray {
 
     fn lay_out(scene: &FlatScene, fill: bool) -> Self {
         let mut out = ImageArray::default();
-        // Texels as vec4f (RGB and 0, or for the environment its density): one load each.
+        // Texels as vec4f (RGB and 0): one load each.
         // Counted in u64: many large images overflow u32, and the size checked against the
         // device's binding limit must be the true one. (Past that check, offsets fit in u32.)
         let mut len = 0u64;
-        let mut place = |out: &mut ImageArray, image: &Image, w: &dyn Fn(usize) -> f32| {
+        let mut place = |out: &mut ImageArray, image: &Image| {
             let at = len as u32;
             len += image.width as u64 * image.height as u64;
             if fill {
-                for (i, rgb) in image.texels.chunks_exact(3).enumerate() {
+                for rgb in image.texels.chunks_exact(3) {
                     out.values.extend(rgb);
-                    out.values.push(w(i));
+                    out.values.push(0.0);
                 }
             }
             at
@@ -289,14 +290,14 @@ impl ImageArray {
                 .chain(m.alpha().and_then(|a| a.image));
             for image in textures.chain(maps) {
                 if !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image)) {
-                    let at = place(&mut out, image, &|_| 0.0);
+                    let at = place(&mut out, image);
                     out.placed.push((image, at));
                 }
             }
         }
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
-            let texels = place(&mut out, env.image, &|_| 0.0);
+            let texels = place(&mut out, env.image);
             // Its CDFs, a vec4f per value: (value, the guide's slot as a number, density, 0),
             // the guide 0 past a table's last slot. The rows' table (cells' rows + 1), then each
             // row's cells' (cells across + 1 each), each entry but the last holding its cell's
@@ -305,7 +306,7 @@ impl ImageArray {
             len += (d.rows.entries.len() + d.columns.entries.len()) as u64;
             if fill {
                 for entry in &d.rows.entries {
-                    // The guide is exact as f32: a table has at most 2^24 slots.
+                    // The guide is exact as f32: a table has at most 2^15 slots.
                     out.values
                         .extend([entry.value, entry.guide as f32, 0.0, 0.0]);
                 }
