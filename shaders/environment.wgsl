@@ -61,12 +61,13 @@ fn cdf_pick(start: u32, n: u32, u: f32) -> CdfPick {
     return CdfPick(i, rest);
 }
 
-// Cells across a texel (and down) in the environment's distribution (cells_per_texel).
-fn environment_cells_per_texel() -> u32 {
-    if params.environment_width * params.environment_height <= SUBDIVIDED_MAX_TEXELS {
-        return 2u;
+// The environment distribution's cells across and down: its texels' times cells_per_texel.
+fn environment_cells() -> vec2u {
+    let texels = vec2u(params.environment_width, params.environment_height);
+    if texels.x * texels.y <= SUBDIVIDED_MAX_TEXELS {
+        return 2u * texels;
     }
-    return 1u;
+    return texels;
 }
 
 // Where the CDF of the environment's cells in row y starts (after the rows' CDF); entry x
@@ -79,9 +80,9 @@ fn environment_row_cdf(y: u32, w: u32, h: u32) -> u32 {
 // u2 a cell from that row's; their remainders place the direction across the cell
 // (Distribution::pick and cpu::environment::sample).
 fn environment_sample(u1: f32, u2: f32) -> EnvironmentSample {
-    let n = environment_cells_per_texel();
-    let w = params.environment_width * n;
-    let h = params.environment_height * n;
+    let cells = environment_cells();
+    let w = cells.x;
+    let h = cells.y;
     let row = cdf_pick(params.environment_cdfs, h, u1);
     let start = environment_row_cdf(row.index, w, h);
     let column = cdf_pick(start, w, u2);
@@ -125,9 +126,9 @@ fn environment_pdf_at(local: vec3f, st: vec2f) -> f32 {
     if !(sin_theta > 0.0) {
         return 0.0;
     }
-    let n = environment_cells_per_texel();
-    let w = params.environment_width * n;
-    let h = params.environment_height * n;
+    let cells = environment_cells();
+    let w = cells.x;
+    let h = cells.y;
     let x = min(u32(max(floor(st.x * f32(w)), 0.0)), w - 1u);
     let y = min(u32(max(floor(st.y * f32(h)), 0.0)), h - 1u);
     let density = image_value(environment_row_cdf(y, w, h) + x).z;

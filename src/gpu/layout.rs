@@ -269,7 +269,11 @@ impl ImageArray {
         // Counted in u64: many large images overflow u32, and the size checked against the
         // device's binding limit must be the true one. (Past that check, offsets fit in u32.)
         let mut len = 0u64;
-        let mut place = |out: &mut ImageArray, image: &Image| {
+        // Each image once, however many materials (or the environment) read it.
+        let mut place = |out: &mut ImageArray, image: &'static Image| {
+            if let Some(&(_, at)) = out.placed.iter().find(|(i, _)| std::ptr::eq(*i, image)) {
+                return at;
+            }
             let at = len as u32;
             len += image.width as u64 * image.height as u64;
             if fill {
@@ -278,6 +282,7 @@ impl ImageArray {
                     out.values.push(0.0);
                 }
             }
+            out.placed.push((image, at));
             at
         };
         for m in &scene.materials {
@@ -289,10 +294,7 @@ impl ImageArray {
                 .chain(m.parameter_image())
                 .chain(m.alpha().and_then(|a| a.image));
             for image in textures.chain(maps) {
-                if !out.placed.iter().any(|(i, _)| std::ptr::eq(*i, image)) {
-                    let at = place(&mut out, image);
-                    out.placed.push((image, at));
-                }
+                place(&mut out, image);
             }
         }
         if let Background::Environment(env) = scene.background {

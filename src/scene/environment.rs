@@ -103,7 +103,7 @@ pub struct Distribution {
 pub const SUBDIVIDED_MAX_TEXELS: u32 = 1 << 19;
 
 /// Cells across a texel (and down) in the distribution of an image of `width` x `height`
-/// texels (twin: `environment_cells_per_texel` in shaders/environment.wgsl).
+/// texels (twin: `environment_cells` in shaders/environment.wgsl).
 pub fn cells_per_texel(width: u32, height: u32) -> usize {
     if width * height <= SUBDIVIDED_MAX_TEXELS {
         2
