@@ -73,9 +73,8 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f64 {
 /// distributions: the first number picks a row of cells from the rows' CDF, the second a cell
 /// from that row's, and their remainders place the direction across the cell. Cells finer than
 /// texels follow the filtered radiance more closely, so a sample's radiance over its pdf varies
-/// less across a bright sun (at 2 x 2 cells a texel, the mean squared error of
-/// `scenes/textured.toml` falls 5%; docs/benchmarks.md); images of more than `SUBDIVIDED_MAX_TEXELS` texels keep one
-/// cell a texel, for the tables' memory. Inversion is monotone, so stratified numbers (Sobol
+/// less across a bright sun (measured in docs/benchmarks.md); images of more than
+/// `SUBDIVIDED_MAX_TEXELS` texels keep one cell a texel, for the tables' memory. Inversion is monotone, so stratified numbers (Sobol
 /// points) give stratified directions; an alias table would scatter neighbouring numbers over
 /// distant cells and lose that (pbrt-v4 and Mitsuba invert too). (One table over all cells
 /// would ask one f32 number to tell apart more cells than its 24 bits can in a large image,
