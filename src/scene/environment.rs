@@ -69,7 +69,8 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f64 {
 
 /// A piecewise-constant density over the image, each texel split into [`cells_per_texel`]
 /// x [`cells_per_texel`] cells, in proportion to the mean over the cell of the luminance as looked up (bilinearly
-/// filtered) times sin(theta) (the solid angle a cell spans), sampled by inverting cumulative
+/// filtered), less the sky's mean where it is above it ([`compensated_weights`]), times
+/// sin(theta) (the solid angle a cell spans), sampled by inverting cumulative
 /// distributions: the first number picks a row of cells from the rows' CDF, the second a cell
 /// from that row's, and their remainders place the direction across the cell. Cells finer than
 /// texels follow the filtered radiance more closely, so a sample's radiance over its pdf varies
@@ -120,6 +121,41 @@ fn filter_shares(n: usize, i: usize) -> [f64; 3] {
         (2, 0) => [0.25, 0.75, 0.0],
         (2, _) => [0.0, 0.75, 0.25],
         _ => unreachable!("one or two cells a texel"),
+    }
+}
+
+/// Each cell's weight for sampling, its filtered radiance `filtered` above the sky's mean `mean`
+/// (over solid angle) times its solid angle (in proportion to sin(theta) of row `cy`): MIS
+/// compensation (Karlik et al. 2019, pbrt-v4's `compensatedDistribution`). Light sampling is
+/// only ever combined with BSDF sampling here, which finds the dim, even parts of a sky well,
+/// so its samples go where the sky is brighter than its mean, where BSDF sampling does badly;
+/// a direction light sampling never picks is weighed 1 on the BSDF's side. A sky with nothing
+/// above its mean (an even one) keeps the plain weights; a black one is sampled uniformly.
+fn compensated_weights(
+    filtered: &[f64],
+    cw: usize,
+    mean: f64,
+    sin_theta: impl Fn(usize) -> f64,
+) -> Vec<f64> {
+    let weighed = |above: &dyn Fn(f64) -> f64| -> Vec<f64> {
+        filtered
+            .chunks_exact(cw)
+            .enumerate()
+            .flat_map(|(cy, row)| {
+                let sin = sin_theta(cy);
+                row.iter().map(move |&f| above(f) * sin)
+            })
+            .collect()
+    };
+    let compensated = weighed(&|f| (f - mean).max(0.0));
+    if compensated.iter().sum::<f64>() > 0.0 {
+        return compensated;
+    }
+    let plain = weighed(&|f| f);
+    if plain.iter().sum::<f64>() > 0.0 {
+        plain
+    } else {
+        vec![1.0; filtered.len()] // nothing to favour: uniform over the image
     }
 }
 
@@ -234,25 +270,26 @@ impl Distribution {
                 l * lum[y * w + left] + c * lum[y * w + x] + r * lum[y * w + right]
             })
             .collect();
-        let mut weights = Vec::with_capacity(cw * ch);
+        let mut filtered = Vec::with_capacity(cw * ch);
+        let sin_theta = |cy: usize| (std::f64::consts::PI * (cy as f64 + 0.5) / ch as f64).sin();
         for cy in 0..ch {
-            let sin_theta = (std::f64::consts::PI * (cy as f64 + 0.5) / ch as f64).sin();
             let (y, part) = (cy / n, cy % n);
             let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
             let [u, c, d] = filter_shares(n, part);
-            for cx in 0..cw {
-                let filtered =
-                    u * across[up * cw + cx] + c * across[y * cw + cx] + d * across[down * cw + cx];
-                weights.push(filtered * sin_theta);
-            }
+            filtered.extend((0..cw).map(|cx| {
+                u * across[up * cw + cx] + c * across[y * cw + cx] + d * across[down * cw + cx]
+            }));
         }
-        let total: f64 = weights.iter().sum();
+        let solid_angles: f64 = (0..ch).map(sin_theta).sum::<f64>() * cw as f64;
+        let total: f64 = filtered
+            .chunks_exact(cw)
+            .enumerate()
+            .map(|(cy, row)| row.iter().sum::<f64>() * sin_theta(cy))
+            .sum();
         let cell_solid_angle =
             2.0 * std::f64::consts::PI / cw as f64 * std::f64::consts::PI / ch as f64;
         let integral = total * cell_solid_angle;
-        if !(total > 0.0) {
-            weights.fill(1.0); // nothing to favour: uniform over the image
-        }
+        let weights = compensated_weights(&filtered, cw, total / solid_angles, sin_theta);
         let row_sums: Vec<f64> = weights.chunks_exact(cw).map(|r| r.iter().sum()).collect();
         let mut rows = Cdfs::default();
         rows.push(&row_sums);
@@ -294,9 +331,10 @@ mod tests {
     use super::*;
 
     /// Each cell's density is in proportion to the mean over it of the luminance as looked
-    /// up (bilinearly, rows clamped to their centres as `cpu::environment` clamps them) times
-    /// sin(theta) at its centre: by a midpoint rule on 4 x 4 points a cell, exact for the
-    /// bilinear lookup since cells split texels at their centres.
+    /// up (bilinearly, rows clamped to their centres as `cpu::environment` clamps them), less
+    /// the sky's mean over solid angle where that leaves something (else 0), times sin(theta)
+    /// at its centre: by a midpoint rule on 4 x 4 points a cell, exact for the bilinear lookup
+    /// since cells split texels at their centres.
     fn assert_cells_follow_the_filtered_image(image: &Image) {
         let d = Distribution::new(image);
         let n = cells_per_texel(image.width, image.height);
@@ -306,20 +344,33 @@ mod tests {
             (n * image.width as usize, n * image.height as usize)
         );
         let rows = image.height as f32;
-        let mut expected = vec![0.0f64; w * h];
-        for (i, e) in expected.iter_mut().enumerate() {
-            let (x, y) = (i % w, i / w);
-            let sin = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
-            for (a, b) in (0..16).map(|k| (k % 4, k / 4)) {
-                let s = (x as f32 + (a as f32 + 0.5) / 4.0) / w as f32;
-                let t = (y as f32 + (b as f32 + 0.5) / 4.0) / h as f32;
-                let t = t.clamp(0.5 / rows, 1.0 - 0.5 / rows);
-                let v = crate::material::texture::bilinear(image, s, t);
-                *e += luminance(v.x, v.y, v.z) * sin / 16.0;
-            }
-        }
+        let sin = |y: usize| (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+        let cell_means: Vec<f64> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let mut sum = 0.0;
+                for (a, b) in (0..16).map(|k| (k % 4, k / 4)) {
+                    let s = (x as f32 + (a as f32 + 0.5) / 4.0) / w as f32;
+                    let t = (y as f32 + (b as f32 + 0.5) / 4.0) / h as f32;
+                    let t = t.clamp(0.5 / rows, 1.0 - 0.5 / rows);
+                    let v = crate::material::texture::bilinear(image, s, t);
+                    sum += luminance(v.x, v.y, v.z) / 16.0;
+                }
+                sum
+            })
+            .collect();
+        let solid_angles: f64 = (0..w * h).map(|i| sin(i / w)).sum();
+        let sky_mean = (0..w * h).map(|i| cell_means[i] * sin(i / w)).sum::<f64>() / solid_angles;
+        let expected: Vec<f64> = (0..w * h)
+            .map(|i| (cell_means[i] - sky_mean).max(0.0) * sin(i / w))
+            .collect();
         let total: f64 = expected.iter().sum();
+        assert!(total > 0.0, "an image with something above its mean");
         for (i, (&density, e)) in d.density.iter().zip(&expected).enumerate() {
+            // A cell within rounding of the mean may go either way.
+            if (cell_means[i] - sky_mean).abs() <= 1e-9 * sky_mean {
+                continue;
+            }
             let want = e / total * (w * h) as f64;
             // A density is the product of the stored f32 CDFs' steps, each off by up to two
             // ulps of 1 (much of a small step near the end of a table).
@@ -355,19 +406,44 @@ mod tests {
             let sun = Image::from_linear("sun", w as u32, h as u32, texels).unwrap();
             assert_cells_follow_the_filtered_image(&sun);
         }
-        // Each table rises from 0 to 1 in order.
+        // Each table rises from 0 to 1 in order (flat over cells below the mean).
         let d = Distribution::new(&ramp);
         let tables = std::iter::once(d.rows.values(0, d.height).collect::<Vec<_>>())
             .chain((0..d.height).map(|row| d.columns.values(row, d.width).collect()));
         for table in tables {
             let n = table.len() - 1;
             assert_eq!((table[0], table[n]), (0.0, 1.0));
-            assert!(table.windows(2).all(|w| w[0] < w[1]), "{table:?}");
+            assert!(table.windows(2).all(|w| w[0] <= w[1]), "{table:?}");
         }
-        // The integral of a white image is 4 pi, up to the midpoint rule's error.
+        // The integral of a white image is 4 pi, up to the midpoint rule's error; nothing in it
+        // is above its mean, so it is sampled in proportion to solid angle (sin(theta)).
         let white = Image::from_linear("white", 8, 4, vec![1.0; 96]).unwrap();
         let d = Distribution::new(&white);
         assert!((d.integral / (4.0 * std::f64::consts::PI) - 1.0).abs() < 0.05);
+        let sin = |y: usize| (std::f64::consts::PI * (y as f64 + 0.5) / d.height as f64).sin();
+        let mean_sin = (0..d.height).map(sin).sum::<f64>() / d.height as f64;
+        for (i, &density) in d.density.iter().enumerate() {
+            let want = sin(i / d.width) / mean_sin;
+            assert!(
+                (density as f64 / want - 1.0).abs() < 1e-5,
+                "cell {i}: {density}"
+            );
+        }
+        // A sky lit half as brightly as the rest: light sampling never picks its dim half.
+        let halves: Vec<f32> = (0..32)
+            .flat_map(|i| [if i % 8 < 4 { 1.0 } else { 2.0 }; 3])
+            .collect();
+        let d = Distribution::new(&Image::from_linear("halves", 8, 4, halves).unwrap());
+        for (i, &density) in d.density.iter().enumerate() {
+            // Cells of texel columns 1-2 see only the dim texels through the filter.
+            let texel_column = (i % d.width) / 2;
+            if (1..3).contains(&texel_column) {
+                assert_eq!(density, 0.0, "cell {i}");
+            }
+            if (5..7).contains(&texel_column) {
+                assert!(density > 0.0, "cell {i}");
+            }
+        }
         // A black image is sampled uniformly and has no power.
         let black = Image::from_linear("black", 2, 2, vec![0.0; 12]).unwrap();
         let d = Distribution::new(&black);
