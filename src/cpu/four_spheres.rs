@@ -4,7 +4,8 @@
 //! (Rust never fuses a multiply and an add unasked; SSE's square root is IEEE's, as
 //! `f32::sqrt` is).
 
-use crate::shape::sphere::{Sphere, hit_sphere};
+use crate::shape::SurfaceShape;
+use crate::shape::sphere::Sphere;
 use crate::shared::ray::Ray;
 
 // The four floats `hits` loads from a sphere: its centre, then its radius.
@@ -12,9 +13,9 @@ const _: () = assert!(
     std::mem::offset_of!(Sphere, center) == 0 && std::mem::offset_of!(Sphere, radius) == 12
 );
 
-/// Where each of up to four spheres is hit within (0, `t_max`): the distance in the lanes set
-/// in `hit`.
-pub struct SphereHits {
+/// Where each of up to four shapes tested together (spheres here, quads in
+/// `cpu::four_quads`) is hit within (0, `t_max`): the distance in the lanes set in `hit`.
+pub struct LaneHits {
     pub t: [f32; 4],
     pub hit: u32,
 }
@@ -22,7 +23,7 @@ pub struct SphereHits {
 /// `spheres` (at most four) against `ray` within (0, `t_max`).
 #[inline]
 #[cfg(target_arch = "x86_64")]
-pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
+pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> LaneHits {
     use std::arch::x86_64::*;
     assert!((1..=4).contains(&spheres.len()), "one to four spheres");
     // A lane past the spheres repeats the first, and is masked off at the end.
@@ -57,7 +58,7 @@ pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
             dot(perpendicular, perpendicular),
         );
         let present = (1u32 << spheres.len()) - 1;
-        let mut out = SphereHits {
+        let mut out = LaneHits {
             t: [0.0; 4],
             hit: 0,
         };
@@ -80,19 +81,20 @@ pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
 
 /// `spheres` (at most four) against `ray` within (0, `t_max`): `hit_sphere` per lane.
 #[cfg(not(target_arch = "x86_64"))]
-pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
+pub fn hits(spheres: &[Sphere], ray: &Ray, t_max: f32) -> LaneHits {
     hits_one_by_one(spheres, ray, t_max)
 }
 
-/// [`hits`] one sphere at a time, by `hit_sphere` itself: the reference the four-lane test is
-/// checked against, and the test where there is no SSE.
-pub fn hits_one_by_one(spheres: &[Sphere], ray: &Ray, t_max: f32) -> SphereHits {
-    let mut out = SphereHits {
+/// Up to four shapes one at a time, by their own test (`hit_sphere` for spheres, `hit_quad`
+/// for quads): the reference the four-lane tests are checked against, and the test where
+/// there is no SSE.
+pub fn hits_one_by_one<S: SurfaceShape>(shapes: &[S], ray: &Ray, t_max: f32) -> LaneHits {
+    let mut out = LaneHits {
         t: [0.0; 4],
         hit: 0,
     };
-    for (lane, sphere) in spheres.iter().enumerate() {
-        if let Some(t) = hit_sphere(sphere, ray, 0.0, t_max) {
+    for (lane, shape) in shapes.iter().enumerate() {
+        if let Some(t) = shape.hit(ray, t_max) {
             out.t[lane] = t;
             out.hit |= 1 << lane;
         }

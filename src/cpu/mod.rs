@@ -6,6 +6,7 @@ pub mod accel;
 pub mod background;
 pub mod camera;
 pub mod environment;
+pub mod four_quads;
 pub mod four_spheres;
 pub mod four_triangles;
 pub mod integrator;

@@ -1,8 +1,10 @@
 //! Ray-shape intersection (twin: `shaders/intersect.wgsl`).
 
 use super::accel::{Leaves, reach};
+use super::four_spheres::LaneHits;
 use crate::scene::flat::{FlatScene, Instance, Triangle};
 use crate::scene::normal_map::NormalMap;
+use crate::shape::quad::{Quad, QuadBlock};
 use crate::shape::sphere::Sphere;
 use crate::shape::{ShapeKind, ShapeVisitor, SurfaceShape};
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
@@ -394,6 +396,7 @@ fn closest_in_turn(scene: &FlatScene, ray: &Ray) -> Option<(f32, Candidate)> {
     let mut found: Option<Candidate> = None;
     let mut in_turn = InTurn {
         ray,
+        quad_blocks: &scene.quad_blocks,
         closest: &mut closest,
         found: &mut found,
     };
@@ -447,19 +450,30 @@ fn through_bvh<const FIRST: bool>(
 /// Whether `scene`'s rays test its few shapes in turn rather than through its BVH.
 #[inline]
 fn tested_in_turn(scene: &FlatScene) -> bool {
-    scene.bvh.primitives.len() <= MAX_TESTED_IN_TURN && scene.triangles.is_empty()
+    scene.triangles.is_empty() && in_turn_cost(scene) <= MAX_IN_TURN_COST
 }
 
-/// Most primitives a scene of shapes alone may have for its rays to test them all in turn
+/// The tests a ray of `scene` (of shapes alone) makes testing every shape in turn: spheres and
+/// quads four to a test, other shapes one each.
+fn in_turn_cost(scene: &FlatScene) -> usize {
+    let (spheres, quads) = (scene.shapes.spheres.len(), scene.shapes.quads.len());
+    let others = scene.bvh.primitives.len() - spheres - quads;
+    spheres.div_ceil(4) + quads.div_ceil(4) + others
+}
+
+/// Most tests a ray may make in a scene of shapes alone for its rays to test them all in turn
 /// rather than through its BVH: for a handful, the hierarchy's box tests cost more than the
-/// primitives' own (docs/benchmarks.md).
-const MAX_TESTED_IN_TURN: usize = 8;
+/// primitives' own. At 8 the Cornell boxes (18-19 quads, 5 tests) are faster in turn, the
+/// materials scene (37 shapes, 11 tests) slower (docs/benchmarks.md).
+const MAX_IN_TURN_COST: usize = 8;
 
 /// Every shape tested in turn, in the order of their packed references (which `replaces`
 /// would impose anyway), as `consider` tests one but monomorphised per kind: no dispatch on
 /// the kind per primitive, which for these few primitives costs measurably.
 struct InTurn<'a> {
     ray: &'a Ray,
+    /// The scene's quads four to a block.
+    quad_blocks: &'a [QuadBlock],
     closest: &'a mut f32,
     found: &'a mut Option<Candidate>,
 }
@@ -469,6 +483,9 @@ impl ShapeVisitor for InTurn<'_> {
     fn visit<S: SurfaceShape>(&mut self, kind: &'static ShapeKind, shapes: &[S]) {
         if let Some(spheres) = S::as_spheres(shapes) {
             return self.visit_spheres(kind, spheres);
+        }
+        if let Some(quads) = S::as_quads(shapes) {
+            return self.visit_quads(kind, quads);
         }
         for (index, shape) in shapes.iter().enumerate() {
             if let Some(t) = shape.hit(self.ray, reach(*self.closest)) {
@@ -486,14 +503,38 @@ impl InTurn<'_> {
     fn visit_spheres(&mut self, kind: &'static ShapeKind, spheres: &[Sphere]) {
         for (block, four) in spheres.chunks(4).enumerate() {
             let hits = super::four_spheres::hits(four, self.ray, reach(*self.closest));
-            let mut lanes = hits.hit;
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros() as usize;
-                lanes &= lanes - 1;
-                let t = hits.t[lane];
-                if t < reach(*self.closest) {
-                    self.keep(kind, 4 * block + lane, &four[lane], t);
-                }
+            self.keep_lanes(kind, 4 * block, four, hits);
+        }
+    }
+
+    /// Quads four at a time, as spheres are: each lane is `hit_quad`'s answer, whose distance
+    /// does not depend on the reach it is tested within.
+    #[inline]
+    fn visit_quads(&mut self, kind: &'static ShapeKind, quads: &[Quad]) {
+        debug_assert_eq!(self.quad_blocks.len(), quads.len().div_ceil(4));
+        for (block, (four, lanes_of)) in quads.chunks(4).zip(self.quad_blocks).enumerate() {
+            let hits = super::four_quads::hits(four, lanes_of, self.ray, reach(*self.closest));
+            self.keep_lanes(kind, 4 * block, four, hits);
+        }
+    }
+
+    /// Keeps, lane by lane in order, each shape of `four` (from index `first` of `kind`) that
+    /// `hits` found and that is still within reach of the closest hit.
+    #[inline]
+    fn keep_lanes<S: SurfaceShape>(
+        &mut self,
+        kind: &'static ShapeKind,
+        first: usize,
+        four: &[S],
+        hits: LaneHits,
+    ) {
+        let mut lanes = hits.hit;
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let t = hits.t[lane];
+            if t < reach(*self.closest) {
+                self.keep(kind, first + lane, &four[lane], t);
             }
         }
     }
@@ -685,7 +726,13 @@ mod tests {
     /// from inside and outside the scenes.
     #[test]
     fn shapes_in_turn_hit_as_through_the_bvh() {
-        for name in ["spheres", "cornell-empty", "textured"] {
+        for name in [
+            "spheres",
+            "cornell-empty",
+            "textured",
+            "cornell",
+            "cornell-smoke",
+        ] {
             let scene = match name {
                 "textured" => crate::scene::file::load(std::path::Path::new(concat!(
                     env!("CARGO_MANIFEST_DIR"),
@@ -695,7 +742,7 @@ mod tests {
                 _ => crate::scene::builtin::builtin(name).expect("built-in"),
             };
             let flat = FlatScene::new(&scene, 8, 8).expect("valid");
-            assert!(flat.bvh.primitives.len() <= MAX_TESTED_IN_TURN, "{name}");
+            assert!(tested_in_turn(&flat), "{name}");
             let radius = flat.bounding_radius() as f32;
             let mut hits = 0;
             for i in 0..20_000 {

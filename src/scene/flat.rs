@@ -173,12 +173,15 @@ pub struct FlatScene {
     /// descends the top level and then that many levels more.
     pub instance_depth: u32,
     /// Over every primitive and instance, and after it each instanced mesh's own (see
-    /// [`Instance::root`]). The CPU always traverses it (faster even for the Cornell box's 18
-    /// primitives than testing each); GPU kernels of small scenes test
+    /// [`Instance::root`]). The CPU traverses it, but for scenes of a few shapes, which it tests
+    /// in turn (`cpu::shapes`); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
     pub bvh: crate::accel::Bvh,
     /// The same hierarchy collapsed to four children per node, which the CPU traverses.
     pub wide_bvh: crate::wide_bvh::WideBvh,
+    /// The quads four to a block (`shapes.quads` in order), which the CPU tests together where
+    /// it tests a scene's shapes in turn; built with the BVH.
+    pub quad_blocks: Vec<crate::shape::quad::QuadBlock>,
     /// Every emitting sphere, quad and triangle, and last an environment background, for next-event
     /// estimation (see [`Light`]).
     pub lights: Vec<Light>,
@@ -379,6 +382,7 @@ impl FlatScene {
             _ => None,
         };
         self.wide_bvh = crate::wide_bvh::WideBvh::new(&self.bvh, instance_roots, corners);
+        self.quad_blocks = crate::shape::quad::QuadBlock::blocks(&self.shapes.quads);
     }
 
     /// Most instances one leaf of the BVH's top level holds (0 without instances).
@@ -1066,6 +1070,7 @@ impl<'a> Flattener<'a> {
             instance_depth: 0,
             bvh: crate::accel::Bvh::default(),
             wide_bvh: crate::wide_bvh::WideBvh::default(),
+            quad_blocks: Vec::new(),
             lights: Vec::new(),
             medium_crossings: 0,
             uv_textures: false,

@@ -49,6 +49,10 @@ pub trait SurfaceShape: Copy + std::fmt::Debug + PartialEq + Send + Sync {
     fn as_spheres(_shapes: &[Self]) -> Option<&[sphere::Sphere]> {
         None
     }
+    /// These shapes as quads, if they are: the CPU tests quads four at a time.
+    fn as_quads(_shapes: &[Self]) -> Option<&[quad::Quad]> {
+        None
+    }
     /// The hit `along_ray` (= o + t d) put back onto the surface, and a bound on its error.
     fn surface(&self, along_ray: Vec3) -> (Vec3, f32);
     /// Surface coordinates for textures at `point` (on the surface) or `along_ray`.

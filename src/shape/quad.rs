@@ -122,6 +122,49 @@ impl Quad {
     }
 }
 
+/// Up to four quads' hit-test values side by side (a structure of arrays, a row per
+/// coordinate), as the CPU's four-lane test (`cpu::four_quads`) loads them: built once per
+/// scene for scenes whose shapes are tested in turn. Lanes past the quads repeat the first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct QuadBlock {
+    pub normal: [[f32; 4]; 3],
+    pub q: [[f32; 4]; 3],
+    pub alpha_axis: [[f32; 4]; 3],
+    pub beta_axis: [[f32; 4]; 3],
+    /// Where a hit's a and b may lie: -edge_tolerance to 1 + edge_tolerance, as `hit_quad`
+    /// computes them.
+    pub lo: [f32; 4],
+    pub hi: [f32; 4],
+    /// The lanes holding a quad (bit k: lane k).
+    pub present: u32,
+}
+
+impl QuadBlock {
+    /// The block of `quads` (one to four).
+    pub fn new(quads: &[Quad]) -> Self {
+        assert!((1..=4).contains(&quads.len()), "one to four quads");
+        let lane = |i: usize| quads.get(i).unwrap_or(&quads[0]);
+        let rows = |f: &dyn Fn(&Quad) -> f32| std::array::from_fn(|i| f(lane(i)));
+        let vector =
+            |f: &dyn Fn(&Quad) -> Vec3| [rows(&|q| f(q).x), rows(&|q| f(q).y), rows(&|q| f(q).z)];
+        QuadBlock {
+            normal: vector(&|q| q.normal),
+            q: vector(&|q| q.q),
+            alpha_axis: vector(&|q| q.alpha_axis),
+            beta_axis: vector(&|q| q.beta_axis),
+            lo: rows(&|q| -q.edge_tolerance),
+            hi: rows(&|q| 1.0 + q.edge_tolerance),
+            present: (1 << quads.len()) - 1,
+        }
+    }
+
+    /// `quads` four to a block, in order.
+    pub fn blocks(quads: &[Quad]) -> Vec<QuadBlock> {
+        quads.chunks(4).map(QuadBlock::new).collect()
+    }
+}
+
 /// Eight units in the last place of the quad's largest coordinate, as a fraction of its shorter
 /// edge, and at least 1e-5.
 fn edge_tolerance(q: Vec3, u: Vec3, v: Vec3) -> f32 {
@@ -180,6 +223,9 @@ impl SurfaceShape for Quad {
     #[inline]
     fn hit(&self, ray: &Ray, t_max: f32) -> Option<f32> {
         hit_quad(self, ray, 0.0, t_max)
+    }
+    fn as_quads(shapes: &[Self]) -> Option<&[Quad]> {
+        Some(shapes)
     }
     #[inline]
     fn outward(&self, _ray: &Ray, _t: f32) -> Vec3 {
