@@ -463,8 +463,8 @@ fn in_turn_cost(scene: &FlatScene) -> usize {
 
 /// Most tests a ray may make in a scene of shapes alone for its rays to test them all in turn
 /// rather than through its BVH: for a handful, the hierarchy's box tests cost more than the
-/// primitives' own. At 8 the Cornell boxes (18-19 quads, 5 tests) are faster in turn, the
-/// materials scene (37 shapes, 11 tests) slower (docs/benchmarks.md).
+/// primitives' own. At 8 the Cornell boxes (18 quads and at most a sphere: 5-6 tests) are
+/// faster in turn, the materials scene (36 shapes, 10 tests) slower (docs/benchmarks.md).
 const MAX_IN_TURN_COST: usize = 8;
 
 /// Every shape tested in turn, in the order of their packed references (which `replaces`
