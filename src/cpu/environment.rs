@@ -1,6 +1,6 @@
 //! The environment light (twin: `shaders/environment.wgsl`): what an escaped ray sees, and
-//! directions sampled in proportion to filtered luminance x sin(theta) (see `scene::environment`), with
-//! their solid-angle pdf.
+//! directions sampled in proportion to filtered luminance above the sky's mean x sin(theta) (see
+//! `scene::environment`), with their solid-angle pdf.
 
 use crate::material::texture::bilinear;
 use crate::scene::environment::Environment;

@@ -3,7 +3,8 @@
 //! it escapes to, for k <= max_depth.
 //!
 //! With next-event estimation (`Integrator::Nee`), each hit on a material that samples lights (a
-//! BSDF with a non-delta lobe: lambertian, a rough conductor) and each scattering event in a medium also samples a light
+//! BSDF with a non-delta lobe: lambertian, rough conductors and glass, plastic, pbr) and each
+//! scattering event in a medium also samples a light
 //! directly with a shadow ray, and light found both ways is weighted by the power heuristic.
 //! A light sample taken at the k-th vertex forms a path of k + 1 segments, so it is taken only
 //! when k + 1 <= max_depth: both integrators sum over exactly the same paths.

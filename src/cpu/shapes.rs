@@ -511,7 +511,8 @@ impl InTurn<'_> {
     /// does not depend on the reach it is tested within.
     #[inline]
     fn visit_quads(&mut self, kind: &'static ShapeKind, quads: &[Quad]) {
-        debug_assert_eq!(self.quad_blocks.len(), quads.len().div_ceil(4));
+        // The blocks are built with the BVH, from these quads.
+        assert_eq!(self.quad_blocks.len(), quads.len().div_ceil(4));
         for (block, (four, lanes_of)) in quads.chunks(4).zip(self.quad_blocks).enumerate() {
             let hits = super::four_quads::hits(four, lanes_of, self.ray, reach(*self.closest));
             self.keep_lanes(kind, 4 * block, four, hits);
@@ -732,13 +733,14 @@ mod tests {
             "textured",
             "cornell",
             "cornell-smoke",
+            "disks",
         ] {
             let scene = match name {
-                "textured" => crate::scene::file::load(std::path::Path::new(concat!(
-                    env!("CARGO_MANIFEST_DIR"),
-                    "/scenes/textured.toml"
+                "textured" | "disks" => crate::scene::file::load(std::path::Path::new(&format!(
+                    "{}/scenes/{name}.toml",
+                    env!("CARGO_MANIFEST_DIR")
                 )))
-                .expect("scenes/textured.toml"),
+                .expect("a shipped scene file"),
                 _ => crate::scene::builtin::builtin(name).expect("built-in"),
             };
             let flat = FlatScene::new(&scene, 8, 8).expect("valid");
