@@ -70,7 +70,7 @@ pub fn hits(quads: &[Quad], _block: &QuadBlock, ray: &Ray, t_max: f32) -> LaneHi
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cpu::four_spheres::hits_one_by_one;
+    use crate::cpu::four_spheres::{assert_lanes_as_one_by_one, hits_one_by_one};
     use crate::shared::rng::Rng;
     use glam::Vec3;
 
@@ -120,26 +120,9 @@ mod tests {
             }
             let ray = Ray { origin, dir };
             let block = QuadBlock::new(&quads);
-            let far = hits_one_by_one(&quads, &ray, f32::INFINITY);
-            let nearest = (0..count)
-                .filter(|&l| far.hit & (1 << l) != 0)
-                .map(|l| far.t[l])
-                .fold(f32::INFINITY, f32::min);
-            for t_max in [f32::INFINITY, nearest, nearest.next_up(), scale] {
-                let (four, one) = (
-                    hits(&quads, &block, &ray, t_max),
-                    hits_one_by_one(&quads, &ray, t_max),
-                );
-                assert_eq!(four.hit, one.hit, "{quads:?} {ray:?} t_max {t_max}");
-                for lane in (0..count).filter(|&l| one.hit & (1 << l) != 0) {
-                    assert_eq!(
-                        four.t[lane].to_bits(),
-                        one.t[lane].to_bits(),
-                        "{ray:?} lane {lane}"
-                    );
-                }
-                found += one.hit.count_ones();
-            }
+            found += assert_lanes_as_one_by_one(&quads, &ray, scale, |t_max| {
+                hits(&quads, &block, &ray, t_max)
+            });
         }
         assert!(found > 20_000, "only {found} hits");
     }

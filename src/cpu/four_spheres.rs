@@ -102,6 +102,37 @@ pub fn hits_one_by_one<S: SurfaceShape>(shapes: &[S], ray: &Ray, t_max: f32) -> 
     out
 }
 
+/// Checks a four-lane test against `shapes` one by one, to the bit, at every reach that matters
+/// for `ray`: beyond every shape, at the nearest hit's own distance, just past it, and at
+/// `scale`. Returns the hits found (for the caller's count of how many cases were exercised).
+#[cfg(test)]
+pub(crate) fn assert_lanes_as_one_by_one<S: SurfaceShape>(
+    shapes: &[S],
+    ray: &Ray,
+    scale: f32,
+    four_lanes: impl Fn(f32) -> LaneHits,
+) -> u32 {
+    let far = hits_one_by_one(shapes, ray, f32::INFINITY);
+    let lanes_hit = |hit: u32| (0..shapes.len()).filter(move |&l| hit & (1 << l) != 0);
+    let nearest = lanes_hit(far.hit)
+        .map(|l| far.t[l])
+        .fold(f32::INFINITY, f32::min);
+    let mut found = 0;
+    for t_max in [f32::INFINITY, nearest, nearest.next_up(), scale] {
+        let (four, one) = (four_lanes(t_max), hits_one_by_one(shapes, ray, t_max));
+        assert_eq!(four.hit, one.hit, "{shapes:?} {ray:?} t_max {t_max}");
+        for lane in lanes_hit(one.hit) {
+            assert_eq!(
+                four.t[lane].to_bits(),
+                one.t[lane].to_bits(),
+                "{ray:?} lane {lane}"
+            );
+        }
+        found += one.hit.count_ones();
+    }
+    found
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -142,26 +173,9 @@ mod tests {
                 dir = (s.center + side * s.radius.abs() - origin).normalize_or(Vec3::Z);
             }
             let ray = Ray { origin, dir };
-            let far = hits_one_by_one(&spheres, &ray, f32::INFINITY);
-            let nearest = (0..count)
-                .filter(|&l| far.hit & (1 << l) != 0)
-                .map(|l| far.t[l])
-                .fold(f32::INFINITY, f32::min);
-            for t_max in [f32::INFINITY, nearest, nearest.next_up(), scale] {
-                let (four, one) = (
-                    hits(&spheres, &ray, t_max),
-                    hits_one_by_one(&spheres, &ray, t_max),
-                );
-                assert_eq!(four.hit, one.hit, "{spheres:?} {ray:?} t_max {t_max}");
-                for lane in (0..count).filter(|&l| one.hit & (1 << l) != 0) {
-                    assert_eq!(
-                        four.t[lane].to_bits(),
-                        one.t[lane].to_bits(),
-                        "{ray:?} lane {lane}"
-                    );
-                }
-                found += one.hit.count_ones();
-            }
+            found += assert_lanes_as_one_by_one(&spheres, &ray, scale, |t_max| {
+                hits(&spheres, &ray, t_max)
+            });
         }
         assert!(found > 20_000, "only {found} hits");
     }
