@@ -21,6 +21,11 @@ use cli::args::{Cli, Command};
 use cli::one_line;
 
 fn main() -> ExitCode {
+    // First, before code built for this CPU's instructions runs on one without them.
+    if let Err(line) = cli::host_cpu::check(cli::host_cpu::FEATURES) {
+        note!("error: {line}");
+        return ExitCode::FAILURE;
+    }
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // Mesa's Vulkan drivers print an "error:" line on every start without it.
         // SAFETY: nothing else runs yet: no other thread can read the environment concurrently.

@@ -8,6 +8,7 @@ pub mod bench;
 pub mod checkpoint;
 pub mod converge;
 pub mod devices;
+pub mod host_cpu;
 pub mod merge;
 pub mod render;
 pub mod scenes;
