@@ -49,11 +49,11 @@ pub fn sample(env: &Environment, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
     let ((x, y), (across, down)) = d.pick(u1, u2);
     let s = (x as f32 + across) / w as f32;
     let t = (y as f32 + down) / h as f32;
-    let (sin_theta, cos_theta) = (PI * t).sin_cos();
+    let (sin_theta, cos_theta) = angles::sin_cos_pi(t);
     if !(sin_theta > 0.0) {
         return None;
     }
-    let (sin_phi, cos_phi) = (2.0 * PI * s - PI).sin_cos();
+    let (sin_phi, cos_phi) = angles::sin_cos_pi(2.0 * s - 1.0);
     let local = Vec3::new(sin_theta * cos_phi, cos_theta, -sin_theta * sin_phi);
     let [cos, sin] = env.rotation;
     let dir = Vec3::new(

@@ -47,7 +47,7 @@ pub fn hg_cosine(g: f32, u: f32) -> f32 {
 pub fn sample_hg(g: f32, dir: Vec3, u1: f32, u2: f32) -> Vec3 {
     let cos_theta = hg_cosine(g, u1);
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
+    let (sin_phi, cos_phi) = crate::shared::angles::sin_cos_pi(2.0 * u2 - 1.0);
     let (t, b) = basis(dir);
     (cos_theta * dir + sin_theta * (cos_phi * t + sin_phi * b)).normalize()
 }

@@ -66,7 +66,7 @@ impl Ggx {
         // Stretched to the configuration of alpha = 1, where visible normals are the sum of
         // wo and a point uniform on the unit sphere's cap z > -wo.z.
         let v = Vec3::new(self.alpha * wo.x, self.alpha * wo.y, wo.z).normalize();
-        let (sin, cos) = (PI * (2.0 * u1 - 1.0)).sin_cos();
+        let (sin, cos) = crate::shared::angles::sin_cos_pi(2.0 * u1 - 1.0);
         let z = (1.0 - u2) * (1.0 + v.z) - v.z;
         let r = (1.0 - z * z).max(0.0).sqrt();
         let h = Vec3::new(r * cos, r * sin, z) + v;

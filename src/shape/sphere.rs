@@ -172,7 +172,7 @@ impl SurfaceShape for Sphere {
         let a = u1 * one_minus_cos;
         let cos_theta = 1.0 - a;
         let sin_theta = (a * (2.0 - a)).max(0.0).sqrt();
-        let (sin_phi, cos_phi) = (PI * (2.0 * u2 - 1.0)).sin_cos();
+        let (sin_phi, cos_phi) = crate::shared::angles::sin_cos_pi(2.0 * u2 - 1.0);
         let (t, b) = basis(axis);
         let dir = (cos_theta * axis + sin_theta * (cos_phi * t + sin_phi * b)).normalize();
         // Where it meets the sphere (a direction in the cone, from outside: the near root;

@@ -1,7 +1,7 @@
 //! Warping uniform random numbers to directions and points (twin: `shaders/sampling.wgsl`).
 
+use super::angles::sin_cos_pi;
 use glam::Vec3;
-use std::f32::consts::PI;
 
 // Angles are drawn in [-pi, pi): Vulkan only bounds the error of GPU sin and cos in that range.
 
@@ -10,7 +10,7 @@ use std::f32::consts::PI;
 pub fn unit_vector(u1: f32, u2: f32) -> Vec3 {
     let z = 1.0 - 2.0 * u1;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let (sin, cos) = (PI * (2.0 * u2 - 1.0)).sin_cos();
+    let (sin, cos) = sin_cos_pi(2.0 * u2 - 1.0);
     Vec3::new(r * cos, r * sin, z)
 }
 
@@ -18,7 +18,7 @@ pub fn unit_vector(u1: f32, u2: f32) -> Vec3 {
 #[inline]
 pub fn unit_disk(u1: f32, u2: f32) -> (f32, f32) {
     let r = u1.sqrt();
-    let (sin, cos) = (PI * (2.0 * u2 - 1.0)).sin_cos();
+    let (sin, cos) = sin_cos_pi(2.0 * u2 - 1.0);
     (r * cos, r * sin)
 }
 
