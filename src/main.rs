@@ -22,8 +22,7 @@ use cli::one_line;
 
 fn main() -> ExitCode {
     // First, before code built for this CPU's instructions runs on one without them.
-    if let Err(line) = cli::host_cpu::check(cli::host_cpu::FEATURES) {
-        note!("error: {line}");
+    if !cli::host_cpu::runs_here() {
         return ExitCode::FAILURE;
     }
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
