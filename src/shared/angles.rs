@@ -10,7 +10,8 @@ use std::f32::consts::{FRAC_PI_2, PI};
 /// p(x) for coefficients `c`, highest power first (Horner).
 #[inline]
 fn horner(x: f32, c: &[f32]) -> f32 {
-    c.iter().fold(0.0, |p, &c| p * x + c)
+    // From the first coefficient, not 0 * x + it: the same value for every finite x.
+    c[1..].iter().fold(c[0], |p, &c| p * x + c)
 }
 
 /// atan(a) for a in [0, 1]: a + a^3 p(a^2), p minimax (coefficients of SLEEF's `atanf`).
@@ -84,8 +85,11 @@ pub fn sin_cos_pi(x: f32) -> (f32, f32) {
         -4.934802,
         1.0,
     ];
-    // round(2x) by truncation of 2x +- 1/2 (no SSE4.1 `round` needed for a portable build).
-    let k = (2.0 * x + 0.5f32.copysign(x)) as i32;
+    // k = round(2x) from the exact 4x's integer part q: (q + 1) / 2 above 0, (q - 1) / 2
+    // below, in integers (no SSE4.1 `round` needed for a portable build; 2x + 1/2 in f32 can
+    // round up to the next integer just below a quarter).
+    let q = (4.0 * x) as i32;
+    let k = (q + if x < 0.0 { -1 } else { 1 }) / 2;
     let y = x - 0.5 * k as f32;
     let t = y * y;
     let (s, c) = (y * horner(t, &SIN), horner(t, &COS));
