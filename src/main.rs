@@ -21,10 +21,16 @@ use cli::args::{Cli, Command};
 use cli::one_line;
 
 fn main() -> ExitCode {
-    // First, before code built for this CPU's instructions runs on one without them.
+    // First, before code built for this CPU's instructions runs on one without them: main
+    // itself is only this test and a call.
     if !cli::host_cpu::runs_here() {
         return ExitCode::FAILURE;
     }
+    run()
+}
+
+#[inline(never)]
+fn run() -> ExitCode {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // Mesa's Vulkan drivers print an "error:" line on every start without it.
         // SAFETY: nothing else runs yet: no other thread can read the environment concurrently.

@@ -7,6 +7,12 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#if defined(__SSE3__) || defined(__SSSE3__) || defined(__SSE4_1__) || defined(__POPCNT__) || \
+    defined(__AVX__) || defined(__BMI__) || defined(__BMI2__) || defined(__LZCNT__) ||      \
+    defined(__MOVBE__) || defined(__FMA__) || defined(__F16C__)
+#error "host_cpu.c must be compiled for plain x86-64: the compiler (CC) adds instructions"
+#endif
+
 struct rt_gpu_feature {
     const char *name;
     /* Where cpuid reports it: leaf, subleaf, register (0-3: eax, ebx, ecx, edx), bit. */

@@ -28,7 +28,7 @@ unsafe impl Sync for Feature {}
 /// Every x86 feature `-C target-cpu=native` may let the compiler use in ordinary code (each a
 /// name rustc knows: tested). Unstable ones, XOP and APX among them, are not `cfg`-visible on
 /// stable Rust and so not checked.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
 macro_rules! x86_features {
     ($(($name:tt, $leaf:literal, $sub:literal, $reg:literal, $bit:literal $(, $state:literal)?)),* $(,)?) => {
         &[$(Feature {
@@ -43,7 +43,7 @@ macro_rules! x86_features {
     };
 }
 
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
 pub static FEATURES: &[Feature] = x86_features!(
     ("sse3", 1, 0, 2, 0),
     ("pclmulqdq", 1, 0, 2, 1),
@@ -86,13 +86,23 @@ pub static FEATURES: &[Feature] = x86_features!(
     ("lzcnt", 0x8000_0001, 0, 2, 5),
     ("sse4a", 0x8000_0001, 0, 2, 6),
     ("tbm", 0x8000_0001, 0, 2, 21),
+    ("sha512", 7, 1, 0, 0, 1),
+    ("sm3", 7, 1, 0, 1, 1),
+    ("sm4", 7, 1, 0, 2, 1),
+    ("avxifma", 7, 1, 0, 23, 1),
+    ("avxvnniint8", 7, 1, 3, 4, 1),
+    ("avxneconvert", 7, 1, 3, 5, 1),
+    ("avxvnniint16", 7, 1, 3, 10, 1),
+    ("kl", 7, 0, 2, 23),
+    ("widekl", 0x19, 0, 1, 2),
 );
 
-/// Other architectures are not checked (their `native` builds have not been tried elsewhere).
-#[cfg(not(target_arch = "x86_64"))]
+/// Other architectures are not checked (their `native` builds have not been tried elsewhere),
+/// nor Windows' MSVC toolchain (the check's C is GCC's and Clang's).
+#[cfg(not(all(target_arch = "x86_64", not(target_env = "msvc"))))]
 pub static FEATURES: &[Feature] = &[];
 
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
 unsafe extern "C" {
     #[cfg(test)]
     fn rt_gpu_missing_cpu_features(
@@ -108,14 +118,14 @@ unsafe extern "C" {
 /// printed (by the C side, before any of this build's own instructions could fail).
 #[inline(never)]
 pub fn runs_here() -> bool {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
     // SAFETY: FEATURES is a valid array of its length, its names 0-terminated.
     return unsafe { rt_gpu_check_cpu(FEATURES.as_ptr(), FEATURES.len()) } == 0;
-    #[cfg(not(target_arch = "x86_64"))]
+    #[cfg(not(all(target_arch = "x86_64", not(target_env = "msvc"))))]
     true
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(all(test, target_arch = "x86_64", not(target_env = "msvc")))]
 mod tests {
     use super::*;
 
