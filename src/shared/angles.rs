@@ -69,8 +69,8 @@ pub fn acos(x: f32) -> f32 {
 }
 
 /// (sin(pi x), cos(pi x)) for x in [-1, 1], within 1.2e-7 of the exact values, branch-free:
-/// libm's `sinf`/`cosf` reduce any argument and were 5-7% of a textured render, where every
-/// sampled angle is pi times a number in [-1, 1]. x is split into quarter turns k = round(2x)
+/// libm's `sinf`/`cosf` reduce any argument, a cost the profile showed (docs/benchmarks.md),
+/// where every sampled angle is pi times a number in [-1, 1]. x is split into quarter turns k = round(2x)
 /// and y = x - k/2 in [-1/4, 1/4], exactly (Sterbenz), and pi y's Taylor polynomials (degree 9
 /// and 10: terms beyond are below 2e-9 there) are turned by k quarter turns.
 #[inline]
