@@ -213,26 +213,31 @@ impl Bin {
     }
 }
 
-/// The items binned by `bin`, in parallel for large sets.
-fn binned(items: &[Item], bin: &(impl Fn(&Item) -> usize + Sync)) -> [Bin; BINS] {
+/// The items binned along each axis by `bins_of`, in parallel for large sets.
+fn binned(items: &[Item], bins_of: &(impl Fn(&Item) -> glam::IVec3 + Sync)) -> [[Bin; BINS]; 3] {
     let serial = |chunk: &[Item]| {
-        let mut bins = [Bin::EMPTY; BINS];
+        let mut bins = [[Bin::EMPTY; BINS]; 3];
         for item in chunk {
-            let b = &mut bins[bin(item)];
+            let at = bins_of(item);
             let c = item.centroid();
-            b.count += 1;
-            b.bounds = b.bounds.grow(item.min(), item.max());
-            b.centroids = b.centroids.grow(c, c);
+            for (axis, axis_bins) in bins.iter_mut().enumerate() {
+                let b = &mut axis_bins[at[axis] as usize];
+                b.count += 1;
+                b.bounds = b.bounds.grow(item.min(), item.max());
+                b.centroids = b.centroids.grow(c, c);
+            }
         }
         bins
     };
     if items.len() >= PARALLEL_BELOW * 4 {
         use rayon::prelude::*;
-        let merge = |a: [Bin; BINS], b: [Bin; BINS]| std::array::from_fn(|k| a[k].merge(b[k]));
+        let merge = |a: [[Bin; BINS]; 3], b: [[Bin; BINS]; 3]| {
+            std::array::from_fn(|axis| std::array::from_fn(|k| a[axis][k].merge(b[axis][k])))
+        };
         items
             .par_chunks(PARALLEL_BELOW * 4)
             .map(serial)
-            .reduce(|| [Bin::EMPTY; BINS], merge)
+            .reduce(|| [[Bin::EMPTY; BINS]; 3], merge)
     } else {
         serial(items)
     }
@@ -350,68 +355,90 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
     let leaf_cost = n as f32;
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
     if n <= SORTED_UP_TO {
-        // Few items: every split between their sorted centroids, costed exactly.
-        items.sort_unstable_by(|a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
-        let mut right = [Bounds::EMPTY; SORTED_UP_TO];
-        let mut running = Bounds::EMPTY;
-        for k in (1..n).rev() {
-            running = running.grow(items[k].min(), items[k].max());
-            right[k] = running;
-        }
-        let (mut best, mut best_cost) = (1, f32::INFINITY);
-        let mut left = Bounds::EMPTY;
-        for k in 1..n {
-            left = left.grow(items[k - 1].min(), items[k - 1].max());
-            let cost = left.half_area() * k as f32 + right[k].half_area() * (n - k) as f32;
-            if cost < best_cost {
-                (best, best_cost) = (k, cost);
+        // Few items: every split between their sorted centroids along each axis, costed exactly.
+        let mut sorted = [items[0]; SORTED_UP_TO];
+        let (mut best_axis, mut best, mut best_cost) = (axis, 1, f32::INFINITY);
+        for a in (0..3).filter(|&a| extent[a] > 0.0) {
+            let sorted = &mut sorted[..n];
+            sorted.copy_from_slice(items);
+            sorted.sort_by(|x, y| x.centroid()[a].total_cmp(&y.centroid()[a]));
+            let mut right = [Bounds::EMPTY; SORTED_UP_TO];
+            let mut running = Bounds::EMPTY;
+            for k in (1..n).rev() {
+                running = running.grow(sorted[k].min(), sorted[k].max());
+                right[k] = running;
+            }
+            let mut left = Bounds::EMPTY;
+            for k in 1..n {
+                left = left.grow(sorted[k - 1].min(), sorted[k - 1].max());
+                let cost = left.half_area() * k as f32 + right[k].half_area() * (n - k) as f32;
+                if cost < best_cost {
+                    (best_axis, best, best_cost) = (a, k, cost);
+                }
             }
         }
         if n <= MAX_LEAF && leaf_cost <= 0.5 + best_cost / area {
             return None;
         }
+        items.sort_by(|x, y| x.centroid()[best_axis].total_cmp(&y.centroid()[best_axis]));
         let (left, right) = items.split_at(best);
         return Some(Split {
             at: best,
-            axis,
+            axis: best_axis,
             children: [bounds_of(left), bounds_of(right)],
         });
     }
-    // Binned SAH along the widest centroid axis (Wald 2007).
-    // The bin of a centroid, ((min + max) / 2 - lo) * BINS / extent, from two scalar loads (this
-    // runs twice per item per level).
-    let scale = 0.5 * BINS as f32 / extent[axis];
-    let offset = centroids.min[axis] * BINS as f32 / extent[axis];
-    let bin = move |i: &Item| {
-        let sum = i.min.as_ref()[axis] + i.max.as_ref()[axis];
-        ((sum * scale - offset) as i32).clamp(0, BINS as i32 - 1) as usize
+    // Binned SAH along each axis the centroids spread over (Wald 2007).
+    // The bin of a centroid, ((min + max) / 2 - lo) * BINS / extent, per axis at once.
+    let spread = extent.cmpgt(Vec3A::ZERO);
+    let scale = Vec3A::select(spread, 0.5 * BINS as f32 / extent, Vec3A::ZERO);
+    let offset = centroids.min * scale * 2.0;
+    let bins_of = move |i: &Item| {
+        let at = (i.min() + i.max()) * scale - offset;
+        // Clamped first (SSE's max turns NaN into the bound), so the truncation needs no check.
+        let at = at.clamp(Vec3A::ZERO, Vec3A::splat(BINS as f32 - 1.0));
+        // SAFETY: every lane is finite and within [0, BINS - 1].
+        unsafe {
+            glam::IVec3::new(
+                at.x.to_int_unchecked(),
+                at.y.to_int_unchecked(),
+                at.z.to_int_unchecked(),
+            )
+        }
     };
-    let bins = binned(items, &bin);
-    // Cost of splitting after bin k: area x count on each side.
-    let mut left = [Bin::EMPTY; BINS];
-    let mut running = Bin::EMPTY;
-    for k in 0..BINS - 1 {
-        running = running.merge(bins[k]);
-        left[k] = running;
-    }
-    let (mut best, mut best_cost, mut best_right) = (0, f32::INFINITY, Bin::EMPTY);
-    let mut right = Bin::EMPTY;
-    for k in (0..BINS - 1).rev() {
-        right = right.merge(bins[k + 1]);
-        let cost = left[k].bounds.half_area() * left[k].count as f32
-            + right.bounds.half_area() * right.count as f32;
-        if cost < best_cost {
-            (best, best_cost, best_right) = (k, cost, right);
+    let bins = binned(items, &bins_of);
+    let (mut best_axis, mut best, mut best_cost) = (axis, 0, f32::INFINITY);
+    let (mut best_left, mut best_right) = (Bin::EMPTY, Bin::EMPTY);
+    for a in (0..3).filter(|&a| spread.test(a)) {
+        // Cost of splitting after bin k: area x count on each side.
+        let mut left = [Bin::EMPTY; BINS];
+        let mut running = Bin::EMPTY;
+        for k in 0..BINS - 1 {
+            running = running.merge(bins[a][k]);
+            left[k] = running;
+        }
+        let mut right = Bin::EMPTY;
+        for k in (0..BINS - 1).rev() {
+            right = right.merge(bins[a][k + 1]);
+            if left[k].count == 0 || right.count == 0 {
+                continue;
+            }
+            let cost = left[k].bounds.half_area() * left[k].count as f32
+                + right.bounds.half_area() * right.count as f32;
+            if cost < best_cost {
+                (best_axis, best, best_cost) = (a, k, cost);
+                (best_left, best_right) = (left[k], right);
+            }
         }
     }
     if n <= MAX_LEAF && leaf_cost <= 0.5 + best_cost / area {
         return None;
     }
-    let at = partition(items, |i| bin(i) <= best);
+    let at = partition(items, |i| bins_of(i)[best_axis] as usize <= best);
     Some(Split {
         at,
-        axis,
-        children: [left[best], best_right].map(|b| (b.bounds, b.centroids)),
+        axis: best_axis,
+        children: [best_left, best_right].map(|b| (b.bounds, b.centroids)),
     })
 }
 
@@ -591,6 +618,41 @@ pub(crate) mod tests {
         let original = items.clone();
         let bvh = Bvh::build(&mut items);
         check(&bvh, &original);
+    }
+
+    /// Two thin layers, 100 apart in y, each spread 400 wide in x: the centroids spread widest
+    /// in x, but only a split in y separates the layers. The best split is sought on every
+    /// axis, both where it is binned (many items) and where it is sorted (few).
+    #[test]
+    fn the_split_is_sought_on_every_axis() {
+        for n in [16, 1000] {
+            let mut next = numbers(7);
+            let mut items: Vec<Item> = (0..n as u32)
+                .map(|primitive| {
+                    let y = if primitive % 2 == 0 { 0.0 } else { 100.0 };
+                    let c = Vec3::new(400.0 * next(), y, 10.0 * next());
+                    Item {
+                        min: c - 1.0,
+                        max: c + 1.0,
+                        primitive,
+                    }
+                })
+                .collect();
+            let original = items.clone();
+            let bvh = Bvh::build(&mut items);
+            check(&bvh, &original);
+            let root = &bvh.nodes[0];
+            assert_eq!(
+                root.count,
+                INTERIOR | 1,
+                "{n} items: the root splits on axis y"
+            );
+            let (first, second) = (&bvh.nodes[1], &bvh.nodes[root.offset as usize]);
+            assert!(
+                first.max.y < second.min.y || second.max.y < first.min.y,
+                "{n} items: the root's children overlap in y"
+            );
+        }
     }
 
     fn hits_box(min: Vec3, max: Vec3, origin: Vec3, inverse: Vec3, t_max: f32) -> bool {
