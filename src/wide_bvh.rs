@@ -1,10 +1,11 @@
-//! The scene's BVH collapsed to four children per node, which the CPU traverses (`cpu/accel.rs`)
-//! testing a node's four boxes at once with SIMD, as Embree does: a binary node's two children
-//! are replaced by its largest interior child's two until four are reached. Leaves stay the
-//! binary hierarchy's, so the primitives and their order are the same; a leaf of triangles
-//! alone (at most four, `accel::MAX_LEAF`) becomes a [`TriangleBlock`], its corners copied
-//! beside each other, so that it is one load and one four-lane test rather than a chase through
-//! the primitive list into the scene's triangles. The GPU keeps the binary hierarchy.
+//! The scene's BVH collapsed to `WIDTH` children per node, which the CPU traverses
+//! (`cpu/accel.rs`) testing a node's boxes at once with SIMD (`cpu/lanes.rs`), as Embree does: a
+//! binary node's two children are replaced by its largest interior child's two until `WIDTH`
+//! are reached. Leaves stay the binary hierarchy's, so the primitives and their order are the
+//! same; a subtree of triangles alone, at most `WIDTH` of them, becomes a [`TriangleBlock`], its
+//! corners copied beside each other, so that it is one load and one test of all its lanes rather
+//! than a chase through the primitive list into the scene's triangles. The GPU keeps the binary
+//! hierarchy.
 
 use crate::accel::{Bvh, Node};
 use crate::shared::primitive::PRIMITIVE_INDEX_BITS;
@@ -17,25 +18,34 @@ pub const EMPTY: u32 = u32::MAX;
 pub const LEAF: u32 = 1 << 31;
 pub const TRIANGLES: u32 = 1 << 30;
 
-/// Four children's boxes, one array per bound and axis so that SIMD lanes load them at once.
+/// Children per wide node and triangles per block: one SIMD register's floats, eight where the
+/// build targets AVX2 (a level's eight boxes tested in the time of four, and half the levels),
+/// else four (SSE).
+pub const WIDTH: usize = if cfg!(all(target_arch = "x86_64", target_feature = "avx2")) {
+    8
+} else {
+    4
+};
+
+/// `WIDTH` children's boxes, one array per bound and axis so that SIMD lanes load them at once.
 /// An empty child's box is +inf on every bound; traversal skips it by its `EMPTY` reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub struct WideNode {
-    pub min: [[f32; 4]; 3],
-    pub max: [[f32; 4]; 3],
-    pub children: [u32; 4],
+    pub min: [[f32; WIDTH]; 3],
+    pub max: [[f32; WIDTH]; 3],
+    pub children: [u32; WIDTH],
 }
 
-/// The triangles of one leaf, in its order, one array per corner and axis (`corners[corner]
-/// [axis][lane]`) so that SIMD lanes load them at once. A lane past the leaf's triangles holds
-/// `EMPTY` and a triangle of zeros.
+/// The triangles of a small subtree, in leaf order, one array per corner and axis
+/// (`corners[corner][axis][lane]`) so that SIMD lanes load them at once. A lane past the
+/// subtree's triangles holds `EMPTY` and a triangle of zeros.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub struct TriangleBlock {
-    pub corners: [[[f32; 4]; 3]; 3],
+    pub corners: [[[f32; WIDTH]; 3]; 3],
     /// Each lane's triangle: its index in `FlatScene::triangles`.
-    pub triangles: [u32; 4],
+    pub triangles: [u32; WIDTH],
 }
 
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -84,7 +94,7 @@ impl WideBvh {
     }
 
     /// The child reference of binary node `index`, its subtree collapsed (depth first); a
-    /// subtree of at most four triangles is one block.
+    /// subtree of at most `WIDTH` triangles is one block.
     fn collapse(
         &mut self,
         bvh: &Bvh,
@@ -100,9 +110,10 @@ impl WideBvh {
             debug_assert!(index < TRIANGLES, "a leaf's index would read as a block's");
             return LEAF | index;
         }
-        let mut children = [index + 1, node.offset, EMPTY, EMPTY];
+        let mut children = [EMPTY; WIDTH];
+        (children[0], children[1]) = (index + 1, node.offset);
         let mut count = 2;
-        while count < 4 {
+        while count < WIDTH {
             // Open the interior child of largest surface area: the likeliest to be entered.
             let opens =
                 |child: u32| !bvh.nodes[child as usize].is_leaf() && !small.fits_block(child);
@@ -118,9 +129,9 @@ impl WideBvh {
         }
         let at = self.nodes.len();
         self.nodes.push(WideNode {
-            min: [[f32::INFINITY; 4]; 3],
-            max: [[f32::INFINITY; 4]; 3],
-            children: [EMPTY; 4],
+            min: [[f32::INFINITY; WIDTH]; 3],
+            max: [[f32::INFINITY; WIDTH]; 3],
+            children: [EMPTY; WIDTH],
         });
         for (lane, &child) in children[..count].iter().enumerate() {
             let box_of = &bvh.nodes[child as usize];
@@ -135,11 +146,11 @@ impl WideBvh {
         at as u32
     }
 
-    /// The block of the triangles below binary node `index` (at most four, in leaf order).
+    /// The block of the triangles below binary node `index` (at most `WIDTH`, in leaf order).
     fn block(&mut self, bvh: &Bvh, index: u32, corners: &impl Fn(u32) -> Option<[Vec3; 3]>) -> u32 {
         let mut block = TriangleBlock {
-            corners: [[[0.0; 4]; 3]; 3],
-            triangles: [EMPTY; 4],
+            corners: [[[0.0; WIDTH]; 3]; 3],
+            triangles: [EMPTY; WIDTH],
         };
         let mut lane = 0;
         let mut pending = vec![index];
@@ -166,15 +177,15 @@ impl WideBvh {
     }
 }
 
-/// Which subtrees of a binary hierarchy hold at most four primitives, all triangles: those
-/// become one block, whose four-lane test costs about what one triangle's does.
+/// Which subtrees of a binary hierarchy hold at most `WIDTH` primitives, all triangles: those
+/// become one block, whose test of all its lanes costs about what one triangle's does.
 struct SmallSubtrees {
     /// Per node: its subtree's primitives, all triangles, capped at `TOO_MANY`.
     triangles: Vec<u8>,
 }
 
 impl SmallSubtrees {
-    const TOO_MANY: u8 = 5;
+    const TOO_MANY: u8 = WIDTH as u8 + 1;
 
     fn new(bvh: &Bvh, corners: &impl Fn(u32) -> Option<[Vec3; 3]>) -> Self {
         let mut triangles = vec![0u8; bvh.nodes.len()];
@@ -227,7 +238,7 @@ mod tests {
                 continue;
             }
             let node = &wide.nodes[reference as usize];
-            for lane in 0..4 {
+            for lane in 0..WIDTH {
                 if node.children[lane] != EMPTY {
                     stack.push(node.children[lane]);
                 }

@@ -1,21 +1,22 @@
 //! Traversal of the scene's BVH: depth-first; an interior node tests its children's boxes,
 //! enters the nearest (by where the ray enters them) and pushes the others with their entry
 //! distances; a popped child whose box now lies beyond the closest hit is skipped without being
-//! read. The CPU traverses the hierarchy collapsed to four children per node (`traverse_wide`);
+//! read. The CPU traverses the hierarchy collapsed to `WIDTH` children per node (`traverse_wide`);
 //! the binary walk the kernel does (`shaders/accel.wgsl`) is kept in the tests, as the reference
 //! the wide one must agree with.
 
-use super::four_triangles::ShearedRay;
+use super::lanes::{Lanes, equal_bits};
+use super::triangle_blocks::ShearedRay;
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, inverse_direction};
 use crate::shared::ray::Ray;
-use crate::wide_bvh::{EMPTY, LEAF, TRIANGLES, WideBvh, WideNode};
+use crate::wide_bvh::{EMPTY, LEAF, TRIANGLES, WIDTH, WideBvh, WideNode};
 use std::mem::MaybeUninit;
 
 /// Pending children of a wide traversal. Its slots are not cleared when it is made: a ray's
 /// traversal is short beside clearing all of them, which had cost a few percent of a mesh
 /// scene's render; only pushed slots are ever read.
 struct Pending {
-    slots: [MaybeUninit<(u32, f32)>; 3 * MAX_DEPTH + 1],
+    slots: [MaybeUninit<(u32, f32)>; (WIDTH - 1) * MAX_DEPTH + 1],
     top: usize,
 }
 
@@ -23,7 +24,7 @@ impl Pending {
     #[inline]
     fn new() -> Self {
         Pending {
-            slots: [MaybeUninit::uninit(); 3 * MAX_DEPTH + 1],
+            slots: [MaybeUninit::uninit(); (WIDTH - 1) * MAX_DEPTH + 1],
             top: 0,
         }
     }
@@ -78,7 +79,7 @@ pub fn reach(closest: f32) -> f32 {
     }
 }
 
-/// The binary walk (see the tests' `traverse`) over the hierarchy collapsed to four children
+/// The binary walk (see the tests' `traverse`) over the hierarchy collapsed to `WIDTH` children
 /// per node (`wide_bvh`), below child reference `root`: primitives met in another order (and
 /// so others skipped), but the same closest hit, as each box test is `accel::box_entry`'s
 /// arithmetic lane by lane, each triangle block's test `hit_triangle`'s, and ties between hits
@@ -96,9 +97,9 @@ pub fn traverse_wide(
     if root == EMPTY {
         return;
     }
-    let boxes = FourBoxes::new(ray);
+    let boxes = WideBoxes::new(ray);
     let sheared = ShearedRay::new(ray);
-    // Each level pushes at most three children.
+    // Each level pushes at most `WIDTH - 1` children.
     let mut stack = Pending::new();
     let mut reference = root;
     loop {
@@ -126,8 +127,8 @@ pub fn traverse_wide(
         } else {
             let node = &wide.nodes[reference as usize];
             let (entries, met) = boxes.entries(node, *closest);
-            // The children met, nearest first (at most four: insertion sort).
-            let mut order = [(0u32, 0f32); 4];
+            // The children met, nearest first (at most `WIDTH`: insertion sort).
+            let mut order = [(0u32, 0f32); WIDTH];
             let mut count = 0;
             let children = node.children.iter().zip(entries);
             for (lane, (&child, entry)) in children.enumerate() {
@@ -156,64 +157,37 @@ pub fn traverse_wide(
     }
 }
 
-/// A ray's origin and reciprocal direction, ready to test against a wide node's four boxes.
-struct FourBoxes {
-    origin: [f32; 3],
-    inverse: [f32; 3],
+/// A ray's origin and reciprocal direction, ready to test against a wide node's boxes.
+struct WideBoxes {
+    origin: [Lanes; 3],
+    inverse: [Lanes; 3],
 }
 
-impl FourBoxes {
+impl WideBoxes {
     fn new(ray: &Ray) -> Self {
-        FourBoxes {
-            origin: ray.origin.to_array(),
-            inverse: inverse_direction(ray.dir).to_array(),
+        let inverse = inverse_direction(ray.dir);
+        WideBoxes {
+            origin: [0, 1, 2].map(|axis| Lanes::splat(ray.origin[axis])),
+            inverse: [0, 1, 2].map(|axis| Lanes::splat(inverse[axis])),
         }
     }
 
     /// Where the ray enters each of `node`'s boxes, and as bits which it meets before
     /// `t_max`: `accel::box_entry` in each lane whose child is not `EMPTY`.
     #[inline]
-    #[cfg(target_arch = "x86_64")]
-    fn entries(&self, node: &WideNode, t_max: f32) -> ([f32; 4], u32) {
-        use std::arch::x86_64::*;
-        // SAFETY: SSE is part of x86-64's baseline, and the loads read the node's own arrays.
-        unsafe {
-            let mut near = _mm_setzero_ps();
-            let mut far = _mm_set1_ps(t_max);
-            for axis in 0..3 {
-                let origin = _mm_set1_ps(self.origin[axis]);
-                let inverse = _mm_set1_ps(self.inverse[axis]);
-                let min = _mm_loadu_ps(node.min[axis].as_ptr());
-                let max = _mm_loadu_ps(node.max[axis].as_ptr());
-                let t0 = _mm_mul_ps(_mm_sub_ps(min, origin), inverse);
-                let t1 = _mm_mul_ps(_mm_sub_ps(max, origin), inverse);
-                near = _mm_max_ps(near, _mm_min_ps(t0, t1));
-                far = _mm_min_ps(far, _mm_max_ps(t0, t1));
-            }
-            far = _mm_mul_ps(far, _mm_set1_ps(BOX_FAR_WIDENING));
-            let children = _mm_loadu_si128(node.children.as_ptr() as *const __m128i);
-            let empty = _mm_castsi128_ps(_mm_cmpeq_epi32(children, _mm_set1_epi32(-1)));
-            let met = _mm_movemask_ps(_mm_andnot_ps(empty, _mm_cmple_ps(near, far))) as u32;
-            let mut entries = [0f32; 4];
-            _mm_storeu_ps(entries.as_mut_ptr(), near);
-            (entries, met)
+    fn entries(&self, node: &WideNode, t_max: f32) -> ([f32; WIDTH], u32) {
+        let mut near = Lanes::splat(0.0);
+        let mut far = Lanes::splat(t_max);
+        for axis in 0..3 {
+            let t0 = (Lanes::load(&node.min[axis]) - self.origin[axis]) * self.inverse[axis];
+            let t1 = (Lanes::load(&node.max[axis]) - self.origin[axis]) * self.inverse[axis];
+            near = near.max(t0.min(t1));
+            far = far.min(t0.max(t1));
         }
-    }
-
-    #[inline]
-    #[cfg(not(target_arch = "x86_64"))]
-    fn entries(&self, node: &WideNode, t_max: f32) -> ([f32; 4], u32) {
-        let mut entries = [0f32; 4];
-        let mut met = 0;
-        for lane in (0..4).filter(|&lane| node.children[lane] != EMPTY) {
-            let min = glam::Vec3::new(node.min[0][lane], node.min[1][lane], node.min[2][lane]);
-            let max = glam::Vec3::new(node.max[0][lane], node.max[1][lane], node.max[2][lane]);
-            let (origin, inverse) = (self.origin.into(), self.inverse.into());
-            if let Some(near) = crate::accel::box_entry(min, max, origin, inverse, t_max) {
-                entries[lane] = near;
-                met |= 1 << lane;
-            }
-        }
+        far = far * Lanes::splat(BOX_FAR_WIDENING);
+        let met = near.le(far).bits() & !equal_bits(&node.children, EMPTY);
+        let mut entries = [0f32; WIDTH];
+        near.store(&mut entries);
         (entries, met)
     }
 }

@@ -8,12 +8,13 @@ pub mod camera;
 pub mod environment;
 pub mod four_quads;
 pub mod four_spheres;
-pub mod four_triangles;
 pub mod integrator;
+pub mod lanes;
 pub mod lights;
 pub mod medium;
 pub mod ray_count;
 pub mod shapes;
+pub mod triangle_blocks;
 
 use crate::backend::{RenderBackend, Rendered};
 use crate::film::{Film, PixelRun, PixelStats, is_valid_sample};

@@ -177,7 +177,8 @@ pub struct FlatScene {
     /// in turn (`cpu::shapes`); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
     pub bvh: crate::accel::Bvh,
-    /// The same hierarchy collapsed to four children per node, which the CPU traverses.
+    /// The same hierarchy collapsed to `wide_bvh::WIDTH` children per node, which the CPU
+    /// traverses.
     pub wide_bvh: crate::wide_bvh::WideBvh,
     /// The quads four to a block (`shapes.quads` in order), which the CPU tests together where
     /// it tests a scene's shapes in turn; built with the BVH.

@@ -1,11 +1,12 @@
-//! A leaf's triangles tested against a ray together (`wide_bvh::TriangleBlock`): the watertight
-//! test of [`super::shapes::hit_triangle`], its ray-dependent part (which axis becomes z, the
-//! shear) computed once per ray, and the rest lane by lane in the same operations in the same
-//! order, so that each lane's distance and weights are bit for bit the ones `hit_triangle` gives
-//! its triangle (no fused multiply-add: the x86-64 baseline has none).
+//! A block's triangles tested against a ray together (`wide_bvh::TriangleBlock`, `WIDTH` lanes
+//! of `cpu/lanes.rs`): the watertight test of [`super::shapes::hit_triangle`], its
+//! ray-dependent part (which axis becomes z, the shear) computed once per ray, and the rest lane
+//! by lane in the same operations in the same order, so that each lane's distance and weights
+//! are bit for bit the ones `hit_triangle` gives its triangle (no fused multiply-add).
 
+use super::lanes::{Lanes, equal_bits};
 use crate::shared::ray::Ray;
-use crate::wide_bvh::{EMPTY, TriangleBlock};
+use crate::wide_bvh::{EMPTY, TriangleBlock, WIDTH};
 use glam::Vec3;
 
 /// A ray in the frame of the watertight test: the ray, the axes that become x, y and z (z the
@@ -19,9 +20,9 @@ pub struct ShearedRay {
 /// Where the lanes of a block are hit: distance, and the weights of each triangle's second and
 /// third corners, valid in the lanes set in `hit`.
 pub struct BlockHits {
-    pub t: [f32; 4],
-    pub b1: [f32; 4],
-    pub b2: [f32; 4],
+    pub t: [f32; WIDTH],
+    pub b1: [f32; WIDTH],
+    pub b2: [f32; WIDTH],
     pub hit: u32,
 }
 
@@ -47,82 +48,55 @@ impl ShearedRay {
 
     /// The block's triangles hit within (0, `t_max`).
     #[inline]
-    #[cfg(target_arch = "x86_64")]
     pub fn hits(&self, block: &TriangleBlock, t_max: f32) -> BlockHits {
-        use std::arch::x86_64::*;
-        // SAFETY: SSE and SSE2 are part of x86-64's baseline, and the loads read the block's
-        // own 16-byte-aligned arrays.
-        unsafe {
-            let [kx, ky, kz] = self.axes;
-            let splat = |k: usize| _mm_set1_ps(self.ray.origin[k]);
-            let (ox, oy, oz) = (splat(kx), splat(ky), splat(kz));
-            let (sx, sy, sz) = (
-                _mm_set1_ps(self.shear[0]),
-                _mm_set1_ps(self.shear[1]),
-                _mm_set1_ps(self.shear[2]),
-            );
-            // Each corner relative to the origin, permuted and sheared: (x, y) and the unsheared z.
-            let corner = |c: usize| {
-                let q = &block.corners[c];
-                let qx = _mm_sub_ps(_mm_load_ps(q[kx].as_ptr()), ox);
-                let qy = _mm_sub_ps(_mm_load_ps(q[ky].as_ptr()), oy);
-                let qz = _mm_sub_ps(_mm_load_ps(q[kz].as_ptr()), oz);
-                let x = _mm_add_ps(qx, _mm_mul_ps(sx, qz));
-                let y = _mm_add_ps(qy, _mm_mul_ps(sy, qz));
-                (x, y, qz)
-            };
-            let (p0, p1, p2) = (corner(0), corner(1), corner(2));
-            let edge = |a: (__m128, __m128, __m128), b: (__m128, __m128, __m128)| {
-                _mm_sub_ps(_mm_mul_ps(a.0, b.1), _mm_mul_ps(a.1, b.0))
-            };
-            let (e0, e1, e2) = (edge(p1, p2), edge(p2, p0), edge(p0, p1));
-            let zero = _mm_setzero_ps();
-            let any = |f: unsafe fn(__m128, __m128) -> __m128| {
-                _mm_or_ps(_mm_or_ps(f(e0, zero), f(e1, zero)), f(e2, zero))
-            };
-            let mixed = _mm_and_ps(any(_mm_cmplt_ps), any(_mm_cmpgt_ps));
-            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-            let term = |e: __m128, qz: __m128| _mm_mul_ps(e, _mm_mul_ps(sz, qz));
-            let scaled = _mm_add_ps(_mm_add_ps(term(e0, p0.2), term(e1, p1.2)), term(e2, p2.2));
-            let t = _mm_div_ps(scaled, det);
-            let within = _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(t_max)));
-            let empty = _mm_castsi128_ps(_mm_cmpeq_epi32(
-                _mm_load_si128(block.triangles.as_ptr() as *const __m128i),
-                _mm_set1_epi32(EMPTY as i32),
-            ));
-            let rejected = _mm_or_ps(_mm_or_ps(mixed, _mm_cmpeq_ps(det, zero)), empty);
-            let hit = _mm_movemask_ps(_mm_andnot_ps(rejected, within)) as u32;
-            let mut out = BlockHits {
-                t: [0.0; 4],
-                b1: [0.0; 4],
-                b2: [0.0; 4],
-                hit,
-            };
-            if hit != 0 {
-                _mm_storeu_ps(out.t.as_mut_ptr(), t);
-                _mm_storeu_ps(out.b1.as_mut_ptr(), _mm_div_ps(e1, det));
-                _mm_storeu_ps(out.b2.as_mut_ptr(), _mm_div_ps(e2, det));
-            }
-            out
+        let [kx, ky, kz] = self.axes;
+        let splat = |k: usize| Lanes::splat(self.ray.origin[k]);
+        let (ox, oy, oz) = (splat(kx), splat(ky), splat(kz));
+        let [sx, sy, sz] = self.shear.map(Lanes::splat);
+        // Each corner relative to the origin, permuted and sheared: (x, y) and the unsheared z.
+        let corner = |c: usize| {
+            let q = &block.corners[c];
+            let qx = Lanes::load(&q[kx]) - ox;
+            let qy = Lanes::load(&q[ky]) - oy;
+            let qz = Lanes::load(&q[kz]) - oz;
+            (qx + sx * qz, qy + sy * qz, qz)
+        };
+        let (p0, p1, p2) = (corner(0), corner(1), corner(2));
+        let edge = |a: (Lanes, Lanes, Lanes), b: (Lanes, Lanes, Lanes)| a.0 * b.1 - a.1 * b.0;
+        let (e0, e1, e2) = (edge(p1, p2), edge(p2, p0), edge(p0, p1));
+        let zero = Lanes::splat(0.0);
+        let negative = e0.lt(zero) | e1.lt(zero) | e2.lt(zero);
+        let positive = e0.gt(zero) | e1.gt(zero) | e2.gt(zero);
+        let det = e0 + e1 + e2;
+        let term = |e: Lanes, qz: Lanes| e * (sz * qz);
+        let t = (term(e0, p0.2) + term(e1, p1.2) + term(e2, p2.2)) / det;
+        let within = (t.gt(zero) & t.lt(Lanes::splat(t_max))).bits();
+        let rejected = (negative & positive | det.eq(zero)).bits();
+        let hit = within & !rejected & !equal_bits(&block.triangles, EMPTY);
+        let mut out = BlockHits {
+            t: [0.0; WIDTH],
+            b1: [0.0; WIDTH],
+            b2: [0.0; WIDTH],
+            hit,
+        };
+        if hit != 0 {
+            t.store(&mut out.t);
+            (e1 / det).store(&mut out.b1);
+            (e2 / det).store(&mut out.b2);
         }
-    }
-
-    /// The block's triangles hit within (0, `t_max`): [`super::shapes::hit_triangle`] per lane.
-    #[cfg(not(target_arch = "x86_64"))]
-    pub fn hits(&self, block: &TriangleBlock, t_max: f32) -> BlockHits {
-        self.hits_lane_by_lane(block, t_max)
+        out
     }
 
     /// [`ShearedRay::hits`] one lane at a time, by `hit_triangle` itself: the reference the
-    /// four-lane test is checked against, and the test where there is no SSE.
+    /// test of all lanes is checked against.
     pub fn hits_lane_by_lane(&self, block: &TriangleBlock, t_max: f32) -> BlockHits {
         let mut out = BlockHits {
-            t: [0.0; 4],
-            b1: [0.0; 4],
-            b2: [0.0; 4],
+            t: [0.0; WIDTH],
+            b1: [0.0; WIDTH],
+            b2: [0.0; WIDTH],
             hit: 0,
         };
-        for lane in (0..4).filter(|&lane| block.triangles[lane] != EMPTY) {
+        for lane in (0..WIDTH).filter(|&lane| block.triangles[lane] != EMPTY) {
             let corner = |c: usize| {
                 let q = &block.corners[c];
                 Vec3::new(q[0][lane], q[1][lane], q[2][lane])
@@ -151,12 +125,12 @@ mod tests {
     use super::*;
     use crate::shared::rng::Rng;
 
-    /// Four lanes at once give each triangle `hit_triangle`'s answer to the bit: over random
+    /// All lanes at once give each triangle `hit_triangle`'s answer to the bit: over random
     /// rays against blocks of random triangles, of triangles sharing an edge the ray crosses or
     /// runs along, of degenerate ones (a point, a line) and of triangles far off, with `t_max`
     /// beyond them, at a hit's own distance and just past it.
     #[test]
-    fn four_lanes_hit_as_hit_triangle_does() {
+    fn all_lanes_hit_as_hit_triangle_does() {
         let mut hits = 0;
         for i in 0..40_000u32 {
             let mut rng = Rng::for_sample(i, 0, 11);
@@ -169,15 +143,20 @@ mod tests {
                 [b, a, d], // shares the edge a-b, wound the other way
                 [a, a, a], // a point
                 [a * scale, b * scale + Vec3::splat(scale), c * scale],
+                // Lanes 4 to 7, where blocks are eight wide.
+                [c, d, a],
+                [d, c, b], // shares the edge c-d with the one before
+                [a, c, c], // a line
+                [b * scale, c * scale, d * scale],
             ];
             let mut block = TriangleBlock {
-                corners: [[[0.0; 4]; 3]; 3],
-                triangles: [0, 1, 2, 3],
+                corners: [[[0.0; WIDTH]; 3]; 3],
+                triangles: std::array::from_fn(|lane| lane as u32),
             };
             if i % 5 == 0 {
                 block.triangles[2] = EMPTY;
             }
-            for (lane, corners) in triangles.iter().enumerate() {
+            for (lane, corners) in triangles.iter().take(WIDTH).enumerate() {
                 for (corner, p) in corners.iter().enumerate() {
                     for axis in 0..3 {
                         block.corners[corner][axis][lane] = p[axis];
@@ -198,20 +177,20 @@ mod tests {
             };
             let sheared = ShearedRay::new(&ray);
             let far = sheared.hits_lane_by_lane(&block, f32::INFINITY);
-            let nearest = (0..4)
+            let nearest = (0..WIDTH)
                 .filter(|&l| far.hit & (1 << l) != 0)
                 .map(|l| far.t[l])
                 .fold(f32::INFINITY, f32::min);
             for t_max in [f32::INFINITY, nearest, nearest.next_up(), 1.0] {
-                let (four, one) = (
+                let (all, one) = (
                     sheared.hits(&block, t_max),
                     sheared.hits_lane_by_lane(&block, t_max),
                 );
-                assert_eq!(four.hit, one.hit, "{ray:?} t_max {t_max}");
-                for lane in (0..4).filter(|&l| one.hit & (1 << l) != 0) {
+                assert_eq!(all.hit, one.hit, "{ray:?} t_max {t_max}");
+                for lane in (0..WIDTH).filter(|&l| one.hit & (1 << l) != 0) {
                     let bits =
                         |h: &BlockHits| [h.t[lane], h.b1[lane], h.b2[lane]].map(f32::to_bits);
-                    assert_eq!(bits(&four), bits(&one), "{ray:?} lane {lane}");
+                    assert_eq!(bits(&all), bits(&one), "{ray:?} lane {lane}");
                 }
                 hits += one.hit.count_ones();
             }
