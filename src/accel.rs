@@ -8,7 +8,7 @@ use glam::{Vec3, Vec3A};
 
 /// Most primitives a leaf holds, except at the depth limit.
 pub const MAX_LEAF: usize = 4;
-/// Most levels: the CPU's traversal stack holds this many entries (the kernel's is sized to the
+/// Most levels: the CPU's traversal stack is sized for this many (the kernel's is sized to the
 /// scene's hierarchy: `BVH_STACK` in src/gpu/shader.rs).
 pub const MAX_DEPTH: usize = 48;
 /// `count` of an interior node: this bit, and the split axis in the low two bits.
@@ -344,13 +344,8 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
         if n <= MAX_LEAF {
             return None;
         }
-        // Every centroid in one place: halves by position in the array.
-        let (left, right) = items.split_at(n / 2);
-        return Some(Split {
-            at: n / 2,
-            axis,
-            children: [bounds_of(left), bounds_of(right)],
-        });
+        // Every centroid in one place.
+        return Some(halves(items, axis));
     }
     let leaf_cost = n as f32;
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
@@ -389,22 +384,17 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
         });
     }
     // Binned SAH along each axis the centroids spread over (Wald 2007).
-    // The bin of a centroid, ((min + max) / 2 - lo) * BINS / extent, per axis at once.
-    let spread = extent.cmpgt(Vec3A::ZERO);
-    let scale = Vec3A::select(spread, 0.5 * BINS as f32 / extent, Vec3A::ZERO);
+    // The bin of a centroid, ((min + max) / 2 - lo) * BINS / extent, per axis at once. An
+    // extent too small for its reciprocal to be finite counts as none.
+    let scale = 0.5 * BINS as f32 / extent;
+    let spread = extent.cmpgt(Vec3A::ZERO) & scale.is_finite_mask();
+    let scale = Vec3A::select(spread, scale, Vec3A::ZERO);
     let offset = centroids.min * scale * 2.0;
     let bins_of = move |i: &Item| {
         let at = (i.min() + i.max()) * scale - offset;
-        // Clamped first (SSE's max turns NaN into the bound), so the truncation needs no check.
-        let at = at.clamp(Vec3A::ZERO, Vec3A::splat(BINS as f32 - 1.0));
-        // SAFETY: every lane is finite and within [0, BINS - 1].
-        unsafe {
-            glam::IVec3::new(
-                at.x.to_int_unchecked(),
-                at.y.to_int_unchecked(),
-                at.z.to_int_unchecked(),
-            )
-        }
+        // Clamped as floats first, where it is cheaper; `as` then saturates and maps NaN to 0.
+        at.clamp(Vec3A::ZERO, Vec3A::splat(BINS as f32 - 1.0))
+            .as_ivec3()
     };
     let bins = binned(items, &bins_of);
     let (mut best_axis, mut best, mut best_cost) = (axis, 0, f32::INFINITY);
@@ -434,12 +424,26 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
     if n <= MAX_LEAF && leaf_cost <= 0.5 + best_cost / area {
         return None;
     }
+    if best_cost == f32::INFINITY {
+        // Every item in one bin on every axis (centroids too close together, or not finite).
+        return Some(halves(items, axis));
+    }
     let at = partition(items, |i| bins_of(i)[best_axis] as usize <= best);
     Some(Split {
         at,
         axis: best_axis,
         children: [best_left, best_right].map(|b| (b.bounds, b.centroids)),
     })
+}
+
+/// `items` split in halves by position in the array: where their centroids tell nothing apart.
+fn halves(items: &[Item], axis: usize) -> Split {
+    let (left, right) = items.split_at(items.len() / 2);
+    Split {
+        at: left.len(),
+        axis,
+        children: [bounds_of(left), bounds_of(right)],
+    }
 }
 
 /// Moves the items for which `left` holds to the front; returns how many there are. Hoare's
@@ -652,6 +656,27 @@ pub(crate) mod tests {
                 first.max.y < second.min.y || second.max.y < first.min.y,
                 "{n} items: the root's children overlap in y"
             );
+        }
+    }
+
+    /// Centroids apart by less than f32's reciprocal resolves (the bins' scale would be
+    /// infinite): the builder still gives a valid tree, each item within its leaf's bounds.
+    #[test]
+    fn centroids_closer_than_a_bin_resolves_still_split() {
+        for n in [20, 1000] {
+            let mut items: Vec<Item> = (0..n as u32)
+                .map(|primitive| {
+                    let z = if primitive % 2 == 0 { 0.0 } else { 1e-40 };
+                    Item {
+                        min: Vec3::new(0.0, 0.0, z),
+                        max: Vec3::new(1.0, 1.0, z),
+                        primitive,
+                    }
+                })
+                .collect();
+            let original = items.clone();
+            let bvh = Bvh::build(&mut items);
+            check(&bvh, &original);
         }
     }
 

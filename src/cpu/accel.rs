@@ -297,13 +297,14 @@ mod tests {
                     *closest = t;
                 }
             };
-            let (mut binary, mut four) = ((f32::INFINITY, u32::MAX), (f32::INFINITY, u32::MAX));
+            let (mut binary, mut wide_found) =
+                ((f32::INFINITY, u32::MAX), (f32::INFINITY, u32::MAX));
             let mut closest = f32::INFINITY;
             traverse(&bvh, 0, &ray, &mut closest, |p, c| hit(p, c, &mut binary));
             let mut closest = f32::INFINITY;
-            let mut boxes = Boxes(|p, c: &mut f32| hit(p, c, &mut four));
+            let mut boxes = Boxes(|p, c: &mut f32| hit(p, c, &mut wide_found));
             traverse_wide(&wide, &bvh, wide.root, &ray, &mut closest, &mut boxes);
-            assert_eq!(binary, four, "ray {ray:?}");
+            assert_eq!(binary, wide_found, "ray {ray:?}");
         }
     }
 }

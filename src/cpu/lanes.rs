@@ -366,8 +366,11 @@ mod tests {
                 use super::WIDTH;
                 use lanes::{Lanes, equal_bits};
                 use $imp as lanes;
-                let a: [f32; WIDTH] =
-                    std::array::from_fn(|i| [1.5, -0.0, f32::NAN, 3.0][i % 4] + i as f32);
+                // Lane 1 (and 5) holds -0 against +0: SSE's min and max give their second.
+                let a: [f32; WIDTH] = std::array::from_fn(|i| match i % 4 {
+                    1 => -0.0,
+                    k => [1.5, 0.0, f32::NAN, 3.0][k] + i as f32,
+                });
                 let b: [f32; WIDTH] =
                     std::array::from_fn(|i| [0.1, 0.0, 2.0, f32::NAN][i % 4] * 3.0);
                 let (x, y) = (Lanes::load(&a), Lanes::load(&b));

@@ -771,8 +771,9 @@ mod block_tests {
     use crate::shared::rng::Rng;
 
     /// The closest-hit search through the wide hierarchy, its small subtrees of triangles tested
-    /// as four-lane blocks, finds what testing every primitive and every instanced triangle one
-    /// by one finds, to the bit: in a scene of placed meshes and one of instanced ones.
+    /// as blocks of `WIDTH` lanes, finds what testing every primitive and every instanced
+    /// triangle one by one finds, to the bit: in a scene of placed meshes and one of instanced
+    /// ones.
     #[test]
     fn triangle_blocks_hit_as_every_triangle_in_turn() {
         for file in ["scenes/meshes.toml", "scenes/knots.toml"] {
