@@ -7,7 +7,6 @@
 use super::lanes::{Lanes, equal_bits};
 use crate::shared::ray::Ray;
 use crate::wide_bvh::{EMPTY, TriangleBlock, WIDTH};
-use glam::Vec3;
 
 /// A ray in the frame of the watertight test: the ray, the axes that become x, y and z (z the
 /// dominant one) and the shear (`-d.x / d.z`, `-d.y / d.z`, `1 / d.z` in that frame).
@@ -88,8 +87,10 @@ impl ShearedRay {
     }
 
     /// [`ShearedRay::hits`] one lane at a time, by `hit_triangle` itself: the reference the
-    /// test of all lanes is checked against.
-    pub fn hits_lane_by_lane(&self, block: &TriangleBlock, t_max: f32) -> BlockHits {
+    /// test of all lanes is checked against (every build tests its lanes, so nothing else
+    /// calls it).
+    #[cfg(test)]
+    fn hits_lane_by_lane(&self, block: &TriangleBlock, t_max: f32) -> BlockHits {
         let mut out = BlockHits {
             t: [0.0; WIDTH],
             b1: [0.0; WIDTH],
@@ -99,7 +100,7 @@ impl ShearedRay {
         for lane in (0..WIDTH).filter(|&lane| block.triangles[lane] != EMPTY) {
             let corner = |c: usize| {
                 let q = &block.corners[c];
-                Vec3::new(q[0][lane], q[1][lane], q[2][lane])
+                glam::Vec3::new(q[0][lane], q[1][lane], q[2][lane])
             };
             let triangle = crate::scene::flat::Triangle {
                 p0: corner(0),
@@ -124,6 +125,7 @@ impl ShearedRay {
 mod tests {
     use super::*;
     use crate::shared::rng::Rng;
+    use glam::Vec3;
 
     /// All lanes at once give each triangle `hit_triangle`'s answer to the bit: over random
     /// rays against blocks of random triangles, of triangles sharing an edge the ray crosses or
