@@ -935,16 +935,17 @@ impl<'a> Flattener<'a> {
         material: u32,
         normal_mapped: bool,
     ) {
+        use rayon::prelude::*;
         // A mirroring scale turns the winding around: swap two corners so the front face stays
         // the same side of the surface.
         let mirrored = scale.x * scale.y * scale.z < 0.0;
-        let placed: Vec<Vec3> = mesh
-            .positions
-            .iter()
-            .map(|&p| t.apply_point_relative(p * scale, origin))
+        let place = t.point_placement(origin);
+        let rotate = t.vector_rotation();
+        let placed: Vec<Vec3> = (mesh.positions.par_iter())
+            .map(|&p| place(p * scale))
             .collect();
         // Normals by the inverse transpose: divided by the scale, then rotated.
-        let shading = |n: Vec3| t.rotate_vector(n / scale).normalize_or_zero();
+        let shading = |n: Vec3| rotate(n / scale).normalize_or_zero();
         // Tangents as the surface's vectors; a mirroring scale turns the bitangent around.
         let tangents = if normal_mapped {
             let key = std::ptr::from_ref(mesh) as usize;
@@ -956,62 +957,84 @@ impl<'a> Flattener<'a> {
             None
         };
         let tangent = |v: Vec4| {
-            let along = t.rotate_vector(v.truncate() * scale).normalize_or_zero();
+            let along = rotate(v.truncate() * scale).normalize_or_zero();
             along.extend(if mirrored { -v.w } else { v.w })
         };
-        for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
+        // Each triangle's corners placed, and its face's normal; `None` for triangles that f32
+        // coordinates here flatten to a line, which are left out.
+        let placed_triangle = |i: usize| {
+            let [a, b, c] = mesh.triangles[i];
             let [b, c] = if mirrored { [c, b] } else { [b, c] };
             let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
-            // Triangles that f32 coordinates here flatten to a line are left out.
-            let Some(n) = face_normal(p0, p1, p2) else {
-                continue;
-            };
-            if self.smooth {
-                let face = n.normalize();
-                self.triangle_normals.push(match mesh.normals.get(i) {
-                    Some(&[n0, n1, n2]) => {
-                        let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
-                        [n0, n1, n2].map(|n| match shading(n) {
-                            Vec3::ZERO => face,
-                            n => n,
-                        })
-                    }
-                    None => [face; 3],
-                });
+            face_normal(p0, p1, p2).map(|n| ([p0, p1, p2], n))
+        };
+        let kept: Vec<usize> = (0..mesh.triangles.len())
+            .into_par_iter()
+            .filter(|&i| placed_triangle(i).is_some())
+            .collect();
+        let face_of = |i: usize| placed_triangle(i).map_or(Vec3::ZERO, |(_, n)| n);
+        let corner_normals = |i: usize| {
+            let face = face_of(i).normalize();
+            match mesh.normals.get(i) {
+                Some(&[n0, n1, n2]) => {
+                    let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
+                    [n0, n1, n2].map(|n| match shading(n) {
+                        Vec3::ZERO => face,
+                        n => n,
+                    })
+                }
+                None => [face; 3],
             }
-            if self.textured {
-                self.triangle_uvs.push(match mesh.uvs.get(i) {
-                    Some(&[uv0, uv1, uv2]) if mirrored => [uv0, uv2, uv1],
-                    Some(&uvs) => uvs,
-                    None => BARYCENTRIC_UVS,
-                });
-            }
-            if self.normal_mapped {
-                let corners = match tangents.as_ref().map(|t| t[i]) {
+        };
+        // The arrays are filled one at a time, each in parallel and in the triangles' order.
+        if self.normal_mapped {
+            // Hits turn a file's normals that point against the winding around; the frame
+            // keeps the map's slopes only with the tangent and its sign turned too. (Without
+            // smooth normals, the last ones before this mesh's are what is compared.)
+            let earlier = self.triangle_normals.last().copied();
+            let smooth = self.smooth;
+            let tangents = tangents.as_deref();
+            self.triangle_tangents.par_extend(kept.par_iter().map(|&i| {
+                let corners = match tangents.map(|t| t[i]) {
                     Some([t0, t1, t2]) if mirrored => [t0, t2, t1].map(tangent),
                     Some(corners) => corners.map(tangent),
                     None => [Vec4::ZERO; 3],
                 };
-                // Hits turn a file's normals that point against the winding around; the frame
-                // keeps the map's slopes only with the tangent and its sign turned too.
-                let against = self
-                    .triangle_normals
-                    .last()
-                    .is_some_and(|[n0, n1, n2]| (*n0 + *n1 + *n2).dot(n) < 0.0);
-                self.triangle_tangents.push(if against {
+                let normals = if smooth {
+                    Some(corner_normals(i))
+                } else {
+                    earlier
+                };
+                let against =
+                    normals.is_some_and(|[n0, n1, n2]| (n0 + n1 + n2).dot(face_of(i)) < 0.0);
+                if against {
                     corners.map(|t| -t)
                 } else {
                     corners
-                });
-            }
-            self.triangles.push(Triangle {
+                }
+            }));
+        }
+        if self.smooth {
+            (self.triangle_normals).par_extend(kept.par_iter().map(|&i| corner_normals(i)));
+        }
+        if self.textured {
+            self.triangle_uvs
+                .par_extend(kept.par_iter().map(|&i| match mesh.uvs.get(i) {
+                    Some(&[uv0, uv1, uv2]) if mirrored => [uv0, uv2, uv1],
+                    Some(&uvs) => uvs,
+                    None => BARYCENTRIC_UVS,
+                }));
+        }
+        self.triangles.par_extend(kept.par_iter().map(|&i| {
+            let ([p0, p1, p2], _) = placed_triangle(i).expect("a kept triangle");
+            Triangle {
                 p0,
                 p1,
                 p2,
                 material,
                 light: 0,
-            });
-        }
+            }
+        }));
     }
 
     /// The flat scene of these primitives and `materials`, instanced meshes' triangles after the

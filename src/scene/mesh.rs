@@ -264,6 +264,19 @@ fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
         ignore_lines: true,
     };
     let text = obj_text(path, source)?;
+    if let Some(read) = super::obj_parallel::read(&text) {
+        let (positions, triangles) = (read.positions, read.triangles);
+        let mut mesh = Mesh::with_tangents(
+            source,
+            positions,
+            triangles,
+            read.normals,
+            read.uvs,
+            Vec::new(),
+        )?;
+        mesh.material_name = "default".into();
+        return Ok(vec![mesh]);
+    }
     // The faces' check and tobj's parse read the text side by side, so the check adds no wall
     // time. The check comes first in what a file is told: tobj trusts the indices, so on a
     // file the check refuses its result (or panic) is dropped unread.
@@ -566,7 +579,7 @@ fn obj_text(path: &Path, source: &str) -> Result<String, String> {
 /// Checks that every face names vertices, texture coordinates and normals that exist by the
 /// time it is read, counting negative (relative) indices back from there: tobj trusts them
 /// (and overflows on far negative ones). The error is the 1-based line and what is wrong.
-fn check_obj_faces(text: &str) -> Result<(), (usize, String)> {
+pub(super) fn check_obj_faces(text: &str) -> Result<(), (usize, String)> {
     let mut counts = [0i64; 3]; // v, vt, vn
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();

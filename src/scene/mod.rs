@@ -16,6 +16,7 @@ pub mod image_lookup;
 pub mod media;
 pub mod mesh;
 pub mod normal_map;
+mod obj_parallel;
 pub mod punctual;
 pub mod tangents;
 pub mod texture;
@@ -49,9 +50,17 @@ pub struct Transform {
 impl Transform {
     /// x' = cos(a) x + sin(a) z, z' = -sin(a) x + cos(a) z.
     pub fn rotate_vector(&self, v: Vec3) -> Vec3 {
+        self.vector_rotation()(v)
+    }
+
+    /// [`Transform::rotate_vector`] with the rotation's sine and cosine worked out once, for
+    /// many vectors.
+    pub fn vector_rotation(&self) -> impl Fn(Vec3) -> Vec3 + Sync + use<> {
         let (sin, cos) = (self.rotate_y_degrees.to_radians() as f64).sin_cos();
-        let (x, z) = (v.x as f64, v.z as f64);
-        Vec3::new((cos * x + sin * z) as f32, v.y, (-sin * x + cos * z) as f32)
+        move |v: Vec3| {
+            let (x, z) = (v.x as f64, v.z as f64);
+            Vec3::new((cos * x + sin * z) as f32, v.y, (-sin * x + cos * z) as f32)
+        }
     }
 
     pub fn apply_point(&self, p: Vec3) -> Vec3 {
@@ -61,10 +70,19 @@ impl Transform {
     /// `apply_point` in f64 and then moved by `-origin`, rounded to f32 once: a point far from
     /// the world origin but near `origin` keeps its full precision.
     pub fn apply_point_relative(&self, p: Vec3, origin: glam::DVec3) -> Vec3 {
+        self.point_placement(origin)(p)
+    }
+
+    /// [`Transform::apply_point_relative`] with the rotation's sine and cosine worked out
+    /// once, for many points.
+    pub fn point_placement(&self, origin: glam::DVec3) -> impl Fn(Vec3) -> Vec3 + Sync + use<> {
         let (sin, cos) = (self.rotate_y_degrees.to_radians() as f64).sin_cos();
-        let (x, z) = (p.x as f64, p.z as f64);
-        let rotated = glam::DVec3::new(cos * x + sin * z, p.y as f64, -sin * x + cos * z);
-        (rotated + self.translate.as_dvec3() - origin).as_vec3()
+        let translate = self.translate.as_dvec3();
+        move |p: Vec3| {
+            let (x, z) = (p.x as f64, p.z as f64);
+            let rotated = glam::DVec3::new(cos * x + sin * z, p.y as f64, -sin * x + cos * z);
+            (rotated + translate - origin).as_vec3()
+        }
     }
 }
 
