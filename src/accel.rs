@@ -351,22 +351,26 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
     if n <= SORTED_UP_TO {
         // Few items: every split between their sorted centroids along each axis, costed exactly.
-        let mut sorted = [items[0]; SORTED_UP_TO];
+        // Each axis's order is sorted as indices by the centroids worked out once (stably, as
+        // `sort_by` would order the items); the items move once, into the chosen order.
+        let centroids: [Vec3A; SORTED_UP_TO] =
+            std::array::from_fn(|k| items.get(k).map_or(Vec3A::ZERO, Item::centroid));
+        let mut orders = [[0u8; SORTED_UP_TO]; 3];
         let (mut best_axis, mut best, mut best_cost) = (axis, 1, f32::INFINITY);
         for a in (0..3).filter(|&a| extent[a] > 0.0) {
-            let sorted = &mut sorted[..n];
-            sorted.copy_from_slice(items);
-            sorted.sort_by(|x, y| x.centroid()[a].total_cmp(&y.centroid()[a]));
+            let order = &mut orders[a][..n];
+            stable_order(order, |k| centroids[k][a]);
+            let item = |k: usize| &items[order[k] as usize];
             let mut right = [Bounds::EMPTY; SORTED_UP_TO];
             let mut running = Bounds::EMPTY;
             for k in (1..n).rev() {
-                running = running.grow(sorted[k].min(), sorted[k].max());
+                running = running.grow(item(k).min(), item(k).max());
                 right[k] = running;
             }
             let mut left = Bounds::EMPTY;
-            for k in 1..n {
-                left = left.grow(sorted[k - 1].min(), sorted[k - 1].max());
-                let cost = left.half_area() * k as f32 + right[k].half_area() * (n - k) as f32;
+            for (k, right) in right.iter().enumerate().take(n).skip(1) {
+                left = left.grow(item(k - 1).min(), item(k - 1).max());
+                let cost = left.half_area() * k as f32 + right.half_area() * (n - k) as f32;
                 if cost < best_cost {
                     (best_axis, best, best_cost) = (a, k, cost);
                 }
@@ -375,7 +379,10 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
         if n <= MAX_LEAF && leaf_cost <= 0.5 + best_cost / area {
             return None;
         }
-        items.sort_by(|x, y| x.centroid()[best_axis].total_cmp(&y.centroid()[best_axis]));
+        let before: [Item; SORTED_UP_TO] = std::array::from_fn(|k| items[k.min(n - 1)]);
+        for (item, &k) in items.iter_mut().zip(&orders[best_axis][..n]) {
+            *item = before[k as usize];
+        }
         let (left, right) = items.split_at(best);
         return Some(Split {
             at: best,
@@ -434,6 +441,20 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
         axis: best_axis,
         children: [best_left, best_right].map(|b| (b.bounds, b.centroids)),
     })
+}
+
+/// `order` set to the indices 0.. sorted by `key` (ties in index order): an insertion sort, as
+/// `sort_by` does so few, on indices rather than the items.
+fn stable_order(order: &mut [u8], key: impl Fn(usize) -> f32) {
+    for i in 0..order.len() {
+        let k = key(i);
+        let mut j = i;
+        while j > 0 && key(order[j - 1] as usize).total_cmp(&k).is_gt() {
+            order[j] = order[j - 1];
+            j -= 1;
+        }
+        order[j] = i as u8;
+    }
 }
 
 /// `items` split in halves by position in the array: where their centroids tell nothing apart.
@@ -560,6 +581,28 @@ pub(crate) mod tests {
             seen.iter().all(|&n| n == 1),
             "a primitive is not in exactly one leaf"
         );
+    }
+
+    /// The sorted path's index order is `sort_by`'s order of the items, ties (many, from
+    /// keys on a coarse grid, and -0 against +0) in their first order.
+    #[test]
+    fn index_order_is_a_stable_sort() {
+        let mut next = numbers(7);
+        for n in 1..=SORTED_UP_TO {
+            for _ in 0..200 {
+                let keys: Vec<f32> = (0..n).map(|_| (next() * 4.0).floor() - 2.0).collect();
+                let keys: Vec<f32> = keys
+                    .iter()
+                    .map(|&k| if k == 0.0 && next() < 0.5 { -0.0 } else { k })
+                    .collect();
+                let mut order = [0u8; SORTED_UP_TO];
+                stable_order(&mut order[..n], |k| keys[k]);
+                let mut expected: Vec<usize> = (0..n).collect();
+                expected.sort_by(|&a, &b| keys[a].total_cmp(&keys[b]));
+                let order: Vec<usize> = order[..n].iter().map(|&k| k as usize).collect();
+                assert_eq!(order, expected, "{keys:?}");
+            }
+        }
     }
 
     #[test]

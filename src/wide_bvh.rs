@@ -153,11 +153,18 @@ impl WideBvh {
             triangles: [EMPTY; WIDTH],
         };
         let mut lane = 0;
-        let mut pending = vec![index];
-        while let Some(at) = pending.pop() {
+        // A subtree of at most `WIDTH` primitives has at most `WIDTH` levels below it, so
+        // that many nodes pending at once at most.
+        let mut pending = [0u32; WIDTH + 1];
+        pending[0] = index;
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            let at = pending[depth];
             let node = &bvh.nodes[at as usize];
             if !node.is_leaf() {
-                pending.extend([node.offset, at + 1]);
+                (pending[depth], pending[depth + 1]) = (node.offset, at + 1);
+                depth += 2;
                 continue;
             }
             let first = node.offset as usize;

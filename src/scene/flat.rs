@@ -526,16 +526,18 @@ impl FlatScene {
                 self.0.extend(shapes.iter().flat_map(|s| s.bounds()));
             }
         }
+        use rayon::prelude::*;
         let mut shapes = Corners(Vec::new());
         self.shapes.visit(&mut shapes);
-        let triangles = self.triangles[..self.instanced_triangles]
-            .iter()
-            .flat_map(|t| [t.p0, t.p1, t.p2]);
         let instances = self.instances.iter().flat_map(|i| i.bounds);
-        let (min, max) = shapes.0.into_iter().chain(triangles).chain(instances).fold(
-            (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
-            |(min, max), p| (min.min(p.as_dvec3()), max.max(p.as_dvec3())),
-        );
+        let none = || (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+        let grow =
+            |(min, max): (DVec3, DVec3), p: Vec3| (min.min(p.as_dvec3()), max.max(p.as_dvec3()));
+        // Minima and maxima are exact in any order: the triangles' in parallel.
+        let triangles = (self.triangles[..self.instanced_triangles].par_iter())
+            .fold(none, |b, t| [t.p0, t.p1, t.p2].into_iter().fold(b, grow))
+            .reduce(none, |(a, b), (c, d)| (a.min(c), b.max(d)));
+        let (min, max) = shapes.0.into_iter().chain(instances).fold(triangles, grow);
         let r = 0.5 * (max - min).length();
         if r > 0.0 && r.is_finite() { r } else { 1.0 }
     }
