@@ -962,21 +962,22 @@ impl<'a> Flattener<'a> {
             let along = rotate(v.truncate() * scale).normalize_or_zero();
             along.extend(if mirrored { -v.w } else { v.w })
         };
-        // Each triangle's corners placed, and its face's normal; `None` for triangles that f32
-        // coordinates here flatten to a line, which are left out.
-        let placed_triangle = |i: usize| {
+        let placed_corners = |i: usize| {
             let [a, b, c] = mesh.triangles[i];
             let [b, c] = if mirrored { [c, b] } else { [b, c] };
-            let [p0, p1, p2] = [a, b, c].map(|i| placed[i as usize]);
-            face_normal(p0, p1, p2).map(|n| ([p0, p1, p2], n))
+            [a, b, c].map(|i| placed[i as usize])
         };
-        let kept: Vec<usize> = (0..mesh.triangles.len())
+        // The triangles kept, with their faces' normals: those that f32 coordinates here
+        // flatten to a line are left out.
+        let kept: Vec<(usize, Vec3)> = (0..mesh.triangles.len())
             .into_par_iter()
-            .filter(|&i| placed_triangle(i).is_some())
+            .filter_map(|i| {
+                let [p0, p1, p2] = placed_corners(i);
+                face_normal(p0, p1, p2).map(|n| (i, n))
+            })
             .collect();
-        let face_of = |i: usize| placed_triangle(i).map_or(Vec3::ZERO, |(_, n)| n);
-        let corner_normals = |i: usize| {
-            let face = face_of(i).normalize();
+        let corner_normals = |i: usize, n: Vec3| {
+            let face = n.normalize();
             match mesh.normals.get(i) {
                 Some(&[n0, n1, n2]) => {
                     let [n1, n2] = if mirrored { [n2, n1] } else { [n1, n2] };
@@ -996,39 +997,39 @@ impl<'a> Flattener<'a> {
             let earlier = self.triangle_normals.last().copied();
             let smooth = self.smooth;
             let tangents = tangents.as_deref();
-            self.triangle_tangents.par_extend(kept.par_iter().map(|&i| {
-                let corners = match tangents.map(|t| t[i]) {
-                    Some([t0, t1, t2]) if mirrored => [t0, t2, t1].map(tangent),
-                    Some(corners) => corners.map(tangent),
-                    None => [Vec4::ZERO; 3],
-                };
-                let normals = if smooth {
-                    Some(corner_normals(i))
-                } else {
-                    earlier
-                };
-                let against =
-                    normals.is_some_and(|[n0, n1, n2]| (n0 + n1 + n2).dot(face_of(i)) < 0.0);
-                if against {
-                    corners.map(|t| -t)
-                } else {
-                    corners
-                }
-            }));
+            self.triangle_tangents
+                .par_extend(kept.par_iter().map(|&(i, n)| {
+                    let corners = match tangents.map(|t| t[i]) {
+                        Some([t0, t1, t2]) if mirrored => [t0, t2, t1].map(tangent),
+                        Some(corners) => corners.map(tangent),
+                        None => [Vec4::ZERO; 3],
+                    };
+                    let normals = if smooth {
+                        Some(corner_normals(i, n))
+                    } else {
+                        earlier
+                    };
+                    let against = normals.is_some_and(|[n0, n1, n2]| (n0 + n1 + n2).dot(n) < 0.0);
+                    if against {
+                        corners.map(|t| -t)
+                    } else {
+                        corners
+                    }
+                }));
         }
         if self.smooth {
-            (self.triangle_normals).par_extend(kept.par_iter().map(|&i| corner_normals(i)));
+            (self.triangle_normals).par_extend(kept.par_iter().map(|&(i, n)| corner_normals(i, n)));
         }
         if self.textured {
             self.triangle_uvs
-                .par_extend(kept.par_iter().map(|&i| match mesh.uvs.get(i) {
+                .par_extend(kept.par_iter().map(|&(i, _)| match mesh.uvs.get(i) {
                     Some(&[uv0, uv1, uv2]) if mirrored => [uv0, uv2, uv1],
                     Some(&uvs) => uvs,
                     None => BARYCENTRIC_UVS,
                 }));
         }
-        self.triangles.par_extend(kept.par_iter().map(|&i| {
-            let ([p0, p1, p2], _) = placed_triangle(i).expect("a kept triangle");
+        self.triangles.par_extend(kept.par_iter().map(|&(i, _)| {
+            let [p0, p1, p2] = placed_corners(i);
             Triangle {
                 p0,
                 p1,

@@ -257,26 +257,39 @@ pub fn load_named(source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>
 }
 
 fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
+    let text = obj_text(path, source)?;
+    match super::obj_parallel::read(&text) {
+        Some(read) => Ok(vec![subset_mesh(source, read)?]),
+        None => read_obj_text(path, source, &text),
+    }
+}
+
+/// The mesh of a file `obj_parallel` read: one part, without a material, as tobj's path makes
+/// it of such a file.
+pub(super) fn subset_mesh(
+    source: &str,
+    read: super::obj_parallel::ObjTriangles,
+) -> Result<Mesh, String> {
+    let mut mesh = Mesh::with_tangents(
+        source,
+        read.positions,
+        read.triangles,
+        read.normals,
+        read.uvs,
+        Vec::new(),
+    )?;
+    mesh.material_name = "default".into();
+    Ok(mesh)
+}
+
+/// An OBJ file's `text` read by tobj, its faces checked beside it; `path` locates its .mtl.
+pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec<Mesh>, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let text = obj_text(path, source)?;
-    if let Some(read) = super::obj_parallel::read(&text) {
-        let (positions, triangles) = (read.positions, read.triangles);
-        let mut mesh = Mesh::with_tangents(
-            source,
-            positions,
-            triangles,
-            read.normals,
-            read.uvs,
-            Vec::new(),
-        )?;
-        mesh.material_name = "default".into();
-        return Ok(vec![mesh]);
-    }
     // The faces' check and tobj's parse read the text side by side, so the check adds no wall
     // time. The check comes first in what a file is told: tobj trusts the indices, so on a
     // file the check refuses its result (or panic) is dropped unread.
@@ -285,13 +298,13 @@ fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
         let mut reader = std::io::Cursor::new(text.as_bytes());
         tobj::load_obj_buf(&mut reader, &options, |mtl| read_mtl(&base_dir, mtl))
     };
-    let (checked, parsed) = rayon::join(|| check_obj_faces(&text), || crate::caught_quietly(parse));
+    let (checked, parsed) = rayon::join(|| check_obj_faces(text), || crate::caught_quietly(parse));
     checked.map_err(|(line, what)| format!("cannot read mesh {source}:{line}: {what}"))?;
     let parsed = parsed.ok_or_else(|| {
         format!("cannot read mesh {source}: the OBJ reader failed on it (a malformed file)")
     })?;
     let (models, materials) = parsed.map_err(|e| {
-        let at = obj_error_line(&text, &e).map_or(String::new(), |l| format!(":{l}"));
+        let at = obj_error_line(text, &e).map_or(String::new(), |l| format!(":{l}"));
         format!("cannot read mesh {source}{at}: {}", obj_error(&e))
     })?;
     // A missing or unreadable .mtl leaves the file without materials (the scene names one).
@@ -579,7 +592,7 @@ fn obj_text(path: &Path, source: &str) -> Result<String, String> {
 /// Checks that every face names vertices, texture coordinates and normals that exist by the
 /// time it is read, counting negative (relative) indices back from there: tobj trusts them
 /// (and overflows on far negative ones). The error is the 1-based line and what is wrong.
-pub(super) fn check_obj_faces(text: &str) -> Result<(), (usize, String)> {
+fn check_obj_faces(text: &str) -> Result<(), (usize, String)> {
     let mut counts = [0i64; 3]; // v, vt, vn
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
