@@ -1,10 +1,9 @@
 //! The common subset of OBJ read on every core: `v`, `vt`, `vn` and `f` lines, with the lines
 //! tobj ignores (comments, `o`, `g`, `s`, unknown keywords), and no materials. tobj reads a file
-//! line by line on one core, most of a large mesh's load (a million-triangle file: 0.7 of its
-//! 1.6 s). Anything outside the subset, or wrong in it, gives `None`, and the file is read by
-//! tobj, so that what a user is told of a bad file is unchanged; on the subset both give the
-//! same triangles with the same corners, normals and texture coordinates (tested against
-//! tobj).
+//! line by line on one core, most of a large mesh's load (docs/benchmarks.md). Anything outside
+//! the subset, or wrong in it, gives `None`, and the file is read by tobj, so that what a user is
+//! told of a bad file is unchanged; on the subset both give the same triangles with the same
+//! corners, normals and texture coordinates (tested against tobj's path).
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
