@@ -37,21 +37,47 @@ pub struct AutoBackend {
     pub reason: String,
 }
 
+/// What `--backend auto` asks of the machine: the adapter wgpu would open, if any. Looking
+/// starts the Vulkan loader and its drivers (a tenth of a second with lavapipe) and needs no
+/// scene, so the CLI looks while the scene loads.
+pub struct AdapterLook {
+    #[cfg(feature = "gpu")]
+    info: Option<wgpu::AdapterInfo>,
+}
+
+/// Looks for the adapter `gpu` names (the best available without a name).
+pub fn look_for_adapter(gpu: &GpuChoice) -> AdapterLook {
+    #[cfg(feature = "gpu")]
+    {
+        let info = crate::gpu::context::adapter_info(gpu.adapter.as_deref()).ok();
+        AdapterLook { info }
+    }
+    #[cfg(not(feature = "gpu"))]
+    {
+        let _ = gpu;
+        AdapterLook {}
+    }
+}
+
 /// `--backend auto`: a hardware GPU runs the kernel. On a software adapter (lavapipe,
 /// SwiftShader, WARP: wgpu's `DeviceType::Cpu`, the CPU's own cores) the kernel runs only a
 /// scene it holds inlined as constants, where it was measured faster than the CPU backend on
 /// the same cores; a scene traced through its BVH goes to the CPU backend, faster there
 /// (docs/benchmarks.md, 2026-12-02). With no adapter, or no `gpu` feature, the CPU backend.
 pub fn auto_backend(gpu: &GpuChoice, scene: &FlatScene) -> AutoBackend {
+    auto_backend_seeing(&look_for_adapter(gpu), gpu, scene)
+}
+
+/// [`auto_backend`] with the adapter already looked for (by [`look_for_adapter`] with `gpu`).
+pub fn auto_backend_seeing(look: &AdapterLook, gpu: &GpuChoice, scene: &FlatScene) -> AutoBackend {
     let cpu = |reason: String| AutoBackend {
         backend: Backend::Cpu,
         reason,
     };
     #[cfg(feature = "gpu")]
     {
-        let info = match crate::gpu::context::adapter_info(gpu.adapter.as_deref()) {
-            Ok(info) => info,
-            Err(_) => return cpu("no GPU adapter (`rt-gpu devices` lists what wgpu sees)".into()),
+        let Some(info) = &look.info else {
+            return cpu("no GPU adapter (`rt-gpu devices` lists what wgpu sees)".into());
         };
         let gpu_backend = |reason: String| AutoBackend {
             backend: Backend::Gpu,
@@ -70,7 +96,7 @@ pub fn auto_backend(gpu: &GpuChoice, scene: &FlatScene) -> AutoBackend {
     }
     #[cfg(not(feature = "gpu"))]
     {
-        let _ = (gpu, scene);
+        let _ = (look, gpu, scene);
         cpu("built without the gpu feature".into())
     }
 }

@@ -114,74 +114,93 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
         bail!("no scene given: try `rt-gpu cornell`, or `rt-gpu scenes` for the list");
     };
     args.options.check()?;
-    let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
-    if let Some(note) = args.options.note_for(&scene) {
-        note!("{note}");
-    }
-    let range = sample_range(args)?;
     let partial = args.samples.is_some() || args.shard.is_some();
-    if let Some(x) = args.target_error {
-        if !(x > 0.0 && x.is_finite()) {
-            bail!("--target-error must be a positive relative error such as 0.01, got {x}");
-        }
-        if partial {
-            bail!(
-                "--target-error renders until the whole image reaches it: not with --samples or --shard"
-            );
-        }
-    }
-    let (output, format) = output_path(args, &scene, &range, partial)?;
-    let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
-    let (width, height) = args.options.size(&scene);
-    if let Some(t) = args.time
-        && !(t > 0.0 && t.is_finite())
-    {
-        bail!("--time must be a positive number of seconds, got {t}");
-    }
-    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
-    let opts = args.options.render_options(&scene, range.clone());
     let gpu = args.options.gpu(args.unspecialised);
-    let (backend, backend_reason) = match args.options.backend {
-        RenderBackendArg::Gpu => (Backend::Gpu, None),
-        RenderBackendArg::Cpu => (Backend::Cpu, None),
+    let chosen = chosen_backend(args, partial);
+    // `--backend auto` looks at the adapter while the scene loads: the drivers' start and the
+    // load (mostly a large mesh's, on every core) overlap where the load runs on one core.
+    std::thread::scope(|threads| {
+        let look = chosen
+            .is_none()
+            .then(|| threads.spawn(|| rt_gpu::render::look_for_adapter(&gpu)));
+        let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
+        if let Some(note) = args.options.note_for(&scene) {
+            note!("{note}");
+        }
+        let range = sample_range(args)?;
+        if let Some(x) = args.target_error {
+            if !(x > 0.0 && x.is_finite()) {
+                bail!("--target-error must be a positive relative error such as 0.01, got {x}");
+            }
+            if partial {
+                bail!(
+                    "--target-error renders until the whole image reaches it: not with --samples or --shard"
+                );
+            }
+        }
+        let (output, format) = output_path(args, &scene, &range, partial)?;
+        let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
+        let (width, height) = args.options.size(&scene);
+        if let Some(t) = args.time
+            && !(t > 0.0 && t.is_finite())
+        {
+            bail!("--time must be a positive number of seconds, got {t}");
+        }
+        let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+        let opts = args.options.render_options(&scene, range.clone());
+        let (backend, backend_reason) = match (chosen, look) {
+            (Some(chosen), _) => chosen,
+            (None, Some(look)) => {
+                let look = look.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+                let auto = rt_gpu::render::auto_backend_seeing(&look, &gpu, &flat);
+                (auto.backend, Some(auto.reason))
+            }
+            (None, None) => unreachable!("a look is taken whenever no backend is chosen"),
+        };
+        Ok(Plan {
+            scene,
+            scene_file,
+            backend,
+            backend_reason,
+            range,
+            partial,
+            output,
+            format,
+            checkpoint,
+            checkpoint_every,
+            flat,
+            opts,
+            gpu: gpu.clone(),
+        })
+    })
+}
+
+/// The backend the options decide without a look at the adapter and the scene, and why
+/// (`--backend auto`'s reason); `None` where `--backend auto` must look.
+fn chosen_backend(args: &RenderArgs, partial: bool) -> Option<(Backend, Option<String>)> {
+    match args.options.backend {
+        RenderBackendArg::Gpu => Some((Backend::Gpu, None)),
+        RenderBackendArg::Cpu => Some((Backend::Cpu, None)),
         // An adapter asked for by name, the unspecialised kernel or its source: the GPU asked for.
         RenderBackendArg::Auto
             if args.options.adapter.is_some() || args.unspecialised || args.print_shader =>
         {
-            (Backend::Gpu, None)
+            Some((Backend::Gpu, None))
         }
         // Films merge only with films of one backend: shards on different machines must not
         // choose differently.
-        RenderBackendArg::Auto if partial => (
+        RenderBackendArg::Auto if partial => Some((
             Backend::Gpu,
             Some("shards and sample ranges render on the kernel, so that every machine's films merge".into()),
-        ),
+        )),
         // A checkpoint continues on the backend it was made on.
         RenderBackendArg::Auto
             if let Some(Ok(Some(recorded))) = args.resume.as_deref().map(film_file::recorded_backend) =>
         {
-            (recorded, Some("the backend the checkpoint was rendered on".into()))
+            Some((recorded, Some("the backend the checkpoint was rendered on".into())))
         }
-        RenderBackendArg::Auto => {
-            let auto = rt_gpu::render::auto_backend(&gpu, &flat);
-            (auto.backend, Some(auto.reason))
-        }
-    };
-    Ok(Plan {
-        scene,
-        scene_file,
-        backend,
-        backend_reason,
-        range,
-        partial,
-        output,
-        format,
-        checkpoint,
-        checkpoint_every,
-        flat,
-        opts,
-        gpu,
-    })
+        RenderBackendArg::Auto => None,
+    }
 }
 
 /// The sample indices a render covers: FIRST..END, or 0..spp.
