@@ -16,6 +16,11 @@ macro_rules! note {
 
 mod cli;
 
+/// Large allocations on huge pages (`cli/huge_pages.rs`).
+#[cfg(target_os = "linux")]
+#[global_allocator]
+static ALLOCATOR: cli::huge_pages::HugePages = cli::huge_pages::HugePages;
+
 use clap::Parser;
 use cli::args::{Cli, Command};
 use cli::one_line;

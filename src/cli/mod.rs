@@ -9,6 +9,8 @@ pub mod checkpoint;
 pub mod converge;
 pub mod devices;
 pub mod host_cpu;
+#[cfg(target_os = "linux")]
+pub mod huge_pages;
 pub mod merge;
 pub mod render;
 pub mod scenes;
