@@ -26,8 +26,9 @@ use cli::args::{Cli, Command};
 use cli::one_line;
 
 fn main() -> ExitCode {
-    // First, before code built for this CPU's instructions runs on one without them: main
-    // itself is only this test and a call.
+    // Checked when the binary was loaded (`cli/host_cpu.c`'s constructor), before the runtime
+    // ran this crate's allocator; again here, before code built for this CPU's instructions
+    // runs on one without them: main itself is only this test and a call.
     if !cli::host_cpu::runs_here() {
         return ExitCode::FAILURE;
     }

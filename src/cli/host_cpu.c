@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <unistd.h>
 
 #if defined(__SSE3__) || defined(__SSSE3__) || defined(__SSE4_1__) || defined(__POPCNT__) || \
     defined(__AVX__) || defined(__BMI__) || defined(__BMI2__) || defined(__LZCNT__) ||      \
@@ -79,4 +80,18 @@ int rt_gpu_check_cpu(const struct rt_gpu_feature *features, size_t count) {
                 names);
     }
     return missing;
+}
+
+/* The table of src/cli/host_cpu.rs, as the Rust side exports it. */
+struct rt_gpu_features {
+    const struct rt_gpu_feature *table;
+    size_t count;
+};
+extern const struct rt_gpu_features RT_GPU_FEATURES;
+
+/* The check at load time, before the Rust runtime starts: the runtime allocates before `main`,
+   and the process's allocator (src/cli/huge_pages.rs) is this crate's own code, built for the
+   building machine's CPU. Exits as `main` would have, with 1. */
+__attribute__((constructor)) static void rt_gpu_check_cpu_at_load(void) {
+    if (rt_gpu_check_cpu(RT_GPU_FEATURES.table, RT_GPU_FEATURES.count) > 0) _exit(1);
 }

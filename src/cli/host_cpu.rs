@@ -1,9 +1,11 @@
 //! Whether this CPU runs what the binary was built for. `.cargo/config.toml` builds for the
 //! building machine's CPU (`-C target-cpu=native`), as Mitsuba's JIT and Cycles' per-ISA kernels
 //! use the host's instructions; a binary copied to a CPU without them would die of an illegal
-//! instruction, so `main` checks first and stops with a line that says what to do. The check is
-//! C (`host_cpu.c`), which build.rs compiles for plain x86-64: this crate's own code, the
-//! check's included, may use any instruction of the building machine. It reads cpuid itself, as
+//! instruction, so the binary checks first and stops with a line that says what to do. The check
+//! is C (`host_cpu.c`), which build.rs compiles for plain x86-64: this crate's own code, the
+//! check's included, may use any instruction of the building machine. It runs when the binary
+//! is loaded (a C constructor), before the Rust runtime, which allocates through this crate's
+//! allocator (`huge_pages.rs`) before `main`; `main` asks again ([`runs_here`]). It reads cpuid itself, as
 //! `is_x86_feature_detected!` answers yes for any feature the build enables.
 
 use std::ffi::{c_char, c_int};
@@ -96,6 +98,26 @@ pub static FEATURES: &[Feature] = x86_features!(
     ("kl", 7, 0, 2, 23),
     ("widekl", 0x19, 0, 1, 2),
 );
+
+/// [`FEATURES`] as `host_cpu.c`'s constructor reads it: before the Rust runtime starts, through
+/// a symbol of its own (a slice has no C layout).
+#[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
+#[repr(C)]
+pub struct Features {
+    table: *const Feature,
+    count: usize,
+}
+
+// SAFETY: `table` points to the static table, never written.
+#[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
+unsafe impl Sync for Features {}
+
+#[cfg(all(target_arch = "x86_64", not(target_env = "msvc")))]
+#[unsafe(no_mangle)]
+pub static RT_GPU_FEATURES: Features = Features {
+    table: FEATURES.as_ptr(),
+    count: FEATURES.len(),
+};
 
 /// Other architectures are not checked (their `native` builds have not been tried elsewhere),
 /// nor Windows' MSVC toolchain (the check's C is GCC's and Clang's).
