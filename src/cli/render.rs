@@ -120,58 +120,78 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
     // `--backend auto` looks at the adapter while the scene loads: the drivers' start and the
     // load (mostly a large mesh's, on every core) overlap where the load runs on one core.
     std::thread::scope(|threads| {
-        let look = chosen
-            .is_none()
-            .then(|| threads.spawn(|| rt_gpu::render::look_for_adapter(&gpu)));
-        let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
-        if let Some(note) = args.options.note_for(&scene) {
-            note!("{note}");
+        let look = chosen.is_none().then(|| {
+            std::thread::Builder::new()
+                .name("adapter look".into())
+                .spawn_scoped(threads, || rt_gpu::render::look_for_adapter(&gpu))
+        });
+        let loaded = load(args, scene_arg, partial, &gpu, &chosen);
+        // Joined on an error too, so that a panic of the look is reported here; looked for on
+        // this thread where none could be started.
+        let look = look.map(|spawned| match spawned {
+            Ok(thread) => thread
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p)),
+            Err(_) => rt_gpu::render::look_for_adapter(&gpu),
+        });
+        let mut plan = loaded?;
+        if let Some(look) = look {
+            let auto = rt_gpu::render::auto_backend_seeing(&look, &gpu, &plan.flat);
+            (plan.backend, plan.backend_reason) = (auto.backend, Some(auto.reason));
         }
-        let range = sample_range(args)?;
-        if let Some(x) = args.target_error {
-            if !(x > 0.0 && x.is_finite()) {
-                bail!("--target-error must be a positive relative error such as 0.01, got {x}");
-            }
-            if partial {
-                bail!(
-                    "--target-error renders until the whole image reaches it: not with --samples or --shard"
-                );
-            }
+        Ok(plan)
+    })
+}
+
+/// The scene loaded and the options checked into a plan, on the backend `chosen` (when no
+/// backend is chosen, the CPU until `--backend auto` decides).
+fn load(
+    args: &RenderArgs,
+    scene_arg: &str,
+    partial: bool,
+    gpu: &GpuChoice,
+    chosen: &Option<(Backend, Option<String>)>,
+) -> anyhow::Result<Plan> {
+    let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
+    if let Some(note) = args.options.note_for(&scene) {
+        note!("{note}");
+    }
+    let range = sample_range(args)?;
+    if let Some(x) = args.target_error {
+        if !(x > 0.0 && x.is_finite()) {
+            bail!("--target-error must be a positive relative error such as 0.01, got {x}");
         }
-        let (output, format) = output_path(args, &scene, &range, partial)?;
-        let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
-        let (width, height) = args.options.size(&scene);
-        if let Some(t) = args.time
-            && !(t > 0.0 && t.is_finite())
-        {
-            bail!("--time must be a positive number of seconds, got {t}");
+        if partial {
+            bail!(
+                "--target-error renders until the whole image reaches it: not with --samples or --shard"
+            );
         }
-        let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
-        let opts = args.options.render_options(&scene, range.clone());
-        let (backend, backend_reason) = match (chosen, look) {
-            (Some(chosen), _) => chosen,
-            (None, Some(look)) => {
-                let look = look.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
-                let auto = rt_gpu::render::auto_backend_seeing(&look, &gpu, &flat);
-                (auto.backend, Some(auto.reason))
-            }
-            (None, None) => unreachable!("a look is taken whenever no backend is chosen"),
-        };
-        Ok(Plan {
-            scene,
-            scene_file,
-            backend,
-            backend_reason,
-            range,
-            partial,
-            output,
-            format,
-            checkpoint,
-            checkpoint_every,
-            flat,
-            opts,
-            gpu: gpu.clone(),
-        })
+    }
+    let (output, format) = output_path(args, &scene, &range, partial)?;
+    let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
+    let (width, height) = args.options.size(&scene);
+    if let Some(t) = args.time
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--time must be a positive number of seconds, got {t}");
+    }
+    let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
+    let opts = args.options.render_options(&scene, range.clone());
+    let (backend, backend_reason) = chosen.clone().unwrap_or((Backend::Cpu, None));
+    Ok(Plan {
+        scene,
+        scene_file,
+        backend,
+        backend_reason,
+        range,
+        partial,
+        output,
+        format,
+        checkpoint,
+        checkpoint_every,
+        flat,
+        opts,
+        gpu: gpu.clone(),
     })
 }
 
