@@ -54,9 +54,21 @@ pub struct Item {
     pub min: Vec3,
     pub max: Vec3,
     pub primitive: u32,
+    /// The build's scratch, in what would be padding: the item's SAH bin along each axis at
+    /// the node being split, kept by the binning for the partition that follows it.
+    bins: [u8; 4],
 }
 
 impl Item {
+    pub fn new(min: Vec3, max: Vec3, primitive: u32) -> Self {
+        Item {
+            min,
+            max,
+            primitive,
+            bins: [0; 4],
+        }
+    }
+
     #[inline]
     fn min(&self) -> Vec3A {
         Vec3A::from(self.min)
@@ -213,12 +225,17 @@ impl Bin {
     }
 }
 
-/// The items binned along each axis by `bins_of`, in parallel for large sets.
-fn binned(items: &[Item], bins_of: &(impl Fn(&Item) -> glam::IVec3 + Sync)) -> [[Bin; BINS]; 3] {
-    let serial = |chunk: &[Item]| {
+/// The items binned along each axis by `bins_of`, in parallel for large sets; each item keeps
+/// its bins.
+fn binned(
+    items: &mut [Item],
+    bins_of: &(impl Fn(&Item) -> glam::IVec3 + Sync),
+) -> [[Bin; BINS]; 3] {
+    let serial = |chunk: &mut [Item]| {
         let mut bins = [[Bin::EMPTY; BINS]; 3];
         for item in chunk {
             let at = bins_of(item);
+            item.bins = [at.x as u8, at.y as u8, at.z as u8, 0];
             let c = item.centroid();
             for (axis, axis_bins) in bins.iter_mut().enumerate() {
                 let b = &mut axis_bins[at[axis] as usize];
@@ -235,7 +252,7 @@ fn binned(items: &[Item], bins_of: &(impl Fn(&Item) -> glam::IVec3 + Sync)) -> [
             std::array::from_fn(|axis| std::array::from_fn(|k| a[axis][k].merge(b[axis][k])))
         };
         items
-            .par_chunks(PARALLEL_BELOW * 4)
+            .par_chunks_mut(PARALLEL_BELOW * 4)
             .map(serial)
             .reduce(|| [[Bin::EMPTY; BINS]; 3], merge)
     } else {
@@ -435,7 +452,7 @@ fn split(items: &mut [Item], depth: usize, bounds: Bounds, centroids: Bounds) ->
         // Every item in one bin on every axis (centroids too close together, or not finite).
         return Some(halves(items, axis));
     }
-    let at = partition(items, |i| bins_of(i)[best_axis] as usize <= best);
+    let at = partition(items, |i| i.bins[best_axis] as usize <= best);
     Some(Split {
         at,
         axis: best_axis,
@@ -539,11 +556,7 @@ pub(crate) mod tests {
             .map(|primitive| {
                 let c = Vec3::new(next(), next(), next()) * 100.0;
                 let h = Vec3::new(next(), next(), next());
-                Item {
-                    min: c - h,
-                    max: c + h,
-                    primitive,
-                }
+                Item::new(c - h, c + h, primitive)
             })
             .collect()
     }
@@ -654,11 +667,7 @@ pub(crate) mod tests {
 
     #[test]
     fn coincident_primitives_split_by_count() {
-        let item = Item {
-            min: Vec3::ZERO,
-            max: Vec3::ONE,
-            primitive: 0,
-        };
+        let item = Item::new(Vec3::ZERO, Vec3::ONE, 0);
         let mut items: Vec<Item> = (0..1000)
             .map(|primitive| Item { primitive, ..item })
             .collect();
@@ -678,11 +687,7 @@ pub(crate) mod tests {
                 .map(|primitive| {
                     let y = if primitive % 2 == 0 { 0.0 } else { 100.0 };
                     let c = Vec3::new(400.0 * next(), y, 10.0 * next());
-                    Item {
-                        min: c - 1.0,
-                        max: c + 1.0,
-                        primitive,
-                    }
+                    Item::new(c - 1.0, c + 1.0, primitive)
                 })
                 .collect();
             let original = items.clone();
@@ -710,11 +715,7 @@ pub(crate) mod tests {
             let mut items: Vec<Item> = (0..n as u32)
                 .map(|primitive| {
                     let z = if primitive % 2 == 0 { 0.0 } else { 1e-40 };
-                    Item {
-                        min: Vec3::new(0.0, 0.0, z),
-                        max: Vec3::new(1.0, 1.0, z),
-                        primitive,
-                    }
+                    Item::new(Vec3::new(0.0, 0.0, z), Vec3::new(1.0, 1.0, z), primitive)
                 })
                 .collect();
             let original = items.clone();

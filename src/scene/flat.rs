@@ -431,11 +431,7 @@ impl FlatScene {
                         index,
                     }
                     .packed();
-                    Item {
-                        min,
-                        max,
-                        primitive,
-                    }
+                    Item::new(min, max, primitive)
                 }));
             }
         }
@@ -446,10 +442,9 @@ impl FlatScene {
             &self.triangles[..self.instanced_triangles],
             0,
         ));
-        let instances = self.instances.iter().enumerate().map(|(i, instance)| Item {
-            min: instance.bounds[0],
-            max: instance.bounds[1],
-            primitive: PrimitiveRef::Instance(i as u32).packed(),
+        let instances = self.instances.iter().enumerate().map(|(i, instance)| {
+            let primitive = PrimitiveRef::Instance(i as u32).packed();
+            Item::new(instance.bounds[0], instance.bounds[1], primitive)
         });
         items.extend(instances);
         items
@@ -751,11 +746,7 @@ impl Triangle {
 fn triangle_items(triangles: &[Triangle], first: u32) -> Vec<crate::accel::Item> {
     let item = |(i, t): (usize, &Triangle)| {
         let [min, max] = crate::shape::pad(t.p0.min(t.p1).min(t.p2), t.p0.max(t.p1).max(t.p2), 0.0);
-        crate::accel::Item {
-            min,
-            max,
-            primitive: PrimitiveRef::Triangle(first + i as u32).packed(),
-        }
+        crate::accel::Item::new(min, max, PrimitiveRef::Triangle(first + i as u32).packed())
     };
     triangles.iter().enumerate().map(item).collect()
 }
