@@ -28,7 +28,8 @@ use cli::one_line;
 fn main() -> ExitCode {
     // Checked when the binary was loaded (`cli/host_cpu.c`'s constructor), before the runtime
     // ran this crate's allocator; again here, before code built for this CPU's instructions
-    // runs on one without them: main itself is only this test and a call.
+    // runs on one without them: main itself is only this test and a call. This call is also
+    // what links host_cpu.c's object, and with it the constructor, into the binary.
     if !cli::host_cpu::runs_here() {
         return ExitCode::FAILURE;
     }

@@ -38,8 +38,8 @@ pub struct AutoBackend {
 }
 
 /// What `--backend auto` asks of the machine: the adapter wgpu would open, if any. Looking
-/// starts the Vulkan loader and its drivers (a tenth of a second with lavapipe) and needs no
-/// scene, so the CLI looks while the scene loads.
+/// starts the Vulkan loader and its drivers and needs no scene, so the CLI looks while the
+/// scene loads.
 pub struct AdapterLook {
     #[cfg(feature = "gpu")]
     info: Option<wgpu::AdapterInfo>,

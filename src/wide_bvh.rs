@@ -79,7 +79,7 @@ impl WideBvh {
         let small = SmallSubtrees::new(bvh, &corners);
         let instance_roots: Vec<u32> = instance_roots.into_iter().collect();
         // Grown block by block, a mesh's blocks (tens of megabytes) were copied at every
-        // doubling of the vector: a third of the collapse's time.
+        // doubling of the vector.
         let mut roots: Vec<u32> = std::iter::once(0)
             .chain(instance_roots.iter().copied())
             .collect();
@@ -212,7 +212,6 @@ impl SmallSubtrees {
     fn new(bvh: &Bvh, corners: &impl Fn(u32) -> Option<[Vec3; 3]>) -> Self {
         let mut triangles = vec![0u8; bvh.nodes.len()];
         let mut blocks_below_others = 0;
-        let fits = |count: u8| (1..Self::TOO_MANY).contains(&count);
         // Children follow their parent (depth-first order), so they are counted first.
         for (index, node) in bvh.nodes.iter().enumerate().rev() {
             triangles[index] = if node.is_leaf() {
@@ -228,8 +227,8 @@ impl SmallSubtrees {
             } else {
                 let (first, second) = (triangles[index + 1], triangles[node.offset as usize]);
                 let both = first.saturating_add(second).min(Self::TOO_MANY);
-                if !fits(both) {
-                    blocks_below_others += fits(first) as usize + fits(second) as usize;
+                if !Self::fits(both) {
+                    blocks_below_others += Self::fits(first) as usize + Self::fits(second) as usize;
                 }
                 both
             };
@@ -241,7 +240,12 @@ impl SmallSubtrees {
     }
 
     fn fits_block(&self, index: u32) -> bool {
-        (1..Self::TOO_MANY).contains(&self.triangles[index as usize])
+        Self::fits(self.triangles[index as usize])
+    }
+
+    /// Whether a subtree of `count` triangles (capped at `TOO_MANY`) is one block.
+    fn fits(count: u8) -> bool {
+        (1..Self::TOO_MANY).contains(&count)
     }
 }
 

@@ -5,7 +5,8 @@
 //! is C (`host_cpu.c`), which build.rs compiles for plain x86-64: this crate's own code, the
 //! check's included, may use any instruction of the building machine. It runs when the binary
 //! is loaded (a C constructor), before the Rust runtime, which allocates through this crate's
-//! allocator (`huge_pages.rs`) before `main`; `main` asks again ([`runs_here`]). It reads cpuid itself, as
+//! allocator (`huge_pages.rs`) before `main`; `main` asks again ([`runs_here`]), a call that
+//! also links the C object, constructor and all. It reads cpuid itself, as
 //! `is_x86_feature_detected!` answers yes for any feature the build enables.
 
 use std::ffi::{c_char, c_int};

@@ -2,9 +2,8 @@
 //! transparent huge pages (2 MiB) where the system leaves that to each program
 //! (`/sys/kernel/mm/transparent_hugepage/enabled` set to `madvise`, a common default), as
 //! Embree's allocator does for its BVHs. Loading a million-triangle mesh fills a few hundred
-//! megabytes of fresh arrays (the file, its triangles, the BVH and its blocks), and on 4 KiB
-//! pages the faults taking them in were a fifth of that process's CPU time (docs/benchmarks.md,
-//! 2026-12-05, eleventh session).
+//! megabytes of fresh arrays (the file, its triangles, the BVH and its blocks), and taking them
+//! in 4 KiB at a time cost more than any single stage of the load (docs/benchmarks.md).
 //!
 //! This code runs before `main` (the Rust runtime allocates), so before `main`'s check of the
 //! CPU: that check runs earlier still, when the binary is loaded (`host_cpu.c`).
