@@ -21,8 +21,8 @@ The reference's own noise (rt-gpu's estimate from its independent randomisations
 quadrature, and must be at most a third of every error compared. (Splitting a render into two
 halves and differencing them, as this script did before, penalises stratified samplers: a half
 has more than twice the variance of the whole.) Both renderers draw with seed `--seed`; one
-image's error varies from seed to seed (Mitsuba's knot at 256 spp: RMSE 6.1e-3 to 6.8e-3 over
-four seeds; `textured` at 1024: 1.06e-2 to 1.23e-2), so `--all` runs each row with seeds 1 and 2.
+image's error varies from seed to seed by several percent where caustics and edges dominate it
+(docs/benchmarks.md), so `--all` runs each row with seeds 1 and 2.
 
 Timing: Mitsuba in a process of its own, warm (its kernels compiled by a first 1-spp render),
 one render of SPP; rt-gpu as whole processes (device start and kernel compilation included), one
@@ -30,8 +30,8 @@ per rung of a ladder of spp, until its error is at or below Mitsuba's; the time 
 is interpolated in log-log between the last two rungs. That ratio (rt-gpu's start and scene load
 counted, Mitsuba's not) is the one the table's goal is set in. Two like-for-like ratios are
 printed beside it: both as whole processes (Mitsuba's: its process's wall time less the 1-spp
-warm-up render, so Python's start, the import, the scene's load, the kernels' compilation and
-the render) and both renders alone (rt-gpu's render time from its summary line, Mitsuba's warm
+warm-up render, so Python's start, the import, the scene's load and the render, without the
+kernels' first compilation: a lower bound) and both renders alone (rt-gpu's render time from its summary line, Mitsuba's warm
 render).
 
 Usage (from the repository root, after `cargo build --release`):
@@ -501,8 +501,7 @@ def run_all(args):
     rows = []
     for name, scene, width, height, spp, reference_spp in ALL_ROWS:
         runs = []
-        # A seed per run: one image's error varies from seed to seed (Mitsuba's knot, 256 spp:
-        # RMSE 6.1e-3 to 6.8e-3 over four), and one seed for both runs would repeat its luck.
+        # A seed per run: one seed for both runs would repeat one image's luck.
         for seed in (1, 2):
             cmd = [sys.executable, __file__, scene, "--spp", str(spp), "--width", str(width), "--height", str(height),
                    "--backend", "auto", "--reference-spp", str(reference_spp), "--cache", args.cache,
@@ -530,7 +529,8 @@ def run_all(args):
         "Mitsuba 3's sampler `multijitter`; rt-gpu's time to Mitsuba's error over Mitsuba's time",
         "(lower is faster; below 1, rt-gpu is ahead): rt-gpu's whole process against Mitsuba's warm",
         "render, then, to Mitsuba's RMSE, like for like: both whole processes (Mitsuba's Python",
-        "start, import, scene load, kernel compilation and render), both renders alone.",
+        "start, import, scene load and render, without its kernels' first compilation), both renders",
+        "alone.",
         "",
         "| scene | size, Mitsuba spp | Mitsuba Msamples/s | Mitsuba RMSE; relMSE | rt-gpu backend | "
         "time to Mitsuba's RMSE | time to its relMSE | RMSE, both whole processes | RMSE, both renders alone |",
