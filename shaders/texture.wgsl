@@ -76,7 +76,8 @@ fn filtered(start: u32, size: vec2f, lookup: u32, s: f32, t: f32) -> vec3f {
 fn albedo_at(m: Material, hit: Hit) -> vec3f {
 //#if IMAGE_TEXTURE
     if m.texture == TEXTURE_IMAGE {
-        return image_at(m.texture_image, m.texture_odd.xy, m.texture_lookup, hit.uv);
+        // Times the image's factor (glTF's factor x texture), which its albedo holds.
+        return image_at(m.texture_image, m.texture_odd.xy, m.texture_lookup, hit.uv) * m.albedo;
     }
 //#endif
     var parities = 0.0;

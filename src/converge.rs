@@ -629,6 +629,16 @@ impl Report {
                         String::new()
                     }
                 )),
+                None if self
+                    .rungs
+                    .iter()
+                    .filter(|r| &r.series == series)
+                    .all(|r| !(r.errors.rmse > 0.0)) =>
+                {
+                    out.push_str(&format!(
+                        "  {series:<22} every render's error is 0 (the scene renders exactly as its reference, black say): nothing to fit\n"
+                    ))
+                }
                 None => out.push_str(&format!(
                     "  {series:<22} too few renders above the reference's noise to fit\n"
                 )),

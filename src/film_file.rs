@@ -505,14 +505,19 @@ fn read_exr(path: &Path) -> anyhow::Result<Image<Layers<AnyChannels<FlatSamples>
 
 /// A render's identity as a film file records it: the scene's digest and every option that
 /// changes its samples (not the sample range: that is what checkpoints and shards differ in).
+///
+/// `files` are the files the scene read, each `file:NAME=DIGEST` (`scene::inputs`), so that a
+/// film of a scene whose texture or mesh changed since is told apart, naming the file.
 pub fn identity(
     scene_digest: u64,
+    files: &[String],
     backend: crate::options::Backend,
     opts: &crate::options::RenderOptions,
     everything_kernel: bool,
 ) -> String {
+    let files: String = files.iter().map(|f| format!(" {f}")).collect();
     format!(
-        "scene={scene_digest:016x} size={}x{} seed={} max_depth={} integrator={} sampler={} roulette_depth={} backend={} kernel={}",
+        "scene={scene_digest:016x} size={}x{} seed={} max_depth={} integrator={} sampler={} roulette_depth={} backend={} kernel={}{files}",
         opts.width,
         opts.height,
         opts.seed,
@@ -527,6 +532,54 @@ pub fn identity(
             "specialised"
         }
     )
+}
+
+/// The prefix of an identity's fields that give a digest of a file the scene read.
+pub const FILE_FIELD: &str = "file:";
+
+/// The identity's field that gives the digest `hex` of a file the scene read, named `shown`.
+pub fn file_field(shown: &str, hex: &str) -> String {
+    format!("{FILE_FIELD}{}={hex}", identity_name(shown))
+}
+
+/// A file name as a film's identity writes it: one word, without `=` (percent-encoded).
+fn identity_name(shown: &str) -> String {
+    let mut out = String::with_capacity(shown.len());
+    for c in shown.chars() {
+        if c == '%' || c == '=' || c.is_whitespace() || c.is_control() {
+            let mut buf = [0u8; 4];
+            for b in c.encode_utf8(&mut buf).bytes() {
+                out.push_str(&format!("%{b:02X}"));
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// An [`identity_name`] as it was written (for messages: control characters stay escaped).
+fn shown_name(identity_name: &str) -> String {
+    let bytes = identity_name.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok())
+            .and_then(|h| u8::from_str_radix(h, 16).ok());
+        match (bytes[i], hex) {
+            (b'%', Some(b)) if !(b as char).is_control() => {
+                out.push(b);
+                i += 3;
+            }
+            (b, _) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// What the identity of a film of format 1 (sums rounded to 2^-32) says of it when read.
@@ -550,8 +603,31 @@ pub fn identity_difference(ours: &str, theirs: &str) -> Option<String> {
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect()
     };
-    let theirs = fields(theirs);
-    for (key, value) in fields(ours) {
+    let (ours, theirs) = (fields(ours), fields(theirs));
+    // A file the scene reads that changed says more than the scene's digest, which holds it.
+    let file = |key: &str| key.strip_prefix(FILE_FIELD).map(shown_name);
+    for (key, value) in ours.iter().filter(|(k, _)| k.starts_with(FILE_FIELD)) {
+        let name = file(key).unwrap_or_default();
+        match theirs.iter().find(|(k, _)| k == key) {
+            Some((_, v)) if v == value => continue,
+            Some(_) => {
+                return Some(format!(
+                    "the scene's file {name} differs: its contents changed between the renders"
+                ));
+            }
+            None => return Some(format!("it was not rendered from the scene's file {name}")),
+        }
+    }
+    if let Some((key, _)) = theirs
+        .iter()
+        .find(|(k, _)| k.starts_with(FILE_FIELD) && !ours.iter().any(|(o, _)| o == k))
+    {
+        let name = file(key).unwrap_or_default();
+        return Some(format!(
+            "it was rendered from a file {name}, which this scene does not read"
+        ));
+    }
+    for (key, value) in ours {
         match theirs.iter().find(|(k, _)| *k == key) {
             Some((_, v)) if *v == value => continue,
             Some((_, v)) => {
@@ -666,6 +742,20 @@ pub fn combine(mut films: Vec<NamedFilm>) -> anyhow::Result<Combined> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn identity_names_are_one_word_and_read_back() {
+        for name in ["tex.png", "my tex=1%.png", "a\nnote: forged", "ü/ß.png"] {
+            let word = identity_name(name);
+            assert!(!word.contains([' ', '=', '\n']), "{word}");
+            let back = shown_name(&word);
+            if name.contains('\n') {
+                assert!(!back.contains('\n'), "{back}");
+            } else {
+                assert_eq!(back, name);
+            }
+        }
+    }
+
     use super::*;
     use glam::{DVec3, Vec3};
 

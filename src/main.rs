@@ -54,7 +54,10 @@ fn run() -> ExitCode {
         )
     }));
     cli::signals::install_signal_handler();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_error(e),
+    };
     let result = match cli.command {
         Some(Command::Scenes { export, force }) => {
             cli::scenes::list_scenes(export.as_deref(), force)
@@ -76,6 +79,37 @@ fn run() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `--help` and `--version` as clap prints them; a mistake in the arguments as one line, as
+/// every other error (clap adds usage and "For more information" lines).
+fn clap_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let _ = e.print();
+        return ExitCode::from(e.exit_code() as u8);
+    }
+    let rendered = e.render().to_string();
+    let first = rendered
+        .lines()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("error: invalid arguments");
+    // clap's tips ("to pass '-1' as a value, use '-- -1'") would make -1 the scene: dropped.
+    let hint = rendered
+        .lines()
+        .map(str::trim)
+        .find(|l| l.starts_with("tip:") && !l.contains("'--'") && !l.contains("-- "))
+        .map_or(String::new(), |tip| format!(" ({tip})"));
+    note!(
+        "{}{hint} (rt-gpu --help lists the options)",
+        first.trim_end()
+    );
+    ExitCode::from(2)
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

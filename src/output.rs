@@ -212,6 +212,38 @@ pub fn write_atomically(
     pending.commit(&buffer.into_inner())
 }
 
+/// Refuses `output` if it is one of `inputs`, the files a run reads (the same file, by any
+/// name: a symbolic or hard link too).
+pub fn check_not_input(output: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    for input in inputs {
+        if same_file(output, input) {
+            anyhow::bail!(
+                "output {} is {}, a file this run reads: choose another output",
+                output.display(),
+                input.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name one existing file (through links too).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        ma.dev() == mb.dev() && ma.ino() == mb.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (ma, mb);
+        std::fs::canonicalize(a).is_ok_and(|ca| std::fs::canonicalize(b).is_ok_and(|cb| ca == cb))
+    }
+}
+
 /// Longest file name most file systems take (NAME_MAX on Linux).
 const MAX_NAME_BYTES: usize = 255;
 
@@ -282,16 +314,7 @@ impl PendingOutput {
                     path.display()
                 );
             }
-            let canonical = std::fs::canonicalize(&target).unwrap_or_else(|_| target.clone());
-            for input in inputs {
-                if std::fs::canonicalize(input).is_ok_and(|i| i == canonical) {
-                    anyhow::bail!(
-                        "output {} is {}, an input of this run: choose another output",
-                        path.display(),
-                        input.display()
-                    );
-                }
-            }
+            check_not_input(path, inputs)?;
         }
         let dir = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),

@@ -64,8 +64,14 @@ where
         .iter()
         .map(|r| r.errors.rmse)
         .chain(report.reference.noise_rmse);
-    let (x0, x1) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
-    let (y0, y1) = ys.fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
+    // A log axis needs positive, finite ends (plotters' never ends its ticks on a degenerate
+    // range): errors of 0 (a black scene, or renders equal to their reference) have no place.
+    let (x0, x1) = log_range(xs).ok_or_else(|| anyhow!("no render took a measurable time"))?;
+    let (y0, y1) = log_range(ys).ok_or_else(|| {
+        anyhow!(
+            "every render's error is 0 (the scene renders exactly as its reference, black say): nothing to draw on a log scale"
+        )
+    })?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 22))
         .margin(15)
@@ -92,6 +98,7 @@ where
             .iter()
             .filter(|r| &r.series == series)
             .map(|r| (r.seconds, r.errors.rmse))
+            .filter(|&(x, y)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite())
             .collect();
         let label = match fit {
             Some(f) => format!("{series} (exponent {:+.2})", f.exponent),
@@ -128,6 +135,19 @@ where
         .map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
+}
+
+/// The smallest and largest positive, finite values of `values`, apart by a factor of 2 at
+/// least (a log axis of any length); `None` if none is positive and finite.
+fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    if lo > hi {
+        return None;
+    }
+    let middle = (lo * hi).sqrt();
+    Some((lo.min(middle / 2.0), hi.max(middle * 2.0)))
 }
 
 /// A short axis label: 0.25, 3, 1e-4.

@@ -610,6 +610,27 @@ fn a_scene_file_takes_a_camera_of_a_gltf_file_it_places() {
         let scene = parse(&format!("gltf = \"{name}\"")).expect("parses");
         assert_eq!(scene.camera, *expected, "{name}");
     }
+    // Issue 61: placed with the file's object (it stayed where the file alone put it, and the
+    // image went black).
+    let placed = {
+        let text = format!(
+            "[camera]\ngltf = \"Camera\"\n[materials]\nm = {{ type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }}\n[[object]]\nmesh = {{ file = \"{}\", node = \"Floor\" }}\nscale = 2\nrotate_y = 90\ntranslate = [10, 0, 0]\nmaterial = \"m\"\n",
+            dir.join("lamps.glb").display()
+        );
+        rt_gpu::scene::file::parse(&text, "cam.toml", "cam").expect("parses")
+    };
+    let transform = rt_gpu::scene::Transform {
+        rotate_y_degrees: 90.0,
+        translate: glam::Vec3::new(10.0, 0.0, 0.0),
+    };
+    let moved = |p: glam::Vec3| transform.apply_point(2.0 * p);
+    let c = &whole.camera;
+    assert!((placed.camera.look_from - moved(c.look_from)).length() < 1e-4);
+    assert!((placed.camera.look_at - moved(c.look_at)).length() < 1e-4);
+    assert!(
+        (placed.camera.up.normalize() - transform.rotate_vector(c.up).normalize()).length() < 1e-5
+    );
+    assert_eq!(placed.camera.vfov_degrees, c.vfov_degrees);
     let with_lens = parse("gltf = \"Camera\"\naperture = 0.1").expect("parses");
     assert_eq!(with_lens.camera.aperture, 0.1);
     for (camera, expected) in [

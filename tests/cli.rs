@@ -415,7 +415,7 @@ fn unwritable_outputs_fail_before_rendering() {
     #[cfg(unix)]
     {
         std::os::unix::fs::symlink("scene.toml", path("scene.png")).expect("symlink");
-        cases.push(("scene.png", "an input of this run"));
+        cases.push(("scene.png", "a file this run reads"));
         if Path::new("/proc/self").exists() {
             cases.push(("/proc/x.png", "cannot create a file in /proc"));
         }
@@ -872,4 +872,317 @@ fn target_error_stops_near_the_true_error() {
             "{sampler}: true relative error {true_error} against the target {target}"
         );
     }
+}
+
+/// A textured scene in `dir`: `tex.png` as an albedo, `env.exr` as the environment, and an OBJ
+/// whose material library gives it `kd.png` (issue 61's cases).
+fn scene_reading_files(dir: &Path) {
+    let image = |name: &str, width: u32| {
+        let mut film = rt_gpu::film::Film::new(width, 2);
+        for (i, p) in film.pixels.iter_mut().enumerate() {
+            p.add_indexed(glam::Vec3::new(0.2, 0.5, 0.1 * i as f32), 0);
+        }
+        rt_gpu::output::write_image(&dir.join(name), &film).expect("writes an image");
+    };
+    image("tex.png", 2);
+    image("kd.png", 2);
+    image("env.exr", 4);
+    std::fs::write(dir.join("m.mtl"), "newmtl paint\nKd 1 1 1\nmap_Kd kd.png\n").expect("mtl");
+    std::fs::write(
+        dir.join("tri.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl paint\nf 1/1 2/2 3/3\n",
+    )
+    .expect("obj");
+    std::fs::write(
+        dir.join("ts.toml"),
+        "[render]\nbackground = { image = \"env.exr\" }\n[camera]\nlook_from = [0, 0, 3]\nlook_at = [0, 0, 0]\nvfov = 40\n\n[materials]\ntex = { type = \"lambertian\", albedo = { image = \"tex.png\" } }\n\n[[object]]\nsphere = { center = [-1, 0, 0], radius = 0.5 }\nmaterial = \"tex\"\n\n[[object]]\nmesh = { file = \"tri.obj\" }\n",
+    )
+    .expect("scene");
+}
+
+/// Issue 61, data loss: no output (`-o`, `--checkpoint`, `converge -o`'s files) may replace a
+/// file the scene reads (a texture, an environment, an MTL's map; by a hard link too).
+#[test]
+fn outputs_never_replace_a_file_the_scene_reads() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    scene_reading_files(d);
+    let before: Vec<Vec<u8>> = ["tex.png", "kd.png", "env.exr"]
+        .iter()
+        .map(|f| std::fs::read(d.join(f)).expect("reads"))
+        .collect();
+    std::fs::hard_link(d.join("tex.png"), d.join("linked.png")).expect("links");
+    let render = ["ts.toml", "--backend", "cpu", "--spp", "1", "--size", "4x4"];
+    for extra in [
+        &["-o", "tex.png"][..],
+        &["-o", "kd.png"],
+        &["-o", "env.exr"],
+        &["-o", "linked.png"],
+        &["-o", "ok.png", "--checkpoint", "env.exr", "--force"],
+    ] {
+        let args: Vec<&str> = render.iter().chain(extra).copied().collect();
+        let out = rt_gpu(&args, d);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{extra:?} succeeded");
+        assert!(
+            err.contains("a file this run reads") && err.lines().count() == 1,
+            "{extra:?}: {err}"
+        );
+    }
+    // The render itself reads them: a render to another file succeeds.
+    let args: Vec<&str> = render.iter().chain(&["-o", "ok.png"]).copied().collect();
+    assert!(rt_gpu(&args, d).status.success());
+    // converge -o writes converge.png into the folder: refused before any render.
+    std::fs::create_dir(d.join("report")).expect("mkdir");
+    std::fs::copy(d.join("tex.png"), d.join("report/converge.png")).expect("copies");
+    let scene = std::fs::read_to_string(d.join("ts.toml")).expect("reads");
+    std::fs::write(
+        d.join("report/ts.toml"),
+        scene.replace("\"tex.png\"", "\"converge.png\""),
+    )
+    .expect("writes");
+    std::fs::copy(d.join("env.exr"), d.join("report/env.exr")).expect("copies");
+    std::fs::copy(d.join("tri.obj"), d.join("report/tri.obj")).expect("copies");
+    std::fs::copy(d.join("m.mtl"), d.join("report/m.mtl")).expect("copies");
+    std::fs::copy(d.join("kd.png"), d.join("report/kd.png")).expect("copies");
+    let out = rt_gpu(
+        &[
+            "converge",
+            "report/ts.toml",
+            "-o",
+            "report",
+            "--budget",
+            "1",
+        ],
+        d,
+    );
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("a file this run reads"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(
+        std::fs::read(d.join("report/converge.png")).expect("kept"),
+        before[0]
+    );
+    let after: Vec<Vec<u8>> = ["tex.png", "kd.png", "env.exr"]
+        .iter()
+        .map(|f| std::fs::read(d.join(f)).expect("reads"))
+        .collect();
+    assert_eq!(before, after);
+}
+
+/// Issue 61: a film knows the contents of the files its scene read, not only their names:
+/// shards or a checkpoint of a scene whose texture, OBJ or MTL changed since neither merge
+/// nor resume, and the message names the file.
+#[test]
+fn films_of_a_scene_whose_files_changed_neither_merge_nor_resume() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    scene_reading_files(d);
+    let shard = |k: &str| {
+        let out = format!("s{}.exr", k.replace('/', "_"));
+        let args = [
+            "ts.toml",
+            "--backend",
+            "cpu",
+            "--spp",
+            "2",
+            "--size",
+            "4x4",
+            "--shard",
+        ];
+        let args: Vec<&str> = args.iter().copied().chain([k, "-o", &out]).collect();
+        let run = rt_gpu(&args, d);
+        assert!(run.status.success(), "{}", stderr(&run));
+    };
+    for (file, change) in [
+        ("tex.png", None),
+        ("kd.png", None),
+        ("tri.obj", Some("v 0 0 0.5\n")),
+        ("m.mtl", Some("Ns 10\n")),
+    ] {
+        let original = std::fs::read(d.join(file)).expect("reads");
+        shard("0/2");
+        // A PNG with bytes after its end decodes the same: the contents, not the image, count.
+        let mut changed = original.clone();
+        changed.extend(change.unwrap_or("\n").as_bytes());
+        std::fs::write(d.join(file), &changed).expect("changes");
+        shard("1/2");
+        let out = rt_gpu(&["merge", "s0_2.exr", "s1_2.exr", "-o", "m.exr"], d);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{file}: merged");
+        assert!(
+            err.contains(&format!("file {file} differs")) && err.lines().count() == 1,
+            "{file}: {err}"
+        );
+        std::fs::write(d.join(file), &original).expect("restores");
+        shard("1/2");
+        let out = rt_gpu(&["merge", "s0_2.exr", "s1_2.exr", "-o", "m.exr"], d);
+        assert!(out.status.success(), "{file}: {}", stderr(&out));
+    }
+    // A checkpoint does not resume once the environment changed.
+    let args = [
+        "ts.toml",
+        "--backend",
+        "cpu",
+        "--spp",
+        "1",
+        "--size",
+        "4x4",
+        "--checkpoint",
+        "c.exr",
+    ];
+    assert!(rt_gpu(&args, d).status.success());
+    let mut env = std::fs::read(d.join("env.exr")).expect("reads");
+    env.push(0);
+    std::fs::write(d.join("env.exr"), &env).expect("changes");
+    let out = rt_gpu(
+        &[
+            "ts.toml",
+            "--backend",
+            "cpu",
+            "--spp",
+            "2",
+            "--size",
+            "4x4",
+            "--resume",
+            "c.exr",
+        ],
+        d,
+    );
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("file env.exr differs"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// Issue 61: `scenes --export DIR --force` replaces a link in DIR with the file rather than
+/// writing through it to a file outside DIR.
+#[cfg(unix)]
+#[test]
+fn export_replaces_links_rather_than_writing_through_them() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    std::fs::create_dir(d.join("out")).expect("mkdir");
+    std::fs::write(d.join("precious.txt"), b"keep").expect("writes");
+    std::os::unix::fs::symlink("../precious.txt", d.join("out/cornell.toml")).expect("links");
+    std::os::unix::fs::symlink("../missing.txt", d.join("out/spheres.toml")).expect("links");
+    let out = rt_gpu(&["scenes", "--export", "out"], d);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("spheres.toml"), "{}", stderr(&out));
+    let out = rt_gpu(&["scenes", "--export", "out", "--force"], d);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        std::fs::read(d.join("precious.txt")).expect("kept"),
+        b"keep"
+    );
+    let exported = d.join("out/cornell.toml");
+    assert!(
+        !std::fs::symlink_metadata(&exported)
+            .expect("exists")
+            .file_type()
+            .is_symlink()
+    );
+    assert!(
+        std::fs::read_to_string(exported)
+            .expect("reads")
+            .contains("[camera]")
+    );
+    assert!(!d.join("missing.txt").exists());
+}
+
+/// Issue 61: mistakes in the arguments are one line each, and a negative number reaches the
+/// option's own check rather than clap's tip that makes it the scene.
+#[test]
+fn argument_mistakes_are_one_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (args, words) in [
+        (
+            &["cornell", "--time", "-1"][..],
+            "--time must be a positive",
+        ),
+        (
+            &["cornell", "--target-error", "-1"],
+            "--target-error must be a positive",
+        ),
+        (
+            &["cornell", "--spp", "4", "--shard", "-1/2"],
+            "expected K/N",
+        ),
+        (&["cornell", "--size", "0x0"], "--size"),
+        (
+            &["cornell", "--spp", "4", "--shard", "1/1"],
+            "does not exist",
+        ),
+        (&["cornell", "--no-such-option"], "--no-such-option"),
+        (&["converge", "cornell", "--budget", "-1"], "budget"),
+    ] {
+        let out = rt_gpu(args, dir.path());
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(words), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(!err.contains("'-- -1'"), "{args:?}: {err}");
+    }
+    // --help is still clap's, whole, on stdout.
+    let out = rt_gpu(&["--help"], dir.path());
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).lines().count() > 10);
+}
+
+/// Issue 61: `converge` on a scene that renders exactly black (every error 0) ends: the CSV is
+/// written, the table says why nothing is fitted, and the plot is skipped with a reason (a log
+/// axis over a degenerate range never ended).
+#[test]
+fn converge_on_a_black_scene_ends_and_says_why_nothing_is_fitted() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    std::fs::write(
+        d.join("black.toml"),
+        "[render]\nbackground = [0, 0, 0]\n[camera]\nlook_from = [0, 0, 3]\nlook_at = [0, 0, 0]\nvfov = 40\n\n[materials]\nwhite = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n\n[[object]]\nsphere = { center = [0, 0, 0], radius = 1 }\nmaterial = \"white\"\n",
+    )
+    .expect("writes");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args([
+            "converge",
+            "black.toml",
+            "--backends",
+            "cpu",
+            "--integrators",
+            "nee",
+            "--size",
+            "8x8",
+            "--budget",
+            "0.5",
+            "--reference-spp",
+            "4",
+            "-o",
+            "rep",
+        ])
+        .current_dir(d)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().expect("waits").is_none() {
+        if start.elapsed().as_secs() > 120 {
+            let _ = child.kill();
+            panic!("converge on a black scene did not end in 120 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().expect("output");
+    let (stdout, err) = (String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert!(out.status.success(), "{err}");
+    assert!(stdout.contains("nothing to fit"), "{stdout}");
+    assert!(
+        err.contains("no plot") && err.contains("error is 0"),
+        "{err}"
+    );
+    assert!(d.join("rep/converge.csv").exists());
 }

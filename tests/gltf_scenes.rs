@@ -263,3 +263,170 @@ fn a_gltf_scene_under_its_sky_matches_on_both_backends() {
         "a 2% brighter base colour went undetected"
     );
 }
+
+/// Issue 61: values the glTF specification forbids are refused in one line naming the field
+/// (they were clamped or substituted silently: ior 0.5 as 1, transmission 2 as 1, a negative
+/// intensity as black, a spot's inner cone beyond its outer), and what it allows loads.
+#[test]
+fn values_outside_the_specification_are_refused_naming_the_field() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let mut case = 0;
+    let mut load_with = |material: &str, nodes: &str, extra: &str| {
+        case += 1;
+        let name = format!("spec{case}.gltf");
+        let path = write_gltf(d, &name, material, nodes, extra);
+        load(&path, &name, None)
+    };
+    for (material, field) in [
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_ior": { "ior": 0.5 } } }"#,
+            "ior is 0.5",
+        ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_ior": { "ior": -1 } } }"#,
+            "ior is -1",
+        ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_transmission": { "transmissionFactor": 2 } } }"#,
+            "transmissionFactor",
+        ),
+        (
+            r#"{ "name": "M", "pbrMetallicRoughness": { "metallicFactor": -1 } }"#,
+            "metallicFactor",
+        ),
+        (
+            r#"{ "name": "M", "pbrMetallicRoughness": { "roughnessFactor": 2 } }"#,
+            "roughnessFactor",
+        ),
+        (
+            r#"{ "name": "M", "pbrMetallicRoughness": { "baseColorFactor": [2, 0, 0, 1] } }"#,
+            "baseColorFactor",
+        ),
+        (
+            r#"{ "name": "M", "emissiveFactor": [1, 1, 1], "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": -5 } } }"#,
+            "emissiveStrength",
+        ),
+        (
+            r#"{ "name": "M", "alphaMode": "MASK", "alphaCutoff": -1 }"#,
+            "alphaCutoff",
+        ),
+    ] {
+        let err = load_with(material, "", "").expect_err(material);
+        assert!(
+            err.contains("material 0 (\"M\")") && err.contains(field) && !err.contains('\n'),
+            "{material}: {err}"
+        );
+    }
+    // What it allows: an ior of 1 or above, or 0.
+    for ior in ["1", "2.4", "0"] {
+        let material = format!(
+            r#"{{ "name": "M", "extensions": {{ "KHR_materials_ior": {{ "ior": {ior} }} }} }}"#
+        );
+        assert!(load_with(&material, "", "").is_ok(), "ior {ior}");
+    }
+    let lamp = |light: &str| {
+        (
+            r#"{ "name": "LampNode", "translation": [0, 3, 2], "extensions": { "KHR_lights_punctual": { "light": 0 } } }"#.to_string(),
+            format!(
+                r#""extensionsUsed": ["KHR_lights_punctual"], "extensions": {{ "KHR_lights_punctual": {{ "lights": [{light}] }} }},"#
+            ),
+        )
+    };
+    for (light, words) in [
+        (
+            r#"{ "name": "L", "type": "point", "intensity": -10 }"#,
+            "intensity of -10",
+        ),
+        (
+            r#"{ "name": "L", "type": "point", "color": [1, -1, 1] }"#,
+            "color",
+        ),
+        (
+            r#"{ "name": "L", "type": "spot", "spot": { "innerConeAngle": 0.6, "outerConeAngle": 0.5 } }"#,
+            "cone angles",
+        ),
+    ] {
+        let (nodes, extra) = lamp(light);
+        let err = load_with("", &nodes, &extra).expect_err(light);
+        assert!(
+            err.contains("light \"L\"") && err.contains(words),
+            "{light}: {err}"
+        );
+    }
+    // A name that would forge a line of output is escaped.
+    let (nodes, extra) = lamp(r#"{ "name": "L\nnote: forged", "type": "point", "range": 3 }"#);
+    let (_, notes) = load_with("", &nodes, &extra).expect("loads");
+    assert!(notes.iter().all(|n| !n.contains('\n')), "{notes:?}");
+}
+
+/// Issue 61: ten thousand lights with a `range` make one note, not ten thousand.
+#[test]
+fn many_ignored_ranges_make_one_note() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let count = 10_000;
+    let nodes: Vec<String> = (0..count)
+        .map(|i| {
+            format!(
+                r#"{{ "translation": [0, 3, {i}], "extensions": {{ "KHR_lights_punctual": {{ "light": {i} }} }} }}"#
+            )
+        })
+        .collect();
+    let lights: Vec<String> = (0..count)
+        .map(|i| format!(r#"{{ "name": "L{i}", "type": "point", "intensity": 1, "range": 5 }}"#))
+        .collect();
+    let extra = format!(
+        r#""extensionsUsed": ["KHR_lights_punctual"], "extensions": {{ "KHR_lights_punctual": {{ "lights": [{}] }} }},"#,
+        lights.join(",")
+    );
+    let path = write_gltf(dir.path(), "many.gltf", "", &nodes.join(",\n"), &extra);
+    // Every light node is a root.
+    let text = std::fs::read_to_string(&path).expect("reads");
+    let roots: Vec<String> = (0..=count).map(|i| i.to_string()).collect();
+    std::fs::write(
+        &path,
+        text.replace(
+            r#""nodes": [0, 1]"#,
+            &format!(r#""nodes": [{}]"#, roots.join(", ")),
+        ),
+    )
+    .expect("writes");
+    let (scene, notes) = load(&path, "many.gltf", None).expect("loads");
+    assert_eq!(scene.punctual.len(), count);
+    assert_eq!(notes.len(), 1, "{}", notes.len());
+    assert!(notes[0].contains("10000 lights"), "{}", notes[0]);
+}
+
+/// Issue 61: a file without a camera is framed whatever size the checks accept (a quad of
+/// half-size 3e7 was refused: the framing camera stood beyond 1e8), and a mesh whose corners
+/// collapse in f32 says so rather than "has no triangles".
+#[test]
+fn any_accepted_file_is_framed_and_collapsed_corners_are_named() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let big = write_gltf(d, "big.gltf", "", "", "");
+    let text = std::fs::read_to_string(&big).expect("reads");
+    std::fs::write(
+        &big,
+        text.replace(
+            r#""name": "Triangle", "mesh": 0"#,
+            r#""name": "Triangle", "mesh": 0, "scale": [3e7, 3e7, 3e7]"#,
+        ),
+    )
+    .expect("writes");
+    let (scene, _) = load(&big, "big.gltf", None).expect("framed");
+    assert!(scene.camera.look_from.abs().max_element() <= 1e8);
+    // Far from the origin, a small triangle's corners are one f32 point.
+    let far = write_gltf(d, "far.gltf", "", "", "");
+    let text = std::fs::read_to_string(&far).expect("reads");
+    std::fs::write(
+        &far,
+        text.replace(
+            r#""name": "Triangle", "mesh": 0"#,
+            r#""name": "Triangle", "mesh": 0, "translation": [9.9e7, 0, 0], "scale": [0.5, 0.5, 0.5]"#,
+        ),
+    )
+    .expect("writes");
+    let err = load(&far, "far.gltf", None).expect_err("collapsed");
+    assert!(err.contains("coincide in f32"), "{err}");
+}

@@ -90,11 +90,12 @@ fn a_base_colour_texture_arrives_with_its_factor_and_uvs() {
             panic!("not an image: {:?}", base_colour(&scene));
         };
         assert_eq!((image.width, image.height), (2, 1));
-        // Decoded from sRGB, then times the factor (0.5, 1, 1).
-        assert_eq!(image.texel(0, 0), Vec3::new(0.5, 0.0, 0.0));
+        // Decoded from sRGB, then times the factor (0.5, 1, 1), which a lookup applies.
+        assert_eq!(image.factor, Vec3::new(0.5, 1.0, 1.0));
+        assert_eq!(image.texel(0, 0) * image.factor, Vec3::new(0.5, 0.0, 0.0));
         let grey = srgb_to_linear(128.0 / 255.0);
         assert!(
-            (image.texel(1, 0) - Vec3::new(0.5 * grey, grey, grey))
+            (image.texel(1, 0) * image.factor - Vec3::new(0.5 * grey, grey, grey))
                 .abs()
                 .max_element()
                 < 1e-6
@@ -770,5 +771,66 @@ fn gpu_rays_pass_see_through_surfaces_where_cpu_rays_do() {
             differ_opaque > rays.len() / 10,
             "alpha ignored went undetected"
         );
+    }
+}
+
+/// Issue 61: one image that eight materials use with eight factors (and two samplers) is
+/// decoded and held once, on the CPU and in the kernel's images (each factor and sampler made
+/// its own copy: a 16384x8192 PNG used so took 10.9 GB and aborted); each material still reads
+/// its factor x the image.
+#[test]
+fn an_image_used_with_many_factors_and_samplers_is_held_once() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    write_png(dir.path());
+    let materials: Vec<String> = (0..8)
+        .map(|i| {
+            let f = 0.2 + 0.1 * i as f32;
+            format!(
+                r#"{{ "name": "M{i}", "pbrMetallicRoughness": {{ "baseColorTexture": {{ "index": {} }}, "baseColorFactor": [{f}, 1, 1, 1], "metallicFactor": 0 }} }}"#,
+                i % 2
+            )
+        })
+        .collect();
+    let extra = r#""samplers": [{ "magFilter": 9728 }], "textures": [{ "source": 0 }, { "source": 0, "sampler": 0 }], "images": [{ "uri": "tex.png" }],"#;
+    let path = write_gltf(dir.path(), true, &materials.join(", "), extra);
+    let text = std::fs::read_to_string(&path).expect("reads");
+    let primitives: Vec<String> = (0..8)
+        .map(|i| {
+            format!(r#"{{ "attributes": {{ "POSITION": 0, "TEXCOORD_0": 1 }}, "material": {i} }}"#)
+        })
+        .collect();
+    let text = text.replace(
+        r#"[{ "attributes": { "POSITION": 0, "TEXCOORD_0": 1 }, "material": 0 }]"#,
+        &format!("[{}]", primitives.join(", ")),
+    );
+    std::fs::write(&path, text).expect("writes");
+    let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
+    let images: Vec<&rt_gpu::scene::image::Image> = (scene.materials.iter())
+        .map(|m| match m {
+            Material::Pbr(pbr) => match pbr.base_color {
+                Texture::Image(image) => image,
+                other => panic!("not an image: {other:?}"),
+            },
+            other => panic!("not pbr: {other:?}"),
+        })
+        .collect();
+    assert_eq!(images.len(), 8);
+    for (i, image) in images.iter().enumerate() {
+        assert!(
+            std::sync::Arc::ptr_eq(&image.texels, &images[0].texels),
+            "material {i}"
+        );
+        assert!((image.factor.x - (0.2 + 0.1 * i as f32)).abs() < 1e-6);
+    }
+    #[cfg(feature = "gpu")]
+    {
+        // The kernel's images take what they take with one of the materials alone.
+        let bytes = |scene: &Scene| {
+            let flat = rt_gpu::scene::flat::FlatScene::new(scene, 8, 8).expect("valid");
+            rt_gpu::gpu::layout::ImageArray::plan(&flat).bytes()
+        };
+        let mut one = scene.clone();
+        one.objects.iter_mut().for_each(|o| o.material = 0);
+        assert_eq!(bytes(&scene), bytes(&one));
     }
 }

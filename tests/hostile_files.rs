@@ -124,9 +124,13 @@ fn malformed_gltf_files_are_one_line_errors_naming_the_problem() {
     assert_eq!(load_gltf(d, &twins, None), Ok(4));
 
     // Buffers: a device is not read (it would be, without end), nor a short file trusted.
-    let mut device = good.clone();
-    device["buffers"][0]["uri"] = json!("/dev/zero");
-    refused(d, &device, None, "not a regular file");
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink("/dev/zero", d.join("zero.bin")).expect("links");
+        let mut device = good.clone();
+        device["buffers"][0]["uri"] = json!("zero.bin");
+        refused(d, &device, None, "not a regular file");
+    }
     let mut short = good.clone();
     short["buffers"][0]["byteLength"] = json!(1000);
     refused(d, &short, None, "fewer than its byteLength 1000");
@@ -147,6 +151,98 @@ fn malformed_gltf_files_are_one_line_errors_naming_the_problem() {
     std::fs::write(d.join("bad.glb"), b"glTX\x02\0\0\0 not a glb").expect("writes");
     let err = load(&d.join("bad.glb"), "bad.glb", None).expect_err("bad magic");
     assert!(err.contains("not a binary glTF file"), "{err}");
+}
+
+/// Issue 61: buffers are read by the one path that is checked, as images are (percent-decoded,
+/// inside the file's folder: no absolute path, `..` or `file://`; a FIFO is refused, not waited
+/// on); accessors' counts, with or without a view, sparse or not, are bounded before anything is
+/// allocated; a stride shorter than an element names its accessor.
+#[test]
+fn gltf_buffers_and_accessors_are_bounded_before_anything_is_read_or_allocated() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let good = quad_gltf(d);
+
+    // A correctly encoded name loads (it was refused: "No such file").
+    std::fs::copy(d.join("quad.bin"), d.join("buf pct.bin")).expect("copies");
+    let mut encoded = good.clone();
+    encoded["buffers"][0]["uri"] = json!("buf%20pct.bin");
+    assert_eq!(load_gltf(d, &encoded, None), Ok(2));
+    // What images refuse, buffers refuse too.
+    let absolute = d.join("quad.bin").display().to_string();
+    for uri in [
+        absolute.clone(),
+        format!("file://{absolute}"),
+        "../quad.bin".to_string(),
+        "sub/../../quad.bin".to_string(),
+    ] {
+        let mut outside = good.clone();
+        outside["buffers"][0]["uri"] = json!(uri);
+        refused(d, &outside, None, "leaves the glTF file's folder");
+    }
+    // The name checked is the name read: `f%41.bin` is `fA.bin`, here a FIFO (it hung the
+    // reader, which opened the decoded name after the check had looked at the other).
+    #[cfg(unix)]
+    {
+        std::fs::copy(d.join("quad.bin"), d.join("f%41.bin")).expect("copies");
+        let status = std::process::Command::new("mkfifo")
+            .arg(d.join("fA.bin"))
+            .status()
+            .expect("mkfifo runs");
+        assert!(status.success());
+        let mut fifo = good.clone();
+        fifo["buffers"][0]["uri"] = json!("f%41.bin");
+        refused(d, &fifo, None, "not a regular file");
+    }
+
+    // POSITION as a sparse accessor with no view and a count of 3e9 (it aborted allocating
+    // 72 GB) or 3e8 (it grew to 23.6 GB): refused at once.
+    for count in [3_000_000_000u64, 300_000_000] {
+        let mut sparse = good.clone();
+        sparse["accessors"][0] = json!({
+            "componentType": 5126, "count": count, "type": "VEC3",
+            "min": [0, 0, 0], "max": [1, 1, 0],
+            "sparse": {
+                "count": 1,
+                "indices": { "bufferView": 1, "componentType": 5123 },
+                "values": { "bufferView": 0 }
+            }
+        });
+        sparse["meshes"][0]["primitives"][0]
+            .as_object_mut()
+            .expect("primitive")
+            .remove("indices");
+        let start = std::time::Instant::now();
+        let err = load_gltf(d, &sparse, None).expect_err("huge sparse accessor");
+        assert!(
+            err.contains("accessor 0") && err.contains(&count.to_string()),
+            "{err}"
+        );
+        assert!(
+            start.elapsed().as_secs_f64() < 5.0,
+            "took {:?}",
+            start.elapsed()
+        );
+    }
+    // A sparse block outside its view, and more sparse values than elements.
+    let mut outside = good.clone();
+    outside["accessors"][0]["sparse"] = json!({
+        "count": 4,
+        "indices": { "bufferView": 1, "byteOffset": 8, "componentType": 5123 },
+        "values": { "bufferView": 0 }
+    });
+    refused(
+        d,
+        &outside,
+        None,
+        "accessor 0's sparse indices needs 16 bytes of buffer view 1",
+    );
+    outside["accessors"][0]["sparse"]["count"] = json!(5);
+    refused(d, &outside, None, "5 sparse values, more than its count 4");
+    // A stride shorter than an element names the accessor.
+    let mut stride = good.clone();
+    stride["bufferViews"][0]["byteStride"] = json!(8);
+    refused(d, &stride, None, "accessor 0 has elements of 12 bytes");
 }
 
 #[test]
@@ -321,4 +417,60 @@ fn checkers_finer_than_f32_resolves_are_refused() {
     assert!(err.to_string().contains("finer than f32 resolves"), "{err}");
     let err = flat(&format!("uv_checker = {{ scale = 1e7, {colours} }}")).expect_err("too many");
     assert!(err.to_string().contains("at most 65536"), "{err}");
+}
+
+/// Issue 61: an MTL map's options are read as the MTL specification gives them, so a file name
+/// after them keeps its spaces; a `-bm` or `Ke` that is not a finite number is refused naming
+/// the material, and a bright `Ke` is kept, not clamped.
+#[test]
+fn mtl_map_options_and_emission_are_read_or_refused_never_guessed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    // A normal map's colours (not grey) with a bump of `tex.png` beside `my tex.png`.
+    let mut film = rt_gpu::film::Film::new(2, 2);
+    for (i, p) in film.pixels.iter_mut().enumerate() {
+        p.add_indexed(glam::Vec3::new(0.5, 0.4 + 0.1 * i as f32, 1.0), 0);
+    }
+    rt_gpu::output::write_image(&d.join("my tex.png"), &film).expect("writes");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl paint\nf 1/1 2/2 3/3\n";
+    static CASE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let load_with = |mtl: &str| {
+        let case = CASE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        std::fs::write(d.join("m.mtl"), mtl).expect("mtl");
+        let name = format!("m{case}.obj");
+        std::fs::write(d.join(&name), obj).expect("obj");
+        load(&d.join(&name), &name, None)
+    };
+    // The name with its space: `tex.png` does not exist, so reading it would fail.
+    let parts = load_with("newmtl paint\nmap_Kd -s 2 2 1 my tex.png\n").expect("loads");
+    let source = match parts[0].material {
+        Some(rt_gpu::scene::Material::Pbr(pbr)) => match pbr.base_color {
+            rt_gpu::scene::texture::Texture::Image(image) => image.source.clone(),
+            other => panic!("{other:?}"),
+        },
+        other => panic!("{other:?}"),
+    };
+    assert!(source.ends_with("my tex.png"), "{source}");
+    for (mtl, words) in [
+        ("newmtl paint\nmap_Bump -bm nan my tex.png\n", "-bm"),
+        ("newmtl paint\nKe inf 1 1\n", "Ke"),
+        ("newmtl paint\nKe nan 1 1\n", "Ke"),
+        (
+            "newmtl paint\nmap_Kd -zz 1 my tex.png\n",
+            "unknown option -zz",
+        ),
+    ] {
+        let err = load_with(mtl).expect_err(mtl);
+        assert!(
+            err.contains("\"paint\"") && err.contains(words),
+            "{mtl}: {err}"
+        );
+    }
+    let parts = load_with("newmtl paint\nKe 1e30 1e30 1e30\n").expect("loads");
+    match parts[0].material {
+        Some(rt_gpu::scene::Material::Light(light)) => {
+            assert_eq!(light.radiance, glam::Vec3::splat(1e30).into())
+        }
+        other => panic!("{other:?}"),
+    }
 }

@@ -11,9 +11,10 @@ fn schlick(f0: vec3f, cos: f32) -> vec3f {
 }
 
 //#if DIELECTRIC
-// The glass of the mix, as a dielectric's parameters (an index of 1 is smooth).
+// The glass of the mix, as a dielectric's parameters (an index within INDEX_MATCHED of 1 is
+// smooth: Dielectric::samples_lights).
 fn pbr_glass(p: PbrParams) -> DielectricParams {
-    return DielectricParams(p.ior, select(p.alpha, 0.0, p.ior == 1.0));
+    return DielectricParams(p.ior, select(p.alpha, 0.0, abs(p.ior - 1.0) < INDEX_MATCHED));
 }
 //#endif
 

@@ -187,7 +187,12 @@ pub struct ConvergeArgs {
     #[arg(long, value_name = "N", default_value_t = rt_gpu::options::DEFAULT_ROULETTE_DEPTH)]
     pub roulette_depth: u32,
     /// Seconds each series may spend on its ladder.
-    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 30.0,
+        allow_negative_numbers = true
+    )]
     pub budget: f64,
     /// Image size WIDTHxHEIGHT [default: the scene's].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
@@ -196,7 +201,7 @@ pub struct ConvergeArgs {
     #[arg(long, value_name = "D", value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     pub max_depth: Option<u32>,
     /// RMSE the time-to-error comparison aims at [default: the CPU series' error at its largest spp].
-    #[arg(long, value_name = "RMSE")]
+    #[arg(long, value_name = "RMSE", allow_negative_numbers = true)]
     pub target_rmse: Option<f64>,
     /// GPU adapter (part of its name).
     #[arg(long)]
@@ -239,7 +244,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// Stop adding samples after this many seconds of a view (the image stays shown).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time: Option<f64>,
     #[command(flatten)]
     pub options: RenderOptionArgs,
@@ -356,13 +361,13 @@ pub struct RenderArgs {
     /// Render until this many seconds are spent, in whole passes over the image, then write the
     /// image; with --spp too, whichever comes first. The summary says how many samples per pixel
     /// were reached.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Render until the image's estimated relative error (its self-estimated RMSE over its mean
     /// radiance; with sobol, from the spread of independent replicas) falls to X, e.g. 0.01,
     /// then write the image; with --spp or --time too, whichever comes first. The summary says
     /// how many samples per pixel were reached.
-    #[arg(long, value_name = "X")]
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
     pub target_error: Option<f64>,
     /// Write the render's state to FILE (a film file, .exr) every --checkpoint-every seconds, at
     /// the end, and when interrupted (Ctrl-C or SIGTERM finish the pass in flight, write it and
@@ -370,7 +375,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
     /// Seconds between checkpoints [default: 60].
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub checkpoint_every: Option<f64>,
     /// Continue the render saved in FILE by --checkpoint (same scene and options; --spp or
     /// --time may grow), checkpointing to FILE again [default: where --checkpoint says]. The
@@ -387,7 +392,7 @@ pub struct RenderArgs {
     pub samples: Option<std::ops::Range<u32>>,
     /// Render the K-th of N equal parts of --spp's samples (K from 0, as Slurm's
     /// $SLURM_ARRAY_TASK_ID) and write a film file for `rt-gpu merge`.
-    #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "spp", conflicts_with = "time")]
+    #[arg(long, value_name = "K/N", value_parser = parse_shard, allow_hyphen_values = true, requires = "spp", conflicts_with = "time")]
     pub shard: Option<(u32, u32)>,
     #[command(flatten)]
     pub options: RenderOptionArgs,

@@ -45,7 +45,8 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
             "--reference-spp sets the spp of a rendered reference; it has no effect with --reference"
         );
     }
-    let (scene, _) = resolve_scene(&args.scene, None)?;
+    let (scene, scene_file) = resolve_scene(&args.scene, None)?;
+    check_outputs_are_not_inputs(&args.output, &scene, scene_file.as_deref())?;
     let (width, height) = args
         .size
         .unwrap_or((scene.defaults.width, scene.defaults.height));
@@ -98,6 +99,34 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         Err(e) => {
             say!("wrote {}", csv.display())?;
             note!("warning: no plot: {}", one_line(&format!("{e:#}")));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses an output folder where the report's files (`converge.csv`, `.svg`, `.png`, the cached
+/// reference's `reference-*` files) would replace a file the scene reads, before any render.
+fn check_outputs_are_not_inputs(
+    dir: &std::path::Path,
+    scene: &rt_gpu::scene::Scene,
+    scene_file: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
+    let inputs: Vec<&std::path::Path> = (scene_file.into_iter())
+        .chain(scene.inputs.iter().map(|f| f.path.as_path()))
+        .collect();
+    for name in ["converge.csv", "converge.svg", "converge.png"] {
+        rt_gpu::output::check_not_input(&dir.join(name), &inputs)?;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        if entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with("reference-")
+        {
+            rt_gpu::output::check_not_input(&entry.path(), &inputs)?;
         }
     }
     Ok(())

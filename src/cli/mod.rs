@@ -46,3 +46,13 @@ pub fn shown_radiance(mean: glam::DVec3) -> String {
     };
     format!("({}, {}, {})", one(mean.x), one(mean.y), one(mean.z))
 }
+
+/// A number a user gave, as a message shows it: plainly where that is short, else in
+/// scientific notation (`--target-error 1e-300` is not 300 zeros).
+pub fn shown_number(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}

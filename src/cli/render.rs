@@ -52,7 +52,8 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let writes_film = plan.checkpoint.is_some() || plan.format == ImageFormat::Exr;
     let identity = if writes_film {
         let digest = file::digest(&plan.scene);
-        film_file::identity(digest, plan.backend, &plan.opts, args.unspecialised)
+        let files = rt_gpu::scene::inputs::identity_fields(&plan.scene.inputs);
+        film_file::identity(digest, &files, plan.backend, &plan.opts, args.unspecialised)
     } else {
         String::new()
     };
@@ -82,6 +83,7 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     write_outputs(args, &plan, pending, &mut passes, &meta(done))?;
     print_summary(&plan, &passes.rendered, seconds, resumed_at, done);
     if let Some(target) = args.target_error {
+        let target = super::shown_number(target);
         let reached = rt_gpu::progressive::relative_error(&passes.rendered.film);
         if passes.outcome == Outcome::TargetReached {
             note!(
@@ -159,7 +161,10 @@ fn load(
     let range = sample_range(args)?;
     if let Some(x) = args.target_error {
         if !(x > 0.0 && x.is_finite()) {
-            bail!("--target-error must be a positive relative error such as 0.01, got {x}");
+            bail!(
+                "--target-error must be a positive relative error such as 0.01, got {}",
+                super::shown_number(x)
+            );
         }
         if partial {
             bail!(
@@ -173,7 +178,10 @@ fn load(
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
     {
-        bail!("--time must be a positive number of seconds, got {t}");
+        bail!(
+            "--time must be a positive number of seconds, got {}",
+            super::shown_number(t)
+        );
     }
     let flat = FlatScene::new(&scene, width, height).context("invalid scene")?;
     let opts = args.options.render_options(&scene, range.clone());
@@ -303,7 +311,10 @@ fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<(Option<P
     }
     let checkpoint_every = args.checkpoint_every.unwrap_or(60.0);
     if !(checkpoint_every > 0.0 && checkpoint_every.is_finite()) {
-        bail!("--checkpoint-every must be a positive number of seconds, got {checkpoint_every}");
+        bail!(
+            "--checkpoint-every must be a positive number of seconds, got {}",
+            super::shown_number(checkpoint_every)
+        );
     }
     if args.checkpoint_every.is_some() && checkpoint.is_none() {
         bail!("--checkpoint-every needs --checkpoint FILE (or --resume FILE)");
@@ -325,7 +336,9 @@ fn print_shader(plan: &Plan) -> anyhow::Result<()> {
 /// Claims the output (and checks the checkpoint can be claimed) now, so that an unwritable
 /// destination fails before a long render, not after it.
 fn claim_outputs(plan: &Plan) -> anyhow::Result<PendingOutput> {
-    let inputs: Vec<&Path> = plan.scene_file.iter().map(|p| p.as_path()).collect();
+    let inputs: Vec<&Path> = (plan.scene_file.iter().map(|p| p.as_path()))
+        .chain(plan.scene.inputs.iter().map(|f| f.path.as_path()))
+        .collect();
     let pending = PendingOutput::claim(&plan.output, &inputs)?;
     if let Some(c) = &plan.checkpoint {
         // Fail now, not at the first checkpoint a minute in.

@@ -16,7 +16,7 @@ pub fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
         let existing: Vec<String> = BUILTINS
             .iter()
             .map(|(name, _)| format!("{name}.toml"))
-            .filter(|file| dir.join(file).exists())
+            .filter(|file| std::fs::symlink_metadata(dir.join(file)).is_ok())
             .collect();
         if !existing.is_empty() {
             bail!(
@@ -30,6 +30,11 @@ pub fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
         say!("{name:<14} {about}")?;
         if let (Some(dir), Some(text)) = (export, rt_gpu::scene::builtin::source(name)) {
             let path = dir.join(format!("{name}.toml"));
+            // A link in DIR is replaced, not written through: the export writes into DIR only.
+            if std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_symlink()) {
+                std::fs::remove_file(&path)
+                    .with_context(|| format!("cannot replace the link {}", path.display()))?;
+            }
             rt_gpu::output::write_atomically(&path, |out| Ok(out.write_all(text.as_bytes())?))?;
         }
     }

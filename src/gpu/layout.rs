@@ -105,6 +105,10 @@ fn wgsl_constants() -> String {
             "MIN_ALPHA",
             crate::material::microfacet::MIN_ALPHA.literal(),
         ),
+        (
+            "INDEX_MATCHED",
+            crate::material::dielectric::INDEX_MATCHED.literal(),
+        ),
         ("ALPHA_MASK", crate::scene::alpha::ALPHA_MASK.literal()),
         ("ALPHA_BLEND", crate::scene::alpha::ALPHA_BLEND.literal()),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
@@ -245,6 +249,11 @@ pub struct ImageArray {
     len: u64,
 }
 
+/// Whether `a` and `b` share their texels (copies read another way or scaled).
+fn same_texels(a: &Image, b: &Image) -> bool {
+    std::ptr::eq(a.texels.as_ptr(), b.texels.as_ptr())
+}
+
 impl ImageArray {
     pub fn new(scene: &FlatScene) -> Self {
         Self::lay_out(scene, true)
@@ -269,9 +278,10 @@ impl ImageArray {
         // Counted in u64: many large images overflow u32, and the size checked against the
         // device's binding limit must be the true one. (Past that check, offsets fit in u32.)
         let mut len = 0u64;
-        // Each image once, however many materials (or the environment) read it.
+        // Each image's texels once, however many materials (or the environment) read them,
+        // through however many lookups and factors.
         let mut place = |out: &mut ImageArray, image: &'static Image| {
-            if let Some(&(_, at)) = out.placed.iter().find(|(i, _)| std::ptr::eq(*i, image)) {
+            if let Some(&(_, at)) = out.placed.iter().find(|(i, _)| same_texels(i, image)) {
                 return at;
             }
             let at = len as u32;
@@ -336,7 +346,7 @@ impl ImageArray {
     pub fn texels_of(&self, image: &Image) -> u32 {
         self.placed
             .iter()
-            .find(|(i, _)| std::ptr::eq(*i, image))
+            .find(|(i, _)| same_texels(i, image))
             .map_or(0, |(_, at)| *at)
     }
 

@@ -139,14 +139,34 @@ impl MaterialModel for Conductor {
         if !(0.0..=1.0).contains(&self.roughness) {
             return Err(format!("roughness must be in [0, 1], got {}", self.roughness));
         }
-        if !(self.eta.min_element() > 0.0) {
-            return Err(format!("eta must be > 0 in every channel, got {}", self.eta));
+        // Below, the Fresnel term's squares vanish in f32 (0/0 at normal incidence).
+        if !(self.eta.min_element() >= MIN_ETA) {
+            return Err(format!(
+                "eta must be at least {MIN_ETA:e} in every channel, got {}",
+                self.eta
+            ));
         }
         if !(self.k.min_element() >= 0.0) {
             return Err(format!("k must be >= 0 in every channel, got {}", self.k));
         }
-        if (0..3).any(|c| self.eta[c] == 1.0 && self.k[c] == 0.0) {
-            return Err("eta 1 with k 0 is no surface (its Fresnel reflectance is 0/0 at grazing incidence)".into());
+        // Measured metals lie far below (eta and k within 20); above, the Fresnel term's squares
+        // of squares overflow f32.
+        if !(self.eta.max_element() <= MAX_INDEX && self.k.max_element() <= MAX_INDEX) {
+            return Err(format!(
+                "eta and k must be at most {MAX_INDEX:e} in every channel, got eta {} and k {}",
+                self.eta, self.k
+            ));
+        }
+        // |eta^2 - 1 + ...|: where it vanishes in f32 the reflectance at grazing incidence is 0/0.
+        let grazing = |c: usize| {
+            let (eta, k) = (self.eta[c] as f64, self.k[c] as f64);
+            (eta * eta - k * k - 1.0).powi(2) + 4.0 * k * k * eta * eta
+        };
+        if (0..3).any(|c| grazing(c) < 1e-12) {
+            return Err(format!(
+                "eta {} with k {} is (nearly) no surface: eta 1 with k 0 reflects nothing (its Fresnel reflectance is 0/0 at grazing incidence)",
+                self.eta, self.k
+            ));
         }
         Ok(())
     }
@@ -247,6 +267,11 @@ fn reflection_half_vector(wo: Vec3, wi: Vec3, hit: &Hit) -> Option<(Vec3, Vec3, 
     (len2 > 0.0).then(|| (wo_local, wi_local, m / len2.sqrt()))
 }
 
+/// The smallest `eta` a conductor may have (measured metals' lie above 0.03).
+pub const MIN_ETA: f32 = 1e-3;
+/// The largest `eta` or `k` a conductor may have.
+pub const MAX_INDEX: f32 = 1e4;
+
 /// Exact unpolarised Fresnel reflectance from a medium of index 1 into a conductor of complex
 /// index eta + i k, per channel, at incidence cosine `cos_i` (the closed form of Mitsuba 3's
 /// `fresnel_conductor`; pbrt-v4's `FrComplex` computes the same with complex numbers).
@@ -287,3 +312,50 @@ pub const METALS: &[(&str, [f32; 3], [f32; 3])] = &[
     ("Ni", [2.367, 1.663, 1.467], [4.499, 3.050, 2.345]),
     ("Ti", [3.275, 2.380, 2.025], [4.572, 3.225, 2.728]),
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 61: every eta and k the check accepts gives a finite reflectance in [0, 1] at every
+    /// incidence, grazing included (k or eta above ~4e9 overflowed; eta 1 with k 1e-30 was 0/0);
+    /// the values at the edges of what is accepted are tried, and those just past them refused.
+    #[test]
+    fn every_accepted_index_reflects_finitely() {
+        let edges = [
+            0.0, 1e-30, 1e-6, 1e-3, 0.5, 1.0 - 1e-7, 1.0, 1.0 + 1e-7, 1.5, 10.0, 1e3, MAX_INDEX,
+            1.5 * MAX_INDEX, 4e9, f32::MAX,
+        ];
+        let (mut accepted, mut refused) = (0, 0);
+        for &eta in &edges {
+            for &k in &edges {
+                let c = Conductor {
+                    eta: Vec3::splat(eta),
+                    k: Vec3::splat(k),
+                    roughness: 0.0,
+                };
+                if c.validate().is_err() {
+                    refused += 1;
+                    continue;
+                }
+                accepted += 1;
+                for cos in [0.0, 1e-30, 1e-8, 1e-3, 0.5, 1.0 - 1e-7, 1.0] {
+                    let f = fresnel_conductor(cos, c.eta, c.k);
+                    assert!(
+                        f.is_finite() && f.min_element() >= 0.0 && f.max_element() <= 1.0 + 1e-5,
+                        "eta {eta} k {k} cos {cos}: {f}"
+                    );
+                }
+            }
+        }
+        assert!(accepted > 100 && refused > 20, "{accepted} {refused}");
+        for (eta, k) in [(4e9, 1.0), (1.0, 4e9), (1.0, 1e-30), (1.0, 0.0)] {
+            let c = Conductor {
+                eta: Vec3::splat(eta),
+                k: Vec3::splat(k),
+                roughness: 0.0,
+            };
+            assert!(c.validate().is_err(), "eta {eta} k {k} accepted");
+        }
+    }
+}

@@ -36,6 +36,9 @@ pub struct Dielectric {
     pub medium: Option<Medium>,
 }
 
+/// How near 1 an index is taken as 1 by rough glass (see `samples_lights`).
+pub const INDEX_MATCHED: f32 = 1e-3;
+
 impl Dielectric {
     /// Clear glass.
     pub fn clear(ior: f32) -> Self {
@@ -204,9 +207,12 @@ impl MaterialModel for Dielectric {
     }
 
     /// Rough: smooth (alpha below [`MIN_ALPHA`], roughness 0.01) is two delta lobes, and so
-    /// is an index of 1, which refracts every microfacet's light straight on.
+    /// is an index of 1, which refracts every microfacet's light straight on: within
+    /// [`INDEX_MATCHED`] of 1, where the microfacet transmission's Jacobian divides by the
+    /// vanishing difference (at 1.0000001, NaN samples), the surface is taken as smooth; its
+    /// reflectance there is below 3e-7 and its refraction bends light by less than a thousandth.
     fn samples_lights(&self) -> bool {
-        self.ggx().alpha >= MIN_ALPHA && self.ior != 1.0
+        self.ggx().alpha >= MIN_ALPHA && (self.ior - 1.0).abs() >= INDEX_MATCHED
     }
 
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {

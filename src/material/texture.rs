@@ -50,10 +50,10 @@ pub fn bilinear(image: &Image, s: f32, t: f32) -> Vec3 {
 }
 
 /// `image` at surface coordinates `uv` (u across, v up; [0, 1] spans the image once) as its
-/// lookup says: wrapped on each axis and filtered.
+/// lookup says: wrapped on each axis and filtered, then times its factor.
 #[inline]
 pub fn image_at(image: &Image, uv: Vec2) -> Vec3 {
-    filtered(image, image.lookup, uv.x, 1.0 - uv.y)
+    filtered(image, image.lookup, uv.x, 1.0 - uv.y) * image.factor
 }
 
 /// `image` at image coordinates (s, t), wrapped and filtered as `lookup` says.
@@ -134,8 +134,10 @@ impl GpuMaterial {
                 };
             }
             Texture::Image(image) => {
-                // `texture_image` is set where the scene's images are laid out (SceneBuffers).
+                // `texture_image` is set where the scene's images are laid out (SceneBuffers);
+                // the albedo is the factor the lookup multiplies by (`image_at`).
                 return GpuMaterial {
+                    albedo: image.factor.to_array(),
                     texture: TEXTURE_IMAGE,
                     texture_odd: [image.width as f32, image.height as f32, 0.0],
                     texture_lookup: image.lookup.bits(),

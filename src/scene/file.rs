@@ -49,9 +49,9 @@ pub fn load(path: &Path) -> anyhow::Result<Scene> {
         .unwrap_or_else(|| "scene".into());
     // Image paths in the file are relative to its directory.
     let dir = path.parent().unwrap_or(Path::new("."));
-    Ok(super::image::with_base_dir(dir, || {
-        parse(text, &file, &name)
-    })?)
+    let (scene, inputs) =
+        super::inputs::recorded(|| super::image::with_base_dir(dir, || parse(text, &file, &name)));
+    Ok(Scene { inputs, ..scene? })
 }
 
 /// 1-based line and column (in characters) of the end of `before`.
@@ -69,12 +69,28 @@ fn line_and_column(before: &[u8]) -> (usize, usize) {
 const MAX_QUOTED_CHARS: usize = 60;
 
 /// `text` as quoted in a message: cut short if it is long.
-fn quoted(text: &str) -> String {
+/// Control characters (a newline that would forge a second line of output) are escaped.
+pub(crate) fn quoted(text: &str) -> String {
+    let escaped = |s: &str| -> String {
+        s.chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect()
+    };
     if text.chars().count() <= MAX_QUOTED_CHARS {
-        return text.to_string();
+        return escaped(text);
     }
     let head: String = text.chars().take(MAX_QUOTED_CHARS).collect();
-    format!("{head}... ({} characters)", text.chars().count())
+    format!(
+        "{}... ({} characters)",
+        escaped(&head),
+        text.chars().count()
+    )
 }
 
 /// Parses scene-file text; `file` names it in errors.
@@ -167,8 +183,8 @@ pub fn to_toml(scene: &Scene) -> String {
     )
 }
 
-/// A digest of `scene` as its file would write it (FNV-1a over the text), for the identity of
-/// its films: the scene's settings and materials serialised once, then each object on its own,
+/// A digest of `scene` as its file would write it (FNV-1a over the text) and of what the files
+/// it reads hold, for the identity of its films: the scene's settings and materials serialised once, then each object on its own,
 /// so that time grows with the object count (toml serialises a whole document in time
 /// quadratic in its tables).
 pub fn digest(scene: &Scene) -> u64 {
@@ -179,6 +195,10 @@ pub fn digest(scene: &Scene) -> u64 {
     for object in &objects {
         hash.add("\n[[object]]\n");
         hash.add(&toml::to_string(object.get_ref()).unwrap_or_default());
+    }
+    // What the files it reads hold, not only their names.
+    for input in &scene.inputs {
+        hash.add(&format!("\n{} {}", input.shown, input.hex_digest()));
     }
     hash.0
 }
@@ -745,6 +765,7 @@ impl SceneDoc {
             objects,
             punctual,
             defaults,
+            inputs: Vec::new(),
         };
         // Media problems point at the object they are found at.
         super::media::check(&scene).map_err(|(i, e)| (object_spans[i].clone(), e))?;
@@ -1090,17 +1111,18 @@ fn background(background_doc: Option<Spanned<BackgroundDoc>>) -> Result<Backgrou
     })
 }
 
-/// The camera named `name` of the first glTF file `objects` place that has one (placed as the
-/// file places it: the objects' transforms do not move it).
+/// The camera named `name` of the first glTF file `objects` place that has one, placed with
+/// the file: the first object that places the file scales, rotates and moves the camera as it
+/// does the file's meshes.
 fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
-    let mut files: Vec<&str> = Vec::new();
+    let mut files: Vec<(&str, Vec3, Transform)> = Vec::new();
     for object in objects {
-        if let Shape::Mesh { mesh, .. } = object.shape {
+        if let Shape::Mesh { mesh, scale } = object.shape {
             let lower = mesh.source.to_ascii_lowercase();
             if (lower.ends_with(".glb") || lower.ends_with(".gltf"))
-                && !files.contains(&mesh.source.as_str())
+                && !files.iter().any(|(f, ..)| *f == mesh.source.as_str())
             {
-                files.push(&mesh.source);
+                files.push((&mesh.source, scale, object.transform));
             }
         }
     }
@@ -1109,21 +1131,31 @@ fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
             "camera: gltf = \"{name}\" names a camera of a glTF file, and the scene places none"
         ));
     }
-    let mut known = Vec::new();
-    for source in files {
+    let mut known: Vec<String> = Vec::new();
+    for (source, scale, transform) in files {
         let path = super::image::resolve(source);
         match super::gltf_scene::named_camera(&path, source, name)? {
-            Ok(camera) => return Ok(camera),
+            Ok(camera) => {
+                let place = |p: Vec3| transform.apply_point(p * scale);
+                return Ok(Camera {
+                    look_from: place(camera.look_from),
+                    look_at: place(camera.look_at),
+                    up: transform.rotate_vector(camera.up * scale),
+                    ..camera
+                });
+            }
             Err(names) => known.extend(names.into_iter().map(|n| format!("{source}: {n}"))),
         }
     }
     let known = if known.is_empty() {
         "they have no cameras".to_string()
     } else {
-        format!("cameras: {}", known.join(", "))
+        let known: Vec<&str> = known.iter().map(String::as_str).collect();
+        format!("cameras: {}", super::gltf_scene::listed(&known))
     };
     Err(format!(
-        "camera: no glTF file the scene places has a camera named \"{name}\" ({known})"
+        "camera: no glTF file the scene places has a camera named \"{}\" ({known})",
+        quoted(name)
     ))
 }
 

@@ -69,40 +69,68 @@ pub fn check_references(root: &json::Root, source: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// Checks the buffers' sources: files named by URI are regular files no larger than
-/// [`MAX_BUFFER_BYTES`] that hold at least `byteLength` bytes.
-pub fn check_buffers(root: &json::Root, base: Option<&Path>, source: &str) -> Result<(), String> {
-    for (i, buffer) in root.buffers.iter().enumerate() {
-        let Some(uri) = &buffer.uri else { continue };
-        if uri.starts_with("data:") {
-            continue;
-        }
-        let path = match base {
-            Some(dir) => dir.join(uri),
-            None => Path::new(uri).to_path_buf(),
+/// Reads the buffers, each checked as it is read: the binary chunk of a `.glb`, a base64 data
+/// URI, or a file named by a relative URI (percent-decoded) that stays inside the glTF file's
+/// folder, as images are (`gltf_textures::relative_uri`), and is a regular file of at most
+/// [`MAX_BUFFER_BYTES`]; each holds at least its `byteLength`. One decoded path is both checked
+/// and read, and the file is recorded as one the scene reads (`inputs`). Padded to a multiple of
+/// four bytes, as the `gltf` crate's reader pads them.
+pub fn read_buffers(
+    document: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+    base: Option<&Path>,
+    source: &str,
+) -> Result<Vec<gltf::buffer::Data>, String> {
+    use super::gltf_textures::{beside, relative_uri};
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let mut data = match buffer.source() {
+            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                format!(
+                    "mesh {source}: buffer {i} names the binary chunk, which the file does not have"
+                )
+            })?,
+            gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
+                Some(data) => {
+                    let Some((_, encoded)) = data.split_once(";base64,") else {
+                        return Err(format!(
+                            "mesh {source}: buffer {i}: a data URI must be base64 (data:<type>;base64,...)"
+                        ));
+                    };
+                    // Base64 takes 4 characters for 3 bytes: bounded by the file's own size.
+                    base64::decode(encoded).map_err(|e| {
+                        format!("mesh {source}: buffer {i}: its data URI is not base64: {e}")
+                    })?
+                }
+                None => {
+                    let shown_uri = super::file::quoted(uri);
+                    let relative = relative_uri(uri).map_err(|why| {
+                        format!("mesh {source}: buffer {i}'s URI \"{shown_uri}\" {why}")
+                    })?;
+                    let path = match base {
+                        Some(dir) => dir.join(&relative),
+                        None => Path::new(&relative).to_path_buf(),
+                    };
+                    super::inputs::read(&path, &beside(source, &relative), MAX_BUFFER_BYTES)
+                        .map_err(|e| format!("mesh {source}: buffer {i} ({shown_uri}): {e}"))?
+                        .0
+                }
+            },
         };
-        let meta = std::fs::metadata(&path)
-            .map_err(|e| format!("mesh {source}: buffer {i} ({uri}): {e}"))?;
-        if !meta.is_file() {
+        let length = buffer.length() as u64;
+        if (data.len() as u64) < length {
             return Err(format!(
-                "mesh {source}: buffer {i} ({uri}) is not a regular file"
+                "mesh {source}: buffer {i} holds {} bytes, fewer than its byteLength {length}",
+                data.len()
             ));
         }
-        if meta.len() > MAX_BUFFER_BYTES {
-            return Err(format!(
-                "mesh {source}: buffer {i} ({uri}) is {} bytes, more than the {MAX_BUFFER_BYTES} rt-gpu reads",
-                meta.len()
-            ));
+        while data.len() % 4 != 0 {
+            data.push(0);
         }
-        if meta.len() < buffer.byte_length.0 {
-            return Err(format!(
-                "mesh {source}: buffer {i} ({uri}) holds {} bytes, fewer than its byteLength {}",
-                meta.len(),
-                buffer.byte_length.0
-            ));
-        }
+        buffers.push(gltf::buffer::Data(data));
     }
-    Ok(())
+    Ok(buffers)
 }
 
 /// Checks the document: its version, its node graph (trees: no node its own ancestor, none
@@ -235,8 +263,18 @@ fn describe(accessor: &json::Accessor) -> String {
     }
 }
 
-/// Checks that accessor `index` lies inside its buffer view and the view inside its buffer;
-/// returns its element count.
+/// Most elements an accessor without a buffer view (all zeros, or sparse) may have: as many as
+/// the corners of the most triangles a mesh may have.
+pub const MAX_UNVIEWED_COUNT: u64 = 3 * super::mesh::MAX_TRIANGLES as u64;
+
+/// Bytes an element of a mesh's attribute may take at the peak of loading it (read, converted,
+/// kept per corner, placed and put in the hierarchy), against which an accessor's count is
+/// checked before anything is allocated.
+const PEAK_BYTES_PER_ELEMENT: u64 = 128;
+
+/// Checks that accessor `index` lies inside its buffer view and the view inside its buffer, and
+/// its sparse blocks inside theirs; that its count fits the mesh limits and this machine's memory
+/// before anything is allocated; returns its element count.
 fn check_accessor(
     root: &json::Root,
     buffer_lengths: &[usize],
@@ -249,43 +287,132 @@ fn check_accessor(
         return Err(format!("{at}: accessor {index} has an unknown type"));
     };
     let element = (ty.multiplicity() * component.size()) as u64;
-    let Some(view_index) = a.buffer_view else {
-        // All zeros unless sparse: either way nothing is read out of bounds.
-        return Ok(count);
-    };
-    let view = root.buffer_views.get(view_index.value()).ok_or_else(|| {
-        format!(
-            "{at}: accessor {index} names buffer view {}, which does not exist",
-            view_index.value()
-        )
+    if a.buffer_view.is_none() && count > MAX_UNVIEWED_COUNT {
+        return Err(format!(
+            "{at}: accessor {index} has a count of {count} and no buffer view: more than the {MAX_UNVIEWED_COUNT} elements rt-gpu reads"
+        ));
+    }
+    let needed = count.saturating_mul(PEAK_BYTES_PER_ELEMENT);
+    if let Some(available) = crate::film::available_memory()
+        && needed > available
+    {
+        return Err(format!(
+            "{at}: accessor {index} has {count} elements: loading them needs about {:.1} GB of memory, and {:.1} GB is available",
+            needed as f64 / 1e9,
+            available as f64 / 1e9
+        ));
+    }
+    if let Some(view) = a.buffer_view {
+        let offset = a.byte_offset.map_or(0, |o| o.0);
+        let what = format!("accessor {index}");
+        check_view(
+            root,
+            buffer_lengths,
+            view.value(),
+            offset,
+            Some(element),
+            count,
+            &what,
+            at,
+        )?;
+    }
+    if let Some(sparse) = &a.sparse {
+        let n = sparse.count.0;
+        if n > count {
+            return Err(format!(
+                "{at}: accessor {index} has {n} sparse values, more than its count {count}"
+            ));
+        }
+        let index_size = match sparse.indices.component_type {
+            Checked::Valid(c) => c.0.size() as u64,
+            Checked::Invalid => {
+                return Err(format!(
+                    "{at}: accessor {index}'s sparse indices have an unknown type"
+                ));
+            }
+        };
+        let blocks = [
+            (
+                "indices",
+                &sparse.indices.buffer_view,
+                sparse.indices.byte_offset.0,
+                index_size,
+            ),
+            (
+                "values",
+                &sparse.values.buffer_view,
+                sparse.values.byte_offset.0,
+                element,
+            ),
+        ];
+        for (name, view, offset, size) in blocks {
+            let what = format!("accessor {index}'s sparse {name}");
+            let bytes = n.saturating_mul(size);
+            check_view(
+                root,
+                buffer_lengths,
+                view.value(),
+                offset,
+                None,
+                bytes,
+                &what,
+                at,
+            )?;
+        }
+    }
+    Ok(count)
+}
+
+/// Checks that `count` elements of `element` bytes (or, where `element` is `None`, `count`
+/// bytes packed), from `offset` in buffer view `view_index`, lie inside the view, and the view
+/// inside its buffer.
+#[allow(clippy::too_many_arguments)]
+fn check_view(
+    root: &json::Root,
+    buffer_lengths: &[usize],
+    view_index: usize,
+    offset: u64,
+    element: Option<u64>,
+    count: u64,
+    what: &str,
+    at: &str,
+) -> Result<(), String> {
+    let view = root.buffer_views.get(view_index).ok_or_else(|| {
+        format!("{at}: {what} names buffer view {view_index}, which does not exist")
     })?;
-    let stride = view
-        .byte_stride
-        .map_or(element, |s| s.0 as u64)
-        .max(element);
-    let offset = a.byte_offset.map_or(0, |o| o.0);
-    let needed = match count {
-        0 => 0,
-        n => offset + stride * (n - 1) + element,
+    let needed = match element {
+        None => offset.saturating_add(count),
+        Some(_) if count == 0 => 0,
+        Some(element) => {
+            let stride = view.byte_stride.map_or(element, |s| s.0 as u64);
+            if stride < element {
+                return Err(format!(
+                    "{at}: {what} has elements of {element} bytes, but buffer view {view_index}'s byteStride is {stride}"
+                ));
+            }
+            offset
+                .saturating_add(stride.saturating_mul(count - 1))
+                .saturating_add(element)
+        }
     };
     if needed > view.byte_length.0 {
         return Err(format!(
-            "{at}: accessor {index} needs {needed} bytes of buffer view {}, which has {}",
-            view_index.value(),
+            "{at}: {what} needs {needed} bytes of buffer view {view_index}, which has {}",
             view.byte_length.0
         ));
     }
-    let view_end = view.byte_offset.map_or(0, |o| o.0) + view.byte_length.0;
+    let view_end = view
+        .byte_offset
+        .map_or(0, |o| o.0)
+        .saturating_add(view.byte_length.0);
     let buffer = view.buffer.value();
     match buffer_lengths.get(buffer) {
-        Some(&len) if view_end <= len as u64 => Ok(count),
+        Some(&len) if view_end <= len as u64 => Ok(()),
         Some(&len) => Err(format!(
-            "{at}: buffer view {} ends at byte {view_end} of buffer {buffer}, which has {len}",
-            view_index.value()
+            "{at}: buffer view {view_index} ends at byte {view_end} of buffer {buffer}, which has {len}"
         )),
         None => Err(format!(
-            "{at}: buffer view {} names buffer {buffer}, which does not exist",
-            view_index.value()
+            "{at}: buffer view {view_index} names buffer {buffer}, which does not exist"
         )),
     }
 }

@@ -60,6 +60,16 @@ pub fn load(
     source: &str,
     camera: Option<&str>,
 ) -> Result<(Scene, Vec<String>), String> {
+    let (loaded, inputs) = super::inputs::recorded(|| load_unrecorded(path, source, camera));
+    loaded.map(|(scene, notes)| (Scene { inputs, ..scene }, notes))
+}
+
+/// [`load`], without the files it reads.
+fn load_unrecorded(
+    path: &Path,
+    source: &str,
+    camera: Option<&str>,
+) -> Result<(Scene, Vec<String>), String> {
     let parts = mesh::load(path, source, None)?;
     let extras = read_extras(path, source)?;
     let chosen =
@@ -67,12 +77,13 @@ pub fn load(
             Some(name) => Some(extras.cameras.iter().find(|c| c.name == name).ok_or_else(
                 || {
                     let names: Vec<&str> = extras.cameras.iter().map(|c| c.name.as_str()).collect();
+                    let name = super::file::quoted(name);
                     if names.is_empty() {
                         format!("{source} has no camera named \"{name}\": it has no cameras")
                     } else {
                         format!(
                             "{source} has no camera named \"{name}\" (cameras: {})",
-                            names.join(", ")
+                            listed(&names)
                         )
                     }
                 },
@@ -144,6 +155,7 @@ pub fn load(
             height,
             max_depth: 10,
         },
+        inputs: Vec::new(),
     };
     scene.validate().map_err(|e| format!("{source}: {e}"))?;
     Ok((scene, extras.notes))
@@ -233,12 +245,36 @@ fn framing_camera(min: DVec3, max: DVec3) -> Camera {
     let radius = ((max - min).length() / 2.0).max(super::MIN_SIZE as f64);
     let half = (FRAMING_VFOV as f64 / 2.0).to_radians();
     let distance = 1.1 * radius / half.sin();
-    let direction = DVec3::new(0.0, 0.25, 1.0).normalize();
+    // How far along `direction` the camera may go and stay within the scenes' extent.
+    let room = |direction: DVec3| {
+        let limit = 0.999 * super::MAX_EXTENT as f64;
+        (0..3)
+            .filter(|&i| direction[i] != 0.0)
+            .map(|i| (limit - center[i] * direction[i].signum()) / direction[i].abs())
+            .fold(f64::MAX, f64::min)
+    };
+    let ahead = DVec3::new(0.0, 0.25, 1.0).normalize();
+    let behind = DVec3::new(0.0, 0.25, -1.0).normalize();
+    let direction = if room(ahead) >= distance || room(ahead) >= room(behind) {
+        ahead
+    } else {
+        behind
+    };
+    // A model too large to frame from 40 degrees within the extent is framed from nearer, wider.
+    let distance = distance.min(room(direction));
+    let vfov_degrees = if distance * half.sin() >= 1.1 * radius * (1.0 - 1e-9) {
+        FRAMING_VFOV
+    } else {
+        let wide = (1.1 * radius / distance)
+            .min(85f64.to_radians().sin())
+            .asin();
+        (2.0 * wide.to_degrees()) as f32
+    };
     Camera {
         look_from: (center + distance * direction).as_vec3(),
         look_at: center.as_vec3(),
         up: Vec3::Y,
-        vfov_degrees: FRAMING_VFOV,
+        vfov_degrees,
         aperture: 0.0,
         focus_distance: None,
     }
@@ -256,7 +292,8 @@ pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
 }
 
 fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {source}: {e}"))?;
+    let (bytes, _) = super::inputs::read(path, source, super::mesh::MAX_MESH_FILE_BYTES)
+        .map_err(|e| format!("cannot read {source}: {e}"))?;
     let document = gltf::Gltf::from_slice(&bytes)
         .map_err(|e| format!("cannot read {source}: {}", e.to_string().replace('\n', " ")))?
         .document;
@@ -267,6 +304,8 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
         return Ok(FileExtras::default());
     };
     let mut extras = FileExtras::default();
+    // Lights whose `range` is ignored, for one note.
+    let mut ranged: Vec<String> = Vec::new();
     // Depth first in file order (the stack pops the last pushed first): "the first camera" is
     // the first a reader of the file meets.
     let roots: Vec<gltf::Node> = scene.nodes().collect();
@@ -311,8 +350,22 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
                 .name()
                 .or(node.name())
                 .map_or(format!("light{}", light.index()), str::to_string);
-            let colour = Vec3::from_array(light.color()).max(Vec3::ZERO);
-            let power = colour * (light.intensity().max(0.0) / LUMENS_PER_WATT);
+            let name = super::file::quoted(&name);
+            // What KHR_lights_punctual's schema forbids is refused, not clamped.
+            if !light.color().iter().all(|c| (0.0..=1.0).contains(c)) {
+                return Err(format!(
+                    "{source}: light \"{name}\" has a color of {:?}; KHR_lights_punctual requires values in [0, 1]",
+                    light.color()
+                ));
+            }
+            if !(light.intensity() >= 0.0 && light.intensity().is_finite()) {
+                return Err(format!(
+                    "{source}: light \"{name}\" has an intensity of {}; KHR_lights_punctual requires a finite number >= 0",
+                    light.intensity()
+                ));
+            }
+            let colour = Vec3::from_array(light.color());
+            let power = colour * (light.intensity() / LUMENS_PER_WATT);
             let position = world.transform_point3(DVec3::ZERO).as_vec3();
             let direction = world
                 .transform_vector3(DVec3::NEG_Z)
@@ -327,13 +380,24 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
                 Kind::Spot {
                     inner_cone_angle,
                     outer_cone_angle,
-                } => Punctual::Spot {
-                    position,
-                    direction,
-                    intensity: power,
-                    inner: inner_cone_angle.min(outer_cone_angle - 1e-4).max(0.0),
-                    outer: outer_cone_angle,
-                },
+                } => {
+                    let right = std::f32::consts::FRAC_PI_2;
+                    if !(0.0 <= inner_cone_angle
+                        && inner_cone_angle < outer_cone_angle
+                        && outer_cone_angle <= right)
+                    {
+                        return Err(format!(
+                            "{source}: spot light \"{name}\" has cone angles {inner_cone_angle} (inner) and {outer_cone_angle} (outer); KHR_lights_punctual requires 0 <= inner < outer <= pi/2"
+                        ));
+                    }
+                    Punctual::Spot {
+                        position,
+                        direction,
+                        intensity: power,
+                        inner: inner_cone_angle,
+                        outer: outer_cone_angle,
+                    }
+                }
                 Kind::Directional => Punctual::Directional {
                     direction,
                     irradiance: power,
@@ -346,9 +410,7 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
                     .push(format!("note: {source}: light \"{name}\" is left out: {e}")),
                 Ok(()) => {
                     if light.range().is_some() {
-                        extras.notes.push(format!(
-                            "note: {source}: light \"{name}\"'s range is ignored (its light falls off with the square of distance alone)"
-                        ));
+                        ranged.push(name.clone());
                     }
                     extras.lights.push(name);
                     extras.punctual.push(punctual);
@@ -358,5 +420,31 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
         let children: Vec<_> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
+    // One note, however many lights have a range.
+    match ranged.as_slice() {
+        [] => {}
+        [one] => extras.notes.push(format!(
+            "note: {source}: light \"{one}\"'s range is ignored (its light falls off with the square of distance alone)"
+        )),
+        [first, ..] => extras.notes.push(format!(
+            "note: {source}: the range of {} lights (\"{first}\" and others) is ignored (their light falls off with the square of distance alone)",
+            ranged.len()
+        )),
+    }
     Ok(extras)
+}
+
+/// Most names a message lists.
+const MAX_LISTED: usize = 8;
+
+/// `names` as a message lists them: the first few, quoted, and how many there are.
+pub fn listed(names: &[&str]) -> String {
+    let shown: Vec<String> = (names.iter().take(MAX_LISTED))
+        .map(|n| super::file::quoted(n))
+        .collect();
+    if names.len() <= MAX_LISTED {
+        shown.join(", ")
+    } else {
+        format!("{}, ... ({} in all)", shown.join(", "), names.len())
+    }
 }

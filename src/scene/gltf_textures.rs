@@ -15,9 +15,6 @@ use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Component, Path};
 
-/// Largest image file beside a glTF file that is read.
-const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
-
 /// A glTF file's images, decoded as its materials use them.
 pub struct FileTextures<'a> {
     document: &'a gltf::Document,
@@ -53,6 +50,11 @@ impl<'a> FileTextures<'a> {
             alphas: HashMap::new(),
             products: HashMap::new(),
         }
+    }
+
+    /// The file as the user named it, for messages.
+    pub fn source(&self) -> &'a str {
+        self.source
     }
 
     /// A colour texture (base colour, emission: sRGB) times `factor`, as `material` names
@@ -210,32 +212,48 @@ impl<'a> FileTextures<'a> {
     /// The bytes of the image file `uri` names: only a relative path that stays inside the
     /// glTF file's folder and names a regular file is opened.
     fn file_bytes(&self, uri: &str, name: &str) -> Result<Vec<u8>, String> {
-        let relative = percent_decoded(uri).ok_or_else(|| {
-            format!("image {name}: its URI \"{uri}\" is not valid UTF-8 once decoded")
-        })?;
-        let path = Path::new(&relative);
-        if !path.components().all(|c| matches!(c, Component::Normal(_))) {
-            return Err(format!(
-                "image {name}: its URI \"{uri}\" leaves the glTF file's folder (rt-gpu reads images beside the file or below it)"
-            ));
-        }
+        let relative =
+            relative_uri(uri).map_err(|why| format!("image {name}: its URI \"{uri}\" {why}"))?;
         let path = match self.base_dir {
-            Some(dir) => dir.join(path),
-            None => path.to_path_buf(),
+            Some(dir) => dir.join(&relative),
+            None => Path::new(&relative).to_path_buf(),
         };
-        let meta = std::fs::metadata(&path)
+        let shown = beside(self.source, &relative);
+        let (bytes, _) = super::inputs::read(&path, &shown, image::MAX_IMAGE_FILE_BYTES)
             .map_err(|e| format!("cannot read image {name} ({relative}): {e}"))?;
-        if !meta.is_file() {
-            return Err(format!("image {name} ({relative}) is not a regular file"));
-        }
-        if meta.len() > MAX_IMAGE_FILE_BYTES {
-            return Err(format!(
-                "image {name} ({relative}) is {} bytes, more than the {MAX_IMAGE_FILE_BYTES} rt-gpu reads",
-                meta.len()
-            ));
-        }
-        std::fs::read(&path).map_err(|e| format!("cannot read image {name} ({relative}): {e}"))
+        Ok(bytes)
     }
+}
+
+/// The relative path a glTF file's URI names (percent-decoded), or why it names none rt-gpu
+/// opens: only paths that stay inside the file's folder (no absolute path, `..`, or scheme such
+/// as `file://`), as glTF's URIs are relative to the file.
+pub fn relative_uri(uri: &str) -> Result<String, String> {
+    let relative = percent_decoded(uri).ok_or("is not valid UTF-8 once decoded")?;
+    let path = Path::new(&relative);
+    let scheme = relative
+        .split_once(':')
+        .is_some_and(|(s, _)| !s.is_empty() && !s.contains('/'));
+    if relative.is_empty()
+        || scheme
+        || !path.components().all(|c| matches!(c, Component::Normal(_)))
+    {
+        return Err(
+            "leaves the glTF file's folder (rt-gpu reads files beside it or below it)".into(),
+        );
+    }
+    Ok(relative)
+}
+
+/// `relative`, a file beside `source` (a path as the user named it), as messages and film
+/// identities name it.
+pub fn beside(source: &str, relative: &str) -> String {
+    Path::new(source)
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(relative)
+        .to_string_lossy()
+        .into_owned()
 }
 
 /// glTF's UV coordinates (v down) as `KHR_texture_transform` maps them: scale, then rotate

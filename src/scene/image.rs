@@ -5,6 +5,7 @@
 //! are small `Copy` data that hold a `&'static Image`, so the same file loaded twice (the same
 //! path, size and modification time) is decoded and kept once.
 
+use super::inputs::InputFile;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -20,15 +21,23 @@ pub struct Image {
     pub source: String,
     pub width: u32,
     pub height: u32,
-    /// Three values per texel, row by row from the top.
-    pub texels: Vec<f32>,
-    /// The largest value of any channel (albedo images must stay within 1).
+    /// Three values per texel, row by row from the top, as decoded: shared by the copies that
+    /// read it another way or scale it (glTF's factor x texture products), so that an image
+    /// used by many materials is held once.
+    pub texels: std::sync::Arc<[f32]>,
+    /// What a surface's lookup multiplies the texels by, per channel (1 but for glTF's
+    /// factor x texture products): [`crate::material::texture::image_at`] and its twin apply it.
+    pub factor: glam::Vec3,
+    /// The largest value of any channel, times `factor` (albedo images must stay within 1).
     pub max_value: f32,
-    /// The mean texel (what light picking weighs an image-textured emitter by).
+    /// The mean texel, times `factor` (what light picking weighs an image-textured emitter by).
     pub mean: glam::Vec3,
     /// How a textured surface reads it beyond [0, 1] and between texels (an environment reads
     /// it its own way).
     pub lookup: super::image_lookup::ImageLookup,
+    /// The largest value of each channel of `texels`, and their mean.
+    channel_max: glam::Vec3,
+    raw_mean: glam::Vec3,
     /// Built on first use by an environment light (see `scene::environment`).
     pub(crate) sampling: OnceLock<super::environment::Distribution>,
 }
@@ -49,7 +58,7 @@ impl Image {
         if texels.len() != 3 * width as usize * height as usize {
             return Err(format!("image {source}: wrong number of values"));
         }
-        let mut max_value = 0.0f32;
+        let mut max_value = glam::Vec3::ZERO;
         let mut sum = glam::DVec3::ZERO;
         for rgb in texels.chunks_exact(3) {
             sum += glam::DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
@@ -63,21 +72,25 @@ impl Image {
                     texel / width as usize
                 ));
             }
-            max_value = max_value.max(x);
+            max_value[i % 3] = max_value[i % 3].max(x);
         }
+        let mean = (sum / (width as f64 * height as f64)).as_vec3();
         Ok(Image {
             source: source.to_string(),
             width,
             height,
-            mean: (sum / (width as f64 * height as f64)).as_vec3(),
-            texels,
-            max_value,
+            mean,
+            raw_mean: mean,
+            texels: texels.into(),
+            factor: glam::Vec3::ONE,
+            max_value: max_value.max_element(),
+            channel_max: max_value,
             lookup: Default::default(),
             sampling: OnceLock::new(),
         })
     }
 
-    /// Texel (x, y) (x from the left, y from the top).
+    /// Texel (x, y) (x from the left, y from the top), as decoded: without `factor`.
     #[inline]
     pub fn texel(&self, x: u32, y: u32) -> glam::Vec3 {
         let i = 3 * (y as usize * self.width as usize + x as usize);
@@ -86,22 +99,26 @@ impl Image {
     }
 
     /// This image with every texel multiplied by `factor` channel by channel (glTF's factor x
-    /// texture products), named `source`.
+    /// texture products), named `source`: its texels shared, the factor applied at lookup.
     pub fn scaled(&self, factor: glam::Vec3, source: &str) -> Result<Self, String> {
-        let factor = factor.to_array();
-        let texels = self
-            .texels
-            .chunks_exact(3)
-            .flat_map(|rgb| [0, 1, 2].map(|c| rgb[c] * factor[c]))
-            .collect();
-        let scaled = Self::from_linear(source, self.width, self.height, texels)?;
+        let factor = self.factor * factor;
+        if !(factor.is_finite() && factor.min_element() >= 0.0) {
+            return Err(format!(
+                "image {source}: its factor {factor} must be finite and non-negative"
+            ));
+        }
         Ok(Image {
-            lookup: self.lookup,
-            ..scaled
+            source: source.to_string(),
+            texels: self.texels.clone(),
+            factor,
+            max_value: (self.channel_max * factor).max_element(),
+            mean: self.raw_mean * factor,
+            sampling: OnceLock::new(),
+            ..*self
         })
     }
 
-    /// A copy of this image read with `lookup`.
+    /// A copy of this image read with `lookup` (its texels shared).
     pub fn with_lookup(&self, lookup: super::image_lookup::ImageLookup) -> Self {
         Image {
             source: self.source.clone(),
@@ -130,6 +147,7 @@ impl PartialEq for Image {
             || (self.width == other.width
                 && self.height == other.height
                 && self.lookup == other.lookup
+                && self.factor == other.factor
                 && self.texels == other.texels)
     }
 }
@@ -151,11 +169,13 @@ pub fn load(path: &Path, source: &str) -> Result<&'static Image, String> {
 }
 
 /// [`load`], with 8- and 16-bit values taken as sRGB only where `srgb` (colours), else as
-/// linear (data such as normal maps). Each file is decoded once per encoding.
+/// linear (data such as normal maps). Each file is decoded once per encoding; the file is
+/// recorded as one the scene reads (`inputs`), on a cache hit too.
 pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, String> {
     /// A file as it was when decoded (its path, size and modification time), and its encoding.
     type FileVersion = (PathBuf, u64, std::time::SystemTime, bool);
-    static CACHE: OnceLock<Mutex<HashMap<FileVersion, &'static Image>>> = OnceLock::new();
+    type Cache = HashMap<FileVersion, (&'static Image, InputFile)>;
+    static CACHE: OnceLock<Mutex<Cache>> = OnceLock::new();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read image {source}: {e}"))?;
     if !meta.is_file() {
         return Err(format!("image {source} is not a file"));
@@ -164,16 +184,22 @@ pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, 
     let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
     let key = (canonical, meta.len(), modified, srgb);
     let cache = CACHE.get_or_init(Default::default);
-    if let Some(image) = cache.lock().map_err(|_| "image cache poisoned")?.get(&key) {
+    if let Some((image, input)) = cache.lock().map_err(|_| "image cache poisoned")?.get(&key) {
+        super::inputs::note(input);
         return Ok(image);
     }
-    let image = decode(path, source, srgb)?.leak();
+    let (bytes, input) = super::inputs::read(path, source, MAX_IMAGE_FILE_BYTES)
+        .map_err(|e| format!("cannot read image {source}: {e}"))?;
+    let image = decode_file(bytes, source, srgb)?.leak();
     cache
         .lock()
         .map_err(|_| "image cache poisoned")?
-        .insert(key, image);
+        .insert(key, (image, input));
     Ok(image)
 }
+
+/// Largest image file read (a path may name anything).
+pub const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
 
 /// Most texels an image may have: a 16384x8192 environment (the largest common HDRI), which
 /// takes 1.6 GB as linear f32 RGB.
@@ -187,17 +213,10 @@ const PEAK_BYTES_PER_TEXEL: u64 = 64;
 /// A Radiance HDR file, whose first line is `#?` and the writing program's name: the `image`
 /// crate reads only `#?RADIANCE`, so others (Mitsuba and many tools write `#?RGBE`) are given
 /// that line. `None` for files of other formats.
-fn radiance_hdr(path: &Path, source: &str) -> Result<Option<Vec<u8>>, String> {
-    use std::io::Read;
-    let mut head = [0u8; 2];
-    let is_hdr = std::fs::File::open(path)
-        .and_then(|mut f| f.read_exact(&mut head))
-        .is_ok()
-        && &head == b"#?";
-    if !is_hdr {
+fn radiance_hdr(bytes: &[u8], source: &str) -> Result<Option<Vec<u8>>, String> {
+    if !bytes.starts_with(b"#?") {
         return Ok(None);
     }
-    let mut bytes = std::fs::read(path).map_err(|e| format!("cannot read image {source}: {e}"))?;
     let header_end = bytes.windows(2).take(1 << 16).position(|w| w == b"\n\n");
     let Some(header_end) = header_end else {
         return Err(format!(
@@ -216,6 +235,7 @@ fn radiance_hdr(path: &Path, source: &str) -> Result<Option<Vec<u8>>, String> {
         ));
     }
     let first_line = bytes.iter().position(|&b| b == b'\n').unwrap_or(0);
+    let mut bytes = bytes.to_vec();
     if &bytes[..first_line] != b"#?RADIANCE" {
         bytes.splice(..first_line, b"#?RADIANCE".iter().copied());
     }
@@ -248,15 +268,16 @@ fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Resu
     Ok(())
 }
 
-fn decode(path: &Path, source: &str, srgb: bool) -> Result<Image, String> {
-    let decoded = match radiance_hdr(path, source)? {
+/// Decodes an image file's `bytes` (by their format, not the file's name).
+fn decode_file(bytes: Vec<u8>, source: &str, srgb: bool) -> Result<Image, String> {
+    let decoded = match radiance_hdr(&bytes, source)? {
         Some(bytes) => decode_from(
             image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Hdr),
             source,
         )?,
         None => {
-            let reader = image::ImageReader::open(path)
-                .and_then(|r| r.with_guessed_format())
+            let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+                .with_guessed_format()
                 .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;
             decode_from(reader, source)?
         }

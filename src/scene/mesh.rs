@@ -39,6 +39,8 @@ pub struct Mesh {
     pub material_name: String,
     /// The largest absolute coordinate (for validating placements).
     pub extent: f32,
+    /// How many of the file's triangles were left out as degenerate (of no area in f32).
+    pub degenerate: usize,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -62,6 +64,9 @@ impl PartialEq for Mesh {
 
 /// Most triangles one file may hold (their indices are packed in 28 bits on the GPU).
 pub const MAX_TRIANGLES: usize = 1 << 27;
+/// Largest mesh file read (a path may name anything; a file of 2^27 triangles as OBJ text
+/// takes about 6 GB).
+pub const MAX_MESH_FILE_BYTES: u64 = 8 << 30;
 
 impl Mesh {
     /// A mesh from vertices and triangles: every index must name a vertex, every coordinate be
@@ -135,6 +140,7 @@ impl Mesh {
         let mut kept_normals = Vec::new();
         let mut kept_uvs = Vec::new();
         let mut kept_tangents = Vec::new();
+        let given = triangles.len();
         let triangles: Vec<[u32; 3]> = triangles
             .into_iter()
             .enumerate()
@@ -170,6 +176,7 @@ impl Mesh {
                 triangles.len()
             ));
         }
+        let degenerate = given - triangles.len();
         let extent = positions
             .iter()
             .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
@@ -185,6 +192,7 @@ impl Mesh {
             material: None,
             material_name: String::new(),
             extent,
+            degenerate,
         })
     }
 
@@ -198,7 +206,9 @@ impl Mesh {
 /// (and for OBJ the line).
 pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
     type FileVersion = (PathBuf, u64, std::time::SystemTime, Option<String>);
-    static CACHE: OnceLock<Mutex<HashMap<FileVersion, Vec<&'static Mesh>>>> = OnceLock::new();
+    /// The parts read, and the files their reading read (the file, its buffers, its images).
+    type Loaded = (Vec<&'static Mesh>, Vec<super::inputs::InputFile>);
+    static CACHE: OnceLock<Mutex<HashMap<FileVersion, Loaded>>> = OnceLock::new();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     if !meta.is_file() {
         return Err(format!("mesh {source} is not a file"));
@@ -207,9 +217,21 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'stati
     let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
     let key = (canonical, meta.len(), modified, node.map(str::to_string));
     let cache = CACHE.get_or_init(Default::default);
-    if let Some(parts) = cache.lock().map_err(|_| "mesh cache poisoned")?.get(&key) {
+    if let Some((parts, inputs)) = cache.lock().map_err(|_| "mesh cache poisoned")?.get(&key) {
+        inputs.iter().for_each(super::inputs::note);
         return Ok(parts.clone());
     }
+    let (parts, inputs) = super::inputs::recorded(|| read_parts(path, source, node));
+    let parts = parts?;
+    cache
+        .lock()
+        .map_err(|_| "mesh cache poisoned")?
+        .insert(key, (parts.clone(), inputs));
+    Ok(parts)
+}
+
+/// The parts of the mesh file at `path` (see [`load`]).
+fn read_parts(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
@@ -230,7 +252,13 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'stati
             ));
         }
     };
+    let degenerate: usize = parts.iter().map(|m| m.degenerate).sum();
     parts.retain(|m| !m.triangles.is_empty());
+    if parts.is_empty() && degenerate > 0 {
+        return Err(format!(
+            "mesh {source} has no triangles of any area: its {degenerate} triangles' corners coincide in f32 (points far from the origin collapse: move the model nearer it)"
+        ));
+    }
     if parts.is_empty() {
         return Err(format!("mesh {source} has no triangles"));
     }
@@ -243,10 +271,6 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'stati
             m.leak()
         })
         .collect();
-    cache
-        .lock()
-        .map_err(|_| "mesh cache poisoned")?
-        .insert(key, parts.clone());
     Ok(parts)
 }
 
@@ -294,9 +318,15 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
     // time. The check comes first in what a file is told: tobj trusts the indices, so on a
     // file the check refuses its result (or panic) is dropped unread.
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    // The material library is read on another thread: what it reads is the scene's too.
+    let recorders = super::inputs::Recorders::current();
     let parse = || {
-        let mut reader = std::io::Cursor::new(text.as_bytes());
-        tobj::load_obj_buf(&mut reader, &options, |mtl| read_mtl(&base_dir, mtl))
+        recorders.install(|| {
+            let mut reader = std::io::Cursor::new(text.as_bytes());
+            tobj::load_obj_buf(&mut reader, &options, |mtl| {
+                read_mtl(&base_dir, mtl, source)
+            })
+        })
     };
     let (checked, parsed) = rayon::join(|| check_obj_faces(text), || crate::caught_quietly(parse));
     checked.map_err(|(line, what)| format!("cannot read mesh {source}:{line}: {what}"))?;
@@ -384,17 +414,18 @@ const MAX_MTL_BYTES: u64 = 16 << 20;
 /// The material library an OBJ file's `mtllib` names, beside it: only a relative path that
 /// stays in the OBJ's folder and names a regular file of at most 16 MiB is opened (an `mtllib`
 /// line may name anything, a device or a FIFO among them).
-fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
+fn read_mtl(base_dir: &Path, name: &Path, source: &str) -> tobj::MTLLoadResult {
     use std::path::Component;
     if !name.components().all(|c| matches!(c, Component::Normal(_))) {
         return Err(tobj::LoadError::OpenFileFailed);
     }
     let path = base_dir.join(name);
-    let regular = std::fs::metadata(&path).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
-    if !regular {
-        return Err(tobj::LoadError::OpenFileFailed);
-    }
-    let bytes = std::fs::read(&path).map_err(|_| tobj::LoadError::ReadError)?;
+    let shown = Path::new(source)
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(name);
+    let (bytes, _) = super::inputs::read(&path, &shown.to_string_lossy(), MAX_MTL_BYTES)
+        .map_err(|_| tobj::LoadError::OpenFileFailed)?;
     // tobj panics on some malformed lines (`Kd 1 2`): such a library reads as unreadable.
     crate::caught_quietly(|| tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes)))
         .unwrap_or(Err(tobj::LoadError::ReadError))
@@ -411,13 +442,25 @@ fn read_mtl(base_dir: &Path, name: &Path) -> tobj::MTLLoadResult {
 fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Material, String> {
     use crate::material::{Light, Pbr};
     let colour = |c: Option<[f32; 3]>| c.map(Vec3::from_array).filter(|c| c.is_finite());
-    let emission = colour(m.emissive).unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
+    if let Some(ke) = m.emissive
+        && !ke.iter().all(|x| x.is_finite() && *x >= 0.0)
+    {
+        return Err(format!(
+            "mesh {source}: material \"{}\" has an emission Ke of {ke:?}: each must be a finite number >= 0",
+            m.name
+        ));
+    }
+    let emission = colour(m.emissive).unwrap_or(Vec3::ZERO);
     if emission.max_element() > 0.0 {
-        return Ok(Material::Light(Light {
-            radiance: emission.min(Vec3::splat(1e6)).into(),
+        let light = Material::Light(Light {
+            radiance: emission.into(),
             strength: 1.0,
             two_sided: true,
-        }));
+        });
+        light
+            .validate()
+            .map_err(|e| format!("mesh {source}: material \"{}\"'s emission Ke: {e}", m.name))?;
+        return Ok(light);
     }
     let param = |key: &str| {
         m.unknown_param
@@ -470,13 +513,16 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
                     m.name, image.source
                 ));
             }
-            let words: Vec<&str> = map.split_whitespace().collect();
-            let scale = words
-                .windows(2)
-                .find(|w| w[0] == "-bm")
-                .and_then(|w| w[1].parse::<f32>().ok())
-                .filter(|x| x.is_finite())
-                .unwrap_or(1.0);
+            let (options, _) = map_options(map)?;
+            let scale = match options.iter().find(|(flag, _)| *flag == "-bm") {
+                Some((_, values)) => values[0].parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                    format!(
+                        "mesh {source}: material \"{}\"'s {slot} has a -bm (normal map strength) of {}, not a finite number",
+                        m.name, values[0]
+                    )
+                })?,
+                None => 1.0,
+            };
             let map = NormalMap { image, scale };
             map.validate()
                 .map_err(|e| format!("mesh {source}: material \"{}\": {e}", m.name))?;
@@ -504,9 +550,9 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
 /// node) that `m`'s maps apply to texture coordinates, `vt * scale + offset`; one for all its
 /// maps (an error where they differ, since rt-gpu applies it to the mesh's coordinates).
 fn mtl_uv_transform(m: &tobj::Material, source: &str) -> Result<(Vec2, Vec2), String> {
-    let option = |words: &[&str], flag: &str, default: f32| {
-        let at = words.iter().position(|w| *w == flag)?;
-        let mut values = words[at + 1..].iter().map_while(|w| w.parse::<f32>().ok());
+    let option = |options: &[MapOption], flag: &str, default: f32| {
+        let (_, values) = options.iter().find(|(f, _)| *f == flag)?;
+        let mut values = values.iter().map(|w| w.parse::<f32>().unwrap_or(f32::NAN));
         let u = values.next()?;
         Some(Vec2::new(u, values.next().unwrap_or(default)))
     };
@@ -516,10 +562,15 @@ fn mtl_uv_transform(m: &tobj::Material, source: &str) -> Result<(Vec2, Vec2), St
         .flatten();
     let mut found: Option<(Vec2, Vec2)> = None;
     for map in maps {
-        let words: Vec<&str> = map.split_whitespace().collect();
+        let (options, _) = map_options(map).map_err(|e| {
+            format!(
+                "mesh {source}: material \"{}\"'s map \"{map}\": {e}",
+                m.name
+            )
+        })?;
         let transform = (
-            option(&words, "-s", 1.0).unwrap_or(Vec2::ONE),
-            option(&words, "-o", 0.0).unwrap_or(Vec2::ZERO),
+            option(&options, "-s", 1.0).unwrap_or(Vec2::ONE),
+            option(&options, "-o", 0.0).unwrap_or(Vec2::ZERO),
         );
         if !(transform.0.is_finite() && transform.1.is_finite()) {
             return Err(format!(
@@ -540,6 +591,41 @@ fn mtl_uv_transform(m: &tobj::Material, source: &str) -> Result<(Vec2, Vec2), St
     Ok(found.unwrap_or((Vec2::ONE, Vec2::ZERO)))
 }
 
+/// An option of an MTL map statement: its flag and its values.
+type MapOption<'a> = (&'a str, Vec<&'a str>);
+
+/// An MTL map statement's options (each flag with its values) and the file it names: what
+/// follows the options, spaces included (`map_Kd -s 2 2 1 my tex.png` names `my tex.png`). The
+/// options and their values are the MTL specification's.
+fn map_options(map: &str) -> Result<(Vec<MapOption<'_>>, String), String> {
+    let words: Vec<&str> = map.split_whitespace().collect();
+    let mut options = Vec::new();
+    let mut i = 0;
+    while let Some(&flag) = words.get(i).filter(|w| w.starts_with('-')) {
+        // (least, most) values; numbers beyond the least are taken while they parse.
+        let (least, most) = match flag {
+            "-blendu" | "-blendv" | "-bm" | "-boost" | "-cc" | "-clamp" | "-imfchan"
+            | "-texres" | "-type" => (1, 1),
+            "-mm" => (2, 2),
+            "-o" | "-s" | "-t" => (1, 3),
+            _ => return Err(format!("unknown option {flag}")),
+        };
+        let mut values = Vec::new();
+        while values.len() < most
+            && let Some(&value) = words.get(i + 1 + values.len())
+            && (values.len() < least || value.parse::<f32>().is_ok())
+        {
+            values.push(value);
+        }
+        if values.len() < least {
+            return Err(format!("option {flag} lacks its value"));
+        }
+        i += 1 + values.len();
+        options.push((flag, values));
+    }
+    Ok((options, words[i..].join(" ")))
+}
+
 /// The image an MTL map `slot` names (`map` after its options: tobj keeps `-o u v` and the like
 /// in the string): a relative path inside the OBJ file's `folder`, decoded from sRGB where
 /// `srgb` (colours).
@@ -552,11 +638,9 @@ fn mtl_image(
     material: &str,
 ) -> Result<&'static super::image::Image, String> {
     use std::path::Component;
-    let name = if map.starts_with('-') {
-        map.split_whitespace().last().unwrap_or_default()
-    } else {
-        map.trim()
-    };
+    let (_, name) = map_options(map)
+        .map_err(|e| format!("mesh {source}: material \"{material}\"'s {slot} \"{map}\": {e}"))?;
+    let name = name.as_str();
     let relative = Path::new(name);
     if name.is_empty()
         || !relative
@@ -577,7 +661,8 @@ fn mtl_image(
 /// An OBJ file's text: UTF-8, or Latin-1 (which some exporters write; OBJ's syntax is ASCII, so
 /// only names and comments can differ). UTF-16 is refused with what to do.
 fn obj_text(path: &Path, source: &str) -> Result<String, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
+    let (bytes, _) = super::inputs::read(path, source, MAX_MESH_FILE_BYTES)
+        .map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
         return Err(format!(
             "cannot read mesh {source}: it is UTF-16 text; save it as UTF-8 (or ASCII)"
@@ -738,7 +823,8 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
 fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
     use super::gltf_check;
     let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
+    let (bytes, _) = super::inputs::read(path, source, MAX_MESH_FILE_BYTES)
+        .map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     gltf_check::check_container(&bytes, path, source)?;
     // The crate's own validation indexes some references before checking them.
     let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
@@ -748,9 +834,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
         .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
     drop(bytes);
-    gltf_check::check_buffers(document.as_json(), path.parent(), source)?;
-    let buffers = gltf::import_buffers(&document, path.parent(), blob)
-        .map_err(|e| format!("cannot read mesh {source}: buffers: {}", one_line(&e)))?;
+    let buffers = gltf_check::read_buffers(&document, blob, path.parent(), source)?;
     let lengths: Vec<usize> = buffers.iter().map(|b| b.0.len()).collect();
     gltf_check::check_document(document.as_json(), &lengths, source)?;
     let roots: Vec<gltf::Node> = match node {
@@ -849,6 +933,12 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     .iter()
                     .find(|p| !(p.abs().max_element() <= super::MAX_EXTENT as f64))
                 {
+                    if !far.is_finite() {
+                        return Err(format!(
+                            "mesh {source}: node {} places a vertex at {far}: a position that is not a finite number (a NaN or infinite value in the file or the node's transform)",
+                            n.index()
+                        ));
+                    }
                     return Err(format!(
                         "mesh {source}: node {} places a vertex at {far}, beyond {:e} from the origin (rt-gpu's limit: scale or move the model)",
                         n.index(),
@@ -930,6 +1020,66 @@ fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
     }
 }
 
+/// Refuses a material's values that the glTF specification (and its extensions' schemas)
+/// forbid, in one line naming the material and the field, rather than clamping them silently:
+/// factors outside [0, 1], a negative emissive strength or alpha cutoff, an index of refraction
+/// below 1 (but the extension's 0).
+fn check_material_values(m: &gltf::Material, source: &str) -> Result<(), String> {
+    let name = super::file::quoted(m.name().unwrap_or(""));
+    let at = || match m.index() {
+        Some(i) => format!("mesh {source}: material {i} (\"{name}\")"),
+        None => format!("mesh {source}: the default material"),
+    };
+    let pbr = m.pbr_metallic_roughness();
+    let unit = |x: f32| (0.0..=1.0).contains(&x);
+    let factors = [
+        ("baseColorFactor", pbr.base_color_factor().to_vec()),
+        ("metallicFactor", vec![pbr.metallic_factor()]),
+        ("roughnessFactor", vec![pbr.roughness_factor()]),
+        ("emissiveFactor", m.emissive_factor().to_vec()),
+        (
+            "KHR_materials_transmission.transmissionFactor",
+            m.transmission()
+                .map(|t| t.transmission_factor())
+                .into_iter()
+                .collect(),
+        ),
+    ];
+    for (field, values) in factors {
+        if !values.iter().all(|&x| unit(x)) {
+            return Err(format!(
+                "{}: its {field} is {values:?}; glTF requires values in [0, 1]",
+                at()
+            ));
+        }
+    }
+    if let Some(strength) = m.emissive_strength()
+        && !(strength >= 0.0 && strength.is_finite())
+    {
+        return Err(format!(
+            "{}: its KHR_materials_emissive_strength.emissiveStrength is {strength}; it must be a finite number >= 0",
+            at()
+        ));
+    }
+    if let Some(cutoff) = m.alpha_cutoff()
+        && !(cutoff >= 0.0 && cutoff.is_finite())
+    {
+        return Err(format!(
+            "{}: its alphaCutoff is {cutoff}; glTF requires a number >= 0",
+            at()
+        ));
+    }
+    if let Some(ior) = m.ior()
+        && !(ior == 0.0 || (ior >= 1.0 && ior.is_finite()))
+    {
+        return Err(format!(
+            "{}: its KHR_materials_ior.ior is {ior}; the extension takes 1 or more (or 0)",
+            at()
+        ));
+    }
+    Ok(())
+}
+
 /// A glTF metallic-roughness material as rt-gpu's: emissive -> light (emissive factor x
 /// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is), else
 /// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
@@ -943,6 +1093,7 @@ fn material_of(
     use crate::material::{Light, Pbr};
     use crate::scene::texture::Texture;
     let name = m.name().unwrap_or("");
+    check_material_values(m, textures.source())?;
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);

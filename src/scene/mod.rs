@@ -13,6 +13,7 @@ pub mod gltf_scene;
 pub mod gltf_textures;
 pub mod image;
 pub mod image_lookup;
+pub mod inputs;
 pub mod media;
 pub mod mesh;
 pub mod normal_map;
@@ -137,6 +138,9 @@ pub struct Scene {
     /// Lights of no area: points, spots and the sun (`punctual.rs`).
     pub punctual: Vec<punctual::Punctual>,
     pub defaults: RenderDefaults,
+    /// The files the scene read (images, meshes, ...) besides the scene file itself: outputs
+    /// must not overwrite them, and films record their digests.
+    pub inputs: Vec<inputs::InputFile>,
 }
 
 /// Problems in a scene that any source (built-in, file, test) can have.

@@ -669,6 +669,7 @@ impl Viewer {
         let meta = FilmMeta {
             identity: film_file::identity(
                 crate::scene::file::digest(&self.scene),
+                &crate::scene::inputs::identity_fields(&self.scene.inputs),
                 config.backend,
                 &opts,
                 config.gpu.everything,
@@ -677,8 +678,10 @@ impl Viewer {
             device: self.film.device(),
         };
         let png = config.output.with_extension("png");
-        PendingOutput::claim(&config.output, &[])?.commit_film(&film, &meta)?;
-        PendingOutput::claim(&png, &[])?.commit_image(&film, None)?;
+        let inputs: Vec<&std::path::Path> =
+            self.scene.inputs.iter().map(|f| f.path.as_path()).collect();
+        PendingOutput::claim(&config.output, &inputs)?.commit_film(&film, &meta)?;
+        PendingOutput::claim(&png, &inputs)?.commit_image(&film, None)?;
         let _ = writeln!(
             std::io::stderr().lock(),
             "wrote {} and {} ({spp} spp)",

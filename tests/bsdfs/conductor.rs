@@ -268,7 +268,7 @@ fn bad_conductors_are_located_errors() {
             ),
             (
                 r#"{ type = "conductor", eta = [0, 1, 1], k = [3, 3, 3] }"#,
-                "eta must be > 0",
+                "eta must be at least",
             ),
             (
                 r#"{ type = "conductor", eta = [1, 1, 1], k = [3, -1, 3] }"#,

@@ -97,6 +97,7 @@ pub fn scene(
         materials,
         objects,
         punctual: Vec::new(),
+        inputs: Vec::new(),
         defaults: RenderDefaults {
             width: 16,
             height: 16,
