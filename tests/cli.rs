@@ -1185,4 +1185,21 @@ fn converge_on_a_black_scene_ends_and_says_why_nothing_is_fitted() {
         "{err}"
     );
     assert!(d.join("rep/converge.csv").exists());
+    // --target-error on it says the image is black rather than that an error of 0 was reached.
+    let out = rt_gpu(
+        &[
+            "black.toml",
+            "--backend",
+            "cpu",
+            "--size",
+            "8x8",
+            "--target-error",
+            "0.01",
+            "-o",
+            "b.png",
+        ],
+        d,
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("exactly black"), "{}", stderr(&out));
 }

@@ -10,6 +10,8 @@
 //! `RT_GPU_FUZZ_SEED` (default 1) set the run.
 
 mod common;
+#[path = "common/gltf_mutations.rs"]
+mod gltf_mutations;
 
 use common::mutate::Mutator;
 use std::path::Path;
@@ -112,23 +114,26 @@ fn corpus(dir: &Path) -> Vec<(Vec<u8>, &'static str)> {
     ]
 }
 
+/// An error must be one short line naming the file `name`, and no loader's panic guard's.
+fn one_line_naming(e: &str, name: &str) -> Result<(), String> {
+    if e.contains('\n') || e.len() > 2000 || !e.contains(name) {
+        Err(format!(
+            "error is not one short line naming the file: {e:?}"
+        ))
+    } else if e.contains("the glTF reader failed") {
+        Err(format!("the gltf crate panicked: {e}"))
+    } else if e.contains("the OBJ reader failed") {
+        Err(format!(
+            "tobj panicked on a file the faces' check passed: {e}"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// What must hold for any input; `Err` says what did not.
 fn check(path: &Path, name: &str, extension: &str) -> Result<(), String> {
-    let one_line = |e: &str| {
-        if e.contains('\n') || e.len() > 2000 || !e.contains(name) {
-            Err(format!(
-                "error is not one short line naming the file: {e:?}"
-            ))
-        } else if e.contains("the glTF reader failed") {
-            Err(format!("the gltf crate panicked: {e}"))
-        } else if e.contains("the OBJ reader failed") {
-            Err(format!(
-                "tobj panicked on a file the faces' check passed: {e}"
-            ))
-        } else {
-            Ok(())
-        }
-    };
+    let one_line = |e: &str| one_line_naming(e, name);
     if extension == "exr" {
         return match rt_gpu::film_file::read(path) {
             Ok((film, _)) if film.pixels.iter().all(|p| p.mean().is_finite()) => Ok(()),
@@ -184,6 +189,136 @@ fn mutated_mesh_and_film_files_never_panic() {
         let shown: String = text.chars().take(3000).collect();
         panic!(
             "{} of {executions} mutants failed; the first (execution {i}): {problem}\n--- input ---\n{shown}",
+            failures.len()
+        );
+    }
+}
+
+impl gltf_mutations::Choices for Mutator {
+    fn below(&mut self, n: usize) -> usize {
+        Mutator::below(self, n)
+    }
+}
+
+/// The JSON and binary chunks of a `.glb`.
+fn glb_chunks(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
+    let word =
+        |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes")) as usize;
+    let json_len = word(12);
+    let json = bytes[20..20 + json_len].to_vec();
+    let bin_at = 20 + json_len;
+    let bin = if bin_at + 8 <= bytes.len() {
+        bytes[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec()
+    } else {
+        Vec::new()
+    };
+    (json, bin)
+}
+
+/// What must hold for a glTF file rendered whole: loaded, or refused in one line naming it;
+/// notes one line each; a scene it makes renders finite (no NaN, infinite or negative sample
+/// from values the checks accepted).
+fn check_scene(path: &Path, name: &str) -> Result<(), String> {
+    let one_line = |e: &str| one_line_naming(e, name);
+    let (scene, notes) = match rt_gpu::scene::gltf_scene::load(path, name, None) {
+        Ok(loaded) => loaded,
+        Err(e) => return one_line(&e),
+    };
+    if let Some(note) = notes.iter().find(|n| n.contains('\n') || n.len() > 2000) {
+        return Err(format!("a note is not one short line: {note:?}"));
+    }
+    let opts = common::nee_opts(6, 4, 1, 4, 0);
+    let flat = match rt_gpu::scene::flat::FlatScene::new(&scene, opts.width, opts.height) {
+        Ok(flat) => flat,
+        Err(e) => return one_line(&format!("{name}: {e}")),
+    };
+    let film = rt_gpu::cpu::render(&flat, &opts, &|| {});
+    if film.invalid_samples > 0 {
+        return Err(format!(
+            "{} samples of an accepted file were NaN, infinite or negative",
+            film.invalid_samples
+        ));
+    }
+    Ok(())
+}
+
+/// Issue 61: glTF files mutated by their structure (`common/gltf_mutations.rs`: accessors'
+/// counts and sparse blocks, views, URIs, nodes, materials and their extensions, lights,
+/// cameras) from the shipped lamp and Blender's files, each loaded whole and, where accepted,
+/// rendered: no panic, one-line errors naming the file, finite samples. Seeded;
+/// `RT_GPU_FUZZ_EXECUTIONS` (default 1000) and `RT_GPU_FUZZ_SEED` set the run.
+#[test]
+fn structured_gltf_mutants_load_or_fail_in_one_line_and_render_finite() {
+    let (executions, seed) = common::mutate::run_settings(1000);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    std::fs::copy(root.join("models/lamp.bin"), d.join("lamp.bin")).expect("copies");
+    #[cfg(unix)]
+    {
+        let _ = std::process::Command::new("mkfifo")
+            .arg(d.join("fifo.bin"))
+            .status();
+    }
+    // (JSON, binary chunk: None for a .gltf beside lamp.bin)
+    let mut seeds: Vec<(serde_json::Value, Option<Vec<u8>>)> = Vec::new();
+    let lamp = std::fs::read(root.join("models/lamp.gltf")).expect("lamp.gltf");
+    seeds.push((serde_json::from_slice(&lamp).expect("json"), None));
+    for glb in [
+        "blender/textured.glb",
+        "blender/lamps.glb",
+        "blender/worn.glb",
+    ] {
+        let (json, bin) = glb_chunks(&std::fs::read(root.join(glb)).expect("glb"));
+        seeds.push((serde_json::from_slice(&json).expect("json"), Some(bin)));
+    }
+    let mut mutator = Mutator { state: seed };
+    let start = std::time::Instant::now();
+    let mut failures = Vec::new();
+    std::panic::set_hook(Box::new(|_| {}));
+    for i in 0..executions {
+        let (seed_doc, bin) = &seeds[mutator.below(seeds.len())];
+        let mut doc = seed_doc.clone();
+        gltf_mutations::mutate(&mut doc, &mut mutator);
+        let json = serde_json::to_vec(&doc).expect("json");
+        let (name, bytes) = match bin {
+            None => (format!("s{i}.gltf"), json.clone()),
+            Some(bin) => (format!("s{i}.glb"), glb(&json, bin)),
+        };
+        let path = d.join(&name);
+        std::fs::write(&path, &bytes).expect("writes");
+        let outcome = common::mutate::problem(|| check_scene(&path, &name));
+        if let Some(problem) = outcome {
+            failures.push((i, problem, String::from_utf8_lossy(&json).into_owned()));
+            // Kept for a replay with panics reported (below).
+            if failures.len() == 1 {
+                continue;
+            }
+        }
+        let _ = std::fs::remove_file(&path);
+    }
+    let _ = std::panic::take_hook();
+    if let Some((i, ..)) = failures.first() {
+        // Where the first failure's panic (if any) was: replayed with the default hook.
+        let name = ["gltf", "glb"]
+            .iter()
+            .map(|e| format!("s{i}.{e}"))
+            .find(|n| d.join(n).exists())
+            .unwrap_or_default();
+        let _ = common::mutate::problem(|| check_scene(&d.join(&name), &name));
+    }
+    eprintln!(
+        "fuzz: {executions} structured glTF mutants (seed {seed}) in {:.1} s, {} failures",
+        start.elapsed().as_secs_f64(),
+        failures.len()
+    );
+    if let Some((i, problem, text)) = failures.first() {
+        let shown: String = text.chars().take(4000).collect();
+        let others: Vec<String> = (failures.iter().skip(1).take(5))
+            .map(|(i, p, _)| format!("{i}: {p}"))
+            .collect();
+        panic!(
+            "{} of {executions} mutants failed; the first (execution {i}): {problem}\nothers: {others:#?}\n--- JSON ---\n{shown}",
             failures.len()
         );
     }

@@ -354,6 +354,21 @@ fn values_outside_the_specification_are_refused_naming_the_field() {
             "{light}: {err}"
         );
     }
+    // A rotation that is no unit quaternion (it was taken as the identity).
+    let err = load_with("", r#"{ "name": "Turned", "rotation": [0, 0, 0, 0] }"#, "")
+        .expect_err("zero quaternion");
+    assert!(err.contains("unit quaternion"), "{err}");
+    // A camera whose node shears it.
+    let sheared = r#"{ "name": "Shear", "camera": 0, "matrix": [1, 0, 0, 0, 0, 1, 0.5, 0, 0, 0, 1, 0, 0, 0, 5, 1] }"#;
+    let cameras = r#""cameras": [{ "name": "Cam", "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }],"#;
+    let err = load_with("", sheared, cameras).expect_err("sheared");
+    assert!(err.contains("shears"), "{err}");
+    // Two cameras of one name: --camera NAME cannot pick one.
+    let path = cameras_file(d);
+    let text = std::fs::read_to_string(&path).expect("reads");
+    std::fs::write(&path, text.replace(r#""name": "Top""#, r#""name": "Side""#)).expect("writes");
+    let err = load(&path, "cams.gltf", Some("Side")).expect_err("two of one name");
+    assert!(err.contains("several cameras named \"Side\""), "{err}");
     // A name that would forge a line of output is escaped.
     let (nodes, extra) = lamp(r#"{ "name": "L\nnote: forged", "type": "point", "range": 3 }"#);
     let (_, notes) = load_with("", &nodes, &extra).expect("loads");

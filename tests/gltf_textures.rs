@@ -435,9 +435,15 @@ fn texture_transforms_map_the_texture_coordinates() {
 
     let two = r#"{ "name": "Two", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "extensions": { "KHR_texture_transform": { "scale": [2, 2] } } }, "metallicRoughnessTexture": { "index": 0 } } }"#;
     let other_set = transformed(r#"{ "texCoord": 1 }"#);
+    // Issue 61: a scale of 1e38 or an offset of 3e38 rendered NaN; beyond what f32 resolves,
+    // the coordinates are refused.
+    let huge_scale = transformed(r#"{ "scale": [1e38, 1] }"#);
+    let huge_offset = transformed(r#"{ "offset": [3e38, 0] }"#);
     for (material, expected) in [
         (two, "different KHR_texture_transforms"),
         (other_set.as_str(), "TEXCOORD_1"),
+        (huge_scale.as_str(), "texture coordinate"),
+        (huge_offset.as_str(), "texture coordinate"),
     ] {
         let path = write_gltf(dir.path(), true, material, &images("tex.png"));
         let err = load(&path, "tri.gltf", None).expect_err(expected);

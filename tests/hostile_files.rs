@@ -474,3 +474,45 @@ fn mtl_map_options_and_emission_are_read_or_refused_never_guessed() {
         other => panic!("{other:?}"),
     }
 }
+
+/// Issue 61: a material library that is not read is named with the reason where a part is left
+/// without its material (every refusal said only `part "default" has no material of its own`),
+/// and a line naming two libraries (valid OBJ) reads both.
+#[test]
+fn refused_material_libraries_are_named_and_two_on_a_line_are_read() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    std::fs::write(d.join("a.mtl"), "newmtl red\nKd 1 0 0\n").expect("writes");
+    std::fs::write(d.join("b.mtl"), "newmtl blue\nKd 0 0 1\n").expect("writes");
+    std::fs::write(d.join("big.mtl"), vec![b'#'; (16 << 20) + 1]).expect("writes");
+    let faces = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+    static CASE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let scene_with = |obj: &str| {
+        let case = CASE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let name = format!("libs{case}.obj");
+        std::fs::write(d.join(&name), obj).expect("writes");
+        let text = format!(
+            "[camera]\nlook_from = [0, 0, 3]\nlook_at = [0, 0, 0]\nvfov = 40\n[[object]]\nmesh = {{ file = \"{}\" }}\n",
+            d.join(&name).display()
+        );
+        rt_gpu::scene::file::parse(&text, "libs.toml", "libs")
+    };
+    let two = format!("mtllib a.mtl b.mtl\n{faces}usemtl red\nf 1 2 3\nusemtl blue\nf 1 3 4\n");
+    let scene = scene_with(&two).expect("both libraries read");
+    assert_eq!(scene.materials.len(), 2);
+    for (library, why) in [
+        ("missing.mtl", "cannot be read"),
+        ("/dev/zero", "not a relative path"),
+        ("../a.mtl", "not a relative path"),
+        ("big.mtl", "bytes, more than"),
+    ] {
+        let obj = format!("mtllib {library}\n{faces}usemtl red\nf 1 2 3\n");
+        let err = scene_with(&obj).expect_err(library).to_string();
+        assert!(
+            err.contains("has no material of its own")
+                && err.contains(library)
+                && err.contains(why),
+            "{library}: {err}"
+        );
+    }
+}

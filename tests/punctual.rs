@@ -261,4 +261,15 @@ fn lamps_read_back_as_written_and_bad_ones_are_one_line_errors() {
         assert!(error.contains("bad.toml:"), "located: {error}");
         assert_eq!(error.lines().count(), 1, "{error}");
     }
+    // Issue 61: a direction of tiny components is a direction (it was refused as [0, 0, 0]).
+    let tiny =
+        "[[light]]\ndirectional = { direction = [1e-30, -1e-30, 0], irradiance = [1, 1, 1] }";
+    let scene = rt_gpu::scene::file::parse(&format!("{base}{tiny}\n"), "tiny.toml", "tiny")
+        .expect("a direction");
+    match scene.punctual[0] {
+        Punctual::Directional { direction, .. } => {
+            assert!((direction - glam::Vec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-6)
+        }
+        ref other => panic!("{other:?}"),
+    }
 }

@@ -243,7 +243,7 @@ fn bad_files_name_the_file_line_and_problem() {
             "white = {",
             "glass = { type = \"dielectric\", ior = -1 }\nwhite = {",
             "bad.toml:8:",
-            "ior must be > 0",
+            "ior must be in [0.01, 100]",
         ),
         (
             "material = \"white\"",

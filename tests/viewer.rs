@@ -403,3 +403,20 @@ fn no_display_is_a_one_line_error() {
         "{text}"
     );
 }
+
+/// Issue 61: a size beyond the GPU's surfaces is one line naming the limit (32768x1 passed the
+/// size check and ended in a raw wgpu validation error).
+#[test]
+fn a_size_beyond_the_gpus_surfaces_is_one_line() {
+    let Some(x) = x_server() else { return };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = view(
+        &x,
+        &["cornell", "--size", "32768x1", "--exit-after-spp", "1"],
+        dir.path(),
+    );
+    assert!(!out.status.success());
+    let text = stderr(&out);
+    assert_eq!(text.trim_end().lines().count(), 1, "{text}");
+    assert!(text.contains("use a smaller --size"), "{text}");
+}

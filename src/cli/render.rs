@@ -85,7 +85,12 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     if let Some(target) = args.target_error {
         let target = super::shown_number(target);
         let reached = rt_gpu::progressive::relative_error(&passes.rendered.film);
-        if passes.outcome == Outcome::TargetReached {
+        let black = passes.rendered.film.image_mean() == glam::DVec3::ZERO;
+        if black && passes.outcome == Outcome::TargetReached {
+            note!(
+                "target error {target}: the image is exactly black at {done} spp (every sample 0), so it has no relative error to estimate: more samples would change nothing"
+            );
+        } else if passes.outcome == Outcome::TargetReached {
             note!(
                 "target error {target} reached at {done} spp (estimated relative error {reached:.3e})"
             );

@@ -182,9 +182,7 @@ impl MaterialModel for Dielectric {
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
     fn validate(&self) -> Result<(), String> {
-        if !(self.ior > 0.0) {
-            return Err(format!("ior must be > 0, got {}", self.ior));
-        }
+        super::fresnel::check_ior(self.ior)?;
         if !(0.0..=1.0).contains(&self.roughness) {
             return Err(format!("roughness must be in [0, 1], got {}", self.roughness));
         }

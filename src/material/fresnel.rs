@@ -1,6 +1,21 @@
 //! The Fresnel reflectance of a boundary between two dielectrics (twin:
 //! `shaders/fresnel.wgsl`), shared by glass and plastic's coat.
 
+/// The indices of refraction a dielectric boundary takes: beyond them the coat's and the rough
+/// glass's terms lose f32 (a rough plastic of index 1e-30, a pbr coat of index 1000, sampled
+/// NaN); glasses lie near 1.5, diamond 2.42, and a relative index below 1 (a bubble) near 0.75.
+pub const MIN_IOR: f32 = 1e-2;
+pub const MAX_IOR: f32 = 100.0;
+
+/// Refuses an index of refraction outside [`MIN_IOR`, `MAX_IOR`].
+pub fn check_ior(ior: f32) -> Result<(), String> {
+    if (MIN_IOR..=MAX_IOR).contains(&ior) {
+        Ok(())
+    } else {
+        Err(format!("ior must be in [{MIN_IOR}, {MAX_IOR}], got {ior}"))
+    }
+}
+
 /// Cosine of the refracted angle for incidence cosine `cos_i` and relative index
 /// `eta = n_incident / n_transmitted`, or `None` under total internal reflection.
 #[inline]

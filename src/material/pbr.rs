@@ -78,9 +78,7 @@ fn one() -> f32 {
 impl TryFrom<PbrDoc> for Pbr {
     type Error = String;
     fn try_from(d: PbrDoc) -> Result<Self, String> {
-        if !(d.ior > 0.0) {
-            return Err(format!("ior must be > 0, got {}", d.ior));
-        }
+        super::fresnel::check_ior(d.ior)?;
         let metallic_roughness = match d.metallic_roughness {
             Some(name) => Some(crate::scene::image::load_named_linear(&name)?),
             None => None,
@@ -247,9 +245,7 @@ impl MaterialModel for Pbr {
                 return Err(format!("{name} must be in [0, 1], got {v}"));
             }
         }
-        if !(self.ior > 0.0) {
-            return Err(format!("ior must be > 0, got {}", self.ior));
-        }
+        super::fresnel::check_ior(self.ior)?;
         if let Some(image) = self.metallic_roughness
             && image.max_value > 1.0
         {

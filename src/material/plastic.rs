@@ -51,9 +51,7 @@ pub(crate) fn default_ior() -> f32 {
 impl TryFrom<PlasticDoc> for Plastic {
     type Error = String;
     fn try_from(doc: PlasticDoc) -> Result<Self, String> {
-        if !(doc.ior > 0.0) {
-            return Err(format!("ior must be > 0, got {}", doc.ior));
-        }
+        super::fresnel::check_ior(doc.ior)?;
         // Before the coat's table is built from it.
         if !(0.0..=1.0).contains(&doc.roughness) {
             return Err(format!("roughness must be in [0, 1], got {}", doc.roughness));
@@ -105,9 +103,7 @@ impl MaterialModel for Plastic {
     const SAMPLES_LIGHTS: bool = true;
 
     fn validate(&self) -> Result<(), String> {
-        if !(self.ior > 0.0) {
-            return Err(format!("ior must be > 0, got {}", self.ior));
-        }
+        super::fresnel::check_ior(self.ior)?;
         if !(0.0..=1.0).contains(&self.roughness) {
             return Err(format!("roughness must be in [0, 1], got {}", self.roughness));
         }

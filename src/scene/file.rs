@@ -317,7 +317,8 @@ impl LightDoc {
                 outer: s.outer.0.to_radians(),
             },
             (None, None, Some(d)) => Punctual::Directional {
-                direction: d.direction.vec().normalize_or_zero(),
+                // In f64: a direction of tiny components, [1e-30, -1e-30, 0] say, is one.
+                direction: d.direction.vec().as_dvec3().normalize_or_zero().as_vec3(),
                 irradiance: d.irradiance.vec(),
             },
             _ => {
@@ -913,8 +914,12 @@ impl SceneMaterials {
         let Some((mesh, own)) = mesh.and_then(|m| m.material.map(|x| (m, x))) else {
             let what = match mesh {
                 Some(m) => format!(
-                    "mesh {} part \"{}\" has no material of its own",
-                    m.source, m.material_name
+                    "mesh {} part \"{}\" has no material of its own{}",
+                    m.source,
+                    m.material_name,
+                    m.library_refused
+                        .as_ref()
+                        .map_or(String::new(), |why| format!(" ({why})"))
                 ),
                 None => "an [[object]] needs a `material`".to_string(),
             };

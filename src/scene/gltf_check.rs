@@ -157,19 +157,49 @@ pub fn check_document(
             }
             let mut position_count = None;
             let mut normal_count = None;
+            // Texture coordinates' counts, which must be the positions' (glTF 2.0, 3.7.2.1).
+            let mut uv_counts = Vec::new();
             for (semantic, index) in &primitive.attributes {
                 let accessor = accessor(root, index.value(), &at)?;
                 let (expected, name) = match semantic {
                     Checked::Valid(json::mesh::Semantic::Positions) => (Type::Vec3, "POSITION"),
                     Checked::Valid(json::mesh::Semantic::Normals) => (Type::Vec3, "NORMAL"),
                     Checked::Valid(json::mesh::Semantic::Tangents) => (Type::Vec4, "TANGENT"),
+                    Checked::Valid(json::mesh::Semantic::TexCoords(set)) => {
+                        // glTF 2.0, 3.7.2.1: VEC2 of FLOAT, or of normalized unsigned bytes
+                        // or shorts (the crate's reader asserts the element's size).
+                        check_kinds(
+                            accessor,
+                            index.value(),
+                            &[Type::Vec2],
+                            &format!("TEXCOORD_{set}"),
+                            &at,
+                        )?;
+                        let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
+                        uv_counts.push((*set, index.value(), count));
+                        continue;
+                    }
+                    Checked::Valid(json::mesh::Semantic::Colors(set)) => {
+                        check_kinds(
+                            accessor,
+                            index.value(),
+                            &[Type::Vec3, Type::Vec4],
+                            &format!("COLOR_{set}"),
+                            &at,
+                        )?;
+                        check_accessor(root, buffer_lengths, index.value(), &at)?;
+                        continue;
+                    }
                     _ => {
                         check_accessor(root, buffer_lengths, index.value(), &at)?;
                         continue;
                     }
                 };
                 let (ty, component) = kinds(accessor);
-                if ty != Some(expected) || component != Some(ComponentType::F32) {
+                if ty != Some(expected)
+                    || component != Some(ComponentType::F32)
+                    || accessor.normalized
+                {
                     let shape = if expected == Type::Vec4 {
                         "VEC4"
                     } else {
@@ -196,6 +226,11 @@ pub fn check_document(
                 && normals != vertices
             {
                 return Err(format!("{at}: {normals} normals for {vertices} positions"));
+            }
+            if let Some((set, index, count)) = uv_counts.iter().find(|(_, _, n)| *n != vertices) {
+                return Err(format!(
+                    "{at}: TEXCOORD_{set} (accessor {index}) has {count} texture coordinates for {vertices} positions"
+                ));
             }
             let corners = match &primitive.indices {
                 Some(index) => {
@@ -229,6 +264,40 @@ pub fn check_document(
         }
     }
     Ok(())
+}
+
+/// Checks an attribute the specification allows as `types` of FLOAT, or of normalized unsigned
+/// bytes or shorts (texture coordinates, colours).
+fn check_kinds(
+    accessor: &json::Accessor,
+    index: usize,
+    types: &[Type],
+    name: &str,
+    at: &str,
+) -> Result<(), String> {
+    let (ty, component) = kinds(accessor);
+    let component_ok = match component {
+        Some(ComponentType::F32) => !accessor.normalized,
+        Some(ComponentType::U8 | ComponentType::U16) => accessor.normalized,
+        _ => false,
+    };
+    if ty.is_some_and(|t| types.contains(&t)) && component_ok {
+        return Ok(());
+    }
+    let shapes: Vec<String> = types
+        .iter()
+        .map(|t| format!("{t:?}").to_uppercase())
+        .collect();
+    Err(format!(
+        "{at}: {name} (accessor {index}) is {}{}, not {} of FLOAT or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT",
+        describe(accessor),
+        if accessor.normalized {
+            " (normalized)"
+        } else {
+            ""
+        },
+        shapes.join(" or ")
+    ))
 }
 
 fn accessor<'a>(
@@ -287,6 +356,12 @@ fn check_accessor(
         return Err(format!("{at}: accessor {index} has an unknown type"));
     };
     let element = (ty.multiplicity() * component.size()) as u64;
+    // glTF 2.0, 5.1: at least one element (the crate's reader subtracts one from the count).
+    if count == 0 {
+        return Err(format!(
+            "{at}: accessor {index} has a count of 0; glTF requires at least 1"
+        ));
+    }
     if a.buffer_view.is_none() && count > MAX_UNVIEWED_COUNT {
         return Err(format!(
             "{at}: accessor {index} has a count of {count} and no buffer view: more than the {MAX_UNVIEWED_COUNT} elements rt-gpu reads"
@@ -318,6 +393,11 @@ fn check_accessor(
     }
     if let Some(sparse) = &a.sparse {
         let n = sparse.count.0;
+        if n == 0 {
+            return Err(format!(
+                "{at}: accessor {index} has a sparse block of 0 values; glTF requires at least 1"
+            ));
+        }
         if n > count {
             return Err(format!(
                 "{at}: accessor {index} has {n} sparse values, more than its count {count}"
@@ -422,7 +502,7 @@ fn check_view(
 fn check_nodes(root: &json::Root, source: &str) -> Result<(), String> {
     let n = root.nodes.len();
     let name = |i: usize| match root.nodes.get(i).and_then(|node| node.name.as_deref()) {
-        Some(name) => format!("node {i} (\"{name}\")"),
+        Some(name) => format!("node {i} (\"{}\")", super::file::quoted(name)),
         None => format!("node {i}"),
     };
     let mut parent: Vec<Option<usize>> = vec![None; n];
@@ -447,6 +527,16 @@ fn check_nodes(root: &json::Root, source: &str) -> Result<(), String> {
                 ));
             }
             parent[c] = Some(i);
+        }
+        if let Some(r) = &node.rotation {
+            let length = r.0.iter().map(|&x| x as f64 * x as f64).sum::<f64>().sqrt();
+            if !((length - 1.0).abs() <= 1e-2) {
+                return Err(format!(
+                    "mesh {source}: {} has a rotation {:?} of length {length:.3}; glTF requires a unit quaternion",
+                    name(i),
+                    r.0
+                ));
+            }
         }
         if let Some(m) = node.matrix {
             // Column-major: the last row is elements 3, 7, 11, 15.

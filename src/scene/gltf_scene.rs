@@ -74,6 +74,12 @@ fn load_unrecorded(
     let extras = read_extras(path, source)?;
     let chosen =
         match camera {
+            Some(name) if extras.cameras.iter().filter(|c| c.name == name).count() > 1 => {
+                return Err(format!(
+                    "{source} has several cameras named \"{}\": rename them apart to pick one",
+                    super::file::quoted(name)
+                ));
+            }
             Some(name) => Some(extras.cameras.iter().find(|c| c.name == name).ok_or_else(
                 || {
                     let names: Vec<&str> = extras.cameras.iter().map(|c| c.name.as_str()).collect();
@@ -170,6 +176,12 @@ pub fn named_camera(
     name: &str,
 ) -> Result<Result<Camera, Vec<String>>, String> {
     let extras = read_extras(path, source)?;
+    if extras.cameras.iter().filter(|c| c.name == name).count() > 1 {
+        return Err(format!(
+            "{source} has several cameras named \"{}\": rename them apart to pick one",
+            super::file::quoted(name)
+        ));
+    }
     let Some(chosen) = extras.cameras.iter().find(|c| c.name == name) else {
         return Ok(Err(extras.cameras.into_iter().map(|c| c.name).collect()));
     };
@@ -328,11 +340,19 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
                 gltf::camera::Projection::Perspective(p) => (p.yfov(), p.aspect_ratio(), false),
                 gltf::camera::Projection::Orthographic(_) => (0.0, None, true),
             };
+            let name = super::file::quoted(&name);
             let forward = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
             let up = world.transform_vector3(DVec3::Y).normalize_or_zero();
             if forward == DVec3::ZERO || up == DVec3::ZERO {
                 return Err(format!(
                     "{source}: camera \"{name}\"'s node has a degenerate transform"
+                ));
+            }
+            // A shear would turn the view sideways of where the image's up points.
+            if forward.dot(up).abs() > 1e-3 {
+                return Err(format!(
+                    "{source}: camera \"{name}\"'s node transform shears it (its view and up are {:.1} degrees from square); glTF places cameras by rotation and translation",
+                    (90.0 - forward.dot(up).clamp(-1.0, 1.0).acos().to_degrees()).abs()
                 ));
             }
             extras.cameras.push(FileCamera {

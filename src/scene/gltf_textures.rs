@@ -1,6 +1,7 @@
 //! The textures of a glTF file's materials as rt-gpu's: each image the file holds (in a .glb's
 //! buffer, a data URI or a file beside it) decoded once, and each factor x texture product of
-//! the spec (glTF 2.0, 3.9.2) made once, as a [`Texture::Image`].
+//! the spec (glTF 2.0, 3.9.2) a [`Texture::Image`] that shares the decoded texels and applies its
+//! factor at lookup (an image used with many factors and samplers is held once).
 //!
 //! Read: a texture's image and `texCoord` 0, its sampler's wrap modes and magnification filter
 //! (mipmaps are not built: a path tracer filters by taking many samples per pixel); normal
@@ -174,7 +175,7 @@ impl<'a> FileTextures<'a> {
             ));
         };
         let name = match file_image.name() {
-            Some(name) => format!("{source} image {index} (\"{name}\")"),
+            Some(name) => format!("{source} image {index} (\"{}\")", super::file::quoted(name)),
             None => format!("{source} image {index}"),
         };
         let bytes = self.bytes(&file_image, &name)?;
@@ -185,6 +186,29 @@ impl<'a> FileTextures<'a> {
 
     /// The encoded bytes of `file_image` (`name`: how messages name it).
     fn bytes(&self, file_image: &gltf::Image, name: &str) -> Result<Vec<u8>, String> {
+        // glTF 2.0, 5.17: a `uri` or a `bufferView` with its `mimeType`, not both (the crate's
+        // `source` unwraps them).
+        let json = self.document.as_json().images.get(file_image.index());
+        match json.map(|j| {
+            (
+                j.uri.is_some(),
+                j.buffer_view.is_some(),
+                j.mime_type.is_some(),
+            )
+        }) {
+            Some((true, false, _)) | Some((false, true, true)) => {}
+            Some((true, true, _)) => {
+                return Err(format!(
+                    "image {name} has both a uri and a bufferView; glTF allows one"
+                ));
+            }
+            Some((false, true, false)) => {
+                return Err(format!(
+                    "image {name} lies in a bufferView without the mimeType glTF requires there"
+                ));
+            }
+            _ => return Err(format!("image {name} has neither a uri nor a bufferView")),
+        }
         match file_image.source() {
             gltf::image::Source::View { view, .. } => {
                 let buffer = self.buffers.get(view.buffer().index()).map(|b| &b.0[..]);
@@ -212,15 +236,22 @@ impl<'a> FileTextures<'a> {
     /// The bytes of the image file `uri` names: only a relative path that stays inside the
     /// glTF file's folder and names a regular file is opened.
     fn file_bytes(&self, uri: &str, name: &str) -> Result<Vec<u8>, String> {
-        let relative =
-            relative_uri(uri).map_err(|why| format!("image {name}: its URI \"{uri}\" {why}"))?;
+        let relative = relative_uri(uri).map_err(|why| {
+            format!(
+                "image {name}: its URI \"{}\" {why}",
+                super::file::quoted(uri)
+            )
+        })?;
         let path = match self.base_dir {
             Some(dir) => dir.join(&relative),
             None => Path::new(&relative).to_path_buf(),
         };
         let shown = beside(self.source, &relative);
-        let (bytes, _) = super::inputs::read(&path, &shown, image::MAX_IMAGE_FILE_BYTES)
-            .map_err(|e| format!("cannot read image {name} ({relative}): {e}"))?;
+        let (bytes, _) =
+            super::inputs::read(&path, &shown, image::MAX_IMAGE_FILE_BYTES).map_err(|e| {
+                let relative = super::file::quoted(&relative);
+                format!("cannot read image {name} ({relative}): {e}")
+            })?;
         Ok(bytes)
     }
 }
@@ -287,7 +318,7 @@ impl UvTransform {
 /// an error where they differ or one reads another UV set, since rt-gpu applies it to the
 /// mesh's coordinates.
 pub fn uv_transform(material: &gltf::Material, source: &str) -> Result<UvTransform, String> {
-    let name = material.name().unwrap_or("");
+    let name = super::file::quoted(material.name().unwrap_or(""));
     let pbr = material.pbr_metallic_roughness();
     let infos = [
         ("baseColorTexture", pbr.base_color_texture()),

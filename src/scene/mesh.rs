@@ -41,6 +41,8 @@ pub struct Mesh {
     pub extent: f32,
     /// How many of the file's triangles were left out as degenerate (of no area in f32).
     pub degenerate: usize,
+    /// For a part without a material, why a material library its OBJ file names was not read.
+    pub library_refused: Option<String>,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -64,6 +66,8 @@ impl PartialEq for Mesh {
 
 /// Most triangles one file may hold (their indices are packed in 28 bits on the GPU).
 pub const MAX_TRIANGLES: usize = 1 << 27;
+/// Largest texture coordinate a mesh may have.
+pub const MAX_UV: f32 = 1e7;
 /// Largest mesh file read (a path may name anything; a file of 2^27 triangles as OBJ text
 /// takes about 6 GB).
 pub const MAX_MESH_FILE_BYTES: u64 = 8 << 30;
@@ -119,6 +123,14 @@ impl Mesh {
         if let Some(uv) = uvs.iter().flatten().flatten().find(|uv| !uv.is_finite()) {
             return Err(format!(
                 "mesh {source} has a non-finite texture coordinate {uv}"
+            ));
+        }
+        // Beyond, f32 resolves no texel and tangents' products overflow.
+        if let Some(uv) =
+            (uvs.iter().flatten().flatten()).find(|uv| uv.abs().max_element() > MAX_UV)
+        {
+            return Err(format!(
+                "mesh {source} has a texture coordinate {uv} (after any KHR_texture_transform) beyond {MAX_UV:e}, where f32 resolves no texel"
             ));
         }
         if let Some(t) = tangents.iter().flatten().flatten().find(|t| !t.is_finite()) {
@@ -193,6 +205,7 @@ impl Mesh {
             material_name: String::new(),
             extent,
             degenerate,
+            library_refused: None,
         })
     }
 
@@ -320,11 +333,12 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // The material library is read on another thread: what it reads is the scene's too.
     let recorders = super::inputs::Recorders::current();
+    let refused = std::sync::Mutex::new(Vec::new());
     let parse = || {
         recorders.install(|| {
             let mut reader = std::io::Cursor::new(text.as_bytes());
             tobj::load_obj_buf(&mut reader, &options, |mtl| {
-                read_mtl(&base_dir, mtl, source)
+                read_mtl(&base_dir, mtl, source, &refused)
             })
         })
     };
@@ -391,6 +405,7 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
         );
     }
     let folder = path.parent().unwrap_or(Path::new(""));
+    let refused = refused.into_inner().unwrap_or_else(|p| p.into_inner());
     parts
         .into_iter()
         .map(|part| {
@@ -401,7 +416,10 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
                     mesh.material = Some(mtl_material(m, folder, source)?);
                     mesh.material_name = m.name.clone();
                 }
-                None => mesh.material_name = "default".into(),
+                None => {
+                    mesh.material_name = "default".into();
+                    mesh.library_refused = refused.first().cloned();
+                }
             }
             Ok(mesh)
         })
@@ -411,13 +429,54 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
 /// Largest .mtl file read.
 const MAX_MTL_BYTES: u64 = 16 << 20;
 
-/// The material library an OBJ file's `mtllib` names, beside it: only a relative path that
-/// stays in the OBJ's folder and names a regular file of at most 16 MiB is opened (an `mtllib`
-/// line may name anything, a device or a FIFO among them).
-fn read_mtl(base_dir: &Path, name: &Path, source: &str) -> tobj::MTLLoadResult {
+/// The material libraries an OBJ file's `mtllib` line names, beside it: a name with spaces if
+/// a file has it, else each word a library (OBJ lets one line name several), merged. Only a
+/// relative path that stays in the OBJ's folder and names a regular file of at most 16 MiB is
+/// opened (an `mtllib` line may name anything, a device or a FIFO among them); why a library
+/// is not read goes to `refused`, for the message of a part left without its material.
+fn read_mtl(
+    base_dir: &Path,
+    name: &Path,
+    source: &str,
+    refused: &std::sync::Mutex<Vec<String>>,
+) -> tobj::MTLLoadResult {
+    let whole = name.to_string_lossy();
+    let names: Vec<&str> = if base_dir.join(name).exists() || !whole.contains(char::is_whitespace) {
+        vec![whole.as_ref()]
+    } else {
+        whole.split_whitespace().collect()
+    };
+    let mut materials = Vec::new();
+    let mut index = tobj::MTLLoadResult::Ok(Default::default())
+        .map(|(_, index)| index)
+        .unwrap_or_default();
+    for library in names {
+        match read_one_mtl(base_dir, Path::new(library), source) {
+            Ok(Ok((mut read, map))) => {
+                let offset = materials.len();
+                materials.append(&mut read);
+                index.extend(map.into_iter().map(|(k, v)| (k, v + offset)));
+            }
+            Ok(Err(_)) => {}
+            Err(why) => refused
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .push(format!(
+                    "its material library \"{}\" {why}",
+                    super::file::quoted(library)
+                )),
+        }
+    }
+    Ok((materials, index))
+}
+
+/// One material library (see [`read_mtl`]), or why it is not read.
+fn read_one_mtl(base_dir: &Path, name: &Path, source: &str) -> Result<tobj::MTLLoadResult, String> {
     use std::path::Component;
     if !name.components().all(|c| matches!(c, Component::Normal(_))) {
-        return Err(tobj::LoadError::OpenFileFailed);
+        return Err(
+            "is not a relative path inside the OBJ file's folder (rt-gpu reads libraries beside the file or below it)".into(),
+        );
     }
     let path = base_dir.join(name);
     let shown = Path::new(source)
@@ -425,10 +484,13 @@ fn read_mtl(base_dir: &Path, name: &Path, source: &str) -> tobj::MTLLoadResult {
         .unwrap_or(Path::new(""))
         .join(name);
     let (bytes, _) = super::inputs::read(&path, &shown.to_string_lossy(), MAX_MTL_BYTES)
-        .map_err(|_| tobj::LoadError::OpenFileFailed)?;
-    // tobj panics on some malformed lines (`Kd 1 2`): such a library reads as unreadable.
-    crate::caught_quietly(|| tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes)))
-        .unwrap_or(Err(tobj::LoadError::ReadError))
+        .map_err(|e| format!("cannot be read: {e}"))?;
+    // tobj panics on some malformed lines (`Kd 1 2`): such a library reads as malformed.
+    match crate::caught_quietly(|| tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes))) {
+        Some(Ok(read)) => Ok(Ok(read)),
+        Some(Err(e)) => Err(format!("is malformed ({e})")),
+        None => Err("is malformed (a line the MTL reader cannot read)".into()),
+    }
 }
 
 /// An MTL material as rt-gpu's, the way Blender's OBJ exporter (3.4) writes its Principled
@@ -1092,7 +1154,7 @@ fn material_of(
 ) -> Result<Material, String> {
     use crate::material::{Light, Pbr};
     use crate::scene::texture::Texture;
-    let name = m.name().unwrap_or("");
+    let name = &super::file::quoted(m.name().unwrap_or(""));
     check_material_values(m, textures.source())?;
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();

@@ -267,6 +267,19 @@ impl Viewer {
             );
         }
         let ctx = GpuContext::open(&adapter)?;
+        // A surface larger than the device's textures fails in wgpu's validation, not here.
+        let limit = ctx.device.limits().max_texture_dimension_2d;
+        let size = window.inner_size();
+        for (what, (w, h)) in [
+            ("the image", (opts.width, opts.height)),
+            ("the window", (size.width, size.height)),
+        ] {
+            if w > limit || h > limit {
+                bail!(
+                    "{what} is {w}x{h}, larger than the {limit} pixels a side this GPU's surfaces take: use a smaller --size"
+                );
+            }
+        }
         let caps = surface.get_capabilities(&adapter);
         let exact = caps
             .formats

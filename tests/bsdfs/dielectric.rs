@@ -258,7 +258,7 @@ fn bad_rough_glass_is_a_located_error() {
             ),
             (
                 r#"{ type = "dielectric", ior = 0, roughness = 0.3 }"#,
-                "ior must be > 0",
+                "ior must be in [0.01, 100]",
             ),
         ],
     );

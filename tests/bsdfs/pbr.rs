@@ -211,7 +211,7 @@ fn bad_pbr_materials_are_located_errors() {
             ),
             (
                 r#"{ type = "pbr", base_color = [0.5, 0.5, 0.5], ior = 0 }"#,
-                "ior must be > 0",
+                "ior must be in [0.01, 100]",
             ),
             (
                 r#"{ type = "pbr", base_color = [1.5, 0.5, 0.5] }"#,

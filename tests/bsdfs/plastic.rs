@@ -327,7 +327,7 @@ fn bad_plastics_are_located_errors() {
             ),
             (
                 r#"{ type = "plastic", albedo = [0.5, 0.5, 0.5], ior = 0 }"#,
-                "ior must be > 0",
+                "ior must be in [0.01, 100]",
             ),
             (
                 r#"{ type = "plastic", albedo = [1.5, 0.5, 0.5] }"#,
