@@ -198,8 +198,9 @@ pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, 
     Ok(image)
 }
 
-/// Largest image file read (a path may name anything).
-pub const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
+/// Largest image file read (a path may name anything): an uncompressed RGBA f32 OpenEXR of the
+/// most texels an image may have ([`MAX_TEXELS`]) takes 2 GiB.
+pub const MAX_IMAGE_FILE_BYTES: u64 = 4 << 30;
 
 /// Most texels an image may have: a 16384x8192 environment (the largest common HDRI), which
 /// takes 1.6 GB as linear f32 RGB.
