@@ -311,6 +311,10 @@ fn values_outside_the_specification_are_refused_naming_the_field() {
             r#"{ "name": "M", "alphaMode": "MASK", "alphaCutoff": -1 }"#,
             "alphaCutoff",
         ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_ior": { "ior": 1000 } } }"#,
+            "up to 100",
+        ),
     ] {
         let err = load_with(material, "", "").expect_err(material);
         assert!(

@@ -55,7 +55,10 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
     if let Some(t) = args.target_rmse
         && !(t > 0.0 && t.is_finite())
     {
-        bail!("--target-rmse must be a positive number, got {t}");
+        bail!(
+            "--target-rmse must be a positive number, got {}",
+            super::shown_number(t)
+        );
     }
     let options = rt_gpu::converge::ConvergeOptions {
         scene: flat,

@@ -21,7 +21,8 @@ pub fn value(texture: &Texture, hit: &Hit) -> Vec3 {
             let p = hit.uv * c.scale;
             pick(parity(p.x) + parity(p.y), c.even, c.odd)
         }
-        Texture::Image(image) => image_at(image, hit.uv),
+        // Times the image's factor (glTF's factor x texture), as the kernel's albedo_at.
+        Texture::Image(image) => image_at(image, hit.uv) * image.factor,
     }
 }
 
@@ -50,10 +51,11 @@ pub fn bilinear(image: &Image, s: f32, t: f32) -> Vec3 {
 }
 
 /// `image` at surface coordinates `uv` (u across, v up; [0, 1] spans the image once) as its
-/// lookup says: wrapped on each axis and filtered, then times its factor.
+/// lookup says: wrapped on each axis and filtered (without its factor, which only a surface's
+/// colour, [`value`], applies).
 #[inline]
 pub fn image_at(image: &Image, uv: Vec2) -> Vec3 {
-    filtered(image, image.lookup, uv.x, 1.0 - uv.y) * image.factor
+    filtered(image, image.lookup, uv.x, 1.0 - uv.y)
 }
 
 /// `image` at image coordinates (s, t), wrapped and filtered as `lookup` says.

@@ -273,7 +273,9 @@ fn framing_camera(min: DVec3, max: DVec3) -> Camera {
         behind
     };
     // A model too large to frame from 40 degrees within the extent is framed from nearer, wider.
-    let distance = distance.min(room(direction));
+    // (A model at the extent's very edge leaves no room: the camera then stands at it, and
+    // its check says where.)
+    let distance = distance.min(room(direction)).max(super::MIN_SIZE as f64);
     let vfov_degrees = if distance * half.sin() >= 1.1 * radius * (1.0 - 1e-9) {
         FRAMING_VFOV
     } else {

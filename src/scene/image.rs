@@ -25,8 +25,10 @@ pub struct Image {
     /// read it another way or scale it (glTF's factor x texture products), so that an image
     /// used by many materials is held once.
     pub texels: std::sync::Arc<[f32]>,
-    /// What a surface's lookup multiplies the texels by, per channel (1 but for glTF's
-    /// factor x texture products): [`crate::material::texture::image_at`] and its twin apply it.
+    /// What a surface's colour multiplies the texels by, per channel (1 but for glTF's
+    /// factor x texture products): [`crate::material::texture::value`] and its twin
+    /// `albedo_at` apply it; maps (normal, alpha, metallic-roughness) and environments read
+    /// the texels as they are.
     pub factor: glam::Vec3,
     /// The largest value of any channel, times `factor` (albedo images must stay within 1).
     pub max_value: f32,
@@ -185,7 +187,11 @@ pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, 
     let key = (canonical, meta.len(), modified, srgb);
     let cache = CACHE.get_or_init(Default::default);
     if let Some((image, input)) = cache.lock().map_err(|_| "image cache poisoned")?.get(&key) {
-        super::inputs::note(input);
+        // As this scene names it (another may have named it otherwise).
+        super::inputs::note(&InputFile {
+            shown: source.to_string(),
+            ..input.clone()
+        });
         return Ok(image);
     }
     let (bytes, input) = super::inputs::read(path, source, MAX_IMAGE_FILE_BYTES)
@@ -213,10 +219,10 @@ const PEAK_BYTES_PER_TEXEL: u64 = 64;
 
 /// A Radiance HDR file, whose first line is `#?` and the writing program's name: the `image`
 /// crate reads only `#?RADIANCE`, so others (Mitsuba and many tools write `#?RGBE`) are given
-/// that line. `None` for files of other formats.
-fn radiance_hdr(bytes: &[u8], source: &str) -> Result<Option<Vec<u8>>, String> {
+/// that line. `Err` gives back the bytes of a file of another format.
+fn radiance_hdr(mut bytes: Vec<u8>, source: &str) -> Result<Result<Vec<u8>, Vec<u8>>, String> {
     if !bytes.starts_with(b"#?") {
-        return Ok(None);
+        return Ok(Err(bytes));
     }
     let header_end = bytes.windows(2).take(1 << 16).position(|w| w == b"\n\n");
     let Some(header_end) = header_end else {
@@ -236,11 +242,10 @@ fn radiance_hdr(bytes: &[u8], source: &str) -> Result<Option<Vec<u8>>, String> {
         ));
     }
     let first_line = bytes.iter().position(|&b| b == b'\n').unwrap_or(0);
-    let mut bytes = bytes.to_vec();
     if &bytes[..first_line] != b"#?RADIANCE" {
         bytes.splice(..first_line, b"#?RADIANCE".iter().copied());
     }
-    Ok(Some(bytes))
+    Ok(Ok(bytes))
 }
 
 /// Refuses an image whose header says it is too large for this machine's memory.
@@ -271,12 +276,12 @@ fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Resu
 
 /// Decodes an image file's `bytes` (by their format, not the file's name).
 fn decode_file(bytes: Vec<u8>, source: &str, srgb: bool) -> Result<Image, String> {
-    let decoded = match radiance_hdr(&bytes, source)? {
-        Some(bytes) => decode_from(
+    let decoded = match radiance_hdr(bytes, source)? {
+        Ok(bytes) => decode_from(
             image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Hdr),
             source,
         )?,
-        None => {
+        Err(bytes) => {
             let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
                 .with_guessed_format()
                 .map_err(|e| format!("cannot read image {source}: {}", one_line(&e)))?;

@@ -663,7 +663,11 @@ fn map_options(map: &str) -> Result<(Vec<MapOption<'_>>, String), String> {
     let words: Vec<&str> = map.split_whitespace().collect();
     let mut options = Vec::new();
     let mut i = 0;
-    while let Some(&flag) = words.get(i).filter(|w| w.starts_with('-')) {
+    // Options are known flags: a file name may start with '-' only after them.
+    while let Some(&flag) = words
+        .get(i)
+        .filter(|w| w.starts_with('-') && is_map_flag(w))
+    {
         // (least, most) values; numbers beyond the least are taken while they parse.
         let (least, most) = match flag {
             "-blendu" | "-blendv" | "-bm" | "-boost" | "-cc" | "-clamp" | "-imfchan"
@@ -685,7 +689,32 @@ fn map_options(map: &str) -> Result<(Vec<MapOption<'_>>, String), String> {
         i += 1 + values.len();
         options.push((flag, values));
     }
-    Ok((options, words[i..].join(" ")))
+    // The name as written, its inner spaces kept: from its first word's place in `map`.
+    let name = match words.get(i) {
+        Some(first) => map[first.as_ptr() as usize - map.as_ptr() as usize..].trim_end(),
+        None => "",
+    };
+    Ok((options, name.to_string()))
+}
+
+/// The MTL specification's options of a map statement.
+fn is_map_flag(word: &str) -> bool {
+    matches!(
+        word,
+        "-blendu"
+            | "-blendv"
+            | "-bm"
+            | "-boost"
+            | "-cc"
+            | "-clamp"
+            | "-imfchan"
+            | "-texres"
+            | "-type"
+            | "-mm"
+            | "-o"
+            | "-s"
+            | "-t"
+    )
 }
 
 /// The image an MTL map `slot` names (`map` after its options: tobj keeps `-o u v` and the like
@@ -903,16 +932,18 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
         Some(name) => match document.nodes().find(|n| n.name() == Some(name)) {
             Some(n) if document.nodes().filter(|m| m.name() == Some(name)).count() > 1 => {
                 return Err(format!(
-                    "mesh {source} has several nodes named \"{name}\" (node {} among them): rename them apart to pick one",
+                    "mesh {source} has several nodes named \"{}\" (node {} among them): rename them apart to pick one",
+                    super::file::quoted(name),
                     n.index()
                 ));
             }
             Some(n) => vec![n],
             None => {
-                let names: Vec<&str> = document.nodes().filter_map(|n| n.name()).take(20).collect();
+                let names: Vec<&str> = document.nodes().filter_map(|n| n.name()).collect();
                 return Err(format!(
-                    "mesh {source} has no node named \"{name}\" (nodes: {})",
-                    names.join(", ")
+                    "mesh {source} has no node named \"{}\" (nodes: {})",
+                    super::file::quoted(name),
+                    super::gltf_scene::listed(&names)
                 ));
             }
         },
@@ -1132,10 +1163,19 @@ fn check_material_values(m: &gltf::Material, source: &str) -> Result<(), String>
         ));
     }
     if let Some(ior) = m.ior()
-        && !(ior == 0.0 || (ior >= 1.0 && ior.is_finite()))
+        && !(ior == 0.0 || ior >= 1.0)
     {
         return Err(format!(
             "{}: its KHR_materials_ior.ior is {ior}; the extension takes 1 or more (or 0)",
+            at()
+        ));
+    }
+    let most = crate::material::fresnel::MAX_IOR;
+    if let Some(ior) = m.ior()
+        && !(ior <= most)
+    {
+        return Err(format!(
+            "{}: its KHR_materials_ior.ior is {ior}; rt-gpu takes indices up to {most} (ior 0, the extension's fully reflecting limit, is taken as {most})",
             at()
         ));
     }
@@ -1220,10 +1260,12 @@ fn material_of(
             base,
             unit(pbr.metallic_factor()),
             unit(pbr.roughness_factor()),
-            m.ior()
-                .filter(|i| i.is_finite())
-                .unwrap_or(1.5)
-                .clamp(1.0, 4.0),
+            // The extension's 0 is its limit of a fully reflecting dielectric (F0 = 1): the
+            // largest index rt-gpu takes, whose F0 is 0.96.
+            match m.ior().unwrap_or(1.5) {
+                0.0 => crate::material::fresnel::MAX_IOR,
+                ior => ior,
+            },
             unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
         )
         .with_normal_map(normal_map)

@@ -324,8 +324,8 @@ gpu_struct! {
         medium_g: f32,
         /// The albedo's texture: `TEXTURE_NONE`, `TEXTURE_CHECKER`, `TEXTURE_UV_CHECKER`
         /// (then `albedo` is its even colour) or `TEXTURE_IMAGE` (then `texture_image` is
-        /// where its texels start in the images array, and `texture_odd` holds its width and
-        /// height).
+        /// where its texels start in the images array, `texture_odd` holds its width and
+        /// height, and `albedo` the factor its texels are multiplied by).
         texture: u32,
         texture_scale: f32,
         texture_image: u32,

@@ -474,7 +474,8 @@ impl Viewer {
                 self.offscreen_copy()?
             };
             let rgb = read_texture(&self.ctx, &texture)?;
-            write_png(path, texture.width(), texture.height(), rgb)?;
+            let inputs: Vec<&Path> = self.scene.inputs.iter().map(|f| f.path.as_path()).collect();
+            write_png(path, &inputs, texture.width(), texture.height(), rgb)?;
         }
         self.ctx.queue.present(frame);
         if let Some(e) = self.ctx.take_failure() {
@@ -691,8 +692,7 @@ impl Viewer {
             device: self.film.device(),
         };
         let png = config.output.with_extension("png");
-        let inputs: Vec<&std::path::Path> =
-            self.scene.inputs.iter().map(|f| f.path.as_path()).collect();
+        let inputs: Vec<&Path> = self.scene.inputs.iter().map(|f| f.path.as_path()).collect();
         PendingOutput::claim(&config.output, &inputs)?.commit_film(&film, &meta)?;
         PendingOutput::claim(&png, &inputs)?.commit_image(&film, None)?;
         let _ = writeln!(
@@ -761,11 +761,18 @@ fn key_input(key: &Key, modifiers: ModifiersState) -> Option<Input> {
     }
 }
 
-fn write_png(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> anyhow::Result<()> {
+/// Writes a screenshot, never onto one of `inputs` (the files the scene reads).
+fn write_png(
+    path: &Path,
+    inputs: &[&Path],
+    width: u32,
+    height: u32,
+    rgb: Vec<u8>,
+) -> anyhow::Result<()> {
     let image = image::RgbImage::from_raw(width, height, rgb).context("screenshot size")?;
     let mut bytes = std::io::Cursor::new(Vec::new());
     image.write_to(&mut bytes, image::ImageFormat::Png)?;
-    PendingOutput::claim(path, &[])?.commit(&bytes.into_inner())
+    PendingOutput::claim(path, inputs)?.commit(&bytes.into_inner())
 }
 
 fn warn(message: &str) {

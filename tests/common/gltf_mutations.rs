@@ -102,7 +102,16 @@ fn element<'a>(doc: &'a mut Value, key: &str, c: &mut impl Choices) -> Option<&'
         return None;
     }
     let i = c.below(array.len());
-    array.get_mut(i)
+    // Only objects are edited (libFuzzer's byte mutations may leave anything there).
+    array.get_mut(i).filter(|v| v.is_object())
+}
+
+/// `v[key]` (`v` an object), made an object if it is not one.
+fn object_at<'a>(v: &'a mut Value, key: &str) -> &'a mut Value {
+    if !v[key].is_object() {
+        v[key] = json!({});
+    }
+    &mut v[key]
 }
 
 fn vec_of(c: &mut impl Choices, n: usize) -> Value {
@@ -111,6 +120,9 @@ fn vec_of(c: &mut impl Choices, n: usize) -> Value {
 
 /// `doc` with one to four structural mutations.
 pub fn mutate(doc: &mut Value, c: &mut impl Choices) {
+    if !doc.is_object() {
+        return;
+    }
     for _ in 0..1 + c.below(4) {
         mutate_once(doc, c);
     }
@@ -217,7 +229,7 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
             if let Some(m) = element(doc, "materials", c) {
                 match slot {
                     "emissiveTexture" | "normalTexture" => m[slot] = info,
-                    _ => m["pbrMetallicRoughness"][slot] = info,
+                    _ => object_at(m, "pbrMetallicRoughness")[slot] = info,
                 }
             }
         }
@@ -266,7 +278,7 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
             };
             match kind {
                 0 => p["mode"] = json!(mode),
-                1 => p["attributes"][attribute] = accessor,
+                1 => object_at(p, "attributes")[attribute] = accessor,
                 2 => p["indices"] = accessor,
                 _ => p["material"] = material,
             }
@@ -280,9 +292,9 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
                 return;
             };
             match kind {
-                0 => m["pbrMetallicRoughness"]["baseColorFactor"] = v4,
-                1 => m["pbrMetallicRoughness"]["metallicFactor"] = x,
-                2 => m["pbrMetallicRoughness"]["roughnessFactor"] = x,
+                0 => object_at(m, "pbrMetallicRoughness")["baseColorFactor"] = v4,
+                1 => object_at(m, "pbrMetallicRoughness")["metallicFactor"] = x,
+                2 => object_at(m, "pbrMetallicRoughness")["roughnessFactor"] = x,
                 3 => m["emissiveFactor"] = v3,
                 4 => m["alphaMode"] = json!(mode),
                 5 => m["alphaCutoff"] = x,
@@ -297,15 +309,21 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
             let Some(m) = element(doc, "materials", c) else {
                 return;
             };
-            let ext = &mut m["extensions"];
             match kind {
-                0 => ext["KHR_materials_ior"] = json!({ "ior": x }),
-                1 => ext["KHR_materials_transmission"] = json!({ "transmissionFactor": x }),
-                2 => ext["KHR_materials_emissive_strength"] = json!({ "emissiveStrength": x }),
+                0 => object_at(m, "extensions")["KHR_materials_ior"] = json!({ "ior": x }),
+                1 => {
+                    object_at(m, "extensions")["KHR_materials_transmission"] =
+                        json!({ "transmissionFactor": x })
+                }
+                2 => {
+                    object_at(m, "extensions")["KHR_materials_emissive_strength"] =
+                        json!({ "emissiveStrength": x })
+                }
                 _ => {
                     let t = json!({ "offset": offset, "scale": scale, "rotation": rotation });
-                    m["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"] =
-                        t;
+                    let texture =
+                        object_at(object_at(m, "pbrMetallicRoughness"), "baseColorTexture");
+                    object_at(texture, "extensions")["KHR_texture_transform"] = t;
                 }
             }
         }
@@ -326,10 +344,10 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
                 "range": number(c),
                 "spot": { "innerConeAngle": number(c), "outerConeAngle": number(c) }
             });
-            doc["extensions"]["KHR_lights_punctual"] = json!({ "lights": [light] });
+            object_at(doc, "extensions")["KHR_lights_punctual"] = json!({ "lights": [light] });
             let light_index = index(c, 1);
             if let Some(n) = element(doc, "nodes", c) {
-                n["extensions"]["KHR_lights_punctual"] = json!({ "light": light_index });
+                object_at(n, "extensions")["KHR_lights_punctual"] = json!({ "light": light_index });
             }
         }
         // Cameras, on a node.
