@@ -231,11 +231,18 @@ pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
 /// anything is allocated (an allocation that fails aborts the process).
 pub fn check_memory(width: u32, height: u32) -> Result<(), String> {
     let needed = width as u64 * height as u64 * RENDER_BYTES_PER_PIXEL;
+    check_available(needed, || format!("a {width}x{height} render"))
+}
+
+/// Refuses `needed` bytes where this machine has fewer available: "`what` needs about X GB of
+/// memory, and Y GB is available".
+pub fn check_available(needed: u64, what: impl FnOnce() -> String) -> Result<(), String> {
     if let Some(available) = available_memory()
         && needed > available
     {
         return Err(format!(
-            "a {width}x{height} render needs about {:.1} GB of memory, and {:.1} GB is available",
+            "{} needs about {:.1} GB of memory, and {:.1} GB is available",
+            what(),
             needed as f64 / 1e9,
             available as f64 / 1e9
         ));

@@ -52,6 +52,12 @@ fn write_gltf(dir: &Path, name: &str, material: &str, nodes: &str, extra: &str) 
     path
 }
 
+/// The file at `path` with `from` replaced by `to`.
+fn rewrite(path: &Path, from: &str, to: &str) {
+    let text = std::fs::read_to_string(path).expect("reads");
+    std::fs::write(path, text.replace(from, to)).expect("writes");
+}
+
 const SQRT_HALF: &str = "0.70710678";
 
 /// Node 1, "Side": camera 0 at (5, 0, 0) turned 90 degrees about +y (looking along -x). Node 2,
@@ -72,12 +78,7 @@ fn cameras_file(dir: &Path) -> PathBuf {
   ],"#;
     let path = write_gltf(dir, "cams.gltf", "", &nodes, cameras);
     // Nodes 3 and 4 are Lift's children, not roots.
-    let text = std::fs::read_to_string(&path).expect("reads");
-    std::fs::write(
-        &path,
-        text.replace(r#""nodes": [0, 1]"#, r#""nodes": [0, 1, 2]"#),
-    )
-    .expect("writes");
+    rewrite(&path, r#""nodes": [0, 1]"#, r#""nodes": [0, 1, 2]"#);
     path
 }
 
@@ -369,8 +370,7 @@ fn values_outside_the_specification_are_refused_naming_the_field() {
     assert!(err.contains("shears"), "{err}");
     // Two cameras of one name: --camera NAME cannot pick one.
     let path = cameras_file(d);
-    let text = std::fs::read_to_string(&path).expect("reads");
-    std::fs::write(&path, text.replace(r#""name": "Top""#, r#""name": "Side""#)).expect("writes");
+    rewrite(&path, r#""name": "Top""#, r#""name": "Side""#);
     let err = load(&path, "cams.gltf", Some("Side")).expect_err("two of one name");
     assert!(err.contains("several cameras named \"Side\""), "{err}");
     // A name that would forge a line of output is escaped.
@@ -400,16 +400,9 @@ fn many_ignored_ranges_make_one_note() {
     );
     let path = write_gltf(dir.path(), "many.gltf", "", &nodes.join(",\n"), &extra);
     // Every light node is a root.
-    let text = std::fs::read_to_string(&path).expect("reads");
     let roots: Vec<String> = (0..=count).map(|i| i.to_string()).collect();
-    std::fs::write(
-        &path,
-        text.replace(
-            r#""nodes": [0, 1]"#,
-            &format!(r#""nodes": [{}]"#, roots.join(", ")),
-        ),
-    )
-    .expect("writes");
+    let roots = format!(r#""nodes": [{}]"#, roots.join(", "));
+    rewrite(&path, r#""nodes": [0, 1]"#, &roots);
     let (scene, notes) = load(&path, "many.gltf", None).expect("loads");
     assert_eq!(scene.punctual.len(), count);
     assert_eq!(notes.len(), 1, "{}", notes.len());
@@ -424,28 +417,20 @@ fn any_accepted_file_is_framed_and_collapsed_corners_are_named() {
     let dir = tempfile::tempdir().expect("temp dir");
     let d = dir.path();
     let big = write_gltf(d, "big.gltf", "", "", "");
-    let text = std::fs::read_to_string(&big).expect("reads");
-    std::fs::write(
+    rewrite(
         &big,
-        text.replace(
-            r#""name": "Triangle", "mesh": 0"#,
-            r#""name": "Triangle", "mesh": 0, "scale": [3e7, 3e7, 3e7]"#,
-        ),
-    )
-    .expect("writes");
+        r#""name": "Triangle", "mesh": 0"#,
+        r#""name": "Triangle", "mesh": 0, "scale": [3e7, 3e7, 3e7]"#,
+    );
     let (scene, _) = load(&big, "big.gltf", None).expect("framed");
     assert!(scene.camera.look_from.abs().max_element() <= 1e8);
     // Far from the origin, a small triangle's corners are one f32 point.
     let far = write_gltf(d, "far.gltf", "", "", "");
-    let text = std::fs::read_to_string(&far).expect("reads");
-    std::fs::write(
+    rewrite(
         &far,
-        text.replace(
-            r#""name": "Triangle", "mesh": 0"#,
-            r#""name": "Triangle", "mesh": 0, "translation": [9.9e7, 0, 0], "scale": [0.5, 0.5, 0.5]"#,
-        ),
-    )
-    .expect("writes");
+        r#""name": "Triangle", "mesh": 0"#,
+        r#""name": "Triangle", "mesh": 0, "translation": [9.9e7, 0, 0], "scale": [0.5, 0.5, 0.5]"#,
+    );
     let err = load(&far, "far.gltf", None).expect_err("collapsed");
     assert!(err.contains("coincide in f32"), "{err}");
 }

@@ -114,9 +114,7 @@ fn check_outputs_are_not_inputs(
     scene: &rt_gpu::scene::Scene,
     scene_file: Option<&std::path::Path>,
 ) -> anyhow::Result<()> {
-    let inputs: Vec<&std::path::Path> = (scene_file.into_iter())
-        .chain(scene.inputs.iter().map(|f| f.path.as_path()))
-        .collect();
+    let inputs: Vec<&std::path::Path> = scene_file.into_iter().chain(scene.input_paths()).collect();
     for name in ["converge.csv", "converge.svg", "converge.png"] {
         rt_gpu::output::check_not_input(&dir.join(name), &inputs)?;
     }

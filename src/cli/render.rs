@@ -342,7 +342,7 @@ fn print_shader(plan: &Plan) -> anyhow::Result<()> {
 /// destination fails before a long render, not after it.
 fn claim_outputs(plan: &Plan) -> anyhow::Result<PendingOutput> {
     let inputs: Vec<&Path> = (plan.scene_file.iter().map(|p| p.as_path()))
-        .chain(plan.scene.inputs.iter().map(|f| f.path.as_path()))
+        .chain(plan.scene.input_paths())
         .collect();
     let pending = PendingOutput::claim(&plan.output, &inputs)?;
     if let Some(c) = &plan.checkpoint {

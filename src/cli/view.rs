@@ -16,7 +16,10 @@ pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
     {
-        bail!("--time must be a positive number of seconds, got {t}");
+        bail!(
+            "--time must be a positive number of seconds, got {}",
+            super::shown_number(t)
+        );
     }
     let (scene, _) = resolve_scene(&args.scene, args.options.camera.as_deref())?;
     if let Some(note) = args.options.note_for(&scene) {

@@ -247,11 +247,11 @@ impl MaterialModel for Pbr {
         }
         super::fresnel::check_ior(self.ior)?;
         if let Some(image) = self.metallic_roughness
-            && image.max_value > 1.0
+            && image.max_value() > 1.0
         {
             return Err(format!(
                 "metallic-roughness image {} has values up to {}: its values lie in [0, 1]",
-                image.source, image.max_value
+                image.source, image.max_value()
             ));
         }
         self.base_color.validate_albedo()

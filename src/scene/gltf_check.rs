@@ -367,16 +367,9 @@ fn check_accessor(
             "{at}: accessor {index} has a count of {count} and no buffer view: more than the {MAX_UNVIEWED_COUNT} elements rt-gpu reads"
         ));
     }
-    let needed = count.saturating_mul(PEAK_BYTES_PER_ELEMENT);
-    if let Some(available) = crate::film::available_memory()
-        && needed > available
-    {
-        return Err(format!(
-            "{at}: accessor {index} has {count} elements: loading them needs about {:.1} GB of memory, and {:.1} GB is available",
-            needed as f64 / 1e9,
-            available as f64 / 1e9
-        ));
-    }
+    crate::film::check_available(count.saturating_mul(PEAK_BYTES_PER_ELEMENT), || {
+        format!("{at}: accessor {index} has {count} elements: loading them")
+    })?;
     if let Some(view) = a.buffer_view {
         let offset = a.byte_offset.map_or(0, |o| o.0);
         let what = format!("accessor {index}");

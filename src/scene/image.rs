@@ -30,14 +30,11 @@ pub struct Image {
     /// `albedo_at` apply it; maps (normal, alpha, metallic-roughness) and environments read
     /// the texels as they are.
     pub factor: glam::Vec3,
-    /// The largest value of any channel, times `factor` (albedo images must stay within 1).
-    pub max_value: f32,
-    /// The mean texel, times `factor` (what light picking weighs an image-textured emitter by).
-    pub mean: glam::Vec3,
+
     /// How a textured surface reads it beyond [0, 1] and between texels (an environment reads
     /// it its own way).
     pub lookup: super::image_lookup::ImageLookup,
-    /// The largest value of each channel of `texels`, and their mean.
+    /// The largest value of each channel of `texels`, and their mean (without `factor`).
     channel_max: glam::Vec3,
     raw_mean: glam::Vec3,
     /// Built on first use by an environment light (see `scene::environment`).
@@ -76,20 +73,27 @@ impl Image {
             }
             max_value[i % 3] = max_value[i % 3].max(x);
         }
-        let mean = (sum / (width as f64 * height as f64)).as_vec3();
         Ok(Image {
             source: source.to_string(),
             width,
             height,
-            mean,
-            raw_mean: mean,
+            raw_mean: (sum / (width as f64 * height as f64)).as_vec3(),
             texels: texels.into(),
             factor: glam::Vec3::ONE,
-            max_value: max_value.max_element(),
             channel_max: max_value,
             lookup: Default::default(),
             sampling: OnceLock::new(),
         })
+    }
+
+    /// The largest value of any channel, times `factor` (albedo images must stay within 1).
+    pub fn max_value(&self) -> f32 {
+        (self.channel_max * self.factor).max_element()
+    }
+
+    /// The mean texel, times `factor` (what light picking weighs an image-textured emitter by).
+    pub fn mean(&self) -> glam::Vec3 {
+        self.raw_mean * self.factor
     }
 
     /// Texel (x, y) (x from the left, y from the top), as decoded: without `factor`.
@@ -113,8 +117,6 @@ impl Image {
             source: source.to_string(),
             texels: self.texels.clone(),
             factor,
-            max_value: (self.channel_max * factor).max_element(),
-            mean: self.raw_mean * factor,
             sampling: OnceLock::new(),
             ..*self
         })
@@ -261,17 +263,10 @@ fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Resu
             "image {source} is {width}x{height}: more than the {MAX_TEXELS} texels (16384x8192) an image may have (use a smaller image)"
         ));
     }
-    let needed = texels * PEAK_BYTES_PER_TEXEL;
-    if let Some(available) = crate::film::available_memory()
-        && needed > available
-    {
-        return Err(format!(
-            "image {source} is {width}x{height}: loading it needs about {:.1} GB of memory, and {:.1} GB is available (use a smaller image)",
-            needed as f64 / 1e9,
-            available as f64 / 1e9
-        ));
-    }
-    Ok(())
+    crate::film::check_available(texels * PEAK_BYTES_PER_TEXEL, || {
+        format!("image {source} is {width}x{height}: loading it")
+    })
+    .map_err(|e| format!("{e} (use a smaller image)"))
 }
 
 /// Decodes an image file's `bytes` (by their format, not the file's name).

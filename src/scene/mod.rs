@@ -202,6 +202,11 @@ impl Camera {
 }
 
 impl Scene {
+    /// Where the files it reads are (what outputs must not replace).
+    pub fn input_paths(&self) -> impl Iterator<Item = &std::path::Path> {
+        self.inputs.iter().map(|f| f.path.as_path())
+    }
+
     /// The whole-scene checks the backends rely on; file loading reports the same problems with
     /// the file's line numbers before it gets here.
     pub fn validate(&self) -> Result<(), SceneError> {

@@ -63,10 +63,11 @@ impl NormalMap {
                 self.scale
             ));
         }
-        if self.image.max_value > 1.0 {
+        if self.image.max_value() > 1.0 {
             return Err(format!(
                 "normal map {} has values up to {}: a normal map's values lie in [0, 1]",
-                self.image.source, self.image.max_value
+                self.image.source,
+                self.image.max_value()
             ));
         }
         Ok(())

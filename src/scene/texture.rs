@@ -68,11 +68,12 @@ impl Texture {
     /// [`Texture::validate`], and every value within [0, 1], as a reflectance must be.
     pub fn validate_albedo(&self) -> Result<(), String> {
         if let Texture::Image(image) = self
-            && image.max_value > 1.0
+            && image.max_value() > 1.0
         {
             return Err(format!(
                 "image {} has values up to {}: an albedo must lie in [0, 1]",
-                image.source, image.max_value
+                image.source,
+                image.max_value()
             ));
         }
         self.validate()
@@ -84,7 +85,7 @@ impl Texture {
         match self {
             Texture::Colour(c) => *c,
             Texture::Checker(c) | Texture::UvChecker(c) => 0.5 * (c.even + c.odd),
-            Texture::Image(image) => image.mean,
+            Texture::Image(image) => image.mean(),
         }
     }
 

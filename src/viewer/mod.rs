@@ -474,7 +474,7 @@ impl Viewer {
                 self.offscreen_copy()?
             };
             let rgb = read_texture(&self.ctx, &texture)?;
-            let inputs: Vec<&Path> = self.scene.inputs.iter().map(|f| f.path.as_path()).collect();
+            let inputs: Vec<&Path> = self.scene.input_paths().collect();
             write_png(path, &inputs, texture.width(), texture.height(), rgb)?;
         }
         self.ctx.queue.present(frame);
@@ -692,7 +692,7 @@ impl Viewer {
             device: self.film.device(),
         };
         let png = config.output.with_extension("png");
-        let inputs: Vec<&Path> = self.scene.inputs.iter().map(|f| f.path.as_path()).collect();
+        let inputs: Vec<&Path> = self.scene.input_paths().collect();
         PendingOutput::claim(&config.output, &inputs)?.commit_film(&film, &meta)?;
         PendingOutput::claim(&png, &inputs)?.commit_image(&film, None)?;
         let _ = writeln!(
