@@ -43,14 +43,25 @@ pub struct AutoBackend {
 pub struct AdapterLook {
     #[cfg(feature = "gpu")]
     info: Option<wgpu::AdapterInfo>,
+    /// The vec4fs of images its kernel holds (`gpu::renderer::image_capacity`).
+    #[cfg(feature = "gpu")]
+    image_capacity: u64,
 }
 
 /// Looks for the adapter `gpu` names (the best available without a name).
 pub fn look_for_adapter(gpu: &GpuChoice) -> AdapterLook {
     #[cfg(feature = "gpu")]
     {
-        let info = crate::gpu::context::adapter_info(gpu.adapter.as_deref()).ok();
-        AdapterLook { info }
+        match crate::gpu::context::adapter_limits(gpu.adapter.as_deref()) {
+            Ok((info, limits)) => AdapterLook {
+                info: Some(info),
+                image_capacity: crate::gpu::renderer::image_capacity(&limits),
+            },
+            Err(_) => AdapterLook {
+                info: None,
+                image_capacity: 0,
+            },
+        }
     }
     #[cfg(not(feature = "gpu"))]
     {
@@ -83,6 +94,14 @@ pub fn auto_backend_seeing(look: &AdapterLook, gpu: &GpuChoice, scene: &FlatScen
             backend: Backend::Gpu,
             reason,
         };
+        let images = crate::gpu::layout::ImageArray::plan(scene).bytes() / 16;
+        if images > look.image_capacity {
+            return cpu(format!(
+                "the scene's images take {} MB, more than the adapter's largest texture holds ({} MB)",
+                (images * 16) >> 20,
+                (look.image_capacity * 16) >> 20
+            ));
+        }
         if info.device_type != wgpu::DeviceType::Cpu {
             return gpu_backend("a GPU".into());
         }
@@ -99,6 +118,28 @@ pub fn auto_backend_seeing(look: &AdapterLook, gpu: &GpuChoice, scene: &FlatScen
         let _ = (look, gpu, scene);
         cpu("built without the gpu feature".into())
     }
+}
+
+/// What `--backend gpu` asks of each image a scene loads (`scene::image::with_device_check`):
+/// that the adapter `gpu` names holds it. Adapters are asked only for an image larger than any
+/// holds (wgpu's default limits: 8192 rows), so other scenes never wait for the drivers.
+#[cfg(feature = "gpu")]
+pub fn image_check(gpu: &GpuChoice) -> crate::scene::image::DeviceCheck {
+    let gpu = gpu.clone();
+    let look = std::sync::OnceLock::new();
+    std::sync::Arc::new(move |texels: u64| {
+        if texels <= crate::gpu::renderer::image_capacity(&wgpu::Limits::default()) {
+            return Ok(());
+        }
+        let look: &AdapterLook = look.get_or_init(|| look_for_adapter(&gpu));
+        match &look.info {
+            Some(info) if texels > look.image_capacity => Err(format!(
+                "more than {}'s largest texture holds ({} texels): use a smaller image, or --backend cpu",
+                info.name, look.image_capacity
+            )),
+            _ => Ok(()),
+        }
+    })
 }
 
 /// A backend made ready once (device opened, kernel compiled) for many renders of one scene.

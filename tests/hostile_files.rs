@@ -355,6 +355,63 @@ fn images_are_checked_from_their_headers_and_radiance_files_of_any_writer_load()
     );
 }
 
+/// `--backend gpu` refuses an environment its adapter cannot hold from the image's header, in
+/// well under a second, rather than after decoding it (gigabytes and seconds).
+#[cfg(feature = "cli")]
+#[test]
+fn images_the_gpu_cannot_hold_are_refused_from_their_headers() {
+    let (info, limits) = match rt_gpu::gpu::context::adapter_limits(None) {
+        Ok(adapter) => adapter,
+        Err(e) if std::env::var_os("RT_GPU_REQUIRE_GPU").is_some() => {
+            panic!("RT_GPU_REQUIRE_GPU is set but the GPU is unavailable: {e}")
+        }
+        Err(e) => return eprintln!("skipping GPU test: {e}"),
+    };
+    let capacity = rt_gpu::gpu::renderer::image_capacity(&limits);
+    // Just over what the adapter holds, within what an image may have (lavapipe: 16384x4097).
+    let (width, height) = (16384u64, capacity / 16384 + 1);
+    if width * height > rt_gpu::scene::image::MAX_TEXELS {
+        return eprintln!("skipping: {} holds any image rt-gpu reads", info.name);
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    std::fs::write(d.join("sky.png"), png_header_only(16384, height as u32)).expect("writes");
+    std::fs::write(
+        d.join("sky.toml"),
+        "[render]\nbackground = { image = \"sky.png\" }\n[camera]\nlook_from = [0, 0, 0]\nlook_at = [0, 0, -1]\nvfov = 40\n[materials]\ngrey = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n[[object]]\nsphere = { center = [0, 0, -3], radius = 1 }\nmaterial = \"grey\"\n",
+    )
+    .expect("writes");
+    let start = std::time::Instant::now();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rt-gpu"))
+        .args([
+            "sky.toml",
+            "--backend",
+            "gpu",
+            "--spp",
+            "1",
+            "-o",
+            "out.png",
+        ])
+        .current_dir(d)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains(&format!("sky.png is 16384x{height}"))
+            && err.contains("largest texture holds")
+            && err.contains("--backend cpu"),
+        "{err}"
+    );
+    assert!(
+        start.elapsed().as_secs_f64() < 5.0,
+        "took {:?}",
+        start.elapsed()
+    );
+    assert!(!d.join("out.png").exists());
+}
+
 // Runs the command line.
 #[cfg(feature = "cli")]
 #[test]

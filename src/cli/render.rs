@@ -132,7 +132,14 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
                 .name("adapter look".into())
                 .spawn_scoped(threads, || rt_gpu::render::look_for_adapter(&gpu))
         });
-        let loaded = load(args, scene_arg, partial, &gpu, &chosen);
+        let loaded = match &chosen {
+            Some((Backend::Gpu, _)) => {
+                rt_gpu::scene::image::with_device_check(rt_gpu::render::image_check(&gpu), || {
+                    load(args, scene_arg, partial, &gpu, &chosen)
+                })
+            }
+            _ => load(args, scene_arg, partial, &gpu, &chosen),
+        };
         // Joined on an error too, so that a panic of the look is reported here; looked for on
         // this thread where none could be started.
         let look = look.map(|spawned| match spawned {

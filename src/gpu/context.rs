@@ -120,9 +120,10 @@ pub fn choose_adapter(
     }
 }
 
-/// What [`GpuContext::new`] with `wanted` would open, without opening it.
-pub fn adapter_info(wanted: Option<&str>) -> Result<wgpu::AdapterInfo, GpuError> {
-    choose_adapter(&instance(), wanted).map(|a| a.get_info())
+/// What [`GpuContext::new`] with `wanted` would open, without opening it: the adapter and the
+/// limits its device is opened with.
+pub fn adapter_limits(wanted: Option<&str>) -> Result<(wgpu::AdapterInfo, wgpu::Limits), GpuError> {
+    choose_adapter(&instance(), wanted).map(|a| (a.get_info(), a.limits()))
 }
 
 impl GpuContext {

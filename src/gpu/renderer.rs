@@ -411,7 +411,7 @@ impl GpuRenderer {
             )));
         }
         let image_rows = texel_rows(buffers.images.bytes() / 16);
-        if image_rows > max_rows {
+        if buffers.images.bytes() / 16 > image_capacity(&self.ctx.limits) {
             let environment = match &scene.background {
                 crate::scene::Background::Environment(env) => Some(env.image),
                 _ => None,
@@ -889,6 +889,13 @@ impl GpuRenderer {
         Ok(result)
     }
 }
+
+/// The vec4fs of images (an image's texels and an environment's CDFs) a device's kernel holds:
+/// its image texture's rows, the device's largest, of `TEXEL_ROW` vec4fs.
+pub fn image_capacity(limits: &wgpu::Limits) -> u64 {
+    limits.max_texture_dimension_2d as u64 * TEXEL_ROW as u64
+}
+
 /// How a render's dispatches are sized, and its parameters.
 pub(super) struct DispatchPlan {
     pub(super) sizer: DispatchSizer,

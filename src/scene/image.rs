@@ -250,7 +250,35 @@ fn radiance_hdr(mut bytes: Vec<u8>, source: &str) -> Result<Result<Vec<u8>, Vec<
     Ok(Ok(bytes))
 }
 
-/// Refuses an image whose header says it is too large for this machine's memory.
+/// What the device a scene is loaded for says of an image of so many texels: `Err` with why it
+/// cannot hold it. Installed by [`with_device_check`].
+pub type DeviceCheck = std::sync::Arc<dyn Fn(u64) -> Result<(), String> + Send + Sync>;
+
+/// The check of the device the scene being loaded is for (process-wide, as the threads that
+/// read a scene's material libraries load its images too).
+static DEVICE_CHECK: Mutex<Option<DeviceCheck>> = Mutex::new(None);
+
+/// Runs `f` (a scene's loading) with every image it decodes checked from its header against
+/// the device that will hold it (`--backend gpu`: the kernel's image texture), so that an
+/// image the device cannot hold is refused before a decode of gigabytes and seconds.
+pub fn with_device_check<R>(check: DeviceCheck, f: impl FnOnce() -> R) -> R {
+    /// Puts the previous check back, however `f` ends.
+    struct Restore(Option<DeviceCheck>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            *DEVICE_CHECK.lock().unwrap_or_else(|p| p.into_inner()) = self.0.take();
+        }
+    }
+    let previous = DEVICE_CHECK
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .replace(check);
+    let _restore = Restore(previous);
+    f()
+}
+
+/// Refuses an image whose header says it is too large for this machine's memory, or for the
+/// device the scene is loaded for.
 fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Result<(), String> {
     if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(format!(
@@ -262,6 +290,13 @@ fn check_size_before_decoding((width, height): (u32, u32), source: &str) -> Resu
         return Err(format!(
             "image {source} is {width}x{height}: more than the {MAX_TEXELS} texels (16384x8192) an image may have (use a smaller image)"
         ));
+    }
+    let device = DEVICE_CHECK
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .clone();
+    if let Some(check) = device {
+        check(texels).map_err(|why| format!("image {source} is {width}x{height}: {why}"))?;
     }
     crate::film::check_available(texels * PEAK_BYTES_PER_TEXEL, || {
         format!("image {source} is {width}x{height}: loading it")
