@@ -158,6 +158,7 @@ fn equivalence_test_detects_small_real_differences() {
         .position(|n| n == "light")
         .expect("light");
     two_sided.materials[light] = Material::Light(rt_gpu::material::Light {
+        alpha: None,
         radiance: Vec3::splat(15.0).into(),
         strength: 1.0,
         two_sided: true,

@@ -529,6 +529,15 @@ fn mtl_map_options_and_emission_are_read_or_refused_never_guessed() {
         }
         other => panic!("{other:?}"),
     }
+    // An emitter's `d` below 1 makes it see-through, as any other material's.
+    let parts = load_with("newmtl paint\nKe 2 2 2\nd 0.25\n").expect("loads");
+    match parts[0].material {
+        Some(rt_gpu::scene::Material::Light(light)) => assert_eq!(
+            light.alpha.map(|a| (a.mode, a.factor)),
+            Some((rt_gpu::scene::alpha::AlphaMode::Blend, 0.25))
+        ),
+        other => panic!("{other:?}"),
+    }
 }
 
 /// Issue 61: a material library that is not read is named with the reason where a part is left

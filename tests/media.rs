@@ -46,6 +46,7 @@ fn transmittance_through_slabs_is_exponential() {
         radiance: Vec3::new(2.0, 3.0, 4.0).into(),
         strength: 1.0,
         two_sided: false,
+        alpha: None,
     });
     let scene = common::scene(
         Vec3::new(0.0, 0.0, -20.0),
@@ -516,6 +517,7 @@ fn only_scenes_with_media_get_media_code() {
                 radiance: Vec3::ONE.into(),
                 strength: 1.0,
                 two_sided: true,
+                alpha: None,
             }),
         ],
         vec![

@@ -43,6 +43,7 @@ fn cornell_with_sphere_light() -> Scene {
             radiance: Vec3::new(2.0, 1.5, 1.0).into(),
             strength: 1.0,
             two_sided: false,
+            alpha: None,
         }),
     );
     scene.objects.push(object(
@@ -63,6 +64,7 @@ fn spheres_with_lights() -> Scene {
             radiance: Vec3::splat(6.0).into(),
             strength: 1.0,
             two_sided: false,
+            alpha: None,
         }),
     );
     let ember = add_material(
@@ -177,6 +179,7 @@ fn nee_comparison_detects_small_real_differences() {
             radiance: Vec3::splat(radiance).into(),
             strength: 1.0,
             two_sided,
+            alpha: None,
         });
         let verdict = compare(&naive, &render_cpu(&changed, &cornell(2, true)));
         eprintln!("{label}: {verdict:?}");

@@ -686,6 +686,7 @@ fn tiny_bright_lights_and_edge_on_lights() {
                 radiance: Vec3::splat(radiance).into(),
                 strength: 1.0,
                 two_sided: false,
+                alpha: None,
             }),
         ],
         vec![

@@ -2,6 +2,7 @@
 //! (along the shape's normal) unless `two_sided`, and reflects nothing. Random numbers: 0.
 
 use super::{BsdfSample, MaterialModel};
+use crate::scene::alpha::Alpha;
 use crate::shared::ray::Hit;
 use crate::material::texture;
 use crate::shared::layout::GpuMaterial;
@@ -22,6 +23,11 @@ pub struct Light {
     pub strength: f32,
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub two_sided: bool,
+    /// How rays see through it (glTF's alphaMode, MTL's `d`; not in scene files yet): where a
+    /// ray passes, it neither meets the light nor sees its emission, and a shadow ray toward a
+    /// point of it passes alike, so light sampling sees the same holes.
+    #[serde(skip)]
+    pub alpha: Option<Alpha>,
 }
 
 fn one() -> f32 {
@@ -48,7 +54,7 @@ impl MaterialModel for Light {
     type Params = LightParams;
     const FEATURE: &'static str = "LIGHT";
     /// Textured radiance.
-    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE", "ALPHA"];
     const EMITS_UNDER: Option<&'static str> = Some("LIGHT");
 
     fn validate(&self) -> Result<(), String> {
@@ -73,7 +79,12 @@ impl MaterialModel for Light {
     }
 
     fn extra_features(&self) -> Vec<&'static str> {
-        self.radiance.feature().into_iter().collect()
+        let alpha = self.alpha.map(|_| "ALPHA");
+        self.radiance.feature().into_iter().chain(alpha).collect()
+    }
+
+    fn alpha(&self) -> Option<&Alpha> {
+        self.alpha.as_ref()
     }
 
     fn emitted(&self, hit: &Hit) -> Vec3 {

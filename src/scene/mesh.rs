@@ -512,12 +512,23 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
             m.name
         ));
     }
+    // `d` below 1 (Blender writes the Principled BSDF's alpha there): see-through, as glTF's
+    // BLEND, emitters too.
+    let dissolve =
+        m.dissolve
+            .filter(|d| d.is_finite() && *d < 1.0)
+            .map(|d| crate::scene::alpha::Alpha {
+                mode: crate::scene::alpha::AlphaMode::Blend,
+                factor: d.max(0.0),
+                image: None,
+            });
     let emission = colour(m.emissive).unwrap_or(Vec3::ZERO);
     if emission.max_element() > 0.0 {
         let light = Material::Light(Light {
             radiance: emission.into(),
             strength: 1.0,
             two_sided: true,
+            alpha: dissolve,
         });
         light
             .validate()
@@ -549,16 +560,6 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
             .clamp(Vec3::ZERO, Vec3::ONE)
             .into(),
     };
-    // `d` below 1 (Blender writes the Principled BSDF's alpha there): see-through, as glTF's
-    // BLEND.
-    let dissolve =
-        m.dissolve
-            .filter(|d| d.is_finite() && *d < 1.0)
-            .map(|d| crate::scene::alpha::Alpha {
-                mode: crate::scene::alpha::AlphaMode::Blend,
-                factor: d.max(0.0),
-                image: None,
-            });
     let bump = (m.normal_texture.as_ref().map(|map| (map, "map_Bump")))
         .or_else(|| m.unknown_param.get("norm").map(|map| (map, "norm")));
     let normal_map = match bump {
@@ -1183,7 +1184,8 @@ fn check_material_values(m: &gltf::Material, source: &str) -> Result<(), String>
 }
 
 /// A glTF metallic-roughness material as rt-gpu's: emissive -> light (emissive factor x
-/// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is), else
+/// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is, cut by
+/// its alphaMode as `pbr` is), else
 /// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
 /// KHR_materials_ior (default 1.5), KHR_materials_transmission's factor (default 0), the
 /// metallic-roughness texture, the normal texture and alphaMode MASK or BLEND (the base
@@ -1199,23 +1201,6 @@ fn material_of(
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
-    let emissive = Vec3::from_array(m.emissive_factor()).clamp(Vec3::ZERO, Vec3::splat(1e6));
-    let strength = m.emissive_strength().unwrap_or(1.0);
-    if emissive.max_element() > 0.0 && strength > 0.0 {
-        let radiance = match m.emissive_texture() {
-            Some(info) => textures.colour(&info, emissive, name, "emissiveTexture")?,
-            None => Texture::Colour(emissive),
-        };
-        return Ok(Material::Light(Light {
-            radiance,
-            strength: strength.clamp(0.0, crate::material::light::MAX_STRENGTH),
-            two_sided: m.double_sided(),
-        }));
-    }
-    let base = match pbr.base_color_texture() {
-        Some(info) => textures.colour(&info, base, name, "baseColorTexture")?,
-        None => Texture::Colour(base),
-    };
     let unit = |x: f32| {
         if x.is_finite() {
             x.clamp(0.0, 1.0)
@@ -1223,14 +1208,7 @@ fn material_of(
             0.0
         }
     };
-    let normal_map = match m.normal_texture() {
-        Some(normal) => Some(textures.normal_map(&normal, name)?),
-        None => None,
-    };
-    let metallic_roughness = match pbr.metallic_roughness_texture() {
-        Some(info) => Some(textures.metallic_roughness(&info, name)?),
-        None => None,
-    };
+    // Cuts emitters too: a masked texel of an emissive material is a hole.
     let alpha = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => None,
         mode => {
@@ -1254,6 +1232,32 @@ fn material_of(
                 image,
             })
         }
+    };
+    let emissive = Vec3::from_array(m.emissive_factor()).clamp(Vec3::ZERO, Vec3::splat(1e6));
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    if emissive.max_element() > 0.0 && strength > 0.0 {
+        let radiance = match m.emissive_texture() {
+            Some(info) => textures.colour(&info, emissive, name, "emissiveTexture")?,
+            None => Texture::Colour(emissive),
+        };
+        return Ok(Material::Light(Light {
+            radiance,
+            strength: strength.clamp(0.0, crate::material::light::MAX_STRENGTH),
+            two_sided: m.double_sided(),
+            alpha,
+        }));
+    }
+    let base = match pbr.base_color_texture() {
+        Some(info) => textures.colour(&info, base, name, "baseColorTexture")?,
+        None => Texture::Colour(base),
+    };
+    let normal_map = match m.normal_texture() {
+        Some(normal) => Some(textures.normal_map(&normal, name)?),
+        None => None,
+    };
+    let metallic_roughness = match pbr.metallic_roughness_texture() {
+        Some(info) => Some(textures.metallic_roughness(&info, name)?),
+        None => None,
     };
     Ok(Material::Pbr(
         Pbr::new(

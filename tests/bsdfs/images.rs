@@ -117,6 +117,7 @@ fn microfacet_nee_and_naive_agree() {
         radiance: Vec3::splat(15.0 * 1.02).into(),
         strength: 1.0,
         two_sided: false,
+        alpha: None,
     });
     let verdict = compare(
         naive,
