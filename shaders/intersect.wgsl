@@ -328,12 +328,18 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
 //#endif
 //#endif
 //#if NORMAL_MAPS
-    // Meshes copied into the scene only: normal-mapped meshes are never instanced.
     let m = materials[c.material];
     if primitive_kind(c.primitive) == KIND_TRIANGLE && m.normal_map_size.x > 0.0 {
         shading = normal_mapped(m, primitive_index(c.primitive), c.weights, (*hit).uv, shading, n);
         (*hit).shading = select(-shading, shading, front);
     }
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE && m.normal_map_size.x > 0.0 {
+        let inst = instances[primitive_index(c.primitive)];
+        shading = instanced_normal_mapped(m, inst, c.triangle, c.weights, (*hit).uv, shading, n);
+        (*hit).shading = select(-shading, shading, front);
+    }
+//#endif
 //#endif
     return true;
 }

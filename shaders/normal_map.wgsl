@@ -14,6 +14,35 @@ fn normal_mapped(m: Material, i: u32, weights: vec2f, uv: vec2f, shading: vec3f,
     let at = 12u * i;
     let t = (1.0 - weights.x - weights.y) * corner_tangent(at) + weights.x * corner_tangent(at + 4u)
         + weights.y * corner_tangent(at + 8u);
+    return bent_by_map(m, t, uv, shading, outward);
+}
+
+//#if INSTANCES
+// A mesh corner's tangent in scene coordinates, as flattening places a copy's (twin:
+// Instance::tangent_to_world): its direction by the instance's to_world, unit, its sign turned
+// where the placement mirrors; zero stays zero.
+fn instance_corner_tangent(inst: Instance, at: u32) -> vec4f {
+    let t = corner_tangent(at);
+    let along = vec3f(dot(inst.to_world_x.xyz, t.xyz), dot(inst.to_world_y.xyz, t.xyz),
+        dot(inst.to_world_z.xyz, t.xyz));
+    let len2 = dot(along, along);
+    let unit = select(vec3f(0.0), along / sqrt(len2), len2 > 0.0);
+    let mirrors = dot(inst.to_world_x.xyz, cross(inst.to_world_y.xyz, inst.to_world_z.xyz)) < 0.0;
+    return vec4f(unit, select(t.w, -t.w, mirrors));
+}
+
+// normal_mapped for triangle i of an instanced mesh, its corner tangents placed by inst.
+fn instanced_normal_mapped(m: Material, inst: Instance, i: u32, weights: vec2f, uv: vec2f, shading: vec3f, outward: vec3f) -> vec3f {
+    let at = 12u * i;
+    let t = (1.0 - weights.x - weights.y) * instance_corner_tangent(inst, at)
+        + weights.x * instance_corner_tangent(inst, at + 4u)
+        + weights.y * instance_corner_tangent(inst, at + 8u);
+    return bent_by_map(m, t, uv, shading, outward);
+}
+//#endif
+
+// shading bent by m's normal map at uv in the frame of the interpolated tangent t.
+fn bent_by_map(m: Material, t: vec4f, uv: vec2f, shading: vec3f, outward: vec3f) -> vec3f {
     let tangent = t.xyz;
     if !(dot(tangent, tangent) > 1e-12) {
         return shading;

@@ -618,18 +618,23 @@ fn shading(scene: &FlatScene, found: &Candidate, material: u32, uv: Vec2, outwar
         }
         _ => outward,
     };
-    // Meshes copied into the scene only: normal-mapped meshes are never instanced.
+    let map = match scene.materials[material as usize].normal_map() {
+        Some(map) if !scene.triangle_tangents.is_empty() => map,
+        _ => return shading,
+    };
     match found.primitive {
-        PrimitiveRef::Triangle(i) if !scene.triangle_tangents.is_empty() => {
-            match scene.materials[material as usize].normal_map() {
-                Some(map) => {
-                    let tangents = &scene.triangle_tangents[i as usize];
-                    normal_mapped(map, tangents, weights, uv, shading, outward)
-                }
-                None => shading,
-            }
+        PrimitiveRef::Triangle(i) => {
+            let tangents = &scene.triangle_tangents[i as usize];
+            normal_mapped(map, tangents, weights, uv, shading, outward)
         }
-        _ => shading,
+        PrimitiveRef::Instance(i) => {
+            // Each corner's tangent placed as flattening places a copy's.
+            let instance = &scene.instances[i as usize];
+            let tangents = scene.triangle_tangents[found.triangle as usize]
+                .map(|t| instance.tangent_to_world(t));
+            normal_mapped(map, &tangents, weights, uv, shading, outward)
+        }
+        PrimitiveRef::Shape { .. } => shading,
     }
 }
 

@@ -88,6 +88,23 @@ impl Instance {
         Vec3::new(a, b, c)
     }
 
+    /// A mesh corner's tangent in scene coordinates, as flattening places a copy's: its
+    /// direction by `to_world` (tangents are surface vectors), unit, and its bitangent's sign
+    /// turned where the placement mirrors. Zero stays zero.
+    #[inline]
+    pub fn tangent_to_world(&self, t: Vec4) -> Vec4 {
+        let [r0, r1, r2] = self.to_world.map(|r| r.truncate());
+        let along = Vec3::new(
+            r0.dot(t.truncate()),
+            r1.dot(t.truncate()),
+            r2.dot(t.truncate()),
+        );
+        let mirrors = r0.dot(r1.cross(r2)) < 0.0;
+        along
+            .normalize_or_zero()
+            .extend(if mirrors { -t.w } else { t.w })
+    }
+
     /// A mesh normal in scene coordinates (by the transpose of `to_local`), not normalised.
     #[inline]
     pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
@@ -160,7 +177,8 @@ pub struct FlatScene {
     pub triangle_uvs: Vec<[Vec2; 3]>,
     /// Per triangle, its corners' tangents (`scene::tangents`), when some mesh of the scene has
     /// a normal-mapped material (the other triangles' are zero, and never read); empty
-    /// otherwise. Such meshes are never instanced, so these are all in scene coordinates.
+    /// otherwise: in scene coordinates, an instanced mesh's in its own (placed at a hit by
+    /// [`Instance::tangent_to_world`]).
     pub triangle_tangents: Vec<[Vec4; 3]>,
     /// Where the instanced meshes' triangles begin in `triangles`.
     pub instanced_triangles: usize,
@@ -782,6 +800,9 @@ struct Flattener<'a> {
     local_triangles: Vec<Triangle>,
     local_normals: Vec<[Vec3; 3]>,
     local_uvs: Vec<[Vec2; 3]>,
+    /// Their corner tangents, where the scene is `normal_mapped` (zero where the instanced
+    /// mesh is not).
+    local_tangents: Vec<[Vec4; 3]>,
     meshes: Vec<std::ops::Range<usize>>,
     mesh_of: std::collections::HashMap<InstancingKey, u32>,
     instances: Vec<Instance>,
@@ -826,6 +847,7 @@ impl<'a> Flattener<'a> {
             local_triangles: Vec::new(),
             local_normals: Vec::new(),
             local_uvs: Vec::new(),
+            local_tangents: Vec::new(),
             meshes: Vec::new(),
             mesh_of: Default::default(),
             instances: Vec::new(),
@@ -838,13 +860,13 @@ impl<'a> Flattener<'a> {
         flattener
     }
 
-    /// The key under which `object` could be instanced: a mesh whose material neither emits,
-    /// nor bounds a medium, nor has a normal map (whose tangents are placed here).
+    /// The key under which `object` could be instanced: a mesh whose material neither emits
+    /// nor bounds a medium.
     fn instancing_key(&self, object: &super::Object) -> Option<InstancingKey> {
         match object.shape {
             Shape::Mesh { mesh, .. } if self.instancing => {
                 let m = &self.scene.materials[object.material as usize];
-                (m.area_light().is_none() && !m.is_invisible() && m.normal_map().is_none())
+                (m.area_light().is_none() && !m.is_invisible())
                     .then_some((std::ptr::from_ref(mesh) as usize, object.material))
             }
             _ => None,
@@ -869,28 +891,40 @@ impl<'a> Flattener<'a> {
                     ));
                 }
             }
-            Shape::Mesh { mesh, scale } => match self.instancing_key(object) {
-                Some(key) if self.placements[&key] > 1 => {
-                    let mesh_index = self.instanced_mesh(key, mesh, material);
-                    let instance = instance_of(&t, scale, origin, material, mesh_index);
-                    self.instances.push(instance);
+            Shape::Mesh { mesh, scale } => {
+                let normal_mapped = self.scene.materials[object.material as usize]
+                    .normal_map()
+                    .is_some();
+                match self.instancing_key(object) {
+                    Some(key) if self.placements[&key] > 1 => {
+                        let mesh_index = self.instanced_mesh(key, mesh, material, normal_mapped);
+                        let instance = instance_of(&t, scale, origin, material, mesh_index);
+                        self.instances.push(instance);
+                    }
+                    _ => self.copy_mesh(mesh, scale, &t, origin, material, normal_mapped),
                 }
-                _ => {
-                    let normal_mapped = self.scene.materials[object.material as usize]
-                        .normal_map()
-                        .is_some();
-                    self.copy_mesh(mesh, scale, &t, origin, material, normal_mapped)
-                }
-            },
+            }
         }
     }
 
     /// The index of `mesh`'s triangles among the instanced meshes', stored at its first
-    /// placement (in mesh coordinates; degenerate triangles left out).
-    fn instanced_mesh(&mut self, key: InstancingKey, mesh: &Mesh, material: u32) -> u32 {
+    /// placement (in mesh coordinates, with their tangents where its material is
+    /// `normal_mapped`; degenerate triangles left out).
+    fn instanced_mesh(
+        &mut self,
+        key: InstancingKey,
+        mesh: &Mesh,
+        material: u32,
+        normal_mapped: bool,
+    ) -> u32 {
         if let Some(&index) = self.mesh_of.get(&key) {
             return index;
         }
+        let tangents = if normal_mapped {
+            self.tangents_of(mesh)
+        } else {
+            None
+        };
         let first = self.local_triangles.len();
         for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
             let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
@@ -904,10 +938,19 @@ impl<'a> Flattener<'a> {
                 material,
                 light: 0,
             });
-            self.local_normals.push(match mesh.normals.get(i) {
-                Some(&normals) => normals,
-                None => [n.normalize(); 3],
-            });
+            let normals = mesh.normals.get(i).copied();
+            self.local_normals
+                .push(normals.unwrap_or([n.normalize(); 3]));
+            if self.normal_mapped {
+                // As a copy's: turned with normals that point against the winding.
+                let corners = tangents.as_deref().map_or([Vec4::ZERO; 3], |t| t[i]);
+                let against = normals.is_some_and(|[n0, n1, n2]| (n0 + n1 + n2).dot(n) < 0.0);
+                self.local_tangents.push(if against {
+                    corners.map(|t| -t)
+                } else {
+                    corners
+                });
+            }
             self.local_uvs
                 .push(mesh.uvs.get(i).copied().unwrap_or(BARYCENTRIC_UVS));
         }
@@ -915,6 +958,16 @@ impl<'a> Flattener<'a> {
         let index = self.meshes.len() as u32 - 1;
         self.mesh_of.insert(key, index);
         index
+    }
+
+    /// `mesh`'s corner tangents (`scene::tangents::of`), computed once however many objects
+    /// place it.
+    fn tangents_of(&mut self, mesh: &Mesh) -> Option<std::rc::Rc<[[Vec4; 3]]>> {
+        let key = std::ptr::from_ref(mesh) as usize;
+        self.mesh_tangents
+            .entry(key)
+            .or_insert_with(|| super::tangents::of(mesh).map(Into::into))
+            .clone()
     }
 
     /// Copies `mesh`'s triangles, scaled by `scale` and placed by `t`, into the scene (with
@@ -941,11 +994,7 @@ impl<'a> Flattener<'a> {
         let shading = |n: Vec3| rotate(n / scale).normalize_or_zero();
         // Tangents as the surface's vectors; a mirroring scale turns the bitangent around.
         let tangents = if normal_mapped {
-            let key = std::ptr::from_ref(mesh) as usize;
-            self.mesh_tangents
-                .entry(key)
-                .or_insert_with(|| super::tangents::of(mesh).map(Into::into))
-                .clone()
+            self.tangents_of(mesh)
         } else {
             None
         };
@@ -1057,8 +1106,7 @@ impl<'a> Flattener<'a> {
             triangle_uvs.extend(self.local_uvs);
         }
         if self.normal_mapped {
-            // Instanced meshes have no normal map: zero tangents, never read.
-            triangle_tangents.resize(triangles.len(), [Vec4::ZERO; 3]);
+            triangle_tangents.extend(self.local_tangents);
         }
         let most_shapes = (crate::shape::KINDS.iter())
             .map(|k| self.shapes.count(k))
