@@ -5,6 +5,7 @@
 mod common;
 
 use glam::Vec3;
+use rt_gpu::material::Pbr;
 use rt_gpu::scene::gltf_scene::{load, read_extras};
 use rt_gpu::scene::punctual::Punctual;
 use rt_gpu::scene::texture::Texture;
@@ -60,15 +61,18 @@ fn blenders_materials_arrive_as_the_script_set_them() {
         }
     }
     let (scene, _) = blender_file("spheres.glb");
-    let Material::Light(panel) = material(&scene, "spheres.glb", "Panel") else {
-        panic!("the panel is not a light");
+    let Material::Pbr(Pbr {
+        emission: Some(panel),
+        ..
+    }) = material(&scene, "spheres.glb", "Panel")
+    else {
+        panic!("the panel does not emit");
     };
     assert_eq!(panel.radiance, Texture::Colour(Vec3::new(1.0, 0.9, 0.8)));
     assert!(close(panel.strength, 8.0), "{}", panel.strength);
-    assert_eq!(
-        scene.background,
-        Background::Constant(Vec3::ZERO),
-        "lit by its panel"
+    assert!(
+        matches!(scene.background, Background::Environment(_)),
+        "no lamps: lit by a sky, its panel glowing on top"
     );
 }
 
@@ -263,7 +267,9 @@ fn the_file_renders_as_cycles_renders_it_where_the_models_agree() {
         "a 5% brighter floor went unseen: {ratios:?}"
     );
 
-    let (principled, _) = blender_file("spheres.glb");
+    let (mut principled, _) = blender_file("spheres.glb");
+    // Lit by its panel alone, as Blender's world is black in the reference.
+    principled.background = Background::Constant(Vec3::ZERO);
     let ratios = ratios_to_cycles(principled, "spheres-cycles.exr", &REGIONS);
     for i in [1, 5] {
         assert!(ratios[i] < 0.9, "{}: {}", REGIONS[i].0, ratios[i]);
@@ -908,7 +914,9 @@ const WORN_REGIONS: [(&str, [usize; 2], [usize; 2]); 6] = [
 /// 1 everywhere) moves every floor region by a factor of 2 or more.
 #[test]
 fn blenders_worn_scene_renders_as_in_cycles() {
-    let (scene, _) = blender_file("worn.glb");
+    let (mut scene, _) = blender_file("worn.glb");
+    // Lit by its panel alone, as Blender's world is black in the reference.
+    scene.background = Background::Constant(Vec3::ZERO);
     let ratios = ratios_to_cycles(scene.clone(), "worn-cycles.exr", &WORN_REGIONS);
     for (i, tolerance) in [(1, 0.025), (3, 0.025), (0, 0.06), (2, 0.06)] {
         let (name, ..) = WORN_REGIONS[i];

@@ -245,7 +245,9 @@ fn gltf_node_transforms_selection_and_materials() {
     );
     assert_eq!(gold.positions[2], Vec3::new(0.0, 6.0, 0.0));
     match lamp.material {
-        Some(Material::Light(l)) => {
+        Some(Material::Pbr(rt_gpu::material::Pbr {
+            emission: Some(l), ..
+        })) => {
             assert_eq!(l.strength, 4.0);
             assert!(!l.two_sided);
         }

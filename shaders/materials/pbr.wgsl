@@ -5,6 +5,20 @@
 // parameters: PbrParams, whose metallic and alpha its metallic-roughness image scales per hit
 // (pbr_with_texel, called by with_albedo_at in texture.wgsl).
 
+// Light emitted on top of what it reflects (Pbr::emitted; GpuMaterial::emission*): its
+// colour, times its image where it has one; from its front face unless two-sided.
+fn pbr_emitted(m: Material, hit: Hit) -> vec3f {
+    if !(hit.front_face || m.emission_two_sided != 0u) {
+        return vec3f(0.0);
+    }
+//#if IMAGE_TEXTURE
+    if m.emission_size.x > 0.0 {
+        return image_at(m.emission_image, m.emission_size, m.emission_lookup, hit.uv) * m.emission;
+    }
+//#endif
+    return m.emission;
+}
+
 fn schlick(f0: vec3f, cos: f32) -> vec3f {
     let x = pow(1.0 - clamp(cos, 0.0, 1.0), 5.0);
     return f0 + (vec3f(1.0) - f0) * x;

@@ -249,6 +249,14 @@ pub struct ImageArray {
     len: u64,
 }
 
+/// The image of a material's emission on top of its surface, if it has one.
+fn emission_image(m: &crate::scene::Material) -> Option<&'static Image> {
+    match m.emission()?.radiance {
+        Texture::Image(image) => Some(image),
+        _ => None,
+    }
+}
+
 /// Whether `a` and `b` share their texels (copies read another way or scaled).
 fn same_texels(a: &Image, b: &Image) -> bool {
     std::ptr::eq(a.texels.as_ptr(), b.texels.as_ptr())
@@ -302,7 +310,8 @@ impl ImageArray {
             });
             let maps = (m.normal_map().map(|n| n.image).into_iter())
                 .chain(m.parameter_image())
-                .chain(m.alpha().and_then(|a| a.image));
+                .chain(m.alpha().and_then(|a| a.image))
+                .chain(emission_image(m));
             for image in textures.chain(maps) {
                 place(&mut out, image);
             }
@@ -392,6 +401,9 @@ impl SceneBuffers {
                 }
                 if let Some(image) = m.alpha().and_then(|a| a.image) {
                     gpu.alpha_image = images.texels_of(image);
+                }
+                if let Some(image) = emission_image(m) {
+                    gpu.emission_image = images.texels_of(image);
                 }
                 gpu
             })

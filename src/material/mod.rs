@@ -82,6 +82,12 @@ pub trait MaterialModel {
     fn alpha(&self) -> Option<&Alpha> {
         None
     }
+    /// Emission on top of its BSDF, if it has some (glTF's emissive pbr): a light's radiance,
+    /// strength and sidedness, which its `emitted` and `area_light` give and the kernel reads
+    /// from `GpuMaterial::emission*` (the `light` material itself emits through its albedo).
+    fn emission(&self) -> Option<&Light> {
+        None
+    }
     /// Radiance leaving the surface toward the ray.
     fn emitted(&self, _hit: &Hit) -> Vec3 {
         Vec3::ZERO
@@ -207,6 +213,9 @@ macro_rules! registry {
             pub fn alpha(&self) -> Option<&Alpha> {
                 match self { $(Material::$ty(m) => m.alpha(),)+ }
             }
+            pub fn emission(&self) -> Option<&Light> {
+                match self { $(Material::$ty(m) => m.emission(),)+ }
+            }
             pub fn relocated(self, origin: glam::DVec3) -> Self {
                 match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }
             }
@@ -239,6 +248,11 @@ macro_rules! registry {
                 );
                 let (alpha_mode, alpha_cutoff) = self.alpha().map_or((0, 0.0), |a| a.gpu_mode());
                 let alpha_image = self.alpha().and_then(|a| a.image);
+                let (emission, emission_image) = match self.emission().map(|e| (e.radiance, e.strength)) {
+                    Some((Texture::Image(image), strength)) => (image.factor * strength, Some(image)),
+                    Some((texture, strength)) => (texture.mean() * strength, None),
+                    None => (glam::Vec3::ZERO, None),
+                };
                 GpuMaterial {
                     kind: self.kind().kind,
                     normal_map_size,
@@ -249,6 +263,10 @@ macro_rules! registry {
                     alpha_factor: self.alpha().map_or(1.0, |a| a.factor),
                     alpha_size: alpha_image.map_or([0.0; 2], |i| [i.width as f32, i.height as f32]),
                     alpha_lookup: alpha_image.map_or(0, |i| i.lookup.bits()),
+                    emission: emission.to_array(),
+                    emission_size: emission_image.map_or([0.0; 2], |i| [i.width as f32, i.height as f32]),
+                    emission_lookup: emission_image.map_or(0, |i| i.lookup.bits()),
+                    emission_two_sided: self.emission().is_some_and(|e| e.two_sided) as u32,
                     ..packed
                 }
             }

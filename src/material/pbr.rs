@@ -37,7 +37,9 @@ use serde::{Deserialize, Serialize};
 /// transmission 0); `base_color` may be any texture; `normal_map = { image, scale }` (optional)
 /// bends meshes' shading normals (glTF's `normalTexture`; `scene::normal_map`);
 /// `metallic_roughness = "file.png"` (optional, linear) scales metallic by its blue channel and
-/// roughness by its green one (glTF's metallicRoughnessTexture).
+/// roughness by its green one (glTF's metallicRoughnessTexture); `emission = { radiance,
+/// strength, two_sided }` (optional, as a `light`'s; a colour or an image) glows on top of
+/// what it reflects (glTF's emissive materials).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -50,6 +52,10 @@ pub struct Pbr {
     pub metallic_roughness: Option<&'static Image>,
     /// How rays see through it (glTF's alphaMode; not in scene files yet).
     pub alpha: Option<Alpha>,
+    /// Light it emits on top of what it reflects (glTF's emissive factor x texture x
+    /// KHR_materials_emissive_strength): a colour or an image, its strength and sidedness, as
+    /// a `light` material's (`emission = { radiance = [1, 0.5, 0.2], strength = 4 }`).
+    pub emission: Option<super::Light>,
     coat: Coat,
 }
 
@@ -69,6 +75,8 @@ struct PbrDoc {
     normal_map: Option<NormalMap>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     metallic_roughness: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    emission: Option<super::Light>,
 }
 
 fn one() -> f32 {
@@ -85,7 +93,8 @@ impl TryFrom<PbrDoc> for Pbr {
         };
         Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
             .with_normal_map(d.normal_map)
-            .with_metallic_roughness(metallic_roughness))
+            .with_metallic_roughness(metallic_roughness)
+            .with_emission(d.emission))
     }
 }
 
@@ -99,6 +108,7 @@ impl From<Pbr> for PbrDoc {
             transmission: p.transmission,
             normal_map: p.normal_map,
             metallic_roughness: p.metallic_roughness.map(|i| i.source.clone()),
+            emission: p.emission,
         }
     }
 }
@@ -128,6 +138,7 @@ impl Pbr {
             normal_map: None,
             metallic_roughness: None,
             alpha: None,
+            emission: None,
             coat: Coat::new(ior, roughness, false),
         }
     }
@@ -149,6 +160,11 @@ impl Pbr {
     /// This material, seen through as `alpha` says.
     pub fn with_alpha(self, alpha: Option<Alpha>) -> Self {
         Pbr { alpha, ..self }
+    }
+
+    /// This material, emitting `emission` on top of what it reflects.
+    pub fn with_emission(self, emission: Option<super::Light>) -> Self {
+        Pbr { emission, ..self }
     }
 
     /// This material at `hit`: its metallic and roughness scaled by its metallic-roughness
@@ -230,8 +246,18 @@ impl MaterialModel for Pbr {
     type Params = PbrParams;
     const FEATURE: &'static str = "PBR";
     /// Rough; glass in the mix; textured base colours.
-    const EXTRA_FEATURES: &'static [&'static str] =
-        &["MICROFACET", "DIELECTRIC", "METALLIC_ROUGHNESS", "ALPHA", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+    const EXTRA_FEATURES: &'static [&'static str] = &[
+        "MICROFACET",
+        "DIELECTRIC",
+        "METALLIC_ROUGHNESS",
+        "ALPHA",
+        "CHECKER",
+        "UV_CHECKER",
+        "IMAGE_TEXTURE",
+        "PBR_EMISSION",
+    ];
+    /// Emissive pbr.
+    const EMITS_UNDER: Option<&'static str> = Some("PBR_EMISSION");
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -246,6 +272,12 @@ impl MaterialModel for Pbr {
             }
         }
         super::fresnel::check_ior(self.ior)?;
+        if let Some(emission) = &self.emission {
+            if matches!(emission.radiance, Texture::Checker(_) | Texture::UvChecker(_)) {
+                return Err("emission must be a colour or an image".into());
+            }
+            emission.validate()?;
+        }
         if let Some(image) = self.metallic_roughness
             && image.max_value() > 1.0
         {
@@ -262,20 +294,38 @@ impl MaterialModel for Pbr {
         let glass = (self.weights().1 > 0.0).then_some("DIELECTRIC");
         let image = self.metallic_roughness.map(|_| "METALLIC_ROUGHNESS");
         let alpha = self.alpha.map(|_| "ALPHA");
+        let emission = self.emission.map(|e| {
+            let image = matches!(e.radiance, Texture::Image(_)).then_some("IMAGE_TEXTURE");
+            std::iter::once("PBR_EMISSION").chain(image)
+        });
         rough
             .into_iter()
             .chain(glass)
             .chain(image)
             .chain(alpha)
             .chain(self.base_color.feature())
+            .chain(emission.into_iter().flatten())
             .collect()
     }
 
     fn relocated(self, origin: glam::DVec3) -> Self {
         Pbr {
             base_color: self.base_color.relocated(origin),
+            emission: self.emission.map(|e| e.relocated(origin)),
             ..self
         }
+    }
+
+    fn emission(&self) -> Option<&super::Light> {
+        self.emission.as_ref()
+    }
+
+    fn emitted(&self, hit: &Hit) -> Vec3 {
+        self.emission.map_or(Vec3::ZERO, |e| e.emitted(hit))
+    }
+
+    fn area_light(&self) -> Option<(Vec3, bool)> {
+        self.emission.and_then(|e| e.area_light())
     }
 
     fn textures(&self) -> Vec<Texture> {

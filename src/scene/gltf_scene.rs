@@ -1,6 +1,7 @@
 //! A glTF 2.0 file as a whole scene (`rt-gpu model.glb`): its default scene's meshes with their
 //! own materials and its punctual lights, seen by one of its cameras (or by a camera framing
-//! it), under a uniform white sky when it carries neither lights nor emitters.
+//! it), under a uniform white sky when it carries no punctual lights (its emissive materials
+//! glow on top of either).
 //!
 //! A glTF camera looks down its node's -z with +y up (glTF 2.0, 3.10.1); its `yfov` is the
 //! vertical field of view and its `aspectRatio`, where given, the image's default width over
@@ -135,12 +136,9 @@ fn load_unrecorded(
             transform: Transform::default(),
         });
     }
-    // Light: the file's emitters and lamps where it has any, else a uniform sky.
-    let lit = materials
-        .iter()
-        .any(|m| matches!(m, super::Material::Light(_)))
-        || !extras.punctual.is_empty();
-    let background = if lit {
+    // Light: the file's lamps where it has any, else a uniform sky; emissive materials glow on
+    // top of either (a helmet's glowing details do not light the helmet).
+    let background = if !extras.punctual.is_empty() {
         Background::Constant(Vec3::ZERO)
     } else {
         Background::Environment(uniform_sky())

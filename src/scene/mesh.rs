@@ -1183,10 +1183,9 @@ fn check_material_values(m: &gltf::Material, source: &str) -> Result<(), String>
     Ok(())
 }
 
-/// A glTF metallic-roughness material as rt-gpu's: emissive -> light (emissive factor x
-/// emissiveTexture x KHR_materials_emissive_strength, two-sided when the material is, cut by
-/// its alphaMode as `pbr` is), else
-/// `pbr` with the base colour factor x baseColorTexture, the metallic and roughness factors,
+/// A glTF metallic-roughness material as rt-gpu's `pbr`: emitting (on top of what it reflects)
+/// its emissive factor x emissiveTexture x KHR_materials_emissive_strength, back faces too when
+/// the material is two-sided; the base colour factor x baseColorTexture, the metallic and roughness factors,
 /// KHR_materials_ior (default 1.5), KHR_materials_transmission's factor (default 0), the
 /// metallic-roughness texture, the normal texture and alphaMode MASK or BLEND (the base
 /// colour's alpha factor x its texture's alpha channel). Not read: the occlusion texture.
@@ -1233,20 +1232,23 @@ fn material_of(
             })
         }
     };
+    // Emission adds to what the surface reflects (glTF's material model).
     let emissive = Vec3::from_array(m.emissive_factor()).clamp(Vec3::ZERO, Vec3::splat(1e6));
     let strength = m.emissive_strength().unwrap_or(1.0);
-    if emissive.max_element() > 0.0 && strength > 0.0 {
+    let emission = if emissive.max_element() > 0.0 && strength > 0.0 {
         let radiance = match m.emissive_texture() {
             Some(info) => textures.colour(&info, emissive, name, "emissiveTexture")?,
             None => Texture::Colour(emissive),
         };
-        return Ok(Material::Light(Light {
+        Some(Light {
             radiance,
             strength: strength.clamp(0.0, crate::material::light::MAX_STRENGTH),
             two_sided: m.double_sided(),
-            alpha,
-        }));
-    }
+            alpha: None,
+        })
+    } else {
+        None
+    };
     let base = match pbr.base_color_texture() {
         Some(info) => textures.colour(&info, base, name, "baseColorTexture")?,
         None => Texture::Colour(base),
@@ -1274,6 +1276,7 @@ fn material_of(
         )
         .with_normal_map(normal_map)
         .with_metallic_roughness(metallic_roughness)
-        .with_alpha(alpha),
+        .with_alpha(alpha)
+        .with_emission(emission),
     ))
 }

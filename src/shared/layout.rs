@@ -356,6 +356,15 @@ gpu_struct! {
         alpha_mode: u32,
         alpha_cutoff: f32,
         _pad: u32,
+        /// Emission on top of the surface (glTF's emissive pbr; `MaterialModel::emission`):
+        /// its colour (the factor its image's texels are multiplied by, x its strength), where
+        /// the image's texels start, its width and height (0: none), how it is read, and 1
+        /// where back faces emit too.
+        emission: [f32; 3],
+        emission_image: u32,
+        emission_size: [f32; 2],
+        emission_lookup: u32,
+        emission_two_sided: u32,
     }
 }
 
