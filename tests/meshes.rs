@@ -523,3 +523,106 @@ fn gpu_smooth_meshes_match_cpu() {
     eprintln!("smooth meshes, gpu with 2% brighter white: {verdict:?}");
     assert!(!verdict.passed(), "a 2% brighter white went undetected");
 }
+
+/// Five vertices in the z = 0 plane, drawn by a primitive of `mode` (glTF's number) with
+/// `indices` (none: in order) beside a primitive of points, written as `name` in `dir`.
+fn primitive_gltf(
+    dir: &std::path::Path,
+    name: &str,
+    mode: u32,
+    indices: &[u16],
+) -> std::path::PathBuf {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0.0], [0.0, 1.0], [1.0, 0.0], [1.0, 1.0], [2.0, 0.0]] {
+        for c in [p[0], p[1], 0.0] {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    for i in indices {
+        bin.extend(i.to_le_bytes());
+    }
+    std::fs::write(dir.join(format!("{name}.bin")), &bin).expect("writes");
+    let mut primitive = serde_json::json!({ "attributes": { "POSITION": 0 }, "mode": mode });
+    let mut accessors = vec![
+        serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 5,
+        "type": "VEC3", "min": [0, 0, 0], "max": [2, 1, 0] }),
+    ];
+    let mut views = vec![serde_json::json!({ "buffer": 0, "byteOffset": 0, "byteLength": 60 })];
+    if !indices.is_empty() {
+        primitive["indices"] = 1.into();
+        accessors.push(serde_json::json!({ "bufferView": 1, "componentType": 5123,
+            "count": indices.len(), "type": "SCALAR" }));
+        views.push(
+            serde_json::json!({ "buffer": 0, "byteOffset": 60, "byteLength": 2 * indices.len() }),
+        );
+    }
+    let points = serde_json::json!({ "attributes": { "POSITION": 0 }, "mode": 0 });
+    let doc = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [primitive, points] }],
+        "buffers": [{ "byteLength": bin.len(), "uri": format!("{name}.bin") }],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, doc.to_string()).expect("writes");
+    path
+}
+
+/// Issue 62: triangle strips and fans are drawn as the triangle lists they stand for (only
+/// lists were drawn: MeshPrimitiveModes showed 1 of its 3 triangle meshes), indexed or not,
+/// with one winding (glTF 2.0, 3.7.2.1); a primitive of points is named in a note.
+#[test]
+fn triangle_strips_and_fans_are_their_lists() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let triangles = |path: &std::path::Path| -> Vec<[glam::Vec3; 3]> {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let parts = rt_gpu::scene::mesh::load(path, &name, None).expect("loads");
+        assert_eq!(parts.len(), 1);
+        let mesh = parts[0];
+        mesh.triangles
+            .iter()
+            .map(|t| t.map(|i| mesh.positions[i as usize]))
+            .collect()
+    };
+    let strip_list = triangles(&primitive_gltf(
+        d,
+        "strip-list",
+        4,
+        &[0, 1, 2, 1, 3, 2, 2, 3, 4],
+    ));
+    assert_eq!(strip_list.len(), 3);
+    assert_eq!(triangles(&primitive_gltf(d, "strip", 5, &[])), strip_list);
+    assert_eq!(
+        triangles(&primitive_gltf(d, "strip-indexed", 5, &[0, 1, 2, 3, 4])),
+        strip_list
+    );
+    let fan_list = triangles(&primitive_gltf(
+        d,
+        "fan-list",
+        4,
+        &[1, 2, 0, 2, 3, 0, 3, 4, 0],
+    ));
+    assert_eq!(triangles(&primitive_gltf(d, "fan", 6, &[])), fan_list);
+    // One winding: every strip triangle faces the way the first does (the zigzag's -z).
+    for [a, b, c] in &strip_list {
+        assert!((*b - *a).cross(*c - *a).z < 0.0, "{strip_list:?}");
+    }
+    let (_, notes) =
+        rt_gpu::scene::gltf_scene::load(&d.join("strip.gltf"), "strip.gltf", None).expect("loads");
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("1 primitive of points or lines is not drawn")),
+        "{notes:?}"
+    );
+    // Too short a strip is named.
+    let err =
+        rt_gpu::scene::mesh::load(&primitive_gltf(d, "short", 5, &[0, 1]), "short.gltf", None)
+            .expect_err("two indices");
+    assert!(err.contains("strip or fan of 2 indices"), "{err}");
+}

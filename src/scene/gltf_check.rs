@@ -151,7 +151,14 @@ pub fn check_document(
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let at = format!("mesh {source}: mesh {m} primitive {p}");
-            let triangles = matches!(primitive.mode, Checked::Valid(json::mesh::Mode::Triangles));
+            let triangles = matches!(
+                primitive.mode,
+                Checked::Valid(
+                    json::mesh::Mode::Triangles
+                        | json::mesh::Mode::TriangleStrip
+                        | json::mesh::Mode::TriangleFan
+                )
+            );
             if !triangles {
                 continue;
             }
@@ -251,14 +258,20 @@ pub fn check_document(
                 }
                 None => vertices,
             };
-            if corners % 3 != 0 {
+            let what = if primitive.indices.is_some() {
+                "indices"
+            } else {
+                "vertices"
+            };
+            let list = matches!(primitive.mode, Checked::Valid(json::mesh::Mode::Triangles));
+            if list && corners % 3 != 0 {
                 return Err(format!(
-                    "{at}: {corners} {} is not a multiple of 3 (whole triangles)",
-                    if primitive.indices.is_some() {
-                        "indices"
-                    } else {
-                        "vertices"
-                    }
+                    "{at}: {corners} {what} is not a multiple of 3 (whole triangles)"
+                ));
+            }
+            if !list && corners < 3 {
+                return Err(format!(
+                    "{at}: a triangle strip or fan of {corners} {what} (at least 3 make a triangle)"
                 ));
             }
         }

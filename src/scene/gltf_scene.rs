@@ -440,6 +440,18 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
         let children: Vec<_> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
+    // What is not drawn, in one note.
+    let undrawn = (document.meshes())
+        .flat_map(|m| m.primitives())
+        .filter(|p| !super::mesh::is_triangles(p.mode()))
+        .count();
+    if undrawn > 0 {
+        extras.notes.push(format!(
+            "note: {source}: {undrawn} primitive{} of points or lines {} not drawn (rt-gpu draws triangles: lists, strips and fans)",
+            if undrawn == 1 { "" } else { "s" },
+            if undrawn == 1 { "is" } else { "are" }
+        ));
+    }
     // One note, however many lights have a range.
     match ranged.as_slice() {
         [] => {}

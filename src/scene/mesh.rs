@@ -967,7 +967,9 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
         if let Some(mesh) = n.mesh() {
             let flip = world.determinant() < 0.0;
             for primitive in mesh.primitives() {
-                if primitive.mode() != gltf::mesh::Mode::Triangles {
+                // Points and lines are not drawn (`gltf_scene::read_extras` notes them).
+                let mode = primitive.mode();
+                if !is_triangles(mode) {
                     continue;
                 }
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
@@ -1050,6 +1052,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                         "mesh {source}: an index {bad} names a vertex beyond its primitive's {count}"
                     ));
                 }
+                let indices = triangle_list(mode, indices);
                 triangles.extend(indices.chunks_exact(3).map(|t| {
                     let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
                     if flip { [a, c, b] } else { [a, b, c] }
@@ -1086,6 +1089,32 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
 /// The first of `material`'s textures that reads texture coordinates, by its property name.
 /// Per triangle of `indices`, its corners' values of the per-vertex `values` (in the order
 /// the triangle is kept: two corners swapped where `flip`); `None` where there are none.
+/// Whether a primitive of `mode` is drawn: triangles, as a list, a strip or a fan.
+pub fn is_triangles(mode: gltf::mesh::Mode) -> bool {
+    use gltf::mesh::Mode;
+    matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    )
+}
+
+/// A triangles primitive's `indices` as a list of triangles, three indices each (glTF 2.0,
+/// 3.7.2.1): a strip's triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), keeping one winding; a
+/// fan's is (v_{i+1}, v_{i+2}, v_0).
+fn triangle_list(mode: gltf::mesh::Mode, indices: Vec<u32>) -> Vec<u32> {
+    use gltf::mesh::Mode;
+    let triangles = indices.len().saturating_sub(2);
+    match mode {
+        Mode::TriangleStrip => (0..triangles)
+            .flat_map(|i| [indices[i], indices[i + 1 + i % 2], indices[i + 2 - i % 2]])
+            .collect(),
+        Mode::TriangleFan => (0..triangles)
+            .flat_map(|i| [indices[i + 1], indices[i + 2], indices[0]])
+            .collect(),
+        _ => indices,
+    }
+}
+
 fn per_corner<'a, T: Copy>(
     values: Option<&'a [T]>,
     indices: &'a [u32],
