@@ -169,6 +169,84 @@ fn a_file_without_cameras_is_framed_and_lit_by_a_sky_its_emitters_glow_on() {
     }
 }
 
+/// Issue 62: `--background` lights any scene without a scene file: a colour (0: black), the
+/// sky, or an image as an environment light, read as the scene's own files are (no output may
+/// replace it); a bad value is one line.
+#[cfg(feature = "cli")]
+#[test]
+fn the_background_option_lights_a_file() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    write_gltf(d, "plain.gltf", "", "", "");
+    let mut sky = image::Rgb32FImage::new(8, 4);
+    for p in sky.pixels_mut() {
+        *p = image::Rgb([0.5, 0.5, 0.5]);
+    }
+    image::DynamicImage::ImageRgb32F(sky)
+        .save(d.join("sky.exr"))
+        .expect("writes sky.exr");
+    let sky_bytes = std::fs::read(d.join("sky.exr")).expect("reads");
+    let mean = |background: &str| -> f64 {
+        let out = rt_gpu(
+            &[
+                "plain.gltf",
+                "--backend",
+                "cpu",
+                "--spp",
+                "256",
+                "--size",
+                "8x8",
+                "-o",
+                "out.png",
+                "--background",
+                background,
+            ],
+            d,
+        );
+        let text = stderr(&out);
+        assert!(out.status.success(), "{background}: {text}");
+        let inside = text.split("mean radiance (").nth(1).expect("a summary");
+        let values: Vec<f64> = inside
+            .split(')')
+            .next()
+            .unwrap_or_default()
+            .split(", ")
+            .map(|v| v.parse().expect("a number"))
+            .collect();
+        values.iter().sum::<f64>() / values.len() as f64
+    };
+    assert_eq!(mean("0"), 0.0, "black: the file has no lights");
+    let white = mean("1");
+    assert!(white > 0.5, "{white}");
+    assert!(mean("sky") > 0.1);
+    let half = mean("sky.exr") / white;
+    assert!(
+        (0.45..0.55).contains(&half),
+        "an image of 0.5 against 1: {half}"
+    );
+    for (args, expected) in [
+        (
+            &["plain.gltf", "--background", "sky.exr", "-o", "sky.exr"][..],
+            "sky.exr, a file this run reads",
+        ),
+        (
+            &["plain.gltf", "--background", "1,2"][..],
+            "--background takes a colour",
+        ),
+        (
+            &["plain.gltf", "--background", "nope.exr"][..],
+            "--background: cannot read image nope.exr",
+        ),
+    ] {
+        let out = rt_gpu(args, d);
+        let text = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(text.contains(expected), "{args:?}: {text}");
+        assert_eq!(text.trim_end().lines().count(), 1, "{args:?}: {text}");
+    }
+    assert_eq!(std::fs::read(d.join("sky.exr")).expect("reads"), sky_bytes);
+}
+
 #[cfg(feature = "cli")]
 #[test]
 fn the_command_line_renders_a_gltf_file_and_its_errors_are_one_line() {

@@ -275,6 +275,11 @@ pub struct RenderOptionArgs {
     /// Image size WIDTHxHEIGHT [default: the scene's].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
+    /// Light the scene by this background instead of its own: a colour R,G,B (or one number,
+    /// a grey; 0 is black), `sky`, or an equirectangular image (.hdr, .exr, .png) as an
+    /// environment light, e.g. `rt-gpu model.glb --background studio.hdr`.
+    #[arg(long, value_name = "R,G,B|sky|FILE")]
+    pub background: Option<String>,
     /// Random seed: the same scene, seed and backend give the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
@@ -302,6 +307,39 @@ pub struct RenderOptionArgs {
     pub adapter: Option<String>,
 }
 
+/// `--background`'s value: a colour, `sky`, or an image read (into `inputs`) as an environment.
+fn background_arg(
+    arg: &str,
+    inputs: &mut Vec<rt_gpu::scene::inputs::InputFile>,
+) -> anyhow::Result<rt_gpu::scene::Background> {
+    use rt_gpu::scene::Background;
+    if arg == "sky" {
+        return Ok(Background::Sky);
+    }
+    let numbers: Option<Vec<f32>> = arg.split(',').map(|w| w.trim().parse().ok()).collect();
+    if let Some(numbers) = numbers {
+        let colour = match numbers[..] {
+            [grey] => glam::Vec3::splat(grey),
+            [r, g, b] => glam::Vec3::new(r, g, b),
+            _ => anyhow::bail!(
+                "--background takes a colour R,G,B (or one number, a grey), sky, or an image file, got {arg}"
+            ),
+        };
+        if !(colour.is_finite() && colour.min_element() >= 0.0) {
+            anyhow::bail!("--background's colour must be finite numbers >= 0, got {arg}");
+        }
+        return Ok(Background::Constant(colour));
+    }
+    let (image, read) = rt_gpu::scene::inputs::recorded(|| {
+        rt_gpu::scene::image::load(std::path::Path::new(arg), arg)
+    });
+    let image = image.map_err(|e| anyhow::anyhow!("--background: {e}"))?;
+    inputs.extend(read);
+    let environment = rt_gpu::scene::environment::Environment::new(image, 1.0, 0.0)
+        .map_err(|e| anyhow::anyhow!("--background: {e}"))?;
+    Ok(Background::Environment(environment))
+}
+
 impl RenderOptionArgs {
     /// The first contradiction among these options, if any.
     pub fn check(&self) -> anyhow::Result<()> {
@@ -318,6 +356,16 @@ impl RenderOptionArgs {
         (self.integrator == IntegratorArg::Naive && !scene.punctual.is_empty()).then(|| {
             "note: the naive integrator never finds punctual lights (points, spots, the sun), which only light sampling reaches: they are left out (use --integrator nee)".to_string()
         })
+    }
+
+    /// `scene` under `--background`, where given (an image is read as the scene's own files
+    /// are: it joins the files outputs must not replace and films' identities digest).
+    pub fn with_background(&self, mut scene: Scene) -> anyhow::Result<Scene> {
+        let Some(arg) = &self.background else {
+            return Ok(scene);
+        };
+        scene.background = background_arg(arg, &mut scene.inputs)?;
+        Ok(scene)
     }
 
     /// The image size: --size, or the scene's.

@@ -167,6 +167,7 @@ fn load(
     chosen: &Option<(Backend, Option<String>)>,
 ) -> anyhow::Result<Plan> {
     let (scene, scene_file) = resolve_scene(scene_arg, args.options.camera.as_deref())?;
+    let scene = args.options.with_background(scene)?;
     if let Some(note) = args.options.note_for(&scene) {
         note!("{note}");
     }

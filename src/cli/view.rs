@@ -22,6 +22,7 @@ pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
         );
     }
     let (scene, _) = resolve_scene(&args.scene, args.options.camera.as_deref())?;
+    let scene = args.options.with_background(scene)?;
     if let Some(note) = args.options.note_for(&scene) {
         note!("{note}");
     }
