@@ -617,7 +617,7 @@ fn triangle_strips_and_fans_are_their_lists() {
     assert!(
         notes
             .iter()
-            .any(|n| n.contains("1 primitive of points or lines is not drawn")),
+            .any(|n| n.contains("not rendered: 1 primitive of points or lines")),
         "{notes:?}"
     );
     // Too short a strip is named.
@@ -625,4 +625,37 @@ fn triangle_strips_and_fans_are_their_lists() {
         rt_gpu::scene::mesh::load(&primitive_gltf(d, "short", 5, &[0, 1]), "short.gltf", None)
             .expect_err("two indices");
     assert!(err.contains("strip or fan of 2 indices"), "{err}");
+}
+
+/// Issue 62: what a glTF file holds and rt-gpu does not render is named in one note (it was
+/// dropped silently): here vertex colours, a second UV set, a morph target, an extension it
+/// does not read and a primitive of points.
+#[test]
+fn what_a_gltf_file_holds_and_is_not_rendered_is_named_in_one_note() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let path = primitive_gltf(d, "extras", 4, &[0, 1, 2]);
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("reads")).expect("json");
+    let primitive = &mut doc["meshes"][0]["primitives"][0];
+    primitive["attributes"]["COLOR_0"] = 0.into();
+    primitive["attributes"]["TEXCOORD_1"] = 2.into();
+    primitive["targets"] = serde_json::json!([{ "POSITION": 0 }]);
+    doc["accessors"].as_array_mut().expect("accessors").push(
+        serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC2" }),
+    );
+    doc["extensionsUsed"] = serde_json::json!(["EXT_unknown_to_rt_gpu", "KHR_materials_ior"]);
+    std::fs::write(&path, doc.to_string()).expect("writes");
+    let (_, notes) = rt_gpu::scene::gltf_scene::load(&path, "extras.gltf", None).expect("loads");
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    for named in [
+        "1 primitive of points or lines",
+        "COLOR_0",
+        "TEXCOORD_1",
+        "1 morph target",
+        "extension EXT_unknown_to_rt_gpu",
+    ] {
+        assert!(notes[0].contains(named), "{named}: {}", notes[0]);
+    }
+    assert!(!notes[0].contains("KHR_materials_ior"), "{}", notes[0]);
 }

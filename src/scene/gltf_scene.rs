@@ -440,17 +440,8 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
         let children: Vec<_> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
-    // What is not drawn, in one note.
-    let undrawn = (document.meshes())
-        .flat_map(|m| m.primitives())
-        .filter(|p| !super::mesh::is_triangles(p.mode()))
-        .count();
-    if undrawn > 0 {
-        extras.notes.push(format!(
-            "note: {source}: {undrawn} primitive{} of points or lines {} not drawn (rt-gpu draws triangles: lists, strips and fans)",
-            if undrawn == 1 { "" } else { "s" },
-            if undrawn == 1 { "is" } else { "are" }
-        ));
+    if let Some(note) = unread_note(&document, source) {
+        extras.notes.push(note);
     }
     // One note, however many lights have a range.
     match ranged.as_slice() {
@@ -464,6 +455,86 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
         )),
     }
     Ok(extras)
+}
+
+/// Extensions whose content rt-gpu reads (KHR_materials_transmission: its factor).
+const READ_EXTENSIONS: [&str; 5] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+    "KHR_texture_transform",
+];
+
+/// One note naming what `document` holds that rt-gpu does not render (nothing is dropped
+/// silently): primitives of points or lines, vertex colours and texture coordinates beyond
+/// TEXCOORD_0, morph targets, skins, animations, extensions it does not read, and a
+/// transmission texture. `None` when there is nothing.
+fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
+    let primitives: Vec<gltf::Primitive> = document.meshes().flat_map(|m| m.primitives()).collect();
+    let mut unread: Vec<String> = Vec::new();
+    let count =
+        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+    let undrawn = primitives
+        .iter()
+        .filter(|p| !super::mesh::is_triangles(p.mode()))
+        .count();
+    if undrawn > 0 {
+        unread.push(count(
+            undrawn,
+            "primitive of points or lines",
+            "primitives of points or lines",
+        ));
+    }
+    let mut attributes: Vec<String> = primitives
+        .iter()
+        .flat_map(|p| p.attributes().map(|(semantic, _)| semantic))
+        .filter_map(|semantic| match semantic {
+            gltf::Semantic::Colors(set) => Some(format!("COLOR_{set}")),
+            gltf::Semantic::TexCoords(set) if set > 0 => Some(format!("TEXCOORD_{set}")),
+            gltf::Semantic::Joints(_) | gltf::Semantic::Weights(_) => Some("JOINTS/WEIGHTS".into()),
+            _ => None,
+        })
+        .collect();
+    attributes.sort();
+    attributes.dedup();
+    unread.extend(attributes);
+    let targets: usize = primitives.iter().map(|p| p.morph_targets().count()).sum();
+    if targets > 0 {
+        unread.push(count(targets, "morph target", "morph targets"));
+    }
+    for (n, one, many) in [
+        (document.skins().count(), "skin", "skins"),
+        (document.animations().count(), "animation", "animations"),
+    ] {
+        if n > 0 {
+            unread.push(count(n, one, many));
+        }
+    }
+    let transmission_texture = document.materials().any(|m| {
+        m.transmission()
+            .is_some_and(|t| t.transmission_texture().is_some())
+    });
+    if transmission_texture {
+        unread.push("KHR_materials_transmission's transmissionTexture".into());
+    }
+    let extensions: Vec<&str> = document
+        .extensions_used()
+        .filter(|e| !READ_EXTENSIONS.contains(e))
+        .collect();
+    if !extensions.is_empty() {
+        unread.push(format!(
+            "extension{} {}",
+            if extensions.len() == 1 { "" } else { "s" },
+            listed(&extensions)
+        ));
+    }
+    (!unread.is_empty()).then(|| {
+        format!(
+            "note: {source}: not rendered: {} (rt-gpu draws triangles in their rest pose; see scenes/README.md's glTF table)",
+            unread.join(", ")
+        )
+    })
 }
 
 /// Most names a message lists.
