@@ -541,7 +541,6 @@ fn primitive_gltf(
     for i in indices {
         bin.extend(i.to_le_bytes());
     }
-    std::fs::write(dir.join(format!("{name}.bin")), &bin).expect("writes");
     let mut primitive = serde_json::json!({ "attributes": { "POSITION": 0 }, "mode": mode });
     let mut accessors = vec![
         serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 5,
@@ -558,15 +557,27 @@ fn primitive_gltf(
     }
     let points = serde_json::json!({ "attributes": { "POSITION": 0 }, "mode": 0 });
     let doc = serde_json::json!({
-        "asset": { "version": "2.0" },
-        "scene": 0,
-        "scenes": [{ "nodes": [0] }],
         "nodes": [{ "mesh": 0 }],
         "meshes": [{ "primitives": [primitive, points] }],
-        "buffers": [{ "byteLength": bin.len(), "uri": format!("{name}.bin") }],
         "bufferViews": views,
         "accessors": accessors,
     });
+    written_gltf(dir, name, doc, &bin)
+}
+
+/// `doc` (its nodes, meshes, views and accessors) written as `name`.gltf in `dir`, its one
+/// buffer `bin` beside it, node 0 its scene.
+fn written_gltf(
+    dir: &std::path::Path,
+    name: &str,
+    mut doc: serde_json::Value,
+    bin: &[u8],
+) -> std::path::PathBuf {
+    std::fs::write(dir.join(format!("{name}.bin")), bin).expect("writes");
+    doc["asset"] = serde_json::json!({ "version": "2.0" });
+    doc["scene"] = 0.into();
+    doc["scenes"] = serde_json::json!([{ "nodes": [0] }]);
+    doc["buffers"] = serde_json::json!([{ "byteLength": bin.len(), "uri": format!("{name}.bin") }]);
     let path = dir.join(format!("{name}.gltf"));
     std::fs::write(&path, doc.to_string()).expect("writes");
     path
@@ -658,4 +669,136 @@ fn what_a_gltf_file_holds_and_is_not_rendered_is_named_in_one_note() {
         assert!(notes[0].contains(named), "{named}: {}", notes[0]);
     }
     assert!(!notes[0].contains("KHR_materials_ior"), "{}", notes[0]);
+}
+
+/// A triangle placed by node 0 with EXT_mesh_gpu_instancing (required) at `instances` (each a
+/// translation, rotation quaternion and scale), the node itself moved by [0, 0, 5].
+fn instanced_gltf(
+    dir: &std::path::Path,
+    name: &str,
+    instances: &[([f32; 3], [f32; 4], [f32; 3])],
+) -> std::path::PathBuf {
+    let mut bin = Vec::new();
+    for p in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0]] {
+        p.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+    }
+    let mut views = vec![serde_json::json!({ "buffer": 0, "byteOffset": 0, "byteLength": 36 })];
+    let mut accessors = vec![
+        serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 3,
+        "type": "VEC3", "min": [0, 0, 0], "max": [1, 2, 0] }),
+    ];
+    for (k, ty) in [(0, "VEC3"), (1, "VEC4"), (2, "VEC3")] {
+        let start = bin.len();
+        for instance in instances {
+            let values: &[f32] = match k {
+                0 => &instance.0,
+                1 => &instance.1,
+                _ => &instance.2,
+            };
+            values.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+        }
+        views.push(serde_json::json!({ "buffer": 0, "byteOffset": start, "byteLength": bin.len() - start }));
+        accessors.push(
+            serde_json::json!({ "bufferView": views.len() - 1, "componentType": 5126,
+            "count": instances.len(), "type": ty }),
+        );
+    }
+    let doc = serde_json::json!({
+        "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+        "extensionsRequired": ["EXT_mesh_gpu_instancing"],
+        "nodes": [{ "mesh": 0, "translation": [0, 0, 5], "extensions": { "EXT_mesh_gpu_instancing":
+            { "attributes": { "TRANSLATION": 1, "ROTATION": 2, "SCALE": 3 } } } }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    written_gltf(dir, name, doc, &bin)
+}
+
+/// Issue 62: EXT_mesh_gpu_instancing places a node's mesh once per instance, each by its
+/// translation, rotation and scale and then the node's transform (only one triangle was drawn,
+/// silently; a file requiring the extension was refused); bad instancing is one line.
+#[test]
+fn gpu_instancing_places_a_mesh_per_instance() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    let quarter = std::f32::consts::FRAC_1_SQRT_2;
+    let path = instanced_gltf(
+        d,
+        "three",
+        &[
+            ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], [1.0, 1.0, 1.0]),
+            (
+                [10.0, 0.0, 0.0],
+                [0.0, 0.0, quarter, quarter],
+                [1.0, 1.0, 1.0],
+            ),
+            ([0.0, 10.0, 0.0], [0.0, 0.0, 0.0, 1.0], [2.0, 3.0, 1.0]),
+        ],
+    );
+    let parts = rt_gpu::scene::mesh::load(&path, "three.gltf", None).expect("loads");
+    let mesh = parts[0];
+    let placed: Vec<[glam::Vec3; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| mesh.positions[i as usize]))
+        .collect();
+    let v = glam::Vec3::new;
+    let expected = [
+        [v(0.0, 0.0, 5.0), v(1.0, 0.0, 5.0), v(0.0, 2.0, 5.0)],
+        // A quarter turn about z: x -> y, y -> -x.
+        [v(10.0, 0.0, 5.0), v(10.0, 1.0, 5.0), v(8.0, 0.0, 5.0)],
+        [v(0.0, 10.0, 5.0), v(2.0, 10.0, 5.0), v(0.0, 16.0, 5.0)],
+    ];
+    assert_eq!(placed.len(), 3, "{placed:?}");
+    for (got, want) in placed.iter().zip(expected) {
+        for (a, b) in got.iter().zip(want) {
+            assert!((*a - b).length() < 1e-5, "{placed:?}");
+        }
+    }
+    let (_, notes) = rt_gpu::scene::gltf_scene::load(&path, "three.gltf", None).expect("loads");
+    assert!(notes.is_empty(), "{notes:?}");
+    // A rotation of length 2 is refused, naming the instance.
+    let bad = instanced_gltf(d, "bad", &[([0.0; 3], [0.0, 0.0, 0.0, 2.0], [1.0; 3])]);
+    let err = rt_gpu::scene::mesh::load(&bad, "bad.gltf", None).expect_err("not a unit quaternion");
+    assert!(
+        err.contains("instance 0's ROTATION") && err.contains("unit quaternion"),
+        "{err}"
+    );
+    assert!(!err.contains('\n'), "{err}");
+    // Bad accessors are named before anything is read; a count that would place more triangles
+    // than rt-gpu takes is refused at once.
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("reads")).expect("json");
+    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut doc = doc.clone();
+        edit(&mut doc);
+        let path = d.join(format!("{name}.gltf"));
+        std::fs::write(&path, doc.to_string()).expect("writes");
+        let start = std::time::Instant::now();
+        let err = rt_gpu::scene::mesh::load(&path, name, None).expect_err(name);
+        assert!(
+            start.elapsed().as_secs_f64() < 1.0,
+            "{name}: {:?}",
+            start.elapsed()
+        );
+        assert!(!err.contains('\n'), "{err}");
+        err
+    };
+    let err = edited("vec3-rotation", &|doc| {
+        doc["accessors"][2]["type"] = "VEC3".into()
+    });
+    assert!(err.contains("ROTATION (accessor 2) is VEC3"), "{err}");
+    let err = edited("counts", &|doc| doc["accessors"][3]["count"] = 2.into());
+    assert!(err.contains("counts differ"), "{err}");
+    let err = edited("many", &|doc| {
+        let attributes =
+            &mut doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+        *attributes = serde_json::json!({ "TRANSLATION": 1 });
+        // Sparse, without a view: one stored value (view 1), at index 0 (view 0's first word).
+        doc["accessors"][1] = serde_json::json!({ "componentType": 5126, "count": 300_000_000u64,
+            "type": "VEC3", "sparse": { "count": 1, "indices": { "bufferView": 0, "componentType": 5125 },
+            "values": { "bufferView": 1 } } });
+    });
+    assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
 }

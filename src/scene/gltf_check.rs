@@ -14,6 +14,23 @@ pub const MAX_BUFFER_BYTES: u64 = 1 << 31;
 /// The first bytes of a binary glTF (`.glb`) file.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 
+/// Parses a glTF file's `bytes` (its references checked before the crate's validation, which
+/// indexes some of them unchecked), accepting as required the extensions rt-gpu reads itself
+/// (the crate refuses any it does not know).
+pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
+    let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
+    let what = format!("mesh {source}");
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| format!("cannot read {what}: {}", one_line(&e)))?;
+    check_references(document.as_json(), source)?;
+    let mut root = document.into_json();
+    root.extensions_required
+        .retain(|e| e != super::gltf_instancing::EXTENSION);
+    let document = gltf::Document::from_json(root)
+        .map_err(|e| format!("cannot read {what}: {}", one_line(&e)))?;
+    Ok(gltf::Gltf { document, blob })
+}
+
 /// Checks what can be checked before parsing: a `.glb` starts with its magic, and a binary
 /// container's header is whole and its length within the file (the crate subtracts the
 /// header's size from it unchecked).
@@ -148,6 +165,7 @@ pub fn check_document(
         ));
     }
     check_nodes(root, source)?;
+    super::gltf_instancing::check(root, buffer_lengths, source)?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let at = format!("mesh {source}: mesh {m} primitive {p}");
@@ -313,7 +331,7 @@ fn check_kinds(
     ))
 }
 
-fn accessor<'a>(
+pub(super) fn accessor<'a>(
     root: &'a json::Root,
     index: usize,
     at: &str,
@@ -326,7 +344,7 @@ fn accessor<'a>(
     })
 }
 
-fn kinds(accessor: &json::Accessor) -> (Option<Type>, Option<ComponentType>) {
+pub(super) fn kinds(accessor: &json::Accessor) -> (Option<Type>, Option<ComponentType>) {
     let ty = match accessor.type_ {
         Checked::Valid(t) => Some(t),
         Checked::Invalid => None,
@@ -338,7 +356,7 @@ fn kinds(accessor: &json::Accessor) -> (Option<Type>, Option<ComponentType>) {
     (ty, component)
 }
 
-fn describe(accessor: &json::Accessor) -> String {
+pub(super) fn describe(accessor: &json::Accessor) -> String {
     match kinds(accessor) {
         (Some(t), Some(c)) => format!("{} of {c:?}", format!("{t:?}").to_uppercase()),
         _ => "of an unknown type".to_string(),
@@ -357,7 +375,7 @@ const PEAK_BYTES_PER_ELEMENT: u64 = 128;
 /// Checks that accessor `index` lies inside its buffer view and the view inside its buffer, and
 /// its sparse blocks inside theirs; that its count fits the mesh limits and this machine's memory
 /// before anything is allocated; returns its element count.
-fn check_accessor(
+pub(super) fn check_accessor(
     root: &json::Root,
     buffer_lengths: &[usize],
     index: usize,

@@ -306,9 +306,7 @@ pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
 fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
     let (bytes, _) = super::inputs::read(path, source, super::mesh::MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read {source}: {e}"))?;
-    let document = gltf::Gltf::from_slice(&bytes)
-        .map_err(|e| format!("cannot read {source}: {}", e.to_string().replace('\n', " ")))?
-        .document;
+    let document = super::gltf_check::parse(&bytes, source)?.document;
     let Some(scene) = document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -458,7 +456,8 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads (KHR_materials_transmission: its factor).
-const READ_EXTENSIONS: [&str; 5] = [
+const READ_EXTENSIONS: [&str; 6] = [
+    "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",

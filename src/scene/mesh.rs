@@ -914,17 +914,10 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
 
 fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
     use super::gltf_check;
-    let one_line = |e: &dyn std::fmt::Display| e.to_string().replace('\n', " ");
     let (bytes, _) = super::inputs::read(path, source, MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     gltf_check::check_container(&bytes, path, source)?;
-    // The crate's own validation indexes some references before checking them.
-    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
-    gltf_check::check_references(unchecked.document.as_json(), source)?;
-    drop(unchecked);
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
-        .map_err(|e| format!("cannot read mesh {source}: {}", one_line(&e)))?;
+    let gltf::Gltf { document, blob } = gltf_check::parse(&bytes, source)?;
     drop(bytes);
     let buffers = gltf_check::read_buffers(&document, blob, path.parent(), source)?;
     let lengths: Vec<usize> = buffers.iter().map(|b| b.0.len()).collect();
@@ -963,8 +956,19 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
     // Finite: `check_document` found the nodes to be trees.
     while let Some((n, parent)) = stack.pop() {
         let local = DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
-        let world = parent * local;
-        if let Some(mesh) = n.mesh() {
+        let node_world = parent * local;
+        // Each instance (EXT_mesh_gpu_instancing; one without it) placed as a node would be.
+        let instances = match n.mesh() {
+            Some(_) => super::gltf_instancing::instances(
+                &n,
+                &document,
+                |b| buffers.get(b.index()).map(|d| &d.0[..]),
+                source,
+            )?,
+            None => Vec::new(),
+        };
+        for (instance, mesh) in instances.iter().filter_map(|i| Some((i, n.mesh()?))) {
+            let world = node_world * *instance;
             let flip = world.determinant() < 0.0;
             for primitive in mesh.primitives() {
                 // Points and lines are not drawn (`gltf_scene::read_extras` notes them).
@@ -1041,6 +1045,13 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                         super::MAX_EXTENT
                     ));
                 }
+                // Nodes (and instances) may place one mesh many times: bounded before it grows.
+                if positions.len() + placed.len() > 3 * MAX_TRIANGLES {
+                    return Err(format!(
+                        "mesh {source}: its nodes place more than {} vertices, more than rt-gpu takes",
+                        3 * MAX_TRIANGLES
+                    ));
+                }
                 positions.extend(placed.iter().map(|p| p.as_vec3()));
                 let count = positions.len() as u32 - base;
                 let indices: Vec<u32> = match reader.read_indices() {
@@ -1053,6 +1064,11 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     ));
                 }
                 let indices = triangle_list(mode, indices);
+                if triangles.len() + indices.len() / 3 > MAX_TRIANGLES {
+                    return Err(format!(
+                        "mesh {source}: its nodes place more than {MAX_TRIANGLES} triangles, more than rt-gpu takes"
+                    ));
+                }
                 triangles.extend(indices.chunks_exact(3).map(|t| {
                     let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
                     if flip { [a, c, b] } else { [a, b, c] }
@@ -1062,7 +1078,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 part_tangents.extend(per_corner(vertex_tangents.as_deref(), &indices, flip));
             }
         }
-        stack.extend(n.children().map(|c| (c, world)));
+        stack.extend(n.children().map(|c| (c, node_world)));
     }
     let materials: Vec<gltf::Material> = document.materials().collect();
     let mut textures =
