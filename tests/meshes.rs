@@ -802,3 +802,81 @@ fn gpu_instancing_places_a_mesh_per_instance() {
     });
     assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
 }
+
+/// A quad whose positions are UNSIGNED_BYTE (0 or 2, the node scaling them by 0.5), normals
+/// normalized BYTE (0, 0, 127) and texture coordinates normalized UNSIGNED_SHORT: what
+/// KHR_mesh_quantization allows, `used` or not.
+fn quantized_gltf(dir: &std::path::Path, name: &str, used: bool) -> std::path::PathBuf {
+    let mut bin: Vec<u8> = Vec::new();
+    for [x, y] in [[0u8, 0], [2, 0], [2, 2], [0, 2]] {
+        bin.extend([x, y, 0, 0]); // padded to 4 bytes
+    }
+    for _ in 0..4 {
+        bin.extend([0u8, 0, 127, 0]);
+    }
+    for [u, v] in [[0u16, 65535], [65535, 65535], [65535, 0], [0, 0]] {
+        bin.extend(u.to_le_bytes());
+        bin.extend(v.to_le_bytes());
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let extensions = if used {
+        serde_json::json!(["KHR_mesh_quantization"])
+    } else {
+        serde_json::json!([])
+    };
+    let doc = serde_json::json!({
+        "extensionsUsed": extensions,
+        "extensionsRequired": extensions,
+        "nodes": [{ "mesh": 0, "scale": [0.5, 0.5, 0.5] }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 }, "indices": 3 }] }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 16, "byteStride": 4 },
+            { "buffer": 0, "byteOffset": 16, "byteLength": 16, "byteStride": 4 },
+            { "buffer": 0, "byteOffset": 32, "byteLength": 16 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 12 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5121, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [2, 2, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5123, "normalized": true, "count": 4, "type": "VEC2" },
+            { "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" }
+        ],
+    });
+    written_gltf(dir, name, doc, &bin)
+}
+
+/// Issue 62: KHR_mesh_quantization's integer attributes read as the extension defines them
+/// (the extension, required, was refused): positions as their values (the node dequantizes),
+/// normalized normals and texture coordinates divided by 127 and 65535. Without the extension
+/// such attributes stay refused in one line.
+#[test]
+fn quantized_attributes_read_as_the_extension_defines() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = quantized_gltf(dir.path(), "quantized", true);
+    let parts = rt_gpu::scene::mesh::load(&path, "quantized.gltf", None).expect("loads");
+    let mesh = parts[0];
+    let corners: Vec<Vec3> = mesh.triangles[0]
+        .map(|i| mesh.positions[i as usize])
+        .to_vec();
+    assert_eq!(
+        corners,
+        [
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0)
+        ]
+    );
+    for n in mesh.normals.iter().flatten() {
+        assert!((*n - Vec3::Z).length() < 1e-6, "{n}");
+    }
+    let uvs = mesh.uvs[0];
+    // glTF's v runs down the image; rt-gpu's up.
+    assert_eq!(uvs[1], glam::Vec2::new(1.0, 0.0), "{uvs:?}");
+    assert_eq!(uvs[2], glam::Vec2::new(1.0, 1.0), "{uvs:?}");
+    let plain = quantized_gltf(dir.path(), "plain", false);
+    let err = rt_gpu::scene::mesh::load(&plain, "plain.gltf", None).expect_err("not FLOAT");
+    assert!(err.contains("POSITION (accessor 0) is VEC3 of U8"), "{err}");
+    assert!(!err.contains('\n'), "{err}");
+}

@@ -24,8 +24,9 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
         .map_err(|e| format!("cannot read {what}: {}", one_line(&e)))?;
     check_references(document.as_json(), source)?;
     let mut root = document.into_json();
-    root.extensions_required
-        .retain(|e| e != super::gltf_instancing::EXTENSION);
+    root.extensions_required.retain(|e| {
+        e != super::gltf_instancing::EXTENSION && e != super::gltf_quantized::EXTENSION
+    });
     let document = gltf::Document::from_json(root)
         .map_err(|e| format!("cannot read {what}: {}", one_line(&e)))?;
     Ok(gltf::Gltf { document, blob })
@@ -165,6 +166,10 @@ pub fn check_document(
         ));
     }
     check_nodes(root, source)?;
+    let quantized = root
+        .extensions_used
+        .iter()
+        .any(|e| e == super::gltf_quantized::EXTENSION);
     super::gltf_instancing::check(root, buffer_lengths, source)?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -193,13 +198,15 @@ pub fn check_document(
                     Checked::Valid(json::mesh::Semantic::TexCoords(set)) => {
                         // glTF 2.0, 3.7.2.1: VEC2 of FLOAT, or of normalized unsigned bytes
                         // or shorts (the crate's reader asserts the element's size).
-                        check_kinds(
-                            accessor,
-                            index.value(),
-                            &[Type::Vec2],
-                            &format!("TEXCOORD_{set}"),
-                            &at,
-                        )?;
+                        if !(quantized && quantized_kind(accessor, Type::Vec2, false)) {
+                            check_kinds(
+                                accessor,
+                                index.value(),
+                                &[Type::Vec2],
+                                &format!("TEXCOORD_{set}"),
+                                &at,
+                            )?;
+                        }
                         let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
                         uv_counts.push((*set, index.value(), count));
                         continue;
@@ -221,9 +228,13 @@ pub fn check_document(
                     }
                 };
                 let (ty, component) = kinds(accessor);
-                if ty != Some(expected)
-                    || component != Some(ComponentType::F32)
-                    || accessor.normalized
+                // KHR_mesh_quantization: positions of any 8- or 16-bit integers, normals and
+                // tangents of normalized signed ones.
+                let allowed = quantized && quantized_kind(accessor, expected, name != "POSITION");
+                if !allowed
+                    && (ty != Some(expected)
+                        || component != Some(ComponentType::F32)
+                        || accessor.normalized)
                 {
                     let shape = if expected == Type::Vec4 {
                         "VEC4"
@@ -295,6 +306,19 @@ pub fn check_document(
         }
     }
     Ok(())
+}
+
+/// Whether `accessor` is of `ty` in a kind KHR_mesh_quantization allows: FLOAT, or 8- or 16-bit
+/// integers, which must be normalized and signed where `unit` (normals and tangents).
+fn quantized_kind(accessor: &json::Accessor, ty: Type, unit: bool) -> bool {
+    let (kind, component) = kinds(accessor);
+    let integer = match component {
+        Some(ComponentType::F32) => return kind == Some(ty) && !accessor.normalized,
+        Some(ComponentType::I8 | ComponentType::I16) => true,
+        Some(ComponentType::U8 | ComponentType::U16) => !unit,
+        _ => false,
+    };
+    kind == Some(ty) && integer && (accessor.normalized || !unit)
 }
 
 /// Checks an attribute the specification allows as `types` of FLOAT, or of normalized unsigned

@@ -456,9 +456,10 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads (KHR_materials_transmission: its factor).
-const READ_EXTENSIONS: [&str; 6] = [
+const READ_EXTENSIONS: [&str; 7] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
+    "KHR_mesh_quantization",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",

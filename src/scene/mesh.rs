@@ -976,14 +976,27 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 if !is_triangles(mode) {
                     continue;
                 }
-                let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                let Some(read) = reader.read_positions() else {
+                let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+                let reader = primitive.reader(buffer);
+                // Any component type KHR_mesh_quantization allows (`gltf_check` checked which).
+                use super::gltf_quantized as quantized;
+                let attribute = |semantic| primitive.get(&semantic);
+                let unread =
+                    |what: &str| format!("mesh {source}: a primitive's {what} cannot be read");
+                let Some(read) = attribute(gltf::Semantic::Positions) else {
                     return Err(format!("mesh {source}: a primitive has no positions"));
                 };
+                let read = quantized::vec3(read, buffer).ok_or_else(|| unread("POSITION"))?;
                 let key = primitive.material().index();
                 let transform = super::gltf_textures::uv_transform(&primitive.material(), source)?;
-                let uvs: Option<Vec<Vec2>> = reader.read_tex_coords(0).map(|read| {
-                    read.into_f32()
+                let uvs = match attribute(gltf::Semantic::TexCoords(0)) {
+                    Some(a) => {
+                        Some(quantized::vec2(a, buffer).ok_or_else(|| unread("TEXCOORD_0"))?)
+                    }
+                    None => None,
+                };
+                let uvs: Option<Vec<Vec2>> = uvs.map(|read| {
+                    read.into_iter()
                         .map(|uv| {
                             let [u, v] = transform.apply(uv);
                             Vec2::new(u, 1.0 - v)
@@ -1010,23 +1023,35 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 let base = positions.len() as u32;
                 // Normals transform by the inverse transpose (non-uniform scales bend them).
                 let to_world = DMat3::from_mat4(world).inverse().transpose();
-                let vertex_normals: Option<Vec<Vec3>> = reader.read_normals().map(|read| {
-                    read.map(|n| (to_world * DVec3::from_array(n.map(|x| x as f64))).as_vec3())
+                let normals_read = match attribute(gltf::Semantic::Normals) {
+                    Some(a) => Some(quantized::vec3(a, buffer).ok_or_else(|| unread("NORMAL"))?),
+                    None => None,
+                };
+                let vertex_normals: Option<Vec<Vec3>> = normals_read.map(|read| {
+                    read.into_iter()
+                        .map(|n| (to_world * DVec3::from_array(n.map(|x| x as f64))).as_vec3())
                         .collect()
                 });
                 // Tangents lie along the surface: they transform as its vectors do, and a
                 // mirroring placement turns the bitangent around.
                 let along = DMat3::from_mat4(world);
                 // glTF: TANGENT without NORMAL is to be ignored.
-                let tangents = vertex_normals.as_ref().and(reader.read_tangents());
+                let tangents = match attribute(gltf::Semantic::Tangents) {
+                    Some(a) if vertex_normals.is_some() => {
+                        Some(quantized::vec4(a, buffer).ok_or_else(|| unread("TANGENT"))?)
+                    }
+                    _ => None,
+                };
                 let vertex_tangents: Option<Vec<Vec4>> = tangents.map(|read| {
-                    read.map(|[x, y, z, w]| {
-                        let t = (along * DVec3::new(x as f64, y as f64, z as f64)).as_vec3();
-                        t.extend(if flip { -w } else { w })
-                    })
-                    .collect()
+                    read.into_iter()
+                        .map(|[x, y, z, w]| {
+                            let t = (along * DVec3::new(x as f64, y as f64, z as f64)).as_vec3();
+                            t.extend(if flip { -w } else { w })
+                        })
+                        .collect()
                 });
                 let placed: Vec<DVec3> = read
+                    .iter()
                     .map(|p| world.transform_point3(DVec3::from_array(p.map(|x| x as f64))))
                     .collect();
                 if let Some(far) = placed
