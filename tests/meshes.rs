@@ -801,6 +801,17 @@ fn gpu_instancing_places_a_mesh_per_instance() {
             "values": { "bufferView": 1 } } });
     });
     assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
+    // A mesh of points draws nothing, but each instance would still be a pass over it.
+    let err = edited("points", &|doc| {
+        doc["meshes"][0]["primitives"][0]["mode"] = 0.into();
+        let attributes =
+            &mut doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+        *attributes = serde_json::json!({ "TRANSLATION": 1 });
+        doc["accessors"][1] = serde_json::json!({ "componentType": 5126, "count": 200_000_000u64,
+            "type": "VEC3", "sparse": { "count": 1, "indices": { "bufferView": 0, "componentType": 5125 },
+            "values": { "bufferView": 1 } } });
+    });
+    assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
 }
 
 /// A quad whose positions are UNSIGNED_BYTE (0 or 2, the node scaling them by 0.5), normals

@@ -89,13 +89,22 @@ pub fn check(root: &json::Root, buffer_lengths: &[usize], source: &str) -> Resul
             }
             count = Some(this);
         }
-        // Every instance's triangles, bounded before any is placed.
+        // Every instance's triangles, bounded before any is placed; and the instances
+        // themselves, each a pass over the mesh's primitives, by the same limit.
+        let count = count.unwrap_or(0);
         let triangles: u64 = mesh.primitives.iter().map(|p| triangles_of(root, p)).sum();
-        let placed = triangles.saturating_mul(count.unwrap_or(0));
+        let passes = (mesh.primitives.len() as u64).max(1).saturating_mul(count);
+        if passes > super::mesh::MAX_TRIANGLES as u64 {
+            return Err(format!(
+                "{at}: {count} instances of {} primitives are more than the {} placements rt-gpu takes",
+                mesh.primitives.len(),
+                super::mesh::MAX_TRIANGLES
+            ));
+        }
+        let placed = triangles.saturating_mul(count);
         if placed > super::mesh::MAX_TRIANGLES as u64 {
             return Err(format!(
-                "{at}: {} instances of {triangles} triangles make {placed}, more than the {} rt-gpu takes",
-                count.unwrap_or(0),
+                "{at}: {count} instances of {triangles} triangles make {placed}, more than the {} rt-gpu takes",
                 super::mesh::MAX_TRIANGLES
             ));
         }
@@ -122,74 +131,137 @@ fn triangles_of(root: &json::Root, primitive: &json::mesh::Primitive) -> u64 {
     }
 }
 
-/// The transforms of `node`'s instances, each its TRS (`[IDENTITY]` without the extension);
-/// `buffer` gives a buffer's bytes. Rotations must be unit quaternions and every value finite.
+/// A node's instances: each one's translation, rotation and scale as the file stores them
+/// (40 bytes an instance), made into a transform as the loader places it.
+pub struct Instances {
+    count: usize,
+    translations: Option<Vec<[f32; 3]>>,
+    rotations: Option<Vec<[f32; 4]>>,
+    scales: Option<Vec<[f32; 3]>>,
+    /// Where errors about an instance are located.
+    at: String,
+}
+
+impl Instances {
+    /// No instance: a node with nothing to draw.
+    pub fn none() -> Self {
+        Instances {
+            count: 0,
+            translations: None,
+            rotations: None,
+            scales: None,
+            at: String::new(),
+        }
+    }
+
+    /// One instance, the node itself: a node without the extension.
+    fn one() -> Self {
+        Instances {
+            count: 1,
+            ..Instances::none()
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Instance `i`'s transform, T R S; its rotation must be a unit quaternion.
+    pub fn transform(&self, i: usize) -> Result<DMat4, String> {
+        let vector = |values: &Option<Vec<[f32; 3]>>, default: DVec3| {
+            values
+                .as_ref()
+                .and_then(|v| v.get(i))
+                .map_or(default, |v| DVec3::from_array(v.map(f64::from)))
+        };
+        let rotation = match self.rotations.as_ref().and_then(|r| r.get(i)) {
+            Some(r) => {
+                let q = DQuat::from_array(r.map(f64::from));
+                if !((q.length() - 1.0).abs() <= 1e-2) {
+                    return Err(format!(
+                        "{}: instance {i}'s ROTATION {r:?} has length {:.3}; the extension requires a unit quaternion",
+                        self.at,
+                        q.length()
+                    ));
+                }
+                q.normalize()
+            }
+            None => DQuat::IDENTITY,
+        };
+        let transform = DMat4::from_scale_rotation_translation(
+            vector(&self.scales, DVec3::ONE),
+            rotation,
+            vector(&self.translations, DVec3::ZERO),
+        );
+        if !transform.is_finite() {
+            return Err(format!(
+                "{}: instance {i}'s transform is not finite numbers",
+                self.at
+            ));
+        }
+        Ok(transform)
+    }
+}
+
+/// `node`'s instances (one, the node itself, without the extension), their attributes read
+/// from the accessors `check` checked; `buffer` gives a buffer's bytes.
 pub fn instances<'a>(
     node: &gltf::Node,
     document: &gltf::Document,
     buffer: impl Fn(gltf::Buffer) -> Option<&'a [u8]> + Clone,
     source: &str,
-) -> Result<Vec<DMat4>, String> {
+) -> Result<Instances, String> {
     let at = named(source, node.index());
-    let Some(attributes) = attributes(node.extension_value(EXTENSION), &at)? else {
-        return Ok(vec![DMat4::IDENTITY]);
+    let Some([t, r, s]) = attributes(node.extension_value(EXTENSION), &at)? else {
+        return Ok(Instances::one());
     };
-    let read = |index: Option<usize>, name: &str| -> Result<Option<Vec<Vec<f64>>>, String> {
-        let Some(index) = index else { return Ok(None) };
-        let accessor = document
-            .accessors()
-            .nth(index)
-            .ok_or_else(|| format!("{at} names accessor {index}, which the file lacks"))?;
-        let values: Vec<Vec<f64>> = if name == "ROTATION" {
-            gltf::accessor::Iter::<[f32; 4]>::new(accessor, buffer.clone())
-                .map(|i| i.map(|v| v.map(f64::from).to_vec()).collect())
-        } else {
-            gltf::accessor::Iter::<[f32; 3]>::new(accessor, buffer.clone())
-                .map(|i| i.map(|v| v.map(f64::from).to_vec()).collect())
-        }
-        .ok_or_else(|| format!("{at}: its {name} (accessor {index}) cannot be read"))?;
-        if let Some(bad) = values.iter().find(|v| !v.iter().all(|x| x.is_finite())) {
-            return Err(format!(
-                "{at}: its {name} holds {bad:?}, not finite numbers"
-            ));
-        }
-        Ok(Some(values))
+    let accessor = |index: Option<usize>| -> Result<Option<gltf::Accessor>, String> {
+        index
+            .map(|i| {
+                document
+                    .accessors()
+                    .nth(i)
+                    .ok_or_else(|| format!("{at} names accessor {i}, which the file lacks"))
+            })
+            .transpose()
     };
-    let [t, r, s] = attributes;
-    let (t, r, s) = (
-        read(t, "TRANSLATION")?,
-        read(r, "ROTATION")?,
-        read(s, "SCALE")?,
-    );
-    let count = [&t, &r, &s]
-        .iter()
-        .filter_map(|v| v.as_ref().map(Vec::len))
-        .max()
-        .unwrap_or(0);
-    (0..count)
-        .map(|i| {
-            let vector = |values: &Option<Vec<Vec<f64>>>, default: DVec3| {
-                values.as_ref().map_or(default, |v| DVec3::new(v[i][0], v[i][1], v[i][2]))
-            };
-            let rotation = match &r {
-                Some(r) => {
-                    let q = DQuat::from_xyzw(r[i][0], r[i][1], r[i][2], r[i][3]);
-                    if !((q.length() - 1.0).abs() <= 1e-2) {
-                        return Err(format!(
-                            "{at}: instance {i}'s ROTATION {:?} has length {:.3}; the extension requires a unit quaternion",
-                            r[i],
-                            q.length()
-                        ));
-                    }
-                    q.normalize()
-                }
-                None => DQuat::IDENTITY,
-            };
-            Ok(DMat4::from_scale_rotation_translation(
-                vector(&s, DVec3::ONE),
-                rotation,
-                vector(&t, DVec3::ZERO),
-            ))
+    let unread = |name: &str| format!("{at}: its {name} cannot be read");
+    let read3 = |index, name: &str| -> Result<Option<Vec<[f32; 3]>>, String> {
+        accessor(index)?
+            .map(|a| {
+                gltf::accessor::Iter::<[f32; 3]>::new(a, buffer.clone())
+                    .map(Iterator::collect)
+                    .ok_or_else(|| unread(name))
+            })
+            .transpose()
+    };
+    let translations = read3(t, "TRANSLATION")?;
+    let scales = read3(s, "SCALE")?;
+    let rotations = accessor(r)?
+        .map(|a| {
+            gltf::accessor::Iter::<[f32; 4]>::new(a, buffer.clone())
+                .map(Iterator::collect::<Vec<_>>)
+                .ok_or_else(|| unread("ROTATION"))
         })
-        .collect()
+        .transpose()?;
+    let count = [
+        translations.as_ref().map(Vec::len),
+        rotations.as_ref().map(Vec::len),
+        scales.as_ref().map(Vec::len),
+    ]
+    .into_iter()
+    .flatten()
+    .max()
+    .unwrap_or(0);
+    Ok(Instances {
+        count,
+        translations,
+        rotations,
+        scales,
+        at,
+    })
 }

@@ -951,31 +951,36 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
     };
     // Parts by glTF material (None: primitives without one), in order of first use.
     let mut parts: Vec<Part> = Vec::new();
+    // Vertices and triangles placed so far, in every part: nodes and instances may place one
+    // mesh many times, so the file's limits are checked as they grow.
+    let (mut placed_vertices, mut placed_triangles) = (0usize, 0usize);
     let mut stack: Vec<(gltf::Node, DMat4)> =
         roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
     // Finite: `check_document` found the nodes to be trees.
     while let Some((n, parent)) = stack.pop() {
         let local = DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
         let node_world = parent * local;
+        // Points and lines are not drawn (`gltf_scene::read_extras` notes them).
+        let drawn: Vec<gltf::Primitive> = n
+            .mesh()
+            .map(|m| m.primitives().filter(|p| is_triangles(p.mode())).collect())
+            .unwrap_or_default();
         // Each instance (EXT_mesh_gpu_instancing; one without it) placed as a node would be.
-        let instances = match n.mesh() {
-            Some(_) => super::gltf_instancing::instances(
+        let instances = if drawn.is_empty() {
+            super::gltf_instancing::Instances::none()
+        } else {
+            super::gltf_instancing::instances(
                 &n,
                 &document,
                 |b| buffers.get(b.index()).map(|d| &d.0[..]),
                 source,
-            )?,
-            None => Vec::new(),
+            )?
         };
-        for (instance, mesh) in instances.iter().filter_map(|i| Some((i, n.mesh()?))) {
-            let world = node_world * *instance;
+        for i in 0..instances.len() {
+            let world = node_world * instances.transform(i)?;
             let flip = world.determinant() < 0.0;
-            for primitive in mesh.primitives() {
-                // Points and lines are not drawn (`gltf_scene::read_extras` notes them).
+            for primitive in &drawn {
                 let mode = primitive.mode();
-                if !is_triangles(mode) {
-                    continue;
-                }
                 let buffer = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
                 let reader = primitive.reader(buffer);
                 // Any component type KHR_mesh_quantization allows (`gltf_check` checked which).
@@ -1008,7 +1013,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 {
                     return Err(format!(
                         "mesh {source}: a primitive of mesh {} has no TEXCOORD_0, which its material \"{}\"'s {slot} reads",
-                        mesh.index(),
+                        n.mesh().map_or(0, |m| m.index()),
                         primitive.material().name().unwrap_or("")
                     ));
                 }
@@ -1071,7 +1076,8 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     ));
                 }
                 // Nodes (and instances) may place one mesh many times: bounded before it grows.
-                if positions.len() + placed.len() > 3 * MAX_TRIANGLES {
+                placed_vertices += placed.len();
+                if placed_vertices > 3 * MAX_TRIANGLES {
                     return Err(format!(
                         "mesh {source}: its nodes place more than {} vertices, more than rt-gpu takes",
                         3 * MAX_TRIANGLES
@@ -1088,12 +1094,17 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                         "mesh {source}: an index {bad} names a vertex beyond its primitive's {count}"
                     ));
                 }
-                let indices = triangle_list(mode, indices);
-                if triangles.len() + indices.len() / 3 > MAX_TRIANGLES {
+                // Counted before a strip or fan is expanded.
+                placed_triangles += match mode {
+                    gltf::mesh::Mode::Triangles => indices.len() / 3,
+                    _ => indices.len().saturating_sub(2),
+                };
+                if placed_triangles > MAX_TRIANGLES {
                     return Err(format!(
                         "mesh {source}: its nodes place more than {MAX_TRIANGLES} triangles, more than rt-gpu takes"
                     ));
                 }
+                let indices = triangle_list(mode, indices);
                 triangles.extend(indices.chunks_exact(3).map(|t| {
                     let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
                     if flip { [a, c, b] } else { [a, b, c] }

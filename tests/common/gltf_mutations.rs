@@ -235,10 +235,17 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
         }
         // Nodes: graphs and transforms.
         4 => {
-            let kind = c.below(6);
+            let kind = c.below(7);
             let (child, mesh) = (index(c, nodes), index(c, array_len(doc, "meshes")));
             let (translation, scale, rotation) = (vec_of(c, 3), vec_of(c, 3), vec_of(c, 4));
             let matrix = vec_of(c, 16);
+            // EXT_mesh_gpu_instancing: some of its attributes, naming any accessor.
+            let mut attributes = serde_json::Map::new();
+            for name in ["TRANSLATION", "ROTATION", "SCALE"] {
+                if c.below(3) > 0 {
+                    attributes.insert(name.into(), index(c, accessors));
+                }
+            }
             let Some(n) = element(doc, "nodes", c) else {
                 return;
             };
@@ -248,7 +255,11 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
                 2 => n["translation"] = translation,
                 3 => n["scale"] = scale,
                 4 => n["rotation"] = rotation,
-                _ => n["matrix"] = matrix,
+                5 => n["matrix"] = matrix,
+                _ => {
+                    object_at(n, "extensions")["EXT_mesh_gpu_instancing"] =
+                        json!({ "attributes": attributes })
+                }
             }
         }
         // Primitives: modes, attributes, indices, materials.
