@@ -791,25 +791,22 @@ fn gpu_instancing_places_a_mesh_per_instance() {
     assert!(err.contains("ROTATION (accessor 2) is VEC3"), "{err}");
     let err = edited("counts", &|doc| doc["accessors"][3]["count"] = 2.into());
     assert!(err.contains("counts differ"), "{err}");
-    let err = edited("many", &|doc| {
+    // Only TRANSLATION, `count` of them, sparse without a view: one stored value (view 1) at
+    // index 0 (view 0's first word).
+    let sparse_translations = |doc: &mut serde_json::Value, count: u64| {
         let attributes =
             &mut doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
         *attributes = serde_json::json!({ "TRANSLATION": 1 });
-        // Sparse, without a view: one stored value (view 1), at index 0 (view 0's first word).
-        doc["accessors"][1] = serde_json::json!({ "componentType": 5126, "count": 300_000_000u64,
+        doc["accessors"][1] = serde_json::json!({ "componentType": 5126, "count": count,
             "type": "VEC3", "sparse": { "count": 1, "indices": { "bufferView": 0, "componentType": 5125 },
             "values": { "bufferView": 1 } } });
-    });
+    };
+    let err = edited("many", &|doc| sparse_translations(doc, 300_000_000));
     assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
     // A mesh of points draws nothing, but each instance would still be a pass over it.
     let err = edited("points", &|doc| {
         doc["meshes"][0]["primitives"][0]["mode"] = 0.into();
-        let attributes =
-            &mut doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
-        *attributes = serde_json::json!({ "TRANSLATION": 1 });
-        doc["accessors"][1] = serde_json::json!({ "componentType": 5126, "count": 200_000_000u64,
-            "type": "VEC3", "sparse": { "count": 1, "indices": { "bufferView": 0, "componentType": 5125 },
-            "values": { "bufferView": 1 } } });
+        sparse_translations(doc, 200_000_000);
     });
     assert!(err.contains("EXT_mesh_gpu_instancing"), "{err}");
 }

@@ -9,17 +9,17 @@
 //! plain mean of its 64 samples (about 1.5% lower at roughness 0.3). Each albedo is an
 //! expectation over visible normals of its lobe's weight ((1 - F) G2 / G1(wo) refracted,
 //! F G2 / G1(wo) reflected), in f64 by Gauss-Legendre quadrature over the two numbers that
-//! sample them ([`CoatTable::exact`], 13 ms a table).
+//! sample them ([`CoatTable::exact`]).
 //!
 //! A scene's coats of index 1 to 100 read their tables off a grid of exact ones over index and
 //! roughness (`coat_grid.bin`, 49 x 33 tables written by the ignored test `write_coat_grid`),
 //! bicubic between them, as Cycles reads its glass albedos off tables over (ior, roughness,
 //! cosine): thousands of distinct plastics then load in milliseconds, not a minute. The grid's
 //! index axis is ln(1 + 4 sqrt(ior - 1)), fine where the index nears 1 (where grazing Fresnel
-//! turns on over a tiny range) and logarithmic for large ones. Against exact tables the grid's
-//! are within 3e-5 on average and 6e-3 at worst (grazing, nearly smooth), K within 1.3e-3 (the
-//! quadrature's own noise is 2e-4): see the tests. Coats of index below 1 (total internal
-//! reflection from outside puts a step in the table that moves with the index) are computed.
+//! turns on over a tiny range) and logarithmic for large ones; how close its tables are to exact
+//! ones is in docs/benchmarks.md and bounded by the tests. Coats of index below 1 (total
+//! internal reflection from outside puts a step in the table that moves with the index) are
+//! computed.
 
 use super::coat::coat_fresnel;
 use super::fresnel::refract_cos;
@@ -94,7 +94,7 @@ impl CoatTable {
         }
     }
 
-    /// The table of a coat of index `ior` and GGX `alpha`, by quadrature (13 ms).
+    /// The table of a coat of index `ior` and GGX `alpha`, by quadrature.
     pub fn exact(ior: f32, alpha: f32) -> Self {
         COMPUTED.with(|c| c.set(c.get() + 1));
         let ggx = Ggx { alpha };

@@ -32,6 +32,13 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
     Ok(gltf::Gltf { document, blob })
 }
 
+/// Whether `q` is a unit quaternion as glTF asks (node rotations, instances' ROTATION), within
+/// the rounding a file's writer may leave.
+pub(super) fn is_unit_quaternion(q: [f32; 4]) -> bool {
+    let length = q.iter().map(|&x| x as f64 * x as f64).sum::<f64>().sqrt();
+    (length - 1.0).abs() <= 1e-2
+}
+
 /// Checks what can be checked before parsing: a `.glb` starts with its magic, and a binary
 /// container's header is whole and its length within the file (the crate subtracts the
 /// header's size from it unchecked).
@@ -578,7 +585,7 @@ fn check_nodes(root: &json::Root, source: &str) -> Result<(), String> {
         }
         if let Some(r) = &node.rotation {
             let length = r.0.iter().map(|&x| x as f64 * x as f64).sum::<f64>().sqrt();
-            if !((length - 1.0).abs() <= 1e-2) {
+            if !is_unit_quaternion(r.0) {
                 return Err(format!(
                     "mesh {source}: {} has a rotation {:?} of length {length:.3}; glTF requires a unit quaternion",
                     name(i),

@@ -114,7 +114,7 @@ pub fn check(root: &json::Root, buffer_lengths: &[usize], source: &str) -> Resul
 
 /// The triangles a primitive draws, from its accessors' counts (0 for points and lines).
 fn triangles_of(root: &json::Root, primitive: &json::mesh::Primitive) -> u64 {
-    use json::mesh::{Mode, Semantic};
+    use json::mesh::Semantic;
     use json::validation::Checked;
     let count = |index: usize| root.accessors.get(index).map_or(0, |a| a.count.0);
     let corners = match &primitive.indices {
@@ -125,9 +125,8 @@ fn triangles_of(root: &json::Root, primitive: &json::mesh::Primitive) -> u64 {
             .map_or(0, |index| count(index.value())),
     };
     match primitive.mode {
-        Checked::Valid(Mode::Triangles) => corners / 3,
-        Checked::Valid(Mode::TriangleStrip | Mode::TriangleFan) => corners.saturating_sub(2),
-        _ => 0,
+        Checked::Valid(mode) => super::mesh::triangles_drawn(mode, corners),
+        Checked::Invalid => 0,
     }
 }
 
@@ -181,7 +180,7 @@ impl Instances {
         let rotation = match self.rotations.as_ref().and_then(|r| r.get(i)) {
             Some(r) => {
                 let q = DQuat::from_array(r.map(f64::from));
-                if !((q.length() - 1.0).abs() <= 1e-2) {
+                if !super::gltf_check::is_unit_quaternion(*r) {
                     return Err(format!(
                         "{}: instance {i}'s ROTATION {r:?} has length {:.3}; the extension requires a unit quaternion",
                         self.at,
@@ -211,7 +210,7 @@ impl Instances {
 /// from the accessors `check` checked; `buffer` gives a buffer's bytes.
 pub fn instances<'a>(
     node: &gltf::Node,
-    document: &gltf::Document,
+    document: &'a gltf::Document,
     buffer: impl Fn(gltf::Buffer) -> Option<&'a [u8]> + Clone,
     source: &str,
 ) -> Result<Instances, String> {
@@ -229,24 +228,18 @@ pub fn instances<'a>(
             })
             .transpose()
     };
+    // FLOAT, as `check` made sure.
+    use super::gltf_quantized::{vec3, vec4};
     let unread = |name: &str| format!("{at}: its {name} cannot be read");
     let read3 = |index, name: &str| -> Result<Option<Vec<[f32; 3]>>, String> {
-        accessor(index)?
-            .map(|a| {
-                gltf::accessor::Iter::<[f32; 3]>::new(a, buffer.clone())
-                    .map(Iterator::collect)
-                    .ok_or_else(|| unread(name))
-            })
+        (accessor(index)?)
+            .map(|a| vec3(a, buffer.clone()).ok_or_else(|| unread(name)))
             .transpose()
     };
     let translations = read3(t, "TRANSLATION")?;
     let scales = read3(s, "SCALE")?;
-    let rotations = accessor(r)?
-        .map(|a| {
-            gltf::accessor::Iter::<[f32; 4]>::new(a, buffer.clone())
-                .map(Iterator::collect::<Vec<_>>)
-                .ok_or_else(|| unread("ROTATION"))
-        })
+    let rotations = (accessor(r)?)
+        .map(|a| vec4(a, buffer.clone()).ok_or_else(|| unread("ROTATION")))
         .transpose()?;
     let count = [
         translations.as_ref().map(Vec::len),

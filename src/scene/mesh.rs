@@ -1095,10 +1095,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     ));
                 }
                 // Counted before a strip or fan is expanded.
-                placed_triangles += match mode {
-                    gltf::mesh::Mode::Triangles => indices.len() / 3,
-                    _ => indices.len().saturating_sub(2),
-                };
+                placed_triangles += triangles_drawn(mode, indices.len() as u64) as usize;
                 if placed_triangles > MAX_TRIANGLES {
                     return Err(format!(
                         "mesh {source}: its nodes place more than {MAX_TRIANGLES} triangles, more than rt-gpu takes"
@@ -1148,6 +1145,17 @@ pub fn is_triangles(mode: gltf::mesh::Mode) -> bool {
         mode,
         Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
     )
+}
+
+/// The triangles a primitive of `mode` draws from `corners` indices (or vertices): a list's
+/// thirds, a strip's or fan's all but two; none for points and lines.
+pub fn triangles_drawn(mode: gltf::mesh::Mode, corners: u64) -> u64 {
+    use gltf::mesh::Mode;
+    match mode {
+        Mode::Triangles => corners / 3,
+        Mode::TriangleStrip | Mode::TriangleFan => corners.saturating_sub(2),
+        _ => 0,
+    }
 }
 
 /// A triangles primitive's `indices` as a list of triangles, three indices each (glTF 2.0,
