@@ -749,6 +749,7 @@ fn bumpy_lambert(
 
 /// The normal map's green channel turned over (DirectX's convention, or a bitangent of the
 /// wrong sign).
+#[cfg(feature = "gpu")]
 fn green_flipped(
     map: rt_gpu::scene::normal_map::NormalMap,
 ) -> rt_gpu::scene::normal_map::NormalMap {
@@ -770,23 +771,25 @@ fn green_flipped(
 }
 
 /// Under a low sun, each quadrant of the normal-mapped floor is as bright as its tilt makes it.
-/// In front, where the floor faces the camera, rt-gpu's image (Lambertian, MikkTSpace tangents
-/// from Blender's UVs) agrees with Cycles' within 2.5% (a deterministic check at seed 0;
-/// rt-gpu's noise there is under 1% at 512 spp), and so does the cube's top. Printed, not
-/// asserted: the far quadrants, where Cycles bends the map's normals back toward the viewer
-/// (its `ensure_valid_reflection`; its normal pass there varies by pixel, mean (0.477, -0.019,
-/// 0.870) for the map's (0.498, 0.004, 0.867)), are 2.8% and 3.8% brighter in rt-gpu, which applies
-/// the map as it is, as pbrt-v4 and Mitsuba 3 do. `bumpy-lambert.toml`, the same scene in a
-/// scene file (`normal_map = { image, scale }`), renders within 0.5% of it. Negative controls:
-/// without the map the front quadrants are off by 30% or more, and with its green channel
-/// turned over the -v quadrant is.
+/// rt-gpu shades a normal map as a microsurface (issue 62, `material::microsurface`): a facet
+/// tilted toward the grazing sun is shadowed by its neighbours, one tilted away lit by their
+/// mirror, where Cycles applies the map as it is (bending normals that face away from the
+/// viewer back toward it). So the quadrants are printed against Cycles, not asserted (measured
+/// at 512 spp: +u 0.70, +v 0.84, -v 1.40, -u 1.98 of Cycles'; before the microsurface, the
+/// front two agreed within 2.5% and the far two were 2.8% and 3.8% brighter), and the cube's
+/// top, which the map leaves flat, agrees within 2.5%. `bumpy-lambert.toml`, the same scene in
+/// a scene file (`normal_map = { image, scale }`), renders within 0.5% of it. Negative controls
+/// against rt-gpu's own image: without the map every quadrant changes by 10% or more (13-15%).
+/// Lambertian facets lit only from their own side reflect as the flat floor times the cosine
+/// of their tilt, whichever way they tilt (the microsurface keeps the light the geometric
+/// surface receives), so a green channel turned over no longer shows here: the tangent frame's
+/// handedness is checked on the file's pbr (below) and by `assert_tilts`.
 #[test]
 fn blenders_normal_mapped_scene_renders_as_in_cycles() {
     let cycles = "bumpy-lambert-cycles.exr";
     let ratios = ratios_to_cycles(bumpy_lambert(Some), cycles, &BUMPY_REGIONS);
-    for ((name, ..), ratio) in BUMPY_REGIONS.iter().zip(&ratios).skip(2) {
-        assert!((ratio - 1.0).abs() < 0.025, "{name}: {ratio}");
-    }
+    let top = ratios[4];
+    assert!((top - 1.0).abs() < 0.025, "cube, top: {top}");
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender/bumpy-lambert.toml");
     let file = rt_gpu::scene::file::load(&path).expect("loads");
     let from_file = ratios_to_cycles(file, cycles, &BUMPY_REGIONS);
@@ -798,17 +801,8 @@ fn blenders_normal_mapped_scene_renders_as_in_cycles() {
     }
     let flat = ratios_to_cycles(bumpy_lambert(|_| None), cycles, &BUMPY_REGIONS);
     assert!(
-        flat[2..4].iter().all(|r| (r - 1.0).abs() >= 0.3),
-        "the normal map's absence went unseen: {flat:?}"
-    );
-    let flipped = ratios_to_cycles(
-        bumpy_lambert(|map| Some(green_flipped(map))),
-        cycles,
-        &BUMPY_REGIONS,
-    );
-    assert!(
-        (flipped[2] - 1.0).abs() >= 0.3,
-        "a green channel turned over went unseen: {flipped:?}"
+        (0..4).all(|i| (flat[i] / ratios[i] - 1.0).abs() >= 0.1),
+        "the normal map's absence went unseen: {flat:?} vs {ratios:?}"
     );
 }
 

@@ -116,3 +116,146 @@ fn closed_emitting_sphere_gives_the_geometric_series() {
         );
     }
 }
+
+/// Where a steep normal map bends the shading normal (60 degrees), a lossless surface under a
+/// uniform sky still renders 1 at every pixel: normal-mapped surfaces are microsurfaces (`material::microsurface`, Schüssler et al. 2017) that
+/// neither lose light below the surface nor go black where the view is below the shading
+/// normal. Naive paths on lossless materials weigh exactly 1 (or 0 where one is lost), so their
+/// bound is a plain 1% at every pixel (the issue asks 2%). With next-event estimation against a
+/// uniform environment light (the split of the BSDF between MIS and sampling alone must add
+/// up), samples vary: the image mean within 4 standard errors (4 such tests; Sidak at 0.01
+/// would allow 3.0) and each pixel within 1% + 5 of its standard errors. The control, albedo
+/// 0.98, must break each bound. Both backends.
+#[test]
+fn normal_maps_keep_a_lossless_surface_lossless() {
+    use rt_gpu::scene::Scene;
+    use rt_gpu::scene::environment::Environment;
+    use rt_gpu::scene::image::Image;
+    use rt_gpu::scene::normal_map::NormalMap;
+    #[cfg(feature = "gpu")]
+    let gpu = common::gpu::renderer();
+    // A 4 x 4 map of normals tilted 60 degrees toward 16 azimuths.
+    let texels = (0..16)
+        .flat_map(|i| {
+            let (phi, theta) = (
+                i as f32 * 2.0 * std::f32::consts::PI / 16.0,
+                60f32.to_radians(),
+            );
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            (0.5 * (n + Vec3::ONE)).to_array()
+        })
+        .collect();
+    let steep = NormalMap {
+        image: Image::from_linear("steep normals", 4, 4, texels)
+            .expect("valid")
+            .leak(),
+        scale: 1.0,
+    };
+    let white = Image::from_linear("white", 8, 4, vec![1.0; 96])
+        .expect("valid")
+        .leak();
+    let bumpy = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/blender/bumpy.glb");
+    let (bumpy, _) = rt_gpu::scene::gltf_scene::load(&bumpy, "bumpy.glb", None).expect("loads");
+    let scenes = |albedo: f32| -> Vec<(&'static str, Scene)> {
+        let lambertian = Material::Lambertian(rt_gpu::material::Lambertian {
+            albedo: Vec3::splat(albedo).into(),
+            emission: Vec3::ZERO,
+            normal_map: Some(steep),
+        });
+        let mut mirror = rt_gpu::material::Pbr::new(Vec3::splat(albedo).into(), 1.0, 0.0, 1.5, 0.0);
+        mirror.normal_map = Some(steep);
+        let mut out = Vec::new();
+        for (what, material) in [
+            ("lambertian", lambertian),
+            ("mirror", Material::Pbr(mirror)),
+        ] {
+            let mut scene = bumpy.clone();
+            scene.background = Background::Constant(Vec3::ONE);
+            scene.punctual.clear(); // its sun
+            scene.materials.iter_mut().for_each(|m| *m = material);
+            out.push((
+                if what == "mirror" {
+                    "mapped mirror"
+                } else {
+                    "mapped lambertian"
+                },
+                scene,
+            ));
+        }
+        out
+    };
+    let worst_of = |film: &rt_gpu::film::Film| {
+        film.pixels
+            .iter()
+            .map(|p| (p.mean() - DVec3::ONE).abs().max_element())
+            .fold(0.0, f64::max)
+    };
+    for albedo in [1.0, 0.98] {
+        for (what, scene) in scenes(albedo) {
+            let environment = Scene {
+                background: Background::Environment(Environment::new(white, 1.0, 0.0).unwrap()),
+                ..scene.clone()
+            };
+            let mut opts = common::opts(32, 24, 16, 64, 5);
+            opts.roulette_depth = 0;
+            let mut nee = common::nee_opts(32, 24, 16, 64, 6);
+            nee.roulette_depth = 0;
+            #[allow(unused_mut)]
+            let mut films = vec![
+                ("cpu naive", common::render_cpu(&scene, &opts)),
+                ("cpu nee", common::render_cpu(&environment, &nee)),
+            ];
+            #[cfg(feature = "gpu")]
+            if let Some(gpu) = &gpu {
+                let tuning = rt_gpu::gpu::Tuning::default();
+                films.push((
+                    "gpu naive",
+                    common::gpu::render_gpu(gpu, &scene, &opts, &tuning),
+                ));
+                films.push((
+                    "gpu nee",
+                    common::gpu::render_gpu(gpu, &environment, &nee, &tuning),
+                ));
+            }
+            for (how, film) in films {
+                let worst = worst_of(&film);
+                let (mean, error) = (film.image_mean()[1], film.image_mean_std_error()[1]);
+                let z = (mean - 1.0) / error.max(1e-12);
+                eprintln!(
+                    "{what}, albedo {albedo}, {how}: worst pixel off by {worst:.2e}, image mean {mean:.5} +- {error:.5}"
+                );
+                let noisy = how.ends_with("nee");
+                let off = |p: &rt_gpu::film::PixelStats| {
+                    let slack = if noisy {
+                        5.0 * film.variance_of_mean(p)[1].sqrt()
+                    } else {
+                        0.0
+                    };
+                    (p.mean()[1] - 1.0).abs() > 0.01 + slack
+                };
+                if albedo == 1.0 {
+                    assert!(z.abs() < 4.0, "{what}, {how}: image mean {mean} +- {error}");
+                    let bad = film.pixels.iter().filter(|p| off(p)).count();
+                    assert!(
+                        bad == 0,
+                        "{what}, {how}: {bad} pixels off (worst by {worst})"
+                    );
+                } else if noisy {
+                    assert!(
+                        z.abs() > 4.0,
+                        "{what}, {how}: the 2% control passed ({mean} +- {error})"
+                    );
+                } else {
+                    assert!(
+                        worst > 0.01,
+                        "{what}, {how}: the 2% control passed ({worst})"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -517,3 +517,33 @@ fn any_accepted_file_is_framed_and_collapsed_corners_are_named() {
     let err = load(&far, "far.gltf", None).expect_err("collapsed");
     assert!(err.contains("coincide in f32"), "{err}");
 }
+
+/// Two materials of one name stay two materials (the sample EnvironmentTest names its white
+/// and its black dielectric spheres alike; merging them by name drew the white ones black).
+#[test]
+fn materials_sharing_a_name_stay_apart() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let twins = r#"{ "name": "Same", "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1] } },
+        { "name": "Same", "pbrMetallicRoughness": { "baseColorFactor": [0, 0, 0, 1] } }"#;
+    let path = write_gltf(dir.path(), "twins.gltf", twins, "", "");
+    rewrite(
+        &path,
+        r#"[{ "attributes": { "POSITION": 0 }, "material": 0 }]"#,
+        r#"[{ "attributes": { "POSITION": 0 }, "material": 0 }, { "attributes": { "POSITION": 0 }, "material": 1 }]"#,
+    );
+    let (scene, _) = load(&path, "twins.gltf", None).expect("loads");
+    let colours: Vec<Vec3> = scene
+        .materials
+        .iter()
+        .map(|m| match m {
+            rt_gpu::scene::Material::Pbr(p) => p.base_color.mean(),
+            other => panic!("pbr expected: {other:?}"),
+        })
+        .collect();
+    assert_eq!(
+        colours,
+        [Vec3::ONE, Vec3::ZERO],
+        "{:?}",
+        scene.material_names
+    );
+}

@@ -46,6 +46,10 @@ const MODULES: &[(&str, &str)] = &[
         "materials.wgsl",
         include_str!("../../shaders/materials.wgsl"),
     ),
+    (
+        "microsurface.wgsl",
+        include_str!("../../shaders/microsurface.wgsl"),
+    ),
     // Here: each material the scene uses (shaders/materials/), then their dispatch.
     (
         "background.wgsl",
@@ -421,6 +425,13 @@ fn material_dispatch(features: &Features) -> String {
     // Assignments, not early returns: under divergent control flow lavapipe runs returns with a
     // mask, a cost in every lane.
     let mut out = String::from("\n// ---- the material interface, generated ----\n");
+    // With normal maps, the materials' own BSDFs are the facets' of a microsurface
+    // (shaders/microsurface.wgsl defines the bsdf_* the path loop calls).
+    let bsdf = if features.normal_maps {
+        "facet"
+    } else {
+        "bsdf"
+    };
     let case = |kind: &MaterialKind, call: &str| {
         format!(
             "    if m.kind == MAT_{} {{\n        out = {}_{call};\n    }}\n",
@@ -455,20 +466,20 @@ fn material_dispatch(features: &Features) -> String {
             "// Whether next-event estimation samples lights here: the BSDF has a lobe that is neither a delta nor absent.\nfn samples_lights(m: Material) -> bool {{\n    return {};\n}}\n\n",
             if lit.is_empty() { "false".to_string() } else { lit.join(" || ") }
         ));
-        out.push_str("fn bsdf_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {\n    var out = vec3f(0.0);\n");
+        out.push_str(&format!("fn {bsdf}_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {{\n    var out = vec3f(0.0);\n"));
         for kind in features.kinds().filter(|k| k.samples_lights) {
             out.push_str(&case(kind, "eval(m, wo, wi, hit)"));
         }
         out.push_str("    return out;\n}\n\n");
-        out.push_str("fn bsdf_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {\n    var out = 0.0;\n");
+        out.push_str(&format!("fn {bsdf}_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {{\n    var out = 0.0;\n"));
         for kind in features.kinds().filter(|k| k.samples_lights) {
             out.push_str(&case(kind, "pdf(m, wo, wi, hit)"));
         }
         out.push_str("    return out;\n}\n\n");
     }
-    out.push_str(
-        "fn bsdf_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {\n    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);\n",
-    );
+    out.push_str(&format!(
+        "fn {bsdf}_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {{\n    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);\n",
+    ));
     for kind in features.kinds() {
         out.push_str(&case(kind, "sample(m, wo, hit, sampler)"));
     }

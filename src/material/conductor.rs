@@ -184,6 +184,10 @@ impl MaterialModel for Conductor {
         self.ggx().alpha >= MIN_ALPHA
     }
 
+    fn reflects_only(&self) -> bool {
+        true
+    }
+
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         if !self.samples_lights() {
             let wi = reflect(-wo, hit.shading);

@@ -74,6 +74,10 @@ impl MaterialModel for Lambertian {
         (self.emission != Vec3::ZERO).then_some((self.emission, true))
     }
 
+    fn reflects_only(&self) -> bool {
+        true
+    }
+
     fn sample(&self, _wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         // normal + a uniform unit vector is cosine-distributed about the normal.
         let d = hit.shading + unit_vector(sampler.next_f32(), sampler.next_f32());

@@ -60,6 +60,10 @@ impl MaterialModel for Metal {
 
     /// The fuzzed lobe's density is not evaluated: it counts as a delta, as light sampling
     /// skips it.
+    fn reflects_only(&self) -> bool {
+        true
+    }
+
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let fuzzed =
             reflect(-wo, hit.shading) + self.fuzz * unit_vector(sampler.next_f32(), sampler.next_f32());

@@ -101,6 +101,11 @@ pub trait MaterialModel {
     fn samples_lights(&self) -> bool {
         Self::SAMPLES_LIGHTS
     }
+    /// Whether its BSDF only reflects (no transmission lobe): then its normal map's shading
+    /// normals make a microsurface of it (`material::microsurface`).
+    fn reflects_only(&self) -> bool {
+        false
+    }
     /// Samples a direction `wi` for light leaving toward `wo` (unit, away from the surface),
     /// or `None` if the path ends here.
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample>;
@@ -226,17 +231,61 @@ macro_rules! registry {
             pub fn area_light(&self) -> Option<(Vec3, bool)> {
                 match self { $(Material::$ty(m) => m.area_light(),)+ }
             }
+            /// Whether its BSDF only reflects (see [`MaterialModel::reflects_only`]).
             #[inline]
-            pub fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+            pub fn reflects_only(&self) -> bool {
+                match self { $(Material::$ty(m) => m.reflects_only(),)+ }
+            }
+            /// Its BSDF on a surface whose normal is `hit.shading` (the geometric one ignored):
+            /// the material's own, which [`Self::sample`] uses on each facet of a microsurface.
+            #[inline]
+            pub fn facet_sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
                 match self { $(Material::$ty(m) => m.sample(wo, hit, sampler),)+ }
             }
             #[inline]
-            pub fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+            pub fn facet_eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
                 match self { $(Material::$ty(m) => m.eval(wo, wi, hit),)+ }
             }
             #[inline]
-            pub fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+            pub fn facet_pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
                 match self { $(Material::$ty(m) => m.pdf(wo, wi, hit),)+ }
+            }
+            /// Whether its normal map's shading normals are microsurfaces
+            /// (`material::microsurface`): it has one and only reflects.
+            #[inline]
+            pub fn has_microsurface(&self) -> bool {
+                self.normal_map().is_some() && self.reflects_only()
+            }
+            /// The microsurface its BSDF sees at `hit`, if [`Self::has_microsurface`] and the
+            /// shading normal there is not the geometric one.
+            #[inline]
+            pub fn microsurface(&self, hit: &Hit) -> Option<Microsurface> {
+                if hit.shading == hit.normal || !self.has_microsurface() {
+                    return None;
+                }
+                Microsurface::at(hit)
+            }
+            /// The path loops' BSDF: the material's own, on a microsurface where it has one.
+            #[inline]
+            pub fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+                match self.microsurface(hit) {
+                    Some(s) => s.sample(self, wo, sampler),
+                    None => self.facet_sample(wo, hit, sampler),
+                }
+            }
+            #[inline]
+            pub fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+                match self.microsurface(hit) {
+                    Some(s) => s.eval(self, wo, wi),
+                    None => self.facet_eval(wo, wi, hit),
+                }
+            }
+            #[inline]
+            pub fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+                match self.microsurface(hit) {
+                    Some(s) => s.pdf(self, wo, wi),
+                    None => self.facet_pdf(wo, wi, hit),
+                }
             }
             /// Its GPU form, with its kind and its normal map (whose `normal_map_image` is set
             /// where the scene's images are laid out).
@@ -267,6 +316,7 @@ macro_rules! registry {
                     emission_size: emission_image.map_or([0.0; 2], |i| [i.width as f32, i.height as f32]),
                     emission_lookup: emission_image.map_or(0, |i| i.lookup.bits()),
                     emission_two_sided: self.emission().is_some_and(|e| e.two_sided) as u32,
+                    microsurface: self.has_microsurface() as u32,
                     ..packed
                 }
             }
@@ -279,9 +329,11 @@ pub mod coat;
 pub mod coat_table;
 pub mod fresnel;
 pub mod microfacet;
+pub mod microsurface;
 pub mod texture;
 
 pub use bsdf::{BsdfSample, Lobe};
+pub use microsurface::Microsurface;
 
 registry! {
     lambertian::Lambertian,

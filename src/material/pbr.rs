@@ -351,6 +351,10 @@ impl MaterialModel for Pbr {
         self.alpha.as_ref()
     }
 
+    fn reflects_only(&self) -> bool {
+        self.transmission == 0.0
+    }
+
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let this = self.at(hit);
         let (w_coat, w_glass, _) = this.weights();

@@ -131,6 +131,10 @@ impl MaterialModel for Plastic {
         vec![self.albedo]
     }
 
+    fn reflects_only(&self) -> bool {
+        true
+    }
+
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
         self.coat

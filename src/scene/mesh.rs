@@ -1123,16 +1123,25 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
             let mut mesh = part.into_mesh(source)?;
             if let Some(m) = key.and_then(|k| materials.get(k)) {
                 mesh.material = Some(material_of(m, &mut textures)?);
-                mesh.material_name = m.name().map_or(
-                    format!("material{}", m.index().unwrap_or(0)),
-                    str::to_string,
-                );
+                mesh.material_name = material_name(m, &materials);
             } else {
                 mesh.material_name = "default".into();
             }
             Ok(mesh)
         })
         .collect()
+}
+
+/// The name a glTF material's parts are known by (in notes, and as the key that merges the
+/// parts of one material): its own where no other material of the file has it, else with its
+/// index (files such as the sample EnvironmentTest give different materials one name).
+fn material_name(m: &gltf::Material, all: &[gltf::Material]) -> String {
+    let index = m.index().unwrap_or(0);
+    match m.name() {
+        Some(name) if all.iter().filter(|o| o.name() == Some(name)).count() == 1 => name.into(),
+        Some(name) => format!("{name} (material {index})"),
+        None => format!("material{index}"),
+    }
 }
 
 /// The first of `material`'s textures that reads texture coordinates, by its property name.

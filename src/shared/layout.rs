@@ -355,7 +355,9 @@ gpu_struct! {
         alpha_lookup: u32,
         alpha_mode: u32,
         alpha_cutoff: f32,
-        _pad: u32,
+        /// 1 where its normal map's shading normals are microsurfaces
+        /// (`Material::has_microsurface`, `shaders/microsurface.wgsl`).
+        microsurface: u32,
         /// Emission on top of the surface (glTF's emissive pbr; `MaterialModel::emission`):
         /// its colour (the factor its image's texels are multiplied by, x its strength), where
         /// the image's texels start, its width and height (0: none), how it is read, and 1

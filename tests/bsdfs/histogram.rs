@@ -27,7 +27,7 @@ impl Polar {
         let (s, t) = rt_gpu::shared::warp::basis(r);
         Polar { r, s, t }
     }
-    fn cell(&self, d: Vec3) -> usize {
+    pub fn cell(&self, d: Vec3) -> usize {
         // The angle from atan2 of the transverse and axial parts, in f64: the cells near `r`
         // are narrower than an f32 cosine resolves.
         let (x, y, z) = (
@@ -51,7 +51,7 @@ impl Polar {
     /// dtheta/du: adaptive Simpson on 4 x 4 sub-cells per cell, each halved (to depth 6) until
     /// its estimate changes by under 1e-9, so that the horizon's cut and narrow lobes inside a
     /// cell are integrated too.
-    fn expected(&self, pdf: impl Fn(Vec3) -> f32) -> Vec<f64> {
+    pub fn expected(&self, pdf: impl Fn(Vec3) -> f32) -> Vec<f64> {
         let f = |u: f64, phi: f64| {
             let theta = PI * u * u * u;
             pdf(self.dir(u, phi)) as f64 * theta.sin() * 3.0 * PI * u * u
@@ -158,18 +158,18 @@ impl Histogram {
         }
     }
 
-    fn cells(&self) -> usize {
+    pub fn cells(&self) -> usize {
         CELLS_U * CELLS_PHI * if self.below.is_some() { 2 } else { 1 }
     }
 
-    fn cell(&self, d: Vec3) -> usize {
+    pub fn cell(&self, d: Vec3) -> usize {
         match &self.below {
             Some(below) if d.dot(self.normal) <= 0.0 => CELLS_U * CELLS_PHI + below.cell(d),
             _ => self.above.cell(d),
         }
     }
 
-    fn expected(&self, pdf: impl Fn(Vec3) -> f32) -> Vec<f64> {
+    pub fn expected(&self, pdf: impl Fn(Vec3) -> f32) -> Vec<f64> {
         let Some(below) = &self.below else {
             return self.above.expected(pdf);
         };

@@ -15,6 +15,7 @@ mod conductor;
 mod dielectric;
 mod histogram;
 mod images;
+mod microsurface;
 mod pbr;
 mod plastic;
 
