@@ -52,6 +52,10 @@ fn image_value(i: u32) -> vec4f {
 // Per triangle its three corner tangents, twelve floats (SceneBuffers::triangle_tangents).
 @group(0) @binding(BINDING_TRIANGLE_TANGENTS) var<storage, read> triangle_tangents: array<f32>;
 //#endif
+//#if VERTEX_COLORS
+// Per triangle its three corner vertex colours, nine floats (SceneBuffers::triangle_colors).
+@group(0) @binding(BINDING_TRIANGLE_COLORS) var<storage, read> triangle_colors: array<f32>;
+//#endif
 //#if INSTANCES
 @group(0) @binding(BINDING_INSTANCES) var<storage, read> instances: array<Instance>;
 //#endif

@@ -309,6 +309,9 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
+//#if VERTEX_COLORS
+    (*hit).color = vertex_color(c);
+//#endif
 //#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
     (*hit).uv = shape_hit_uv(c, surface.point);
 //#if TRIANGLES
@@ -353,6 +356,28 @@ fn interpolated_uv(i: u32, weights: vec2f) -> vec2f {
     let uv1 = vec2f(triangle_uvs[at + 2u], triangle_uvs[at + 3u]);
     let uv2 = vec2f(triangle_uvs[at + 4u], triangle_uvs[at + 5u]);
     return (1.0 - weights.x - weights.y) * uv0 + weights.x * uv1 + weights.y * uv2;
+}
+//#endif
+
+//#if VERTEX_COLORS
+fn corner_color(at: u32) -> vec3f {
+    return vec3f(triangle_colors[at], triangle_colors[at + 1u], triangle_colors[at + 2u]);
+}
+
+// The vertex colour at the hit on c: its triangle's corner colours interpolated, white on a
+// shape (twin: vertex_color in src/cpu/shapes.rs).
+fn vertex_color(c: Closest) -> vec3f {
+    var i = 0u;
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        i = primitive_index(c.primitive);
+    } else if primitive_kind(c.primitive) == KIND_INSTANCE {
+        i = c.triangle;
+    } else {
+        return vec3f(1.0);
+    }
+    let at = 9u * i;
+    return (1.0 - c.weights.x - c.weights.y) * corner_color(at) + c.weights.x * corner_color(at + 3u)
+        + c.weights.y * corner_color(at + 6u);
 }
 //#endif
 

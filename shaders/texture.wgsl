@@ -73,7 +73,19 @@ fn filtered(start: u32, size: vec2f, lookup: u32, s: f32, t: f32) -> vec3f {
 }
 //#endif
 
+// The material's colour at hit times the hit's vertex colour (glTF's base colour x COLOR_0;
+// twin: material::texture::albedo).
 fn albedo_at(m: Material, hit: Hit) -> vec3f {
+//#if VERTEX_COLORS
+    return texture_at(m, hit) * hit.color;
+//#else
+    return texture_at(m, hit);
+//#endif
+}
+
+// The material's texture (its colour: checker, image, or plain) at hit (twin:
+// material::texture::value).
+fn texture_at(m: Material, hit: Hit) -> vec3f {
 //#if IMAGE_TEXTURE
     if m.texture == TEXTURE_IMAGE {
         // Times the image's factor (glTF's factor x texture), which its albedo holds.
@@ -107,7 +119,7 @@ fn albedo_at(m: Material, hit: Hit) -> vec3f {
 // a rough plastic's parameter image is its coat table, read by cosine).
 fn with_albedo_at(m: Material, hit: Hit) -> Material {
     var out = m;
-    out.albedo = albedo_at(m, hit);
+    out.albedo = texture_at(m, hit);
     out.texture = TEXTURE_NONE;
 //#if METALLIC_ROUGHNESS
 //#if PBR

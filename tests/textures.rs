@@ -229,6 +229,7 @@ fn gpu_texture_lookups_match_the_cpu() {
                 index: 0,
             },
             uv: *uv,
+            color: Vec3::ONE,
         };
         let cpu_value = rt_gpu::material::texture::value(texture, &hit);
         // Negative control: the same comparison against checkers 2% larger must disagree.
@@ -346,6 +347,7 @@ fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
                 index: 0,
             },
             uv: *uv,
+            color: Vec3::ONE,
         };
         let cpu_value = rt_gpu::material::texture::value(&l.albedo, &hit);
         worst = worst.max((gpu_value - cpu_value).abs().max_element());

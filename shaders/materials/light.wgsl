@@ -4,7 +4,7 @@
 
 fn light_emitted(m: Material, hit: Hit) -> vec3f {
     let p = light_params(m);
-    return select(vec3f(0.0), albedo_at(m, hit) * p.strength, hit.front_face || p.two_sided != 0u);
+    return select(vec3f(0.0), texture_at(m, hit) * p.strength, hit.front_face || p.two_sided != 0u);
 }
 
 fn light_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {

@@ -376,6 +376,26 @@ fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
         material,
         primitive: found.primitive,
         uv,
+        color: vertex_color(scene, found),
+    }
+}
+
+/// The vertex colour at the hit on `found`: its triangle's corner colours interpolated, white
+/// where the scene has none or the hit is on a shape (twin: `vertex_color` in
+/// shaders/intersect.wgsl).
+#[inline]
+fn vertex_color(scene: &FlatScene, found: &Candidate) -> Vec3 {
+    let triangle = match found.primitive {
+        PrimitiveRef::Triangle(i) => i,
+        PrimitiveRef::Instance(_) => found.triangle,
+        PrimitiveRef::Shape { .. } => return Vec3::ONE,
+    };
+    match scene.triangle_colors.get(triangle as usize) {
+        Some(&[c0, c1, c2]) => {
+            let (b1, b2) = (found.weights.x, found.weights.y);
+            (1.0 - b1 - b2) * c0 + b1 * c1 + b2 * c2
+        }
+        None => Vec3::ONE,
     }
 }
 

@@ -44,6 +44,7 @@ bindings! {
     Instances => "BINDING_INSTANCES",
     TriangleUvs => "BINDING_TRIANGLE_UVS",
     TriangleTangents => "BINDING_TRIANGLE_TANGENTS",
+    TriangleColors => "BINDING_TRIANGLE_COLORS",
 }
 
 impl Binding {
@@ -80,6 +81,7 @@ impl Binding {
             | Binding::TriangleNormals
             | Binding::TriangleUvs
             | Binding::TriangleTangents
+            | Binding::TriangleColors
             | Binding::Instances => buffer(read_only),
             Binding::ImageTexels => texels,
             Binding::BvhNodes if features.uniform_bvh => buffer(Uniform),

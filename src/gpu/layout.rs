@@ -223,6 +223,9 @@ pub struct SceneBuffers {
     /// Per triangle its three corner tangents, twelve floats (the kernel's
     /// `triangle_tangents`), when some mesh is normal-mapped.
     pub triangle_tangents: Vec<f32>,
+    /// Per triangle its three corner vertex colours, nine floats (the kernel's
+    /// `triangle_colors`), when some mesh has them.
+    pub triangle_colors: Vec<f32>,
     pub bvh_nodes: Vec<GpuBvhNode>,
     /// Packed primitive references, in the BVH's leaf order.
     pub bvh_primitives: Vec<u32>,
@@ -365,6 +368,19 @@ impl ImageArray {
     }
 }
 
+/// Per triangle its corners' values as floats, one after another (a storage array of the
+/// kernel's); one float, never read, where there are none (wgpu binds no empty buffer).
+fn corner_floats<T: Copy, const N: usize>(
+    corners: &[[T; 3]],
+    floats: fn(&T) -> [f32; N],
+) -> Vec<f32> {
+    let mut out: Vec<f32> = corners.iter().flatten().flat_map(floats).collect();
+    if out.is_empty() {
+        out.push(0.0);
+    }
+    out
+}
+
 /// GPU memory a scene's meshes and hierarchy take: triangles, their corner normals, BVH nodes and
 /// primitive references, and instances (what `rt-gpu bench` reports per triangle).
 pub fn geometry_bytes(scene: &FlatScene) -> usize {
@@ -373,6 +389,7 @@ pub fn geometry_bytes(scene: &FlatScene) -> usize {
         + std::mem::size_of_val(&buffers.triangle_normals[..])
         + std::mem::size_of_val(&buffers.triangle_uvs[..])
         + std::mem::size_of_val(&buffers.triangle_tangents[..])
+        + std::mem::size_of_val(&buffers.triangle_colors[..])
         + std::mem::size_of_val(&buffers.bvh_nodes[..])
         + std::mem::size_of_val(&buffers.bvh_primitives[..])
         + std::mem::size_of_val(&buffers.instances[..])
@@ -451,30 +468,10 @@ impl SceneBuffers {
             // Only a lone leaf, or nothing, which the kernel never reads as a node.
             bvh_nodes.push(GpuBvhNode::default());
         }
-        let mut triangle_normals: Vec<f32> = scene
-            .triangle_normals
-            .iter()
-            .flat_map(|corners| corners.iter().flat_map(|n| n.to_array()))
-            .collect();
-        if triangle_normals.is_empty() {
-            triangle_normals.push(0.0);
-        }
-        let mut triangle_uvs: Vec<f32> = scene
-            .triangle_uvs
-            .iter()
-            .flat_map(|corners| corners.iter().flat_map(|uv| uv.to_array()))
-            .collect();
-        if triangle_uvs.is_empty() {
-            triangle_uvs.push(0.0);
-        }
-        let mut triangle_tangents: Vec<f32> = scene
-            .triangle_tangents
-            .iter()
-            .flat_map(|corners| corners.iter().flat_map(|t| t.to_array()))
-            .collect();
-        if triangle_tangents.is_empty() {
-            triangle_tangents.push(0.0);
-        }
+        let triangle_normals = corner_floats(&scene.triangle_normals, glam::Vec3::to_array);
+        let triangle_uvs = corner_floats(&scene.triangle_uvs, glam::Vec2::to_array);
+        let triangle_tangents = corner_floats(&scene.triangle_tangents, glam::Vec4::to_array);
+        let triangle_colors = corner_floats(&scene.triangle_colors, glam::Vec3::to_array);
         if bvh_primitives.is_empty() {
             bvh_primitives.push(0);
         }
@@ -491,6 +488,7 @@ impl SceneBuffers {
             triangle_normals,
             triangle_uvs,
             triangle_tangents,
+            triangle_colors,
             bvh_nodes,
             bvh_primitives,
             instances,

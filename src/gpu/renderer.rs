@@ -140,6 +140,7 @@ pub(super) struct SceneBindings {
     triangle_normals: wgpu::Buffer,
     triangle_uvs: wgpu::Buffer,
     triangle_tangents: wgpu::Buffer,
+    triangle_colors: wgpu::Buffer,
     instances: wgpu::Buffer,
     bvh_nodes: NodeBinding,
     images: wgpu::TextureView,
@@ -219,7 +220,8 @@ impl GpuRenderer {
         //   `check_kernel` refuses a kernel whose features or source are not this render's.
         // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on, corner
         //   texture coordinates (6 floats per triangle) wherever TRIANGLE_UVS is, and corner
-        //   tangents (12 floats per triangle) wherever NORMAL_MAPS is.
+        //   tangents (12 floats per triangle) wherever NORMAL_MAPS is, and corner colours (9
+        //   floats per triangle) wherever VERTEX_COLORS is.
         // - A normal map's texels lie in the images array: its size is its image's, and its
         //   start where `ImageArray` placed that image; texel indices are wrapped into it.
         // - accum: gid < tile_size <= (width, tile_rows), and the buffer holds tile_rows x width
@@ -338,6 +340,10 @@ impl GpuRenderer {
                 "triangle tangents",
                 bytemuck::cast_slice(&buffers.triangle_tangents),
             ),
+            triangle_colors: storage(
+                "triangle colours",
+                bytemuck::cast_slice(&buffers.triangle_colors),
+            ),
             instances: storage("instances", bytemuck::cast_slice(&buffers.instances)),
             bvh_nodes,
             images,
@@ -371,6 +377,10 @@ impl GpuRenderer {
             (
                 "tangents",
                 std::mem::size_of_val(&buffers.triangle_tangents[..]),
+            ),
+            (
+                "vertex colours",
+                std::mem::size_of_val(&buffers.triangle_colors[..]),
             ),
             ("instances", std::mem::size_of_val(&buffers.instances[..])),
             ("lights", std::mem::size_of_val(&buffers.lights[..])),
@@ -485,6 +495,7 @@ impl GpuRenderer {
             Binding::TriangleNormals => scene.triangle_normals.as_entire_binding(),
             Binding::TriangleUvs => scene.triangle_uvs.as_entire_binding(),
             Binding::TriangleTangents => scene.triangle_tangents.as_entire_binding(),
+            Binding::TriangleColors => scene.triangle_colors.as_entire_binding(),
             Binding::Instances => scene.instances.as_entire_binding(),
         };
         let shapes =

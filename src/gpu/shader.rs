@@ -76,6 +76,8 @@ pub struct Features {
     pub triangle_uvs: bool,
     /// Triangles with corner tangents, for their materials' normal maps.
     pub normal_maps: bool,
+    /// Triangles with corner colours (glTF COLOR_0), which multiply their materials' colour.
+    pub vertex_colors: bool,
     /// Meshes placed as instances (the BVH's second level; see `scene::flat::Instance`).
     pub instances: bool,
     /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
@@ -115,11 +117,12 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 16] = [
+const SWITCHES: [Switch; 17] = [
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
     ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
     ("NORMAL_MAPS", |f| &mut f.normal_maps),
+    ("VERTEX_COLORS", |f| &mut f.vertex_colors),
     ("INSTANCES", |f| &mut f.instances),
     ("BVH", |f| &mut f.bvh),
     ("LENS", |f| &mut f.lens),
@@ -210,6 +213,7 @@ impl Features {
             shading_normals: !scene.triangle_normals.is_empty(),
             triangle_uvs: !scene.triangle_uvs.is_empty(),
             normal_maps: !scene.triangle_tangents.is_empty(),
+            vertex_colors: !scene.triangle_colors.is_empty(),
             instances: !scene.instances.is_empty(),
             bvh,
             materials,

@@ -88,7 +88,7 @@ impl MaterialModel for Lambertian {
             hit.shading
         };
         (!below_surface(hit, wi)).then(|| BsdfSample {
-            weight: texture::value(&self.albedo, hit),
+            weight: texture::albedo(&self.albedo, hit),
             wi,
             pdf: cosine_pdf(hit, wi),
             lobe: Lobe::DIFFUSE_REFLECTION,
@@ -96,7 +96,7 @@ impl MaterialModel for Lambertian {
     }
 
     fn eval(&self, _wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
-        texture::value(&self.albedo, hit) * cosine_pdf(hit, wi)
+        texture::albedo(&self.albedo, hit) * cosine_pdf(hit, wi)
     }
 
     fn pdf(&self, _wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {

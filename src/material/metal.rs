@@ -74,7 +74,7 @@ impl MaterialModel for Metal {
         let wi = fuzzed / len2.sqrt();
         // Fuzzed (or, by a shading normal, reflected) below the surface: absorbed.
         (wi.dot(hit.normal) > 0.0).then(|| BsdfSample {
-            weight: texture::value(&self.albedo, hit),
+            weight: texture::albedo(&self.albedo, hit),
             wi,
             pdf: 0.0,
             lobe: Lobe::DELTA_REFLECTION,

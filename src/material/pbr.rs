@@ -358,7 +358,7 @@ impl MaterialModel for Pbr {
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let this = self.at(hit);
         let (w_coat, w_glass, _) = this.weights();
-        let base = texture::value(&this.base_color, hit);
+        let base = texture::albedo(&this.base_color, hit);
         let u = sampler.next_f32();
         let chosen = if u < w_coat {
             let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
@@ -419,7 +419,7 @@ impl MaterialModel for Pbr {
     fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
         let this = self.at(hit);
         let (w_coat, w_glass, w_metal) = this.weights();
-        let base = texture::value(&this.base_color, hit);
+        let base = texture::albedo(&this.base_color, hit);
         let mut f = Vec3::ZERO;
         if w_coat > 0.0 {
             f += w_coat * this.coat.eval(base, wo, wi, hit);
@@ -437,7 +437,7 @@ impl MaterialModel for Pbr {
     fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
         let this = self.at(hit);
         let (w_coat, w_glass, w_metal) = this.weights();
-        let base = texture::value(&this.base_color, hit);
+        let base = texture::albedo(&this.base_color, hit);
         let mut pdf = 0.0;
         if w_coat > 0.0 {
             pdf += w_coat * this.coat.pdf(base, wo, wi, hit);

@@ -138,17 +138,17 @@ impl MaterialModel for Plastic {
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
         self.coat
-            .sample(texture::value(&self.albedo, hit), wo, hit, numbers)
+            .sample(texture::albedo(&self.albedo, hit), wo, hit, numbers)
     }
 
     fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
         self.coat
-            .eval(texture::value(&self.albedo, hit), wo, wi, hit)
+            .eval(texture::albedo(&self.albedo, hit), wo, wi, hit)
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
         self.coat
-            .pdf(texture::value(&self.albedo, hit), wo, wi, hit)
+            .pdf(texture::albedo(&self.albedo, hit), wo, wi, hit)
     }
 
     /// albedo (and texture_*); a rough coat's table as its parameter image; its

@@ -8,6 +8,14 @@ use crate::shared::ray::Hit;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
+/// A material's colour (albedo, base colour) from `texture` at `hit`: the texture's value times
+/// the hit's vertex colour (glTF's base colour x COLOR_0; twin: albedo_at in
+/// shaders/texture.wgsl). Emission is not coloured by vertices (`value`).
+#[inline]
+pub fn albedo(texture: &Texture, hit: &Hit) -> Vec3 {
+    value(texture, hit) * hit.color
+}
+
 /// The texture's value at `hit`.
 #[inline]
 pub fn value(texture: &Texture, hit: &Hit) -> Vec3 {
@@ -180,6 +188,7 @@ mod tests {
                 index: 0,
             },
             uv,
+            color: Vec3::ONE,
         }
     }
 

@@ -175,6 +175,9 @@ pub struct FlatScene {
     /// some material reads them (`uv_textures`); empty otherwise. Triangles without them take
     /// (0, 0), (1, 0), (0, 1), so their coordinates are their barycentric weights, as without.
     pub triangle_uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, its corners' vertex colours (`Mesh::colors`), when some mesh of the scene
+    /// has them (the other triangles' are white); empty otherwise.
+    pub triangle_colors: Vec<[Vec3; 3]>,
     /// Per triangle, its corners' tangents (`scene::tangents`), when some mesh of the scene has
     /// a normal-mapped material (the other triangles' are zero, and never read); empty
     /// otherwise: in scene coordinates, an instanced mesh's in its own (placed at a hit by
@@ -785,11 +788,14 @@ struct Flattener<'a> {
     /// Whether every triangle gets corner texture coordinates: some mesh of the scene has them
     /// and some material reads them.
     textured: bool,
+    /// Whether every triangle gets corner colours: some mesh of the scene has vertex colours.
+    coloured: bool,
     shapes: Shapes,
     boxes: Vec<u32>,
     triangles: Vec<Triangle>,
     triangle_normals: Vec<[Vec3; 3]>,
     triangle_uvs: Vec<[Vec2; 3]>,
+    triangle_colors: Vec<[Vec3; 3]>,
     /// Whether every triangle gets corner tangents: some mesh of the scene is normal-mapped.
     normal_mapped: bool,
     triangle_tangents: Vec<[Vec4; 3]>,
@@ -800,6 +806,7 @@ struct Flattener<'a> {
     local_triangles: Vec<Triangle>,
     local_normals: Vec<[Vec3; 3]>,
     local_uvs: Vec<[Vec2; 3]>,
+    local_colors: Vec<[Vec3; 3]>,
     /// Their corner tangents, where the scene is `normal_mapped` (zero where the instanced
     /// mesh is not).
     local_tangents: Vec<[Vec4; 3]>,
@@ -830,23 +837,30 @@ impl<'a> Flattener<'a> {
                 .objects
                 .iter()
                 .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
+        let coloured = scene
+            .objects
+            .iter()
+            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.colors.is_empty()));
         let mut flattener = Flattener {
             scene,
             instancing,
             placements: Default::default(),
             smooth,
             textured,
+            coloured,
             shapes: Shapes::default(),
             boxes: Vec::new(),
             triangles: Vec::new(),
             triangle_normals: Vec::new(),
             triangle_uvs: Vec::new(),
+            triangle_colors: Vec::new(),
             normal_mapped,
             triangle_tangents: Vec::new(),
             mesh_tangents: Default::default(),
             local_triangles: Vec::new(),
             local_normals: Vec::new(),
             local_uvs: Vec::new(),
+            local_colors: Vec::new(),
             local_tangents: Vec::new(),
             meshes: Vec::new(),
             mesh_of: Default::default(),
@@ -953,6 +967,8 @@ impl<'a> Flattener<'a> {
             }
             self.local_uvs
                 .push(mesh.uvs.get(i).copied().unwrap_or(BARYCENTRIC_UVS));
+            self.local_colors
+                .push(mesh.colors.get(i).copied().unwrap_or([Vec3::ONE; 3]));
         }
         self.meshes.push(first..self.local_triangles.len());
         let index = self.meshes.len() as u32 - 1;
@@ -1068,6 +1084,15 @@ impl<'a> Flattener<'a> {
                     None => BARYCENTRIC_UVS,
                 }));
         }
+        if self.coloured {
+            self.triangle_colors.par_extend(kept.par_iter().map(
+                |&(i, _)| match mesh.colors.get(i) {
+                    Some(&[c0, c1, c2]) if mirrored => [c0, c2, c1],
+                    Some(&colors) => colors,
+                    None => [Vec3::ONE; 3],
+                },
+            ));
+        }
         self.triangles.par_extend(kept.par_iter().map(|&(i, _)| {
             let [p0, p1, p2] = placed_corners(i);
             Triangle {
@@ -1091,6 +1116,7 @@ impl<'a> Flattener<'a> {
         let mut triangles = self.triangles;
         let mut triangle_normals = self.triangle_normals;
         let mut triangle_uvs = self.triangle_uvs;
+        let mut triangle_colors = self.triangle_colors;
         let mut triangle_tangents = self.triangle_tangents;
         let instanced_triangles = triangles.len();
         let instanced_meshes = self
@@ -1104,6 +1130,9 @@ impl<'a> Flattener<'a> {
         }
         if self.textured {
             triangle_uvs.extend(self.local_uvs);
+        }
+        if self.coloured {
+            triangle_colors.extend(self.local_colors);
         }
         if self.normal_mapped {
             triangle_tangents.extend(self.local_tangents);
@@ -1129,6 +1158,7 @@ impl<'a> Flattener<'a> {
             triangles,
             triangle_normals,
             triangle_uvs,
+            triangle_colors,
             triangle_tangents,
             instanced_triangles,
             instanced_meshes,

@@ -55,3 +55,29 @@ macro_rules! reader {
 reader!(vec2, 2, Dimensions::Vec2);
 reader!(vec3, 3, Dimensions::Vec3);
 reader!(vec4, 4, Dimensions::Vec4);
+
+/// COLOR_0's values as linear RGB (its alpha, if VEC4, left out): floats, or normalized
+/// unsigned 8- or 16-bit integers, as glTF allows; `None` where the accessor is another kind
+/// or holds a value that is not a finite number.
+pub fn colors<'a>(
+    accessor: gltf::Accessor<'a>,
+    buffer: impl Fn(gltf::Buffer) -> Option<&'a [u8]> + Clone,
+) -> Option<Vec<[f32; 3]>> {
+    let allowed = match accessor.data_type() {
+        DataType::F32 => true,
+        DataType::U8 | DataType::U16 => accessor.normalized(),
+        _ => false,
+    };
+    if !allowed {
+        return None;
+    }
+    let rgb: Vec<[f32; 3]> = match accessor.dimensions() {
+        Dimensions::Vec3 => vec3(accessor, buffer)?,
+        Dimensions::Vec4 => vec4(accessor, buffer)?
+            .into_iter()
+            .map(|[r, g, b, _]| [r, g, b])
+            .collect(),
+        _ => return None,
+    };
+    rgb.iter().flatten().all(|c| c.is_finite()).then_some(rgb)
+}

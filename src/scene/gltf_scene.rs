@@ -456,19 +456,20 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads (KHR_materials_transmission: its factor).
-const READ_EXTENSIONS: [&str; 7] = [
+const READ_EXTENSIONS: [&str; 8] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_mesh_quantization",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
+    "KHR_materials_unlit",
     "KHR_texture_transform",
 ];
 
 /// One note naming what `document` holds that rt-gpu does not render (nothing is dropped
-/// silently): primitives of points or lines, vertex colours and texture coordinates beyond
-/// TEXCOORD_0, morph targets, skins, animations, extensions it does not read, and a
+/// silently): primitives of points or lines, vertex colours beyond COLOR_0 (and its alpha
+/// where the material is not opaque), texture coordinates beyond TEXCOORD_0, morph targets, skins, animations, extensions it does not read, and a
 /// transmission texture. `None` when there is nothing.
 fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
     let primitives: Vec<gltf::Primitive> = document.meshes().flat_map(|m| m.primitives()).collect();
@@ -490,12 +491,21 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
         .iter()
         .flat_map(|p| p.attributes().map(|(semantic, _)| semantic))
         .filter_map(|semantic| match semantic {
-            gltf::Semantic::Colors(set) => Some(format!("COLOR_{set}")),
+            gltf::Semantic::Colors(set) if set > 0 => Some(format!("COLOR_{set}")),
             gltf::Semantic::TexCoords(set) if set > 0 => Some(format!("TEXCOORD_{set}")),
             gltf::Semantic::Joints(_) | gltf::Semantic::Weights(_) => Some("JOINTS/WEIGHTS".into()),
             _ => None,
         })
         .collect();
+    // glTF multiplies the base colour's alpha by COLOR_0's too; rt-gpu reads its RGB.
+    let color_alpha = primitives.iter().any(|p| {
+        p.material().alpha_mode() != gltf::material::AlphaMode::Opaque
+            && p.get(&gltf::Semantic::Colors(0))
+                .is_some_and(|a| a.dimensions() == gltf::accessor::Dimensions::Vec4)
+    });
+    if color_alpha {
+        attributes.push("COLOR_0's alpha".into());
+    }
     attributes.sort();
     attributes.dedup();
     unread.extend(attributes);

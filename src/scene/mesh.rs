@@ -30,6 +30,10 @@ pub struct Mesh {
     /// Per triangle, its corners' texture coordinates (u across an image, v up it), where the
     /// file gives them; empty where it gives none. Corners without them take (0, 0).
     pub uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, its corners' linear RGB vertex colours (glTF COLOR_0, each channel in
+    /// [0, 1]), where the file gives them; empty where it gives none. Corners without them take
+    /// white.
+    pub colors: Vec<[Vec3; 3]>,
     /// Per triangle, its corners' tangents (xyz unit along +u, w = ±1 the bitangent's sign; see
     /// `scene::tangents`) where the file gives them all (glTF `TANGENT`); empty otherwise.
     pub tangents: Vec<[Vec4; 3]>,
@@ -103,11 +107,20 @@ impl Mesh {
         normals: Vec<Option<[Vec3; 3]>>,
         uvs: Vec<Option<[Vec2; 3]>>,
     ) -> Result<Self, String> {
-        Self::with_tangents(source, positions, triangles, normals, uvs, Vec::new())
+        Self::with_tangents(
+            source,
+            positions,
+            triangles,
+            normals,
+            uvs,
+            Vec::new(),
+            Vec::new(),
+        )
     }
 
-    /// A mesh as [`Mesh::with_corners`], with its triangles' corner tangents too (`tangents`:
-    /// one entry per triangle, kept only where every triangle has them).
+    /// A mesh as [`Mesh::with_corners`], with its triangles' corner tangents (`tangents`: one
+    /// entry per triangle, kept only where every triangle has them) and vertex colours
+    /// (`colors`: one entry per triangle, `None` where the file gives none) too.
     pub fn with_tangents(
         source: &str,
         positions: Vec<Vec3>,
@@ -115,9 +128,14 @@ impl Mesh {
         normals: Vec<Option<[Vec3; 3]>>,
         uvs: Vec<Option<[Vec2; 3]>>,
         tangents: Vec<Option<[Vec4; 3]>>,
+        colors: Vec<Option<[Vec3; 3]>>,
     ) -> Result<Self, String> {
         let smooth = normals.iter().any(Option::is_some);
         let textured = uvs.iter().any(Option::is_some);
+        let coloured = colors.iter().any(Option::is_some);
+        if let Some(c) = colors.iter().flatten().flatten().find(|c| !c.is_finite()) {
+            return Err(format!("mesh {source} has a non-finite vertex colour {c}"));
+        }
         let tangent_frames =
             tangents.len() == triangles.len() && tangents.iter().all(Option::is_some);
         if let Some(uv) = uvs.iter().flatten().flatten().find(|uv| !uv.is_finite()) {
@@ -151,6 +169,7 @@ impl Mesh {
         };
         let mut kept_normals = Vec::new();
         let mut kept_uvs = Vec::new();
+        let mut kept_colors = Vec::new();
         let mut kept_tangents = Vec::new();
         let given = triangles.len();
         let triangles: Vec<[u32; 3]> = triangles
@@ -171,6 +190,10 @@ impl Mesh {
                 }
                 if textured {
                     kept_uvs.push(uvs.get(i).copied().flatten().unwrap_or([Vec2::ZERO; 3]));
+                }
+                if coloured {
+                    let corners = colors.get(i).copied().flatten().unwrap_or([Vec3::ONE; 3]);
+                    kept_colors.push(corners.map(|c| c.clamp(Vec3::ZERO, Vec3::ONE)));
                 }
                 if let Some(Some(corners)) = tangent_frames.then(|| tangents[i]) {
                     // A tangent of no length bends nothing (`cpu::shapes::normal_mapped`).
@@ -200,6 +223,7 @@ impl Mesh {
             triangles,
             normals: kept_normals,
             uvs: kept_uvs,
+            colors: kept_colors,
             tangents: kept_tangents,
             material: None,
             material_name: String::new(),
@@ -313,6 +337,7 @@ pub(super) fn subset_mesh(
         read.triangles,
         read.normals,
         read.uvs,
+        Vec::new(),
         Vec::new(),
     )?;
     mesh.material_name = "default".into();
@@ -872,6 +897,7 @@ struct Part {
     normals: Vec<Option<[Vec3; 3]>>,
     uvs: Vec<Option<[Vec2; 3]>>,
     tangents: Vec<Option<[Vec4; 3]>>,
+    colors: Vec<Option<[Vec3; 3]>>,
 }
 
 impl Part {
@@ -883,6 +909,7 @@ impl Part {
             self.normals,
             self.uvs,
             self.tangents,
+            self.colors,
         )
     }
 }
@@ -1017,12 +1044,20 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                         primitive.material().name().unwrap_or("")
                     ));
                 }
+                // COLOR_0 multiplies the base colour (its alpha not read: a note says so).
+                let colors = match attribute(gltf::Semantic::Colors(0)) {
+                    Some(a) => Some(quantized::colors(a, buffer).ok_or_else(|| unread("COLOR_0"))?),
+                    None => None,
+                };
+                let colors: Option<Vec<Vec3>> =
+                    colors.map(|read| read.into_iter().map(Vec3::from_array).collect());
                 let Part {
                     positions,
                     triangles,
                     normals,
                     uvs: part_uvs,
                     tangents: part_tangents,
+                    colors: part_colors,
                     ..
                 } = part_of(&mut parts, key);
                 let base = positions.len() as u32;
@@ -1109,6 +1144,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 normals.extend(per_corner(vertex_normals.as_deref(), &indices, flip));
                 part_uvs.extend(per_corner(uvs.as_deref(), &indices, flip));
                 part_tangents.extend(per_corner(vertex_tangents.as_deref(), &indices, flip));
+                part_colors.extend(per_corner(colors.as_deref(), &indices, flip));
             }
         }
         stack.extend(n.children().map(|c| (c, node_world)));
@@ -1351,6 +1387,18 @@ fn material_of(
         Some(info) => textures.colour(&info, base, name, "baseColorTexture")?,
         None => Texture::Colour(base),
     };
+    // KHR_materials_unlit: the base colour as it is, shaded by nothing. A path tracer shows it
+    // as a surface that emits its base colour and reflects nothing (Cycles' import instead
+    // shows it to camera rays alone and lets every other ray pass): seen directly it is its
+    // colour; it also glows in reflections and on what is near, as an emitter does.
+    if m.unlit() {
+        return Ok(Material::Light(Light {
+            radiance: base,
+            strength: 1.0,
+            two_sided: m.double_sided(),
+            alpha,
+        }));
+    }
     let normal_map = match m.normal_texture() {
         Some(normal) => Some(textures.normal_map(&normal, name)?),
         None => None,

@@ -62,6 +62,7 @@ pub fn surface_hit(normal: Vec3, front_face: bool) -> rt_gpu::shared::ray::Hit {
             index: 0,
         },
         uv: glam::Vec2::ZERO,
+        color: Vec3::ONE,
     }
 }
 
