@@ -12,7 +12,7 @@ files ask for an extension neither renderer is compared on here (see UNCOMPARED)
 skipped, with the extension.
 
 For each model, OUT_DIR gets NAME-rtgpu.pfm, NAME-cycles.exr, NAME.png (the two side by side,
-rt-gpu left) and NAME.log (rt-gpu's notes); OUT_DIR/table.md gets one row: rt-gpu's mean
+rt-gpu left, Cycles' over the world it rendered under) and NAME.log (rt-gpu's notes); OUT_DIR/table.md gets one row: rt-gpu's mean
 luminance over Cycles' over the pixels the model covers in Cycles' render (alpha 1), and the
 correlation of the log luminance of the 4x4 blocks inside those pixels. The verdict is "agrees"
 where the ratio is within 0.85-1.18 and the correlation at least 0.95 (issue 62's goal: Blender's
@@ -20,7 +20,7 @@ Principled v1 diffuse is brighter than glTF's).
 
 The Blender side follows ../shared/notes/blender-gltf-import.md: numpy's removed aliases are
 restored for the importer, punctual lights are made punctual, alphaMode MASK is thresholded,
-meshes without a material get glTF's default one, the camera is rt-gpu's (the file's first
+meshes without a material get glTF's default one (times COLOR_0), the camera is rt-gpu's (the file's first
 camera with a vertical field of view, else rt-gpu's framing camera), the world is black where
 the file has lamps and a uniform sky of radiance 1 otherwise (rt-gpu's default lighting), and
 Cycles renders with the settings listed in `cycles_settings`.
@@ -161,16 +161,20 @@ def fix_import(doc):
                 mat.node_tree.links.new(step.outputs[0], alpha)
             else:
                 alpha.default_value = 1.0 if alpha.default_value >= mat.alpha_threshold else 0.0
-    default = None
     for obj in bpy.data.objects:
         if obj.type == "MESH" and not obj.data.materials:
-            if default is None:
-                default = bpy.data.materials.new("glTF default")
-                default.use_nodes = True
-                bsdf = default.node_tree.nodes["Principled BSDF"]
-                bsdf.inputs["Base Color"].default_value = (1, 1, 1, 1)
-                bsdf.inputs["Metallic"].default_value = 1.0
-                bsdf.inputs["Roughness"].default_value = 1.0
+            # glTF's default material: base colour 1 (times COLOR_0), metallic 1, roughness 1.
+            default = bpy.data.materials.new("glTF default")
+            default.use_nodes = True
+            bsdf = default.node_tree.nodes["Principled BSDF"]
+            bsdf.inputs["Base Color"].default_value = (1, 1, 1, 1)
+            bsdf.inputs["Metallic"].default_value = 1.0
+            bsdf.inputs["Roughness"].default_value = 1.0
+            colors = getattr(obj.data, "color_attributes", None)
+            if colors is not None and len(colors) > 0:
+                node = default.node_tree.nodes.new("ShaderNodeVertexColor")
+                node.layer_name = colors[0].name
+                default.node_tree.links.new(node.outputs["Color"], bsdf.inputs["Base Color"])
             obj.data.materials.append(default)
 
 
@@ -290,11 +294,12 @@ def render_cycles(opts, path, exr):
     cycles_settings(int(opts["--spp"]), width, height)
     place_camera(doc, width, height)
     lamps = any(o.type == "LIGHT" for o in bpy.data.objects)
-    world(0.0 if lamps else 1.0)
+    background = 0.0 if lamps else 1.0
+    world(background)
     bpy.context.scene.render.filepath = exr
     start = time.time()
     bpy.ops.render.render(write_still=True)
-    return time.time() - start
+    return time.time() - start, background
 
 
 def pixels(path, width, height):
@@ -338,11 +343,13 @@ def figures(rt, cy):
     return ratio, corr, int(mask.sum())
 
 
-def side_by_side(rt, cy, path):
+def side_by_side(rt, cy, path, background):
+    """rt-gpu's image beside Cycles' over the world it was rendered under (Cycles renders the
+    world transparent, for the mask), as 8-bit sRGB."""
     h, w = rt.shape[:2]
     out = np.zeros((h, 2 * w, 4), dtype=np.float32)
     out[:, :w, :3] = rt[..., :3]
-    out[:, w:, :3] = cy[..., :3] + (1 - cy[..., 3:4]) * 0.0
+    out[:, w:, :3] = cy[..., :3] + (1 - cy[..., 3:4]) * background
     out[..., 3] = 1
     # sRGB for the PNG.
     c = np.clip(out[..., :3], 0, 1)
@@ -381,10 +388,10 @@ def main():
         if code != 0:
             rows.append((name, "", "", "refused", last))
             continue
-        cy_s = render_cycles(opts, os.path.abspath(path), os.path.abspath(cy_exr))
+        cy_s, background = render_cycles(opts, os.path.abspath(path), os.path.abspath(cy_exr))
         rt = pfm(rt_pfm, width, height)
         cy = pixels(cy_exr, width, height)
-        side_by_side(rt, cy, os.path.abspath(os.path.join(out, name + ".png")))
+        side_by_side(rt, cy, os.path.abspath(os.path.join(out, name + ".png")), background)
         ratio, corr, covered = figures(rt, cy)
         if ratio is None:
             rows.append((name, "", "", "no model pixels", f"{covered} covered pixels"))
