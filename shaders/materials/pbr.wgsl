@@ -43,6 +43,7 @@ fn roughness_alpha(roughness: f32) -> f32 {
 fn pbr_with_texel(m: Material, texel: vec3f) -> Material {
     var p = pbr_params(m);
     p.metallic = p.metallic * texel.z;
+    p.transmission = select(p.transmission, p.transmission * texel.x, p.transmission_in_red != 0u);
     p.alpha = roughness_alpha(p.roughness * texel.y);
     return pbr_with_params(m, p);
 }

@@ -50,6 +50,10 @@ pub struct Pbr {
     pub transmission: f32,
     pub normal_map: Option<NormalMap>,
     pub metallic_roughness: Option<&'static Image>,
+    /// Whether `metallic_roughness`'s red channel scales `transmission` too (glTF's
+    /// transmissionTexture, merged into that image where a file is read:
+    /// `FileTextures::transmission`; not in scene files yet).
+    pub transmission_in_red: bool,
     /// How rays see through it (glTF's alphaMode; not in scene files yet).
     pub alpha: Option<Alpha>,
     /// Light it emits on top of what it reflects (glTF's emissive factor x texture x
@@ -137,6 +141,7 @@ impl Pbr {
             transmission,
             normal_map: None,
             metallic_roughness: None,
+            transmission_in_red: false,
             alpha: None,
             emission: None,
             coat: Coat::new(ior, roughness, false),
@@ -177,6 +182,11 @@ impl Pbr {
         let roughness = self.roughness * texel.y;
         Pbr {
             metallic: self.metallic * texel.z,
+            transmission: if self.transmission_in_red {
+                self.transmission * texel.x
+            } else {
+                self.transmission
+            },
             roughness,
             metallic_roughness: None,
             coat: Coat {
@@ -239,6 +249,8 @@ material_params! {
         roughness: f32,
         /// 1: next-event estimation samples lights here.
         samples_lights: u32,
+        /// 1: the metallic-roughness image's red channel scales `transmission`.
+        transmission_in_red: u32,
     }
 }
 
@@ -340,7 +352,8 @@ impl MaterialModel for Pbr {
     /// metallic-roughness image may take metallic to 0 anywhere).
     fn samples_lights(&self) -> bool {
         let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
-        (1.0 - least_metallic) * (1.0 - self.transmission) > 0.0 || self.ggx().is_some()
+        let least_transmission = if self.transmission_in_red { 0.0 } else { self.transmission };
+        (1.0 - least_metallic) * (1.0 - least_transmission) > 0.0 || self.ggx().is_some()
     }
 
     fn parameter_image(&self) -> Option<&'static Image> {
@@ -466,6 +479,7 @@ impl MaterialModel for Pbr {
                 internal_reflectance: self.coat.internal_reflectance,
                 roughness: self.roughness,
                 samples_lights: self.samples_lights() as u32,
+                transmission_in_red: self.transmission_in_red as u32,
             }
             .words(),
             parameter_image_size: size,

@@ -455,7 +455,7 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
     Ok(extras)
 }
 
-/// Extensions whose content rt-gpu reads (KHR_materials_transmission: its factor).
+/// Extensions whose content rt-gpu reads.
 const READ_EXTENSIONS: [&str; 8] = [
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
@@ -469,8 +469,8 @@ const READ_EXTENSIONS: [&str; 8] = [
 
 /// One note naming what `document` holds that rt-gpu does not render (nothing is dropped
 /// silently): primitives of points or lines, vertex colours beyond COLOR_0 (and its alpha
-/// where the material is not opaque), texture coordinates beyond TEXCOORD_0, morph targets, skins, animations, extensions it does not read, and a
-/// transmission texture. `None` when there is nothing.
+/// where the material is not opaque), texture coordinates beyond TEXCOORD_0, morph targets,
+/// skins, animations and extensions it does not read. `None` when there is nothing.
 fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
     let primitives: Vec<gltf::Primitive> = document.meshes().flat_map(|m| m.primitives()).collect();
     let mut unread: Vec<String> = Vec::new();
@@ -520,13 +520,6 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
         if n > 0 {
             unread.push(count(n, one, many));
         }
-    }
-    let transmission_texture = document.materials().any(|m| {
-        m.transmission()
-            .is_some_and(|t| t.transmission_texture().is_some())
-    });
-    if transmission_texture {
-        unread.push("KHR_materials_transmission's transmissionTexture".into());
     }
     let extensions: Vec<&str> = document
         .extensions_used()

@@ -138,6 +138,49 @@ impl<'a> FileTextures<'a> {
         self.sampled(&info.texture(), false)
     }
 
+    /// The parameter image of a material whose transmissionTexture is `info`: its red channel
+    /// the transmission texture's, its green and blue `metallic_roughness`'s (roughness and
+    /// metallic; 1 where the material has none), read as `metallic_roughness` is (or as the
+    /// transmission texture is, without one). The two share texture coordinates (one transform
+    /// per material, `uv_transform`); where their images differ in size, the transmission
+    /// texture is sampled at the other's texel centres.
+    pub fn transmission(
+        &mut self,
+        info: &gltf::texture::Info,
+        metallic_roughness: Option<&'static Image>,
+        material: &str,
+    ) -> Result<&'static Image, String> {
+        self.check_uv_set(info.tex_coord(), material, "transmissionTexture")?;
+        let transmission = self.sampled(&info.texture(), false)?;
+        let base = metallic_roughness.unwrap_or(transmission);
+        let (w, h) = (base.width, base.height);
+        let same_size = (transmission.width, transmission.height) == (w, h);
+        let mut texels = Vec::with_capacity(3 * (w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let red = if same_size {
+                    transmission.texel(x, y).x
+                } else {
+                    let uv = glam::Vec2::new(
+                        (x as f32 + 0.5) / w as f32,
+                        1.0 - (y as f32 + 0.5) / h as f32,
+                    );
+                    crate::material::texture::image_at(transmission, uv).x
+                };
+                let [_, g, b] = match metallic_roughness {
+                    Some(mr) => mr.texel(x, y).to_array(),
+                    None => [0.0, 1.0, 1.0],
+                };
+                texels.extend([red, g, b]);
+            }
+        }
+        let name = format!("{} (transmission in red)", base.source);
+        let merged = Image::from_linear(&name, w, h, texels)
+            .map_err(|e| format!("mesh {}: {e}", self.source))?
+            .with_lookup(base.lookup);
+        Ok(merged.leak())
+    }
+
     /// An error unless `set`, the UV set `material`'s `slot` reads, is TEXCOORD_0.
     fn check_uv_set(&self, set: u32, material: &str, slot: &str) -> Result<(), String> {
         if set == 0 {
@@ -324,6 +367,12 @@ pub fn uv_transform(material: &gltf::Material, source: &str) -> Result<UvTransfo
         ("baseColorTexture", pbr.base_color_texture()),
         ("metallicRoughnessTexture", pbr.metallic_roughness_texture()),
         ("emissiveTexture", material.emissive_texture()),
+        (
+            "transmissionTexture",
+            material
+                .transmission()
+                .and_then(|t| t.transmission_texture()),
+        ),
     ];
     let mut found: Vec<(&str, UvTransform, Option<u32>)> = infos
         .into_iter()

@@ -1407,22 +1407,32 @@ fn material_of(
         Some(info) => Some(textures.metallic_roughness(&info, name)?),
         None => None,
     };
-    Ok(Material::Pbr(
-        Pbr::new(
-            base,
-            unit(pbr.metallic_factor()),
-            unit(pbr.roughness_factor()),
-            // The extension's 0 is its limit of a fully reflecting dielectric (F0 = 1): the
-            // largest index rt-gpu takes, whose F0 is 0.96.
-            match m.ior().unwrap_or(1.5) {
-                0.0 => crate::material::fresnel::MAX_IOR,
-                ior => ior,
-            },
-            unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
-        )
-        .with_normal_map(normal_map)
-        .with_metallic_roughness(metallic_roughness)
-        .with_alpha(alpha)
-        .with_emission(emission),
-    ))
+    // KHR_materials_transmission's texture scales the factor: its red channel, carried in the
+    // parameter image's (`Pbr::transmission_in_red`).
+    let transmission_texture = m.transmission().and_then(|t| t.transmission_texture());
+    let (metallic_roughness, transmission_in_red) = match transmission_texture {
+        Some(info) => (
+            Some(textures.transmission(&info, metallic_roughness, name)?),
+            true,
+        ),
+        None => (metallic_roughness, false),
+    };
+    let mut out = Pbr::new(
+        base,
+        unit(pbr.metallic_factor()),
+        unit(pbr.roughness_factor()),
+        // The extension's 0 is its limit of a fully reflecting dielectric (F0 = 1): the
+        // largest index rt-gpu takes, whose F0 is 0.96.
+        match m.ior().unwrap_or(1.5) {
+            0.0 => crate::material::fresnel::MAX_IOR,
+            ior => ior,
+        },
+        unit(m.transmission().map_or(0.0, |t| t.transmission_factor())),
+    )
+    .with_normal_map(normal_map)
+    .with_metallic_roughness(metallic_roughness)
+    .with_alpha(alpha)
+    .with_emission(emission);
+    out.transmission_in_red = transmission_in_red;
+    Ok(Material::Pbr(out))
 }
