@@ -5,7 +5,7 @@
 // normal map bends the hit's shading normal and the material only reflects.
 
 //#if NORMAL_MAPS
-const MICROSURFACE_MAX_SCATTERINGS: u32 = 64u;
+// MICROSURFACE_MAX_SCATTERINGS, _MIN_SIN and _MIN_COS are generated from their Rust twins.
 
 struct Microsurface {
     n: vec3f,
@@ -28,7 +28,7 @@ fn microsurface_at(m: Material, hit: Hit) -> Microsurface {
     let cos = dot(hit.shading, hit.normal);
     let tilt = hit.shading - cos * hit.normal;
     let sin = length(tilt);
-    if !(sin > 1e-5 && cos > 1e-3) {
+    if !(sin > MICROSURFACE_MIN_SIN && cos > MICROSURFACE_MIN_COS) {
         return s;
     }
     s.n = hit.normal;

@@ -166,6 +166,18 @@ fn wgsl_constants() -> String {
             "GROUP_DIMENSIONS",
             crate::shared::sampler::GROUP_DIMENSIONS.literal(),
         ),
+        (
+            "MICROSURFACE_MAX_SCATTERINGS",
+            crate::material::microsurface::MAX_SCATTERINGS.literal(),
+        ),
+        (
+            "MICROSURFACE_MIN_SIN",
+            crate::material::microsurface::MIN_SIN.literal(),
+        ),
+        (
+            "MICROSURFACE_MIN_COS",
+            crate::material::microsurface::MIN_COS.literal(),
+        ),
     ]
     .map(|(name, value)| (name.to_string(), value));
     let bindings = super::bindings::BINDINGS

@@ -47,10 +47,10 @@ use glam::Vec3;
 pub const MAX_SCATTERINGS: u32 = 64;
 
 /// Below this sine of its tilt, a shading normal is the geometric normal (no microsurface).
-const MIN_SIN: f32 = 1e-5;
+pub const MIN_SIN: f32 = 1e-5;
 /// Below this cosine of its tilt, the shading facet is bent past what f32 resolves: the
 /// geometric normal shades.
-const MIN_COS: f32 = 1e-3;
+pub const MIN_COS: f32 = 1e-3;
 
 /// The two facets at a hit whose shading normal differs from its geometric normal.
 #[derive(Clone, Copy, Debug)]
