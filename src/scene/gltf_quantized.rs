@@ -58,7 +58,7 @@ reader!(vec4, 4, Dimensions::Vec4);
 
 /// COLOR_0's values as linear RGB (its alpha, if VEC4, left out): floats, or normalized
 /// unsigned 8- or 16-bit integers, as glTF allows; `None` where the accessor is another kind
-/// or holds a value that is not a finite number.
+/// (`Mesh::with_tangents` refuses values that are not finite, as for the other attributes).
 pub fn colors<'a>(
     accessor: gltf::Accessor<'a>,
     buffer: impl Fn(gltf::Buffer) -> Option<&'a [u8]> + Clone,
@@ -71,13 +71,14 @@ pub fn colors<'a>(
     if !allowed {
         return None;
     }
-    let rgb: Vec<[f32; 3]> = match accessor.dimensions() {
-        Dimensions::Vec3 => vec3(accessor, buffer)?,
-        Dimensions::Vec4 => vec4(accessor, buffer)?
-            .into_iter()
-            .map(|[r, g, b, _]| [r, g, b])
-            .collect(),
-        _ => return None,
-    };
-    rgb.iter().flatten().all(|c| c.is_finite()).then_some(rgb)
+    match accessor.dimensions() {
+        Dimensions::Vec3 => vec3(accessor, buffer),
+        Dimensions::Vec4 => Some(
+            vec4(accessor, buffer)?
+                .into_iter()
+                .map(|[r, g, b, _]| [r, g, b])
+                .collect(),
+        ),
+        _ => None,
+    }
 }
