@@ -584,7 +584,8 @@ fn write_coloured_gltf(dir: &Path, name: &str, material: &str, colors: [[u8; 4];
 /// Issue 62: COLOR_0 multiplies the base colour (it was ignored). A triangle whose corners are
 /// all (51, 128, 204) / 255 renders as the same triangle without COLOR_0 whose base colour is
 /// that colour (the same paths: within 1e-4 of the triangle's light), and 2% off in the base
-/// colour is not; COLOR_0 of integers that are not normalized is refused in one line.
+/// colour is not; its alpha, unread, is named in a note where the material blends; COLOR_0 of
+/// integers that are not normalized is refused in one line.
 #[test]
 fn vertex_colours_multiply_the_base_colour() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -625,6 +626,18 @@ fn vertex_colours_multiply_the_base_colour() {
     assert!(
         darker > 1e-3,
         "a 2% darker base colour went unseen: {darker}"
+    );
+    // Its alpha is not read: named where the material blends (not where it is opaque).
+    let blended = write_coloured_gltf(
+        dir.path(),
+        "blended.gltf",
+        r#"{ "alphaMode": "BLEND", "pbrMetallicRoughness": { "metallicFactor": 0 } }"#,
+        [[51, 128, 204, 128]; 3],
+    );
+    let (_, notes) = load(&blended, "blended.gltf", None).expect("loads");
+    assert!(
+        notes.iter().any(|n| n.contains("COLOR_0's alpha")),
+        "{notes:?}"
     );
     // Integers that are not normalized are no colour glTF allows: one line naming COLOR_0.
     rewrite(&uniform, r#""normalized": true"#, r#""normalized": false"#);

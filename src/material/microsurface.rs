@@ -15,25 +15,22 @@
 //!
 //! Chosen over Cycles' valid-reflection correction (which bends the normal so that the mirror
 //! direction stays above the surface): that one still loses the light a diffuse or rough lobe
-//! sends below the surface, so a furnace is not 1. The paper's own evaluation keeps the
-//! walks of up to two facet events (`wp`, `wp` then `wt`, `wt` then `wp`); those lose 6% of a
-//! white lambertian's light at a 20 degree tilt and 29% at 45 (measured by simulation, the
-//! walk as below truncated there). So `sample` follows the whole walk (up to
-//! [`MAX_SCATTERINGS`] scatterings on `wp`) and this splits the BSDF in two: the first-order
-//! walks, which `eval` and `pdf` give in closed form and next-event estimation weighs by
-//! multiple importance sampling, and the rest, which only `sample` finds and returns with pdf
-//! 0 (light it then meets counts in full, as after a mirror). The two estimate disjoint parts
-//! of one BSDF, so their sum is unbiased.
+//! sends below the surface, so a furnace is not 1. The paper's own evaluation keeps only the
+//! walks of up to two facet events (`wp`, `wp` then `wt`, `wt` then `wp`), which loses a
+//! large share of a lambertian's light at steep tilts (docs/benchmarks.md). So `sample`
+//! follows the whole walk (up to [`MAX_SCATTERINGS`] scatterings on `wp`) and this splits the
+//! BSDF in two: the first-order walks, which `eval` and `pdf` give in closed form and
+//! next-event estimation weighs by multiple importance sampling, and the rest, which only
+//! `sample` finds and returns with pdf 0 (light it then meets counts in full, as after a
+//! mirror). The two estimate disjoint parts of one BSDF, so their sum is unbiased.
 //!
 //! It applies to normal-mapped materials that only reflect (`Material::has_microsurface`).
 //! Glass keeps the shading normal as its frame and ends paths that would leave on the wrong
-//! side; so do a mesh's interpolated vertex normals, whose small tilts Cycles and pbrt-v4
-//! shade as they are: on a smooth-shaded rough gold sphere lit by Blender's lamps
-//! (tests/blender_scenes.rs) the microsurface moved the mean 3.8% from Cycles, against 1%
-//! without. A normal map's look departs from Cycles' (which bends the map's normal toward the
-//! viewer and lets light below the surface go): where the light grazes, a facet tilted toward
-//! it is shadowed by its neighbours and one tilted away lit by their mirror, so under
-//! `scenes/blender/bumpy`'s low sun its quadrants are 0.70 to 1.98x Cycles'.
+//! side; so do a mesh's interpolated vertex normals, whose small tilts Cycles and pbrt-v4 shade
+//! as they are (as microsurfaces they moved Blender's smooth spheres away from Cycles:
+//! docs/benchmarks.md). A normal map's look departs from Cycles' (which bends the map's normal
+//! toward the viewer and lets light below the surface go) where light grazes: a facet tilted
+//! toward it is shadowed by its neighbours and one tilted away lit by their mirror.
 
 use super::{BsdfSample, Material, reflect};
 use crate::shared::ray::Hit;
@@ -42,8 +39,8 @@ use glam::Vec3;
 
 /// Scatterings on the shading facet a sampled walk may take before it is given up (its light
 /// lost). A walk goes on after a scattering only when light is shadowed twice (by `wt`, then
-/// by `wp`), more often the steeper the tilt: with 64 a white lambertian keeps its albedo 1 to
-/// 1e-4 up to a 75 degree tilt, 0.997 at 85 (16 lost 0.8% at 75; tests/bsdfs/microsurface.rs).
+/// by `wp`), more often the steeper the tilt: enough that a white lambertian keeps its albedo
+/// at any tilt a normal map gives (tests/bsdfs/microsurface.rs; docs/benchmarks.md).
 pub const MAX_SCATTERINGS: u32 = 64;
 
 /// Below this sine of its tilt, a shading normal is the geometric normal (no microsurface).
