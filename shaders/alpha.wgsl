@@ -12,10 +12,14 @@ fn passes_through(material: u32, triangle: u32, weights: vec2f, ray: Ray, packed
     }
     var texture = 1.0;
     if m.alpha_size.x > 0.0 {
+        var uv = weights;
 //#if TRIANGLE_UVS
-        let uv = interpolated_uv(triangle, weights);
-//#else
-        let uv = weights;
+        uv = interpolated_uv(triangle, weights);
+//#endif
+//#if TRIANGLE_UVS1
+        if (m.alpha_lookup & LOOKUP_UV1) != 0u {
+            uv = interpolated_uv1(triangle, weights);
+        }
 //#endif
         texture = image_at(m.alpha_image, m.alpha_size, m.alpha_lookup, uv).x;
     }

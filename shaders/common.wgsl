@@ -48,6 +48,10 @@ fn image_value(i: u32) -> vec4f {
 // Per triangle its three corner texture coordinates, six floats (SceneBuffers::triangle_uvs).
 @group(0) @binding(BINDING_TRIANGLE_UVS) var<storage, read> triangle_uvs: array<f32>;
 //#endif
+//#if TRIANGLE_UVS1
+// Per triangle its three corner second texture coordinates (SceneBuffers::triangle_uvs1).
+@group(0) @binding(BINDING_TRIANGLE_UVS1) var<storage, read> triangle_uvs1: array<f32>;
+//#endif
 //#if NORMAL_MAPS
 // Per triangle its three corner tangents, twelve floats (SceneBuffers::triangle_tangents).
 @group(0) @binding(BINDING_TRIANGLE_TANGENTS) var<storage, read> triangle_tangents: array<f32>;

@@ -329,17 +329,18 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     }
 //#endif
 //#endif
+    (*hit).uv1 = second_uv(c, (*hit).uv);
 //#endif
 //#if NORMAL_MAPS
     let m = materials[c.material];
     if primitive_kind(c.primitive) == KIND_TRIANGLE && m.normal_map_size.x > 0.0 {
-        shading = normal_mapped(m, primitive_index(c.primitive), c.weights, (*hit).uv, shading, n);
+        shading = normal_mapped(m, primitive_index(c.primitive), c.weights, uv_at(m.normal_map_lookup, *hit), shading, n);
         (*hit).shading = select(-shading, shading, front);
     }
 //#if INSTANCES
     if primitive_kind(c.primitive) == KIND_INSTANCE && m.normal_map_size.x > 0.0 {
         let inst = instances[primitive_index(c.primitive)];
-        shading = instanced_normal_mapped(m, inst, c.triangle, c.weights, (*hit).uv, shading, n);
+        shading = instanced_normal_mapped(m, inst, c.triangle, c.weights, uv_at(m.normal_map_lookup, *hit), shading, n);
         (*hit).shading = select(-shading, shading, front);
     }
 //#endif
@@ -347,15 +348,51 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
     return true;
 }
 
-//#if TRIANGLE_UVS
-// Triangle i's corner texture coordinates interpolated at weights (twin: interpolated_uv in
+//#if TRIANGLE_UVS || TRIANGLE_UVS1
+// Three corners' texture coordinates interpolated at weights (twin: interpolated_uv in
 // src/cpu/shapes.rs).
+fn corner_uvs_at(uv0: vec2f, uv1: vec2f, uv2: vec2f, weights: vec2f) -> vec2f {
+    return (1.0 - weights.x - weights.y) * uv0 + weights.x * uv1 + weights.y * uv2;
+}
+//#endif
+
+//#if TRIANGLE_UVS
+// Triangle i's corner texture coordinates interpolated at weights.
 fn interpolated_uv(i: u32, weights: vec2f) -> vec2f {
     let at = 6u * i;
     let uv0 = vec2f(triangle_uvs[at], triangle_uvs[at + 1u]);
     let uv1 = vec2f(triangle_uvs[at + 2u], triangle_uvs[at + 3u]);
     let uv2 = vec2f(triangle_uvs[at + 4u], triangle_uvs[at + 5u]);
-    return (1.0 - weights.x - weights.y) * uv0 + weights.x * uv1 + weights.y * uv2;
+    return corner_uvs_at(uv0, uv1, uv2, weights);
+}
+//#endif
+
+//#if TRIANGLE_UVS1
+// Triangle i's second corner texture coordinates (TEXCOORD_1) interpolated at weights.
+fn interpolated_uv1(i: u32, weights: vec2f) -> vec2f {
+    let at = 6u * i;
+    let uv0 = vec2f(triangle_uvs1[at], triangle_uvs1[at + 1u]);
+    let uv1 = vec2f(triangle_uvs1[at + 2u], triangle_uvs1[at + 3u]);
+    let uv2 = vec2f(triangle_uvs1[at + 4u], triangle_uvs1[at + 5u]);
+    return corner_uvs_at(uv0, uv1, uv2, weights);
+}
+//#endif
+
+//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+// The hit on c's second texture coordinates where the scene's materials read them, else uv,
+// its first (twin: second_uv in src/cpu/shapes.rs).
+fn second_uv(c: Closest, uv: vec2f) -> vec2f {
+//#if TRIANGLE_UVS1
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        return interpolated_uv1(primitive_index(c.primitive), c.weights);
+    }
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE {
+        return interpolated_uv1(c.triangle, c.weights);
+    }
+//#endif
+//#endif
+    return uv;
 }
 //#endif
 

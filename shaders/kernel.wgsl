@@ -278,6 +278,7 @@ fn look_up_albedo(@builtin(global_invocation_id) gid: vec3u) {
     var hit: Hit;
     hit.point = s.point;
     hit.uv = s.normal.xy;
+    hit.uv1 = hit.uv;
     bounces[slot].dir = albedo_at(material_at(s.primitive), hit);
 }
 

@@ -37,6 +37,12 @@ fn wrapped(mode: u32, i: f32, n: f32) -> u32 {
     return min(u32(clamp(j, 0.0, n - 1.0)), u32(n) - 1u);
 }
 
+// The texture coordinates an image read as `lookup` says is read at on hit: its UV set's
+// (twin: material::texture::uv_at).
+fn uv_at(lookup: u32, hit: Hit) -> vec2f {
+    return select(hit.uv, hit.uv1, (lookup & LOOKUP_UV1) != 0u);
+}
+
 // The image of `size` texels starting at `start` at surface coordinates uv (u across, v up),
 // wrapped on each axis and filtered as `lookup` (ImageLookup::bits) says.
 fn image_at(start: u32, size: vec2f, lookup: u32, uv: vec2f) -> vec3f {
@@ -89,7 +95,7 @@ fn texture_at(m: Material, hit: Hit) -> vec3f {
 //#if IMAGE_TEXTURE
     if m.texture == TEXTURE_IMAGE {
         // Times the image's factor (glTF's factor x texture), which its albedo holds.
-        return image_at(m.texture_image, m.texture_odd.xy, m.texture_lookup, hit.uv) * m.albedo;
+        return image_at(m.texture_image, m.texture_odd.xy, m.texture_lookup, uv_at(m.texture_lookup, hit)) * m.albedo;
     }
 //#endif
     var parities = 0.0;
@@ -124,7 +130,8 @@ fn with_albedo_at(m: Material, hit: Hit) -> Material {
 //#if METALLIC_ROUGHNESS
 //#if PBR
     if m.kind == MAT_PBR && m.parameter_image_size.x > 0.0 {
-        let texel = image_at(m.parameter_image, m.parameter_image_size, m.parameter_image_lookup, hit.uv);
+        let uv = uv_at(m.parameter_image_lookup, hit);
+        let texel = image_at(m.parameter_image, m.parameter_image_size, m.parameter_image_lookup, uv);
         out = pbr_with_texel(out, texel);
         out.parameter_image_size = vec2f(0.0);
     }

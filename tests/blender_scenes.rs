@@ -694,7 +694,7 @@ fn blenders_normal_maps_arrive_as_the_script_set_them() {
             panic!("meshes only");
         };
         assert!(mesh.tangents.is_empty(), "no TANGENT in the file");
-        let tangents = rt_gpu::scene::tangents::of(mesh).expect("uvs");
+        let tangents = rt_gpu::scene::tangents::of(mesh, Default::default()).expect("uvs");
         assert_eq!(tangents.len(), mesh.triangles.len());
         for t in tangents.iter().flatten() {
             assert!((t.truncate().length() - 1.0).abs() < 1e-4, "{t}");
@@ -848,6 +848,7 @@ fn blenders_metallic_roughness_and_samplers_arrive_as_the_script_set_them() {
         wrap_u: Wrap::Clamp,
         wrap_v: Wrap::Clamp,
         filter: Filter::Linear,
+        ..ImageLookup::default()
     };
     for (name, lookup, span) in [("Floor", nearest, 2.0), ("Box", clamped, 1.5)] {
         let Material::Pbr(pbr) = material(&scene, "worn.glb", name) else {

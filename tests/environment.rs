@@ -434,6 +434,7 @@ fn gpu_image_lookups_match_the_cpu() {
                 index: 0,
             },
             uv,
+            uv1: uv,
             color: Vec3::ONE,
         };
         let cpu = rt_gpu::material::texture::value(texture, &hit(*uv));

@@ -607,14 +607,7 @@ fn vertex_colours_multiply_the_base_colour() {
     let colour = Vec3::new(51.0, 128.0, 204.0) / 255.0;
     let opts = common::nee_opts(24, 24, 64, 4, 3);
     let render = |scene: &rt_gpu::scene::Scene| common::render_cpu(scene, &opts);
-    let difference = |a: &rt_gpu::film::Film, b: &rt_gpu::film::Film| {
-        let (mut off, mut total) = (0.0, 0.0);
-        for (p, q) in a.pixels.iter().zip(&b.pixels) {
-            off += (p.mean() - q.mean()).abs().element_sum();
-            total += p.mean().element_sum();
-        }
-        off / total
-    };
+    let difference = common::relative_difference;
     let with_colours = render(&coloured);
     let same = difference(&with_colours, &render(&plain_with(colour)));
     let darker = difference(&with_colours, &render(&plain_with(colour * 0.98)));

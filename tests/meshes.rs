@@ -639,7 +639,7 @@ fn triangle_strips_and_fans_are_their_lists() {
 }
 
 /// Issue 62: what a glTF file holds and rt-gpu does not render is named in one note (it was
-/// dropped silently): here a second set of vertex colours, a second UV set, a morph target, an
+/// dropped silently): here a second set of vertex colours, a third UV set, a morph target, an
 /// extension it does not read and a primitive of points.
 #[test]
 fn what_a_gltf_file_holds_and_is_not_rendered_is_named_in_one_note() {
@@ -650,7 +650,7 @@ fn what_a_gltf_file_holds_and_is_not_rendered_is_named_in_one_note() {
         serde_json::from_str(&std::fs::read_to_string(&path).expect("reads")).expect("json");
     let primitive = &mut doc["meshes"][0]["primitives"][0];
     primitive["attributes"]["COLOR_1"] = 0.into();
-    primitive["attributes"]["TEXCOORD_1"] = 2.into();
+    primitive["attributes"]["TEXCOORD_2"] = 2.into();
     primitive["targets"] = serde_json::json!([{ "POSITION": 0 }]);
     doc["accessors"].as_array_mut().expect("accessors").push(
         serde_json::json!({ "bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC2" }),
@@ -662,7 +662,7 @@ fn what_a_gltf_file_holds_and_is_not_rendered_is_named_in_one_note() {
     for named in [
         "1 primitive of points or lines",
         "COLOR_1",
-        "TEXCOORD_1",
+        "TEXCOORD_2",
         "1 morph target",
         "extension EXT_unknown_to_rt_gpu",
     ] {

@@ -229,6 +229,7 @@ fn gpu_texture_lookups_match_the_cpu() {
                 index: 0,
             },
             uv: *uv,
+            uv1: *uv,
             color: Vec3::ONE,
         };
         let cpu_value = rt_gpu::material::texture::value(texture, &hit);
@@ -296,6 +297,7 @@ fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
                     wrap_u,
                     wrap_v,
                     filter,
+                    ..ImageLookup::default()
                 });
                 text += &format!(
                     "m{k} = {{ type = \"lambertian\", albedo = {{ image = \"textures/tiles.png\" }} }}\n"
@@ -347,6 +349,7 @@ fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
                 index: 0,
             },
             uv: *uv,
+            uv1: *uv,
             color: Vec3::ONE,
         };
         let cpu_value = rt_gpu::material::texture::value(&l.albedo, &hit);

@@ -13,7 +13,7 @@ fn pbr_emitted(m: Material, hit: Hit) -> vec3f {
     }
 //#if IMAGE_TEXTURE
     if m.emission_size.x > 0.0 {
-        return image_at(m.emission_image, m.emission_size, m.emission_lookup, hit.uv) * m.emission;
+        return image_at(m.emission_image, m.emission_size, m.emission_lookup, uv_at(m.emission_lookup, hit)) * m.emission;
     }
 //#endif
     return m.emission;

@@ -3,6 +3,7 @@
 use super::accel::{Leaves, reach};
 use super::four_spheres::LaneHits;
 use crate::scene::flat::{FlatScene, Instance, Triangle};
+use crate::scene::image_lookup::UvSet;
 use crate::scene::normal_map::NormalMap;
 use crate::shape::quad::{Quad, QuadBlock};
 use crate::shape::sphere::Sphere;
@@ -312,10 +313,12 @@ fn passes_through(
     };
     let texture = match alpha.image {
         Some(image) => {
-            let uv = match scene.triangle_uvs.get(triangle as usize) {
-                Some(uvs) => interpolated_uv(uvs, weights),
-                None => weights,
+            let first = scene.triangle_uvs.get(triangle as usize);
+            let corners = match image.lookup.uv_set {
+                UvSet::First => first,
+                UvSet::Second => scene.triangle_uvs1.get(triangle as usize).or(first),
             };
+            let uv = corners.map_or(weights, |uvs| interpolated_uv(uvs, weights));
             crate::material::texture::image_at(image, uv).x
         }
         None => 1.0,
@@ -364,7 +367,8 @@ fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
     }
     .normalize();
     let (material, (point, error), uv) = surface(scene, found, ray.at(t));
-    let shading = shading(scene, found, material, uv, outward);
+    let uv1 = second_uv(scene, found, uv);
+    let shading = shading(scene, found, material, [uv, uv1], outward);
     let front_face = ray.dir.dot(outward) < 0.0;
     Hit {
         t,
@@ -376,6 +380,7 @@ fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
         material,
         primitive: found.primitive,
         uv,
+        uv1,
         color: vertex_color(scene, found),
     }
 }
@@ -396,6 +401,21 @@ fn vertex_color(scene: &FlatScene, found: &Candidate) -> Vec3 {
             (1.0 - b1 - b2) * c0 + b1 * c1 + b2 * c2
         }
         None => Vec3::ONE,
+    }
+}
+
+/// The hit on `found`'s second texture coordinates (glTF's TEXCOORD_1) where the scene's
+/// materials read them, else `uv`, its first (twin: `second_uv` in shaders/intersect.wgsl).
+#[inline]
+fn second_uv(scene: &FlatScene, found: &Candidate, uv: Vec2) -> Vec2 {
+    let triangle = match found.primitive {
+        PrimitiveRef::Triangle(i) => i,
+        PrimitiveRef::Instance(_) => found.triangle,
+        PrimitiveRef::Shape { .. } => return uv,
+    };
+    match scene.triangle_uvs1.get(triangle as usize) {
+        Some(uvs) => interpolated_uv(uvs, found.weights),
+        None => uv,
     }
 }
 
@@ -616,9 +636,16 @@ fn surface(scene: &FlatScene, found: &Candidate, along_ray: Vec3) -> (u32, (Vec3
     }
 }
 
-/// The shading normal of the hit on `found`, on the side of its unit geometric normal
-/// `outward`: a mesh's corner normals interpolated, bent by its material's normal map.
-fn shading(scene: &FlatScene, found: &Candidate, material: u32, uv: Vec2, outward: Vec3) -> Vec3 {
+/// The shading normal of the hit on `found` (whose texture coordinates are `uvs`, both sets),
+/// on the side of its unit geometric normal `outward`: a mesh's corner normals interpolated,
+/// bent by its material's normal map.
+fn shading(
+    scene: &FlatScene,
+    found: &Candidate,
+    material: u32,
+    uvs: [Vec2; 2],
+    outward: Vec3,
+) -> Vec3 {
     let weights = found.weights;
     let shading = match found.primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
@@ -641,6 +668,10 @@ fn shading(scene: &FlatScene, found: &Candidate, material: u32, uv: Vec2, outwar
     let map = match scene.materials[material as usize].normal_map() {
         Some(map) if !scene.triangle_tangents.is_empty() => map,
         _ => return shading,
+    };
+    let uv = match map.image.lookup.uv_set {
+        UvSet::First => uvs[0],
+        UvSet::Second => uvs[1],
     };
     match found.primitive {
         PrimitiveRef::Triangle(i) => {

@@ -43,6 +43,7 @@ bindings! {
     TriangleNormals => "BINDING_TRIANGLE_NORMALS",
     Instances => "BINDING_INSTANCES",
     TriangleUvs => "BINDING_TRIANGLE_UVS",
+    TriangleUvs1 => "BINDING_TRIANGLE_UVS1",
     TriangleTangents => "BINDING_TRIANGLE_TANGENTS",
     TriangleColors => "BINDING_TRIANGLE_COLORS",
 }
@@ -80,6 +81,7 @@ impl Binding {
             | Binding::Triangles
             | Binding::TriangleNormals
             | Binding::TriangleUvs
+            | Binding::TriangleUvs1
             | Binding::TriangleTangents
             | Binding::TriangleColors
             | Binding::Instances => buffer(read_only),

@@ -102,6 +102,10 @@ fn wgsl_constants() -> String {
             crate::scene::image_lookup::LOOKUP_NEAREST.literal(),
         ),
         (
+            "LOOKUP_UV1",
+            crate::scene::image_lookup::LOOKUP_UV1.literal(),
+        ),
+        (
             "MIN_ALPHA",
             crate::material::microfacet::MIN_ALPHA.literal(),
         ),
@@ -232,6 +236,9 @@ pub struct SceneBuffers {
     /// Per triangle its three corner texture coordinates, six floats (the kernel's
     /// `triangle_uvs`), when the scene's meshes have them and a material reads them.
     pub triangle_uvs: Vec<f32>,
+    /// Per triangle its three corner second texture coordinates, six floats (the kernel's
+    /// `triangle_uvs1`), when a material reads them.
+    pub triangle_uvs1: Vec<f32>,
     /// Per triangle its three corner tangents, twelve floats (the kernel's
     /// `triangle_tangents`), when some mesh is normal-mapped.
     pub triangle_tangents: Vec<f32>,
@@ -318,18 +325,8 @@ impl ImageArray {
             out.placed.push((image, at));
             at
         };
-        for m in &scene.materials {
-            let textures = m.textures().into_iter().filter_map(|t| match t {
-                Texture::Image(image) => Some(image),
-                _ => None,
-            });
-            let maps = (m.normal_map().map(|n| n.image).into_iter())
-                .chain(m.parameter_image())
-                .chain(m.alpha().and_then(|a| a.image))
-                .chain(emission_image(m));
-            for image in textures.chain(maps) {
-                place(&mut out, image);
-            }
+        for image in scene.materials.iter().flat_map(|m| m.images()) {
+            place(&mut out, image);
         }
         if let Background::Environment(env) = scene.background {
             let d = env.distribution();
@@ -400,6 +397,7 @@ pub fn geometry_bytes(scene: &FlatScene) -> usize {
     std::mem::size_of_val(&buffers.triangles[..])
         + std::mem::size_of_val(&buffers.triangle_normals[..])
         + std::mem::size_of_val(&buffers.triangle_uvs[..])
+        + std::mem::size_of_val(&buffers.triangle_uvs1[..])
         + std::mem::size_of_val(&buffers.triangle_tangents[..])
         + std::mem::size_of_val(&buffers.triangle_colors[..])
         + std::mem::size_of_val(&buffers.bvh_nodes[..])
@@ -482,6 +480,7 @@ impl SceneBuffers {
         }
         let triangle_normals = corner_floats(&scene.triangle_normals, glam::Vec3::to_array);
         let triangle_uvs = corner_floats(&scene.triangle_uvs, glam::Vec2::to_array);
+        let triangle_uvs1 = corner_floats(&scene.triangle_uvs1, glam::Vec2::to_array);
         let triangle_tangents = corner_floats(&scene.triangle_tangents, glam::Vec4::to_array);
         let triangle_colors = corner_floats(&scene.triangle_colors, glam::Vec3::to_array);
         if bvh_primitives.is_empty() {
@@ -499,6 +498,7 @@ impl SceneBuffers {
             triangles,
             triangle_normals,
             triangle_uvs,
+            triangle_uvs1,
             triangle_tangents,
             triangle_colors,
             bvh_nodes,

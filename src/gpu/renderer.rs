@@ -141,6 +141,7 @@ pub(super) struct SceneBindings {
     triangle_uvs: wgpu::Buffer,
     triangle_tangents: wgpu::Buffer,
     triangle_colors: wgpu::Buffer,
+    triangle_uvs1: wgpu::Buffer,
     instances: wgpu::Buffer,
     bvh_nodes: NodeBinding,
     images: wgpu::TextureView,
@@ -344,6 +345,10 @@ impl GpuRenderer {
                 "triangle colours",
                 bytemuck::cast_slice(&buffers.triangle_colors),
             ),
+            triangle_uvs1: storage(
+                "triangle second texture coordinates",
+                bytemuck::cast_slice(&buffers.triangle_uvs1),
+            ),
             instances: storage("instances", bytemuck::cast_slice(&buffers.instances)),
             bvh_nodes,
             images,
@@ -381,6 +386,10 @@ impl GpuRenderer {
             (
                 "vertex colours",
                 std::mem::size_of_val(&buffers.triangle_colors[..]),
+            ),
+            (
+                "second texture coordinates",
+                std::mem::size_of_val(&buffers.triangle_uvs1[..]),
             ),
             ("instances", std::mem::size_of_val(&buffers.instances[..])),
             ("lights", std::mem::size_of_val(&buffers.lights[..])),
@@ -496,6 +505,7 @@ impl GpuRenderer {
             Binding::TriangleUvs => scene.triangle_uvs.as_entire_binding(),
             Binding::TriangleTangents => scene.triangle_tangents.as_entire_binding(),
             Binding::TriangleColors => scene.triangle_colors.as_entire_binding(),
+            Binding::TriangleUvs1 => scene.triangle_uvs1.as_entire_binding(),
             Binding::Instances => scene.instances.as_entire_binding(),
         };
         let shapes =

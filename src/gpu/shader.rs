@@ -74,6 +74,9 @@ pub struct Features {
     pub shading_normals: bool,
     /// Triangles with corner texture coordinates, which a material's texture reads.
     pub triangle_uvs: bool,
+    /// Triangles with second corner texture coordinates (glTF TEXCOORD_1), which a material's
+    /// image reads.
+    pub triangle_uvs1: bool,
     /// Triangles with corner tangents, for their materials' normal maps.
     pub normal_maps: bool,
     /// Triangles with corner colours (glTF COLOR_0), which multiply their materials' colour.
@@ -117,10 +120,11 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 17] = [
+const SWITCHES: [Switch; 18] = [
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
     ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
+    ("TRIANGLE_UVS1", |f| &mut f.triangle_uvs1),
     ("NORMAL_MAPS", |f| &mut f.normal_maps),
     ("VERTEX_COLORS", |f| &mut f.vertex_colors),
     ("INSTANCES", |f| &mut f.instances),
@@ -212,6 +216,7 @@ impl Features {
             triangles: !scene.triangles.is_empty(),
             shading_normals: !scene.triangle_normals.is_empty(),
             triangle_uvs: !scene.triangle_uvs.is_empty(),
+            triangle_uvs1: !scene.triangle_uvs1.is_empty(),
             normal_maps: !scene.triangle_tangents.is_empty(),
             vertex_colors: !scene.triangle_colors.is_empty(),
             instances: !scene.instances.is_empty(),

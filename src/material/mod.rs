@@ -221,6 +221,19 @@ macro_rules! registry {
             pub fn emission(&self) -> Option<&Light> {
                 match self { $(Material::$ty(m) => m.emission(),)+ }
             }
+            /// Every image it reads: its textures', its normal map's, its parameter image, its
+            /// alpha's and its emission's (an image may come more than once).
+            pub fn images(&self) -> Vec<&'static Image> {
+                let textures = self.textures().into_iter().chain(self.emission().map(|e| e.radiance));
+                let textures = textures.filter_map(|t| match t {
+                    Texture::Image(image) => Some(image),
+                    _ => None,
+                });
+                let maps = (self.normal_map().map(|n| n.image).into_iter())
+                    .chain(self.parameter_image())
+                    .chain(self.alpha().and_then(|a| a.image));
+                textures.chain(maps).collect()
+            }
             pub fn relocated(self, origin: glam::DVec3) -> Self {
                 match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }
             }

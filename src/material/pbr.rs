@@ -178,7 +178,7 @@ impl Pbr {
         let Some(image) = self.metallic_roughness else {
             return *self;
         };
-        let texel = texture::image_at(image, hit.uv);
+        let texel = texture::image_at(image, texture::uv_at(image.lookup, hit));
         let roughness = self.roughness * texel.y;
         Pbr {
             metallic: self.metallic * texel.z,

@@ -1,7 +1,7 @@
 //! Texture lookups (twin: `shaders/texture.wgsl`) and the surface coordinates they use.
 
 use crate::scene::image::Image;
-use crate::scene::image_lookup::{Filter, ImageLookup, Wrap};
+use crate::scene::image_lookup::{Filter, ImageLookup, UvSet, Wrap};
 use crate::scene::texture::Texture;
 use crate::shared::layout::{GpuMaterial, TEXTURE_CHECKER, TEXTURE_IMAGE, TEXTURE_UV_CHECKER};
 use crate::shared::ray::Hit;
@@ -30,7 +30,17 @@ pub fn value(texture: &Texture, hit: &Hit) -> Vec3 {
             pick(parity(p.x) + parity(p.y), c.even, c.odd)
         }
         // Times the image's factor (glTF's factor x texture), as the kernel's albedo_at.
-        Texture::Image(image) => image_at(image, hit.uv) * image.factor,
+        Texture::Image(image) => image_at(image, uv_at(image.lookup, hit)) * image.factor,
+    }
+}
+
+/// The texture coordinates an image read as `lookup` says is read at on `hit`: its UV set's
+/// (twin: `uv_at` in shaders/texture.wgsl).
+#[inline]
+pub fn uv_at(lookup: ImageLookup, hit: &Hit) -> Vec2 {
+    match lookup.uv_set {
+        UvSet::First => hit.uv,
+        UvSet::Second => hit.uv1,
     }
 }
 
@@ -188,6 +198,7 @@ mod tests {
                 index: 0,
             },
             uv,
+            uv1: uv,
             color: Vec3::ONE,
         }
     }
@@ -262,6 +273,7 @@ mod tests {
                 wrap_u,
                 wrap_v: Wrap::Repeat,
                 filter,
+                ..ImageLookup::default()
             };
             // v = 0.75: row 0's centre (t = 0.25), so only x varies.
             image_at(&image.with_lookup(lookup), Vec2::new(u, 0.75))

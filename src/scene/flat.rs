@@ -4,6 +4,7 @@
 //! transforms rays per hit; only a mesh placed more than once is kept in its own coordinates
 //! and instanced (see [`Instance`]), its rays transformed into them.
 
+use super::image_lookup::UvSet;
 use super::mesh::Mesh;
 use super::texture::Texture;
 use super::{Background, Material, Scene, SceneError, Shape};
@@ -145,6 +146,21 @@ fn reads_uvs(material: &Material) -> bool {
         || material.alpha().is_some_and(|a| a.image.is_some())
 }
 
+/// Whether `material` reads an image at the second texture coordinate set (glTF's
+/// TEXCOORD_1).
+fn reads_uv1(material: &Material) -> bool {
+    (material.images().iter()).any(|i| i.lookup.uv_set == UvSet::Second)
+}
+
+/// Triangle `i` of `mesh`'s corner coordinates of the second set: its first set's where it has
+/// no second, as a shape's second coordinates are its first.
+fn second_uvs(mesh: &Mesh, i: usize) -> [Vec2; 3] {
+    (mesh.uvs1.get(i).or(mesh.uvs.get(i)).copied()).unwrap_or(BARYCENTRIC_UVS)
+}
+
+/// A mesh's corner tangents (`scene::tangents::of`), shared by its placements.
+type Tangents = std::rc::Rc<[[Vec4; 3]]>;
+
 /// The corner texture coordinates of a triangle whose mesh has none, in a scene where others
 /// have them: interpolated, they are the barycentric weights a hit has without them.
 pub const BARYCENTRIC_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
@@ -175,6 +191,9 @@ pub struct FlatScene {
     /// some material reads them (`uv_textures`); empty otherwise. Triangles without them take
     /// (0, 0), (1, 0), (0, 1), so their coordinates are their barycentric weights, as without.
     pub triangle_uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, its corners' second texture coordinates (glTF TEXCOORD_1; [`second_uvs`]),
+    /// when some material reads them; empty otherwise.
+    pub triangle_uvs1: Vec<[Vec2; 3]>,
     /// Per triangle, its corners' vertex colours (`Mesh::colors`), when some mesh of the scene
     /// has them (the other triangles' are white); empty otherwise.
     pub triangle_colors: Vec<[Vec3; 3]>,
@@ -788,6 +807,8 @@ struct Flattener<'a> {
     /// Whether every triangle gets corner texture coordinates: some mesh of the scene has them
     /// and some material reads them.
     textured: bool,
+    /// Whether every triangle gets second texture coordinates: some material reads them.
+    textured1: bool,
     /// Whether every triangle gets corner colours: some mesh of the scene has vertex colours.
     coloured: bool,
     shapes: Shapes,
@@ -795,17 +816,19 @@ struct Flattener<'a> {
     triangles: Vec<Triangle>,
     triangle_normals: Vec<[Vec3; 3]>,
     triangle_uvs: Vec<[Vec2; 3]>,
+    triangle_uvs1: Vec<[Vec2; 3]>,
     triangle_colors: Vec<[Vec3; 3]>,
     /// Whether every triangle gets corner tangents: some mesh of the scene is normal-mapped.
     normal_mapped: bool,
     triangle_tangents: Vec<[Vec4; 3]>,
-    /// Each normal-mapped mesh's tangents (`scene::tangents::of`), by the mesh's address:
+    /// Each normal-mapped mesh's tangents (`scene::tangents::of`), by the mesh's address and UV set:
     /// computed once however many objects place it.
-    mesh_tangents: std::collections::HashMap<usize, Option<std::rc::Rc<[[Vec4; 3]]>>>,
+    mesh_tangents: std::collections::HashMap<(usize, UvSet), Option<Tangents>>,
     /// Instanced meshes: their triangles in mesh coordinates, and which of them each holds.
     local_triangles: Vec<Triangle>,
     local_normals: Vec<[Vec3; 3]>,
     local_uvs: Vec<[Vec2; 3]>,
+    local_uvs1: Vec<[Vec2; 3]>,
     local_colors: Vec<[Vec3; 3]>,
     /// Their corner tangents, where the scene is `normal_mapped` (zero where the instanced
     /// mesh is not).
@@ -837,6 +860,10 @@ impl<'a> Flattener<'a> {
                 .objects
                 .iter()
                 .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
+        let textured1 = scene.objects.iter().any(|o| {
+            matches!(o.shape, Shape::Mesh { .. })
+                && reads_uv1(&scene.materials[o.material as usize])
+        });
         let coloured = scene
             .objects
             .iter()
@@ -847,12 +874,14 @@ impl<'a> Flattener<'a> {
             placements: Default::default(),
             smooth,
             textured,
+            textured1,
             coloured,
             shapes: Shapes::default(),
             boxes: Vec::new(),
             triangles: Vec::new(),
             triangle_normals: Vec::new(),
             triangle_uvs: Vec::new(),
+            triangle_uvs1: Vec::new(),
             triangle_colors: Vec::new(),
             normal_mapped,
             triangle_tangents: Vec::new(),
@@ -860,6 +889,7 @@ impl<'a> Flattener<'a> {
             local_triangles: Vec::new(),
             local_normals: Vec::new(),
             local_uvs: Vec::new(),
+            local_uvs1: Vec::new(),
             local_colors: Vec::new(),
             local_tangents: Vec::new(),
             meshes: Vec::new(),
@@ -906,39 +936,35 @@ impl<'a> Flattener<'a> {
                 }
             }
             Shape::Mesh { mesh, scale } => {
-                let normal_mapped = self.scene.materials[object.material as usize]
-                    .normal_map()
-                    .is_some();
+                // The UV set its normal map reads, which its tangents follow.
+                let normal_map = (self.scene.materials[object.material as usize].normal_map())
+                    .map(|map| map.image.lookup.uv_set);
                 match self.instancing_key(object) {
                     Some(key) if self.placements[&key] > 1 => {
-                        let mesh_index = self.instanced_mesh(key, mesh, material, normal_mapped);
+                        let mesh_index = self.instanced_mesh(key, mesh, material, normal_map);
                         let instance = instance_of(&t, scale, origin, material, mesh_index);
                         self.instances.push(instance);
                     }
-                    _ => self.copy_mesh(mesh, scale, &t, origin, material, normal_mapped),
+                    _ => self.copy_mesh(mesh, scale, &t, origin, material, normal_map),
                 }
             }
         }
     }
 
     /// The index of `mesh`'s triangles among the instanced meshes', stored at its first
-    /// placement (in mesh coordinates, with their tangents where its material is
-    /// `normal_mapped`; degenerate triangles left out).
+    /// placement (in mesh coordinates, with their tangents along the UV set `normal_map` where
+    /// its material has a normal map; degenerate triangles left out).
     fn instanced_mesh(
         &mut self,
         key: InstancingKey,
         mesh: &Mesh,
         material: u32,
-        normal_mapped: bool,
+        normal_map: Option<UvSet>,
     ) -> u32 {
         if let Some(&index) = self.mesh_of.get(&key) {
             return index;
         }
-        let tangents = if normal_mapped {
-            self.tangents_of(mesh)
-        } else {
-            None
-        };
+        let tangents = normal_map.and_then(|set| self.tangents_of(mesh, set));
         let first = self.local_triangles.len();
         for (i, &[a, b, c]) in mesh.triangles.iter().enumerate() {
             let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
@@ -967,6 +993,9 @@ impl<'a> Flattener<'a> {
             }
             self.local_uvs
                 .push(mesh.uvs.get(i).copied().unwrap_or(BARYCENTRIC_UVS));
+            if self.textured1 {
+                self.local_uvs1.push(second_uvs(mesh, i));
+            }
             self.local_colors
                 .push(mesh.colors.get(i).copied().unwrap_or([Vec3::ONE; 3]));
         }
@@ -976,18 +1005,18 @@ impl<'a> Flattener<'a> {
         index
     }
 
-    /// `mesh`'s corner tangents (`scene::tangents::of`), computed once however many objects
-    /// place it.
-    fn tangents_of(&mut self, mesh: &Mesh) -> Option<std::rc::Rc<[[Vec4; 3]]>> {
-        let key = std::ptr::from_ref(mesh) as usize;
+    /// `mesh`'s corner tangents along UV set `set` (`scene::tangents::of`), computed once
+    /// however many objects place it.
+    fn tangents_of(&mut self, mesh: &Mesh, set: UvSet) -> Option<Tangents> {
+        let key = (std::ptr::from_ref(mesh) as usize, set);
         self.mesh_tangents
             .entry(key)
-            .or_insert_with(|| super::tangents::of(mesh).map(Into::into))
+            .or_insert_with(|| super::tangents::of(mesh, set).map(Into::into))
             .clone()
     }
 
     /// Copies `mesh`'s triangles, scaled by `scale` and placed by `t`, into the scene (with
-    /// their tangents where its material is `normal_mapped`).
+    /// their tangents along UV set `normal_map` where its material has a normal map).
     fn copy_mesh(
         &mut self,
         mesh: &Mesh,
@@ -995,7 +1024,7 @@ impl<'a> Flattener<'a> {
         t: &super::Transform,
         origin: DVec3,
         material: u32,
-        normal_mapped: bool,
+        normal_map: Option<UvSet>,
     ) {
         use rayon::prelude::*;
         // A mirroring scale turns the winding around: swap two corners so the front face stays
@@ -1009,11 +1038,7 @@ impl<'a> Flattener<'a> {
         // Normals by the inverse transpose: divided by the scale, then rotated.
         let shading = |n: Vec3| rotate(n / scale).normalize_or_zero();
         // Tangents as the surface's vectors; a mirroring scale turns the bitangent around.
-        let tangents = if normal_mapped {
-            self.tangents_of(mesh)
-        } else {
-            None
-        };
+        let tangents = normal_map.and_then(|set| self.tangents_of(mesh, set));
         let tangent = |v: Vec4| {
             let along = rotate(v.truncate() * scale).normalize_or_zero();
             along.extend(if mirrored { -v.w } else { v.w })
@@ -1084,6 +1109,13 @@ impl<'a> Flattener<'a> {
                     None => BARYCENTRIC_UVS,
                 }));
         }
+        if self.textured1 {
+            self.triangle_uvs1
+                .par_extend(kept.par_iter().map(|&(i, _)| match second_uvs(mesh, i) {
+                    [uv0, uv1, uv2] if mirrored => [uv0, uv2, uv1],
+                    uvs => uvs,
+                }));
+        }
         if self.coloured {
             self.triangle_colors.par_extend(kept.par_iter().map(
                 |&(i, _)| match mesh.colors.get(i) {
@@ -1116,6 +1148,7 @@ impl<'a> Flattener<'a> {
         let mut triangles = self.triangles;
         let mut triangle_normals = self.triangle_normals;
         let mut triangle_uvs = self.triangle_uvs;
+        let mut triangle_uvs1 = self.triangle_uvs1;
         let mut triangle_colors = self.triangle_colors;
         let mut triangle_tangents = self.triangle_tangents;
         let instanced_triangles = triangles.len();
@@ -1131,6 +1164,7 @@ impl<'a> Flattener<'a> {
         if self.textured {
             triangle_uvs.extend(self.local_uvs);
         }
+        triangle_uvs1.extend(self.local_uvs1);
         if self.coloured {
             triangle_colors.extend(self.local_colors);
         }
@@ -1158,6 +1192,7 @@ impl<'a> Flattener<'a> {
             triangles,
             triangle_normals,
             triangle_uvs,
+            triangle_uvs1,
             triangle_colors,
             triangle_tangents,
             instanced_triangles,

@@ -469,7 +469,7 @@ const READ_EXTENSIONS: [&str; 8] = [
 
 /// One note naming what `document` holds that rt-gpu does not render (nothing is dropped
 /// silently): primitives of points or lines, vertex colours beyond COLOR_0 (and its alpha
-/// where the material is not opaque), texture coordinates beyond TEXCOORD_0, morph targets,
+/// where the material is not opaque), texture coordinates beyond TEXCOORD_1, morph targets,
 /// skins, animations and extensions it does not read. `None` when there is nothing.
 fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
     let primitives: Vec<gltf::Primitive> = document.meshes().flat_map(|m| m.primitives()).collect();
@@ -492,7 +492,7 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
         .flat_map(|p| p.attributes().map(|(semantic, _)| semantic))
         .filter_map(|semantic| match semantic {
             gltf::Semantic::Colors(set) if set > 0 => Some(format!("COLOR_{set}")),
-            gltf::Semantic::TexCoords(set) if set > 0 => Some(format!("TEXCOORD_{set}")),
+            gltf::Semantic::TexCoords(set) if set > 1 => Some(format!("TEXCOORD_{set}")),
             gltf::Semantic::Joints(_) | gltf::Semantic::Weights(_) => Some("JOINTS/WEIGHTS".into()),
             _ => None,
         })

@@ -3,13 +3,13 @@
 //! the spec (glTF 2.0, 3.9.2) a [`Texture::Image`] that shares the decoded texels and applies its
 //! factor at lookup (an image used with many factors and samplers is held once).
 //!
-//! Read: a texture's image and `texCoord` 0, its sampler's wrap modes and magnification filter
-//! (mipmaps are not built: a path tracer filters by taking many samples per pixel); normal
-//! textures with their scale. `KHR_texture_transform` is applied to the mesh's texture
-//! coordinates (`uv_transform`). Not read: other UV sets.
+//! Read: a texture's image and `texCoord` (0 or 1), its sampler's wrap modes and magnification
+//! filter (mipmaps are not built: a path tracer filters by taking many samples per pixel);
+//! normal textures with their scale. `KHR_texture_transform` is applied to the mesh's texture
+//! coordinates (`uv_sets`: one per set and material). Not read: TEXCOORD_2 and beyond.
 
 use super::image::{self, Image};
-use super::image_lookup::{Filter, ImageLookup, Wrap};
+use super::image_lookup::{Filter, ImageLookup, UvSet, Wrap};
 use super::normal_map::NormalMap;
 use super::texture::Texture;
 use glam::Vec3;
@@ -67,9 +67,9 @@ impl<'a> FileTextures<'a> {
         material: &str,
         slot: &str,
     ) -> Result<Texture, String> {
-        self.check_uv_set(info.tex_coord(), material, slot)?;
+        let set = self.uv_set(set_of(info), material, slot)?;
         let index = info.texture().source().index();
-        let image = self.sampled(&info.texture(), true)?;
+        let image = self.sampled(&info.texture(), true, set)?;
         if factor == Vec3::ONE {
             return Ok(Texture::Image(image));
         }
@@ -95,8 +95,8 @@ impl<'a> FileTextures<'a> {
         material: &str,
     ) -> Result<NormalMap, String> {
         let source = self.source;
-        self.check_uv_set(normal.tex_coord(), material, "normalTexture")?;
-        let image = self.sampled(&normal.texture(), false)?;
+        let set = self.uv_set(normal_set_of(normal), material, "normalTexture")?;
+        let image = self.sampled(&normal.texture(), false, set)?;
         let map = NormalMap {
             image,
             scale: normal.scale(),
@@ -108,10 +108,15 @@ impl<'a> FileTextures<'a> {
 
     /// The alpha channel of a material's base colour texture (linear), read as the texture's
     /// sampler says; `None` where its image has none.
-    pub fn alpha(&mut self, info: &gltf::texture::Info) -> Result<Option<&'static Image>, String> {
+    pub fn alpha(
+        &mut self,
+        info: &gltf::texture::Info,
+        material: &str,
+    ) -> Result<Option<&'static Image>, String> {
         let texture = info.texture();
         let index = texture.source().index();
-        let lookup = lookup_of(&texture.sampler());
+        let set = self.uv_set(set_of(info), material, "baseColorTexture")?;
+        let lookup = lookup_of(&texture.sampler(), set);
         if let Some(&image) = self.alphas.get(&(index, lookup)) {
             return Ok(image);
         }
@@ -134,25 +139,31 @@ impl<'a> FileTextures<'a> {
         info: &gltf::texture::Info,
         material: &str,
     ) -> Result<&'static Image, String> {
-        self.check_uv_set(info.tex_coord(), material, "metallicRoughnessTexture")?;
-        self.sampled(&info.texture(), false)
+        let set = self.uv_set(set_of(info), material, "metallicRoughnessTexture")?;
+        self.sampled(&info.texture(), false, set)
     }
 
     /// The parameter image of a material whose transmissionTexture is `info`: its red channel
     /// the transmission texture's, its green and blue `metallic_roughness`'s (roughness and
     /// metallic; 1 where the material has none), read as `metallic_roughness` is (or as the
-    /// transmission texture is, without one). The two share texture coordinates (one transform
-    /// per material, `uv_transform`); where their images differ in size, the transmission
-    /// texture is sampled at the other's texel centres.
+    /// transmission texture is, without one). The two must read one UV set, and so share its
+    /// transform (`uv_sets`); where their images differ in size, the transmission texture is
+    /// sampled at the other's texel centres.
     pub fn transmission(
         &mut self,
         info: &gltf::texture::Info,
         metallic_roughness: Option<&'static Image>,
         material: &str,
     ) -> Result<&'static Image, String> {
-        self.check_uv_set(info.tex_coord(), material, "transmissionTexture")?;
-        let transmission = self.sampled(&info.texture(), false)?;
+        let set = self.uv_set(set_of(info), material, "transmissionTexture")?;
+        let transmission = self.sampled(&info.texture(), false, set)?;
         let base = metallic_roughness.unwrap_or(transmission);
+        if base.lookup.uv_set != set {
+            return Err(format!(
+                "mesh {}: material \"{material}\"'s transmissionTexture and metallicRoughnessTexture read different UV sets; rt-gpu reads them together from one",
+                self.source
+            ));
+        }
         let (w, h) = (base.width, base.height);
         let same_size = (transmission.width, transmission.height) == (w, h);
         let mut texels = Vec::with_capacity(3 * (w * h) as usize);
@@ -181,22 +192,27 @@ impl<'a> FileTextures<'a> {
         Ok(merged.leak())
     }
 
-    /// An error unless `set`, the UV set `material`'s `slot` reads, is TEXCOORD_0.
-    fn check_uv_set(&self, set: u32, material: &str, slot: &str) -> Result<(), String> {
-        if set == 0 {
-            return Ok(());
-        }
-        Err(format!(
-            "mesh {}: material \"{material}\"'s {slot} reads TEXCOORD_{set}; rt-gpu reads TEXCOORD_0 only",
-            self.source
-        ))
+    /// The UV set `material`'s `slot` reads (`set`, its texCoord); an error beyond the second.
+    fn uv_set(&self, set: u32, material: &str, slot: &str) -> Result<UvSet, String> {
+        uv_set(set).ok_or_else(|| {
+            format!(
+                "mesh {}: material \"{material}\"'s {slot} reads TEXCOORD_{set}; rt-gpu reads TEXCOORD_0 and TEXCOORD_1",
+                self.source
+            )
+        })
     }
 
-    /// `texture`'s image decoded (from sRGB where `srgb`) and read as its sampler says.
-    fn sampled(&mut self, texture: &gltf::Texture, srgb: bool) -> Result<&'static Image, String> {
+    /// `texture`'s image decoded (from sRGB where `srgb`) and read as its sampler says, at UV
+    /// set `set`.
+    fn sampled(
+        &mut self,
+        texture: &gltf::Texture,
+        srgb: bool,
+        set: UvSet,
+    ) -> Result<&'static Image, String> {
         let index = texture.source().index();
         let image = self.image(index, srgb)?;
-        let lookup = lookup_of(&texture.sampler());
+        let lookup = lookup_of(&texture.sampler(), set);
         if lookup == image.lookup {
             return Ok(image);
         }
@@ -357,10 +373,38 @@ impl UvTransform {
     }
 }
 
-/// The one `KHR_texture_transform` the textures of `material` share (identity without one);
-/// an error where they differ or one reads another UV set, since rt-gpu applies it to the
-/// mesh's coordinates.
-pub fn uv_transform(material: &gltf::Material, source: &str) -> Result<UvTransform, String> {
+/// A UV set as rt-gpu holds it: glTF's `texCoord` 0 or 1, else `None`.
+fn uv_set(set: u32) -> Option<UvSet> {
+    match set {
+        0 => Some(UvSet::First),
+        1 => Some(UvSet::Second),
+        _ => None,
+    }
+}
+
+/// The UV set a texture reads: `KHR_texture_transform`'s `texCoord` where it gives one (the
+/// extension overrides the texture's), else the texture's.
+fn set_of(info: &gltf::texture::Info) -> u32 {
+    (info.texture_transform().and_then(|t| t.tex_coord())).unwrap_or(info.tex_coord())
+}
+
+/// [`set_of`] of a normal texture (whose extensions the `gltf` crate gives only as JSON).
+fn normal_set_of(normal: &gltf::material::NormalTexture) -> u32 {
+    tex_coord_of_json(normal.extension_value("KHR_texture_transform")).unwrap_or(normal.tex_coord())
+}
+
+/// How a material reads one UV set: the `KHR_texture_transform` its textures on that set share
+/// (rt-gpu applies it to the mesh's coordinates) and the first texture that reads it (for
+/// messages).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvSetUse {
+    pub transform: UvTransform,
+    pub slot: &'static str,
+}
+
+/// How `material` reads TEXCOORD_0 and TEXCOORD_1 (`None`: no texture reads that set); an
+/// error where a texture reads another set, or two on one set have different transforms.
+pub fn uv_sets(material: &gltf::Material, source: &str) -> Result<[Option<UvSetUse>; 2], String> {
     let name = super::file::quoted(material.name().unwrap_or(""));
     let pbr = material.pbr_metallic_roughness();
     let infos = [
@@ -374,20 +418,17 @@ pub fn uv_transform(material: &gltf::Material, source: &str) -> Result<UvTransfo
                 .and_then(|t| t.transmission_texture()),
         ),
     ];
-    let mut found: Vec<(&str, UvTransform, Option<u32>)> = infos
+    let mut found: Vec<(&'static str, UvTransform, u32)> = infos
         .into_iter()
         .filter_map(|(slot, info)| {
             let info = info?;
             let t = info.texture_transform();
-            Some((
-                slot,
-                t.as_ref().map_or(UvTransform::IDENTITY, |t| UvTransform {
-                    offset: t.offset(),
-                    rotation: t.rotation(),
-                    scale: t.scale(),
-                }),
-                t.and_then(|t| t.tex_coord()),
-            ))
+            let transform = t.as_ref().map_or(UvTransform::IDENTITY, |t| UvTransform {
+                offset: t.offset(),
+                rotation: t.rotation(),
+                scale: t.scale(),
+            });
+            Some((slot, transform, set_of(&info)))
         })
         .collect();
     if let Some(normal) = material.normal_texture() {
@@ -395,35 +436,39 @@ pub fn uv_transform(material: &gltf::Material, source: &str) -> Result<UvTransfo
         found.push((
             "normalTexture",
             transform_of_json(value),
-            tex_coord_of_json(value),
+            normal_set_of(&normal),
         ));
     }
-    if let Some((slot, _, Some(set))) = found.iter().find(|(_, _, set)| set.is_some_and(|s| s != 0))
-    {
-        return Err(format!(
-            "mesh {source}: material \"{name}\"'s {slot} reads TEXCOORD_{set} (KHR_texture_transform's texCoord); rt-gpu reads TEXCOORD_0 only"
-        ));
+    let mut sets: [Option<UvSetUse>; 2] = [None; 2];
+    for (slot, transform, set) in found {
+        let Some(read) = uv_set(set) else {
+            return Err(format!(
+                "mesh {source}: material \"{name}\"'s {slot} reads TEXCOORD_{set}; rt-gpu reads TEXCOORD_0 and TEXCOORD_1"
+            ));
+        };
+        let finite = transform
+            .offset
+            .iter()
+            .chain(&transform.scale)
+            .all(|x| x.is_finite())
+            && transform.rotation.is_finite();
+        if !finite {
+            return Err(format!(
+                "mesh {source}: material \"{name}\"'s {slot} has a KHR_texture_transform that is not finite: {transform:?}"
+            ));
+        }
+        match &mut sets[read as usize] {
+            Some(first) if first.transform != transform => {
+                return Err(format!(
+                    "mesh {source}: material \"{name}\"'s {} and {slot} read TEXCOORD_{set} with different KHR_texture_transforms ({:?} and {transform:?}); rt-gpu applies one per material and UV set",
+                    first.slot, first.transform
+                ));
+            }
+            Some(_) => {}
+            empty => *empty = Some(UvSetUse { transform, slot }),
+        }
     }
-    let Some(&(first_slot, first, _)) = found.first() else {
-        return Ok(UvTransform::IDENTITY);
-    };
-    if let Some((slot, other, _)) = found.iter().find(|(_, t, _)| *t != first) {
-        return Err(format!(
-            "mesh {source}: material \"{name}\"'s {first_slot} and {slot} have different KHR_texture_transforms ({first:?} and {other:?}); rt-gpu applies one per material"
-        ));
-    }
-    if !(first
-        .offset
-        .iter()
-        .chain(&first.scale)
-        .all(|x| x.is_finite())
-        && first.rotation.is_finite())
-    {
-        return Err(format!(
-            "mesh {source}: material \"{name}\"'s KHR_texture_transform is not finite: {first:?}"
-        ));
-    }
-    Ok(first)
+    Ok(sets)
 }
 
 /// A `KHR_texture_transform` read from its JSON (the `gltf` crate gives normal textures'
@@ -459,7 +504,7 @@ fn tex_coord_of_json(value: Option<&gltf::json::Value>) -> Option<u32> {
 
 /// How a glTF sampler reads its image: its wrap modes, and its magnification filter (glTF
 /// leaves an absent one to the renderer: linear, as Blender's importer takes it).
-fn lookup_of(sampler: &gltf::texture::Sampler) -> ImageLookup {
+fn lookup_of(sampler: &gltf::texture::Sampler, uv_set: UvSet) -> ImageLookup {
     use gltf::texture::{MagFilter, WrappingMode};
     let wrap = |mode| match mode {
         WrappingMode::Repeat => Wrap::Repeat,
@@ -473,6 +518,7 @@ fn lookup_of(sampler: &gltf::texture::Sampler) -> ImageLookup {
             Some(MagFilter::Nearest) => Filter::Nearest,
             _ => Filter::Linear,
         },
+        uv_set,
     }
 }
 

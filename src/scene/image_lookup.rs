@@ -27,18 +27,32 @@ pub enum Filter {
     Nearest,
 }
 
-/// An image's wrap modes across (u, `wrap_u`) and up (v, `wrap_v`) and its filter.
+/// Which of a mesh's texture coordinate sets a surface reads an image at (glTF's `texCoord`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum UvSet {
+    /// The first (glTF TEXCOORD_0, OBJ's `vt`); shapes' own coordinates.
+    #[default]
+    First,
+    /// The second (glTF TEXCOORD_1): meshes only; elsewhere it reads the first's value.
+    Second,
+}
+
+/// An image's wrap modes across (u, `wrap_u`) and up (v, `wrap_v`), its filter, and the texture
+/// coordinates it is read at.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct ImageLookup {
     pub wrap_u: Wrap,
     pub wrap_v: Wrap,
     pub filter: Filter,
+    pub uv_set: UvSet,
 }
 
 /// [`ImageLookup::bits`]' codes of the wrap modes (repeat is 0) and its nearest-filter bit.
 pub const WRAP_CLAMP: u32 = 1;
 pub const WRAP_MIRROR: u32 = 2;
 pub const LOOKUP_NEAREST: u32 = 1 << 4;
+/// [`ImageLookup::bits`]' bit for the second texture coordinate set.
+pub const LOOKUP_UV1: u32 = 1 << 5;
 
 impl Wrap {
     fn bits(self) -> u32 {
@@ -52,14 +66,19 @@ impl Wrap {
 
 impl ImageLookup {
     /// Its GPU form (`GpuMaterial::*_lookup`): `wrap_u` in bits 0-1, `wrap_v` in bits 2-3,
-    /// nearest in bit 4; 0 is the default (repeat, linear).
+    /// nearest in bit 4, the second UV set in bit 5; 0 is the default (repeat, linear, first).
     pub fn bits(&self) -> u32 {
         let nearest = if self.filter == Filter::Nearest {
             LOOKUP_NEAREST
         } else {
             0
         };
-        self.wrap_u.bits() | self.wrap_v.bits() << 2 | nearest
+        let second = if self.uv_set == UvSet::Second {
+            LOOKUP_UV1
+        } else {
+            0
+        };
+        self.wrap_u.bits() | self.wrap_v.bits() << 2 | nearest | second
     }
 }
 
@@ -75,12 +94,15 @@ mod tests {
         for wrap_u in wraps {
             for wrap_v in wraps {
                 for filter in [Filter::Linear, Filter::Nearest] {
-                    let lookup = ImageLookup {
-                        wrap_u,
-                        wrap_v,
-                        filter,
-                    };
-                    assert!(seen.insert(lookup.bits()), "{lookup:?}");
+                    for uv_set in [UvSet::First, UvSet::Second] {
+                        let lookup = ImageLookup {
+                            wrap_u,
+                            wrap_v,
+                            filter,
+                            uv_set,
+                        };
+                        assert!(seen.insert(lookup.bits()), "{lookup:?}");
+                    }
                 }
             }
         }

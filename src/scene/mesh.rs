@@ -30,6 +30,10 @@ pub struct Mesh {
     /// Per triangle, its corners' texture coordinates (u across an image, v up it), where the
     /// file gives them; empty where it gives none. Corners without them take (0, 0).
     pub uvs: Vec<[Vec2; 3]>,
+    /// Per triangle, its corners' second texture coordinates (glTF TEXCOORD_1), where the file
+    /// gives them and a material reads them; empty otherwise. Corners without them take their
+    /// first set's.
+    pub uvs1: Vec<[Vec2; 3]>,
     /// Per triangle, its corners' linear RGB vertex colours (glTF COLOR_0, each channel in
     /// [0, 1]), where the file gives them; empty where it gives none. Corners without them take
     /// white.
@@ -47,6 +51,17 @@ pub struct Mesh {
     pub degenerate: usize,
     /// For a part without a material, why a material library its OBJ file names was not read.
     pub library_refused: Option<String>,
+}
+
+/// A mesh's attributes per triangle corner as a file gives them, one entry per triangle
+/// (`None` where the file gives none for it); see [`Mesh`] for each.
+#[derive(Default)]
+pub struct Corners {
+    pub normals: Vec<Option<[Vec3; 3]>>,
+    pub uvs: Vec<Option<[Vec2; 3]>>,
+    pub uvs1: Vec<Option<[Vec2; 3]>>,
+    pub tangents: Vec<Option<[Vec4; 3]>>,
+    pub colors: Vec<Option<[Vec3; 3]>>,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -107,46 +122,46 @@ impl Mesh {
         normals: Vec<Option<[Vec3; 3]>>,
         uvs: Vec<Option<[Vec2; 3]>>,
     ) -> Result<Self, String> {
-        Self::with_tangents(
-            source,
-            positions,
-            triangles,
+        let corners = Corners {
             normals,
             uvs,
-            Vec::new(),
-            Vec::new(),
-        )
+            ..Corners::default()
+        };
+        Self::with_attributes(source, positions, triangles, corners)
     }
 
-    /// A mesh as [`Mesh::with_corners`], with its triangles' corner tangents (`tangents`: one
-    /// entry per triangle, kept only where every triangle has them) and vertex colours
-    /// (`colors`: one entry per triangle, `None` where the file gives none) too.
-    pub fn with_tangents(
+    /// A mesh as [`Mesh::with_corners`], with every attribute of its triangles' corners
+    /// (tangents kept only where every triangle has them).
+    pub fn with_attributes(
         source: &str,
         positions: Vec<Vec3>,
         triangles: Vec<[u32; 3]>,
-        normals: Vec<Option<[Vec3; 3]>>,
-        uvs: Vec<Option<[Vec2; 3]>>,
-        tangents: Vec<Option<[Vec4; 3]>>,
-        colors: Vec<Option<[Vec3; 3]>>,
+        corners: Corners,
     ) -> Result<Self, String> {
+        let Corners {
+            normals,
+            uvs,
+            uvs1,
+            tangents,
+            colors,
+        } = corners;
         let smooth = normals.iter().any(Option::is_some);
         let textured = uvs.iter().any(Option::is_some);
+        let textured1 = uvs1.iter().any(Option::is_some);
         let coloured = colors.iter().any(Option::is_some);
         if let Some(c) = colors.iter().flatten().flatten().find(|c| !c.is_finite()) {
             return Err(format!("mesh {source} has a non-finite vertex colour {c}"));
         }
         let tangent_frames =
             tangents.len() == triangles.len() && tangents.iter().all(Option::is_some);
-        if let Some(uv) = uvs.iter().flatten().flatten().find(|uv| !uv.is_finite()) {
+        let every_uv = || uvs.iter().chain(&uvs1).flatten().flatten();
+        if let Some(uv) = every_uv().find(|uv| !uv.is_finite()) {
             return Err(format!(
                 "mesh {source} has a non-finite texture coordinate {uv}"
             ));
         }
         // Beyond, f32 resolves no texel and tangents' products overflow.
-        if let Some(uv) =
-            (uvs.iter().flatten().flatten()).find(|uv| uv.abs().max_element() > MAX_UV)
-        {
+        if let Some(uv) = every_uv().find(|uv| uv.abs().max_element() > MAX_UV) {
             return Err(format!(
                 "mesh {source} has a texture coordinate {uv} (after any KHR_texture_transform) beyond {MAX_UV:e}, where f32 resolves no texel"
             ));
@@ -169,6 +184,7 @@ impl Mesh {
         };
         let mut kept_normals = Vec::new();
         let mut kept_uvs = Vec::new();
+        let mut kept_uvs1 = Vec::new();
         let mut kept_colors = Vec::new();
         let mut kept_tangents = Vec::new();
         let given = triangles.len();
@@ -190,6 +206,11 @@ impl Mesh {
                 }
                 if textured {
                     kept_uvs.push(uvs.get(i).copied().flatten().unwrap_or([Vec2::ZERO; 3]));
+                }
+                if textured1 {
+                    let first = uvs.get(i).copied().flatten();
+                    let corners = uvs1.get(i).copied().flatten().or(first);
+                    kept_uvs1.push(corners.unwrap_or([Vec2::ZERO; 3]));
                 }
                 if coloured {
                     let corners = colors.get(i).copied().flatten().unwrap_or([Vec3::ONE; 3]);
@@ -223,6 +244,7 @@ impl Mesh {
             triangles,
             normals: kept_normals,
             uvs: kept_uvs,
+            uvs1: kept_uvs1,
             colors: kept_colors,
             tangents: kept_tangents,
             material: None,
@@ -331,14 +353,12 @@ pub(super) fn subset_mesh(
     source: &str,
     read: super::obj_parallel::ObjTriangles,
 ) -> Result<Mesh, String> {
-    let mut mesh = Mesh::with_tangents(
+    let mut mesh = Mesh::with_corners(
         source,
         read.positions,
         read.triangles,
         read.normals,
         read.uvs,
-        Vec::new(),
-        Vec::new(),
     )?;
     mesh.material_name = "default".into();
     Ok(mesh)
@@ -397,26 +417,30 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
             Some(Vec3::new(n[0], n[1], n[2]))
         };
         if mesh.normal_indices.len() == mesh.indices.len() {
-            part.normals
+            part.corners
+                .normals
                 .extend(mesh.normal_indices.chunks_exact(3).map(|c| {
                     let [a, b, c] = [vn(c[0])?, vn(c[1])?, vn(c[2])?];
                     Some([a, b, c])
                 }));
         } else {
-            part.normals.extend(std::iter::repeat_n(None, faces));
+            part.corners
+                .normals
+                .extend(std::iter::repeat_n(None, faces));
         }
         let vt = |i: u32| {
             let uv = mesh.texcoords.get(2 * i as usize..2 * i as usize + 2)?;
             Some(Vec2::new(uv[0], uv[1]) * scale + offset)
         };
         if mesh.texcoord_indices.len() == mesh.indices.len() {
-            part.uvs
+            part.corners
+                .uvs
                 .extend(mesh.texcoord_indices.chunks_exact(3).map(|c| {
                     let [a, b, c] = [vt(c[0])?, vt(c[1])?, vt(c[2])?];
                     Some([a, b, c])
                 }));
         } else {
-            part.uvs.extend(std::iter::repeat_n(None, faces));
+            part.corners.uvs.extend(std::iter::repeat_n(None, faces));
         }
         part.positions.extend(
             mesh.positions
@@ -894,23 +918,12 @@ struct Part {
     key: Option<usize>,
     positions: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
-    normals: Vec<Option<[Vec3; 3]>>,
-    uvs: Vec<Option<[Vec2; 3]>>,
-    tangents: Vec<Option<[Vec4; 3]>>,
-    colors: Vec<Option<[Vec3; 3]>>,
+    corners: Corners,
 }
 
 impl Part {
     fn into_mesh(self, source: &str) -> Result<Mesh, String> {
-        Mesh::with_tangents(
-            source,
-            self.positions,
-            self.triangles,
-            self.normals,
-            self.uvs,
-            self.tangents,
-            self.colors,
-        )
+        Mesh::with_attributes(source, self.positions, self.triangles, self.corners)
     }
 }
 
@@ -1020,30 +1033,41 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 };
                 let read = quantized::vec3(read, buffer).ok_or_else(|| unread("POSITION"))?;
                 let key = primitive.material().index();
-                let transform = super::gltf_textures::uv_transform(&primitive.material(), source)?;
-                let uvs = match attribute(gltf::Semantic::TexCoords(0)) {
-                    Some(a) => {
-                        Some(quantized::vec2(a, buffer).ok_or_else(|| unread("TEXCOORD_0"))?)
+                let [set0, set1] = super::gltf_textures::uv_sets(&primitive.material(), source)?;
+                // Each set the material reads, transformed as it reads it; TEXCOORD_0 also
+                // where nothing reads it, as OBJ's coordinates are kept (UV checkers, tangents).
+                let read_set = |set: u32, read: Option<super::gltf_textures::UvSetUse>| {
+                    let semantic = gltf::Semantic::TexCoords(set);
+                    let Some(a) = attribute(semantic.clone()) else {
+                        return match read {
+                            Some(read) => Err(format!(
+                                "mesh {source}: a primitive of mesh {} has no {}, which its material \"{}\"'s {} reads",
+                                n.mesh().map_or(0, |m| m.index()),
+                                semantic.to_string(),
+                                primitive.material().name().unwrap_or(""),
+                                read.slot
+                            )),
+                            None => Ok(None),
+                        };
+                    };
+                    if set > 0 && read.is_none() {
+                        return Ok(None);
                     }
-                    None => None,
+                    let transform =
+                        read.map_or(super::gltf_textures::UvTransform::IDENTITY, |r| r.transform);
+                    let uvs =
+                        quantized::vec2(a, buffer).ok_or_else(|| unread(&semantic.to_string()))?;
+                    Ok(Some(
+                        (uvs.into_iter())
+                            .map(|uv| {
+                                let [u, v] = transform.apply(uv);
+                                Vec2::new(u, 1.0 - v)
+                            })
+                            .collect::<Vec<Vec2>>(),
+                    ))
                 };
-                let uvs: Option<Vec<Vec2>> = uvs.map(|read| {
-                    read.into_iter()
-                        .map(|uv| {
-                            let [u, v] = transform.apply(uv);
-                            Vec2::new(u, 1.0 - v)
-                        })
-                        .collect()
-                });
-                if uvs.is_none()
-                    && let Some(slot) = textured_slot(&primitive.material())
-                {
-                    return Err(format!(
-                        "mesh {source}: a primitive of mesh {} has no TEXCOORD_0, which its material \"{}\"'s {slot} reads",
-                        n.mesh().map_or(0, |m| m.index()),
-                        primitive.material().name().unwrap_or("")
-                    ));
-                }
+                let uvs = read_set(0, set0)?;
+                let uvs1 = read_set(1, set1)?;
                 // COLOR_0 multiplies the base colour (its alpha not read: a note says so).
                 let colors = match attribute(gltf::Semantic::Colors(0)) {
                     Some(a) => Some(quantized::colors(a, buffer).ok_or_else(|| unread("COLOR_0"))?),
@@ -1054,10 +1078,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 let Part {
                     positions,
                     triangles,
-                    normals,
-                    uvs: part_uvs,
-                    tangents: part_tangents,
-                    colors: part_colors,
+                    corners,
                     ..
                 } = part_of(&mut parts, key);
                 let base = positions.len() as u32;
@@ -1141,10 +1162,19 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     let [a, b, c] = [t[0], t[1], t[2]].map(|i| base + i);
                     if flip { [a, c, b] } else { [a, b, c] }
                 }));
-                normals.extend(per_corner(vertex_normals.as_deref(), &indices, flip));
-                part_uvs.extend(per_corner(uvs.as_deref(), &indices, flip));
-                part_tangents.extend(per_corner(vertex_tangents.as_deref(), &indices, flip));
-                part_colors.extend(per_corner(colors.as_deref(), &indices, flip));
+                let normals = per_corner(vertex_normals.as_deref(), &indices, flip);
+                corners.normals.extend(normals);
+                corners
+                    .uvs
+                    .extend(per_corner(uvs.as_deref(), &indices, flip));
+                corners
+                    .uvs1
+                    .extend(per_corner(uvs1.as_deref(), &indices, flip));
+                let tangents = per_corner(vertex_tangents.as_deref(), &indices, flip);
+                corners.tangents.extend(tangents);
+                corners
+                    .colors
+                    .extend(per_corner(colors.as_deref(), &indices, flip));
             }
         }
         stack.extend(n.children().map(|c| (c, node_world)));
@@ -1231,21 +1261,6 @@ fn per_corner<'a, T: Copy>(
         let [a, b, c] = [*a?, *b?, *c?];
         Some(if flip { [a, c, b] } else { [a, b, c] })
     })
-}
-
-fn textured_slot(material: &gltf::Material) -> Option<&'static str> {
-    let pbr = material.pbr_metallic_roughness();
-    if pbr.base_color_texture().is_some() {
-        Some("baseColorTexture")
-    } else if pbr.metallic_roughness_texture().is_some() {
-        Some("metallicRoughnessTexture")
-    } else if material.emissive_texture().is_some() {
-        Some("emissiveTexture")
-    } else if material.normal_texture().is_some() {
-        Some("normalTexture")
-    } else {
-        None
-    }
 }
 
 /// Refuses a material's values that the glTF specification (and its extensions' schemas)
@@ -1346,7 +1361,7 @@ fn material_of(
         gltf::material::AlphaMode::Opaque => None,
         mode => {
             let image = match pbr.base_color_texture() {
-                Some(info) => textures.alpha(&info)?,
+                Some(info) => textures.alpha(&info, name)?,
                 None => None,
             };
             let cutoff = m.alpha_cutoff().unwrap_or(0.5);

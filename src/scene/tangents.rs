@@ -2,22 +2,29 @@
 //! as Blender and glTF's reference viewers compute them (the `mikktspace` crate), so a normal
 //! map baked against Blender's frames bends normals here as it does there.
 
+use crate::scene::image_lookup::UvSet;
 use crate::scene::mesh::Mesh;
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 /// Per triangle of `mesh`, its corners' tangents (xyz along +u; w = ±1, the bitangent being
 /// w x normal x tangent, along +v): the mesh's own where it has them, else MikkTSpace's over
-/// its positions, corner normals (the face's where it has none) and texture coordinates.
-/// `None` when the mesh has no texture coordinates, from which tangents follow.
-pub fn of(mesh: &Mesh) -> Option<Vec<[Vec4; 3]>> {
+/// its positions, corner normals (the face's where it has none) and texture coordinates of
+/// `set`, the normal map's (glTF: "the texture coordinates associated with the normal
+/// texture"). `None` when the mesh has no texture coordinates, from which tangents follow.
+pub fn of(mesh: &Mesh, set: UvSet) -> Option<Vec<[Vec4; 3]>> {
     if !mesh.tangents.is_empty() {
         return Some(mesh.tangents.clone());
     }
-    if mesh.uvs.is_empty() {
+    let uvs = match set {
+        UvSet::Second if !mesh.uvs1.is_empty() => &mesh.uvs1,
+        _ => &mesh.uvs,
+    };
+    if uvs.is_empty() {
         return None;
     }
     let mut corners = Corners {
         mesh,
+        uvs,
         tangents: vec![[Vec4::ZERO; 3]; mesh.triangles.len()],
     };
     // False only for a mesh with no faces, whose tangents are then all zero: never read.
@@ -28,6 +35,7 @@ pub fn of(mesh: &Mesh) -> Option<Vec<[Vec4; 3]>> {
 /// A mesh as MikkTSpace reads it (triangles of three corners) and where it writes.
 struct Corners<'a> {
     mesh: &'a Mesh,
+    uvs: &'a [[Vec2; 3]],
     tangents: Vec<[Vec4; 3]>,
 }
 
@@ -57,7 +65,7 @@ impl mikktspace::Geometry for Corners<'_> {
         }
     }
     fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-        self.mesh.uvs[face][vert].to_array()
+        self.uvs[face][vert].to_array()
     }
     fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
         let t = Vec4::from_array(tangent);
@@ -69,7 +77,6 @@ impl mikktspace::Geometry for Corners<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec2;
 
     /// A unit square in the xz-plane facing +y, its texture's u along +x and v along -z.
     fn square(uv_flip: bool) -> Mesh {
@@ -91,14 +98,14 @@ mod tests {
 
     #[test]
     fn tangents_follow_u_and_bitangents_v() {
-        let tangents = of(&square(false)).unwrap();
+        let tangents = of(&square(false), UvSet::First).unwrap();
         for corner in tangents.iter().flatten() {
             assert!((corner.truncate() - Vec3::X).length() < 1e-5, "{corner}");
             // Bitangent w (n x t) = w (+y x +x) = -w z: along +v, which runs along -z.
             assert_eq!(corner.w, 1.0);
         }
         // A mirrored texture: tangents along -x, and the bitangent's sign keeps v along -z.
-        let mirrored = of(&square(true)).unwrap();
+        let mirrored = of(&square(true), UvSet::First).unwrap();
         for corner in mirrored.iter().flatten() {
             assert!((corner.truncate() + Vec3::X).length() < 1e-5, "{corner}");
             assert_eq!(corner.w, -1.0);
@@ -113,6 +120,6 @@ mod tests {
             vec![[0, 1, 2]],
         )
         .unwrap();
-        assert!(of(&mesh).is_none());
+        assert!(of(&mesh, UvSet::First).is_none());
     }
 }

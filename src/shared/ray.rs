@@ -42,6 +42,9 @@ kernel_struct! {
         /// Surface coordinates, for textures (zero unless the scene's textures need them): a
         /// sphere's longitude and latitude (`material::texture::sphere_uv`), a quad's (a, b).
         uv: Vec2,
+        /// A mesh's second texture coordinates (glTF's TEXCOORD_1) where a material reads them
+        /// (`ImageLookup::uv_set`), else `uv`.
+        uv1: Vec2,
         /// A mesh's vertex colour interpolated (glTF's COLOR_0), which multiplies the
         /// material's colour (`material::texture::value`); 1 elsewhere.
         color: Vec3,

@@ -38,6 +38,17 @@ pub fn render_cpu(scene: &Scene, opts: &RenderOptions) -> Film {
     rt_gpu::cpu::render(&flat, opts, &|| {})
 }
 
+/// How far film `b` is from film `a`: the summed absolute difference of their pixels' means over
+/// `a`'s summed light (0 for equal films).
+pub fn relative_difference(a: &Film, b: &Film) -> f64 {
+    let (mut off, mut total) = (0.0, 0.0);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        off += (p.mean() - q.mean()).abs().element_sum();
+        total += p.mean().element_sum();
+    }
+    off / total
+}
+
 /// The one-line error of scene file `text` (as bad.toml), which must be refused.
 pub fn scene_error(text: &str) -> String {
     match rt_gpu::scene::file::parse(text, "bad.toml", "bad") {
@@ -62,6 +73,7 @@ pub fn surface_hit(normal: Vec3, front_face: bool) -> rt_gpu::shared::ray::Hit {
             index: 0,
         },
         uv: glam::Vec2::ZERO,
+        uv1: glam::Vec2::ZERO,
         color: Vec3::ONE,
     }
 }
