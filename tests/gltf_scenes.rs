@@ -699,3 +699,223 @@ fn vertex_colours_match_on_both_backends() {
         "a 2% darker green corner went undetected"
     );
 }
+
+/// A glTF file `name` in `dir`: [`write_gltf`]'s triangle (accessor 0; node 0 places it), its
+/// buffer also holding `arrays` as accessors 1.. (each its bytes, component type, type and
+/// count), and the document then edited by `edit`.
+fn write_posed_gltf(
+    dir: &Path,
+    name: &str,
+    arrays: &[(Vec<u8>, u32, &str, usize)],
+    edit: impl FnOnce(&mut serde_json::Value),
+) -> PathBuf {
+    let mut bin: Vec<u8> = Vec::new();
+    for x in [-1.0f32, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend(x.to_le_bytes());
+    }
+    let mut views = vec![serde_json::json!({ "buffer": 0, "byteOffset": 0, "byteLength": 36 })];
+    let mut accessors = vec![serde_json::json!({
+        "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [-1, -1, 0], "max": [1, 1, 0]
+    })];
+    for (bytes, component, ty, count) in arrays {
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        views.push(
+            serde_json::json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len() }),
+        );
+        bin.extend(bytes);
+        let mut accessor = serde_json::json!({
+            "bufferView": views.len() - 1, "componentType": component, "count": count, "type": ty
+        });
+        // Animation inputs must give their range.
+        if *ty == "SCALAR" && *component == 5126 {
+            let values: Vec<f32> = (bytes.chunks_exact(4))
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect();
+            let min = values.iter().copied().fold(f32::INFINITY, f32::min);
+            let max = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            accessor["min"] = serde_json::json!([min]);
+            accessor["max"] = serde_json::json!([max]);
+        }
+        accessors.push(accessor);
+    }
+    let bin_name = format!("{name}.bin");
+    std::fs::write(dir.join(&bin_name), &bin).expect("writes");
+    let mut doc = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "buffers": [{ "uri": bin_name, "byteLength": bin.len() }],
+        "bufferViews": views,
+        "accessors": accessors,
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        "nodes": [{ "name": "Triangle", "mesh": 0 }],
+        "scenes": [{ "nodes": [0] }],
+        "scene": 0
+    });
+    edit(&mut doc);
+    let path = dir.join(name);
+    std::fs::write(&path, doc.to_string()).expect("writes");
+    path
+}
+
+fn floats(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// The positions of the one mesh part of the file at `path`.
+fn posed_positions(path: &Path) -> Vec<Vec3> {
+    let meshes =
+        rt_gpu::scene::mesh::load(path, "posed.gltf", None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(meshes.len(), 1);
+    meshes[0].positions.clone()
+}
+
+fn assert_positions(path: &Path, expected: [[f32; 3]; 3]) {
+    let got = posed_positions(path);
+    for (g, e) in got.iter().zip(expected) {
+        assert!(
+            (*g - Vec3::from(e)).length() < 1e-5,
+            "{got:?} against {expected:?}"
+        );
+    }
+}
+
+/// Issue 62: morph targets move the vertices by their weights (they were ignored: the rest
+/// pose was drawn): the mesh's default weights, the node's over them, the first animation's
+/// at 0 s over both (a linear key from -1 s to 1 s: halfway).
+#[test]
+fn morph_targets_move_vertices_by_their_weights() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // Accessor 1: a target lifting every vertex by 1 along z.
+    let lift = (floats(&[0.0, 0.0, 1.0].repeat(3)), 5126, "VEC3", 3);
+    let times = (floats(&[-1.0, 1.0]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[0.2, 0.6]), 5126, "SCALAR", 2);
+    let at = |z: f32| [[-1.0, -1.0, z], [1.0, -1.0, z], [0.0, 1.0, z]];
+    let target = |doc: &mut serde_json::Value| {
+        doc["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{ "POSITION": 1 }]);
+        doc["meshes"][0]["weights"] = serde_json::json!([0.5]);
+    };
+    let mesh_weights =
+        write_posed_gltf(dir.path(), "mesh.gltf", std::slice::from_ref(&lift), target);
+    assert_positions(&mesh_weights, at(0.5));
+    let node_weights = write_posed_gltf(
+        dir.path(),
+        "node.gltf",
+        std::slice::from_ref(&lift),
+        |doc| {
+            target(doc);
+            doc["nodes"][0]["weights"] = serde_json::json!([0.25]);
+        },
+    );
+    assert_positions(&node_weights, at(0.25));
+    let animated = write_posed_gltf(dir.path(), "animated.gltf", &[lift, times, keyed], |doc| {
+        target(doc);
+        doc["animations"] = serde_json::json!([{
+            "samplers": [{ "input": 2, "output": 3 }],
+            "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }]
+        }]);
+    });
+    assert_positions(&animated, at(0.4));
+    let (_, notes) = load(&animated, "animated.gltf", None).expect("loads");
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("its animation's motion (posed at 0 s)")),
+        "{notes:?}"
+    );
+}
+
+/// Issue 62: a skinned mesh is placed by its joints (it was drawn in its bind pose): a vertex
+/// bound to a joint lifted 2 along z moves with it, one bound half to it half to a joint at
+/// rest moves half as far, and the mesh node's own transform (a move of 5 along x) is not
+/// applied, as glTF says; the joint animated moves them too. Influences of a joint the skin
+/// does not have are refused in one line.
+#[test]
+fn skinned_meshes_are_placed_by_their_joints() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // Accessors 1 (JOINTS_0) and 2 (WEIGHTS_0): vertex 0 on joint 0, 1 on joint 1, 2 on both.
+    let joints = (vec![0u8, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0], 5121, "VEC4", 3);
+    let weights = (
+        floats(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0]),
+        5126,
+        "VEC4",
+        3,
+    );
+    let skinned = |lift: &str| {
+        let lift: serde_json::Value = serde_json::from_str(lift).expect("json");
+        move |doc: &mut serde_json::Value| {
+            doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = 1.into();
+            doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"] = 2.into();
+            doc["nodes"] = serde_json::json!([
+                { "name": "Triangle", "mesh": 0, "skin": 0, "translation": [5, 0, 0] },
+                { "name": "Rest" },
+                { "name": "Lifted", "translation": lift }
+            ]);
+            doc["skins"] = serde_json::json!([{ "joints": [1, 2] }]);
+            doc["scenes"] = serde_json::json!([{ "nodes": [0, 1, 2] }]);
+        }
+    };
+    let arrays = [joints.clone(), weights.clone()];
+    let path = write_posed_gltf(dir.path(), "skin.gltf", &arrays, skinned("[0, 0, 2]"));
+    assert_positions(
+        &path,
+        [[-1.0, -1.0, 0.0], [1.0, -1.0, 2.0], [0.0, 1.0, 1.0]],
+    );
+
+    // Joint 1 animated from (0, 0, 0) at -1 s to (0, 0, 4) at 1 s: (0, 0, 2) at 0 s.
+    let times = (floats(&[-1.0, 1.0]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[0.0, 0.0, 0.0, 0.0, 0.0, 4.0]), 5126, "VEC3", 2);
+    let arrays = [joints.clone(), weights.clone(), times, keyed];
+    let animated = write_posed_gltf(dir.path(), "animated.gltf", &arrays, |doc| {
+        skinned("[0, 0, 0]")(doc);
+        doc["animations"] = serde_json::json!([{
+            "samplers": [{ "input": 3, "output": 4 }],
+            "channels": [{ "sampler": 0, "target": { "node": 2, "path": "translation" } }]
+        }]);
+    });
+    assert_positions(
+        &animated,
+        [[-1.0, -1.0, 0.0], [1.0, -1.0, 2.0], [0.0, 1.0, 1.0]],
+    );
+
+    let beyond = (vec![0u8, 0, 0, 0, 7, 0, 0, 0, 0, 1, 0, 0], 5121, "VEC4", 3);
+    let path = write_posed_gltf(
+        dir.path(),
+        "beyond.gltf",
+        &[beyond, weights],
+        skinned("[0, 0, 2]"),
+    );
+    let error = rt_gpu::scene::mesh::load(&path, "beyond.gltf", None).expect_err("joint 7");
+    assert!(
+        error.contains("joint 7") && error.contains("beyond.gltf") && !error.contains('\n'),
+        "{error}"
+    );
+}
+
+/// Issue 62: the first animation places nodes at 0 s (it was ignored): a translation keyed from
+/// (0, 0, 0) at -1 s to (2, 0, 0) at 1 s moves the triangle by (1, 0, 0), whatever the node's
+/// own translation; a channel whose values do not fit its keys is refused in one line.
+#[test]
+fn the_first_animation_places_nodes_at_time_zero() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let times = (floats(&[-1.0, 1.0]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0]), 5126, "VEC3", 2);
+    let animate = |doc: &mut serde_json::Value| {
+        doc["nodes"][0]["translation"] = serde_json::json!([9, 9, 9]);
+        doc["animations"] = serde_json::json!([{
+            "samplers": [{ "input": 1, "output": 2 }],
+            "channels": [{ "sampler": 0, "target": { "node": 0, "path": "translation" } }]
+        }]);
+    };
+    let path = write_posed_gltf(dir.path(), "moved.gltf", &[times.clone(), keyed], animate);
+    assert_positions(&path, [[0.0, -1.0, 0.0], [2.0, -1.0, 0.0], [1.0, 1.0, 0.0]]);
+
+    let short = (floats(&[0.0, 0.0, 0.0]), 5126, "VEC3", 1);
+    let path = write_posed_gltf(dir.path(), "short.gltf", &[times, short], animate);
+    let error = rt_gpu::scene::mesh::load(&path, "short.gltf", None).expect_err("1 value");
+    assert!(
+        error.contains("animation 0's channel 0") && !error.contains('\n'),
+        "{error}"
+    );
+}

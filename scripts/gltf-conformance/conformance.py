@@ -19,7 +19,8 @@ where the ratio is within 0.85-1.18 and the correlation at least 0.95 (issue 62'
 Principled v1 diffuse is brighter than glTF's).
 
 The Blender side follows ../shared/notes/blender-gltf-import.md: numpy's removed aliases are
-restored for the importer, punctual lights are made punctual, alphaMode MASK is thresholded,
+restored for the importer, animated files are shown at 0 s (frame 0), punctual lights are made
+punctual, alphaMode MASK is thresholded,
 meshes without a material get glTF's default one (times COLOR_0), the camera is rt-gpu's (the file's first
 camera with a vertical field of view, else rt-gpu's framing camera), the world is black where
 the file has lamps and a uniform sky of radiance 1 otherwise (rt-gpu's default lighting), and
@@ -140,6 +141,10 @@ def render_rtgpu(opts, path, pfm, log):
 
 def fix_import(doc):
     """Where Blender's importer departs from glTF (../shared/notes/blender-gltf-import.md)."""
+    # The importer keys an animation's time t at frame t x fps and leaves the scene at frame 1
+    # (1/24 s in); rt-gpu draws the first animation at 0 s (src/scene/gltf_pose.rs).
+    if doc.get("animations"):
+        bpy.context.scene.frame_set(0)
     for light in bpy.data.lights:
         if light.type in ("POINT", "SPOT"):
             light.shadow_soft_size = 0.0

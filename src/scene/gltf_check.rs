@@ -75,8 +75,23 @@ pub fn check_container(bytes: &[u8], path: &Path, source: &str) -> Result<(), St
 }
 
 /// Checks what the `gltf` crate's validation indexes without checking: every primitive's
-/// POSITION accessor exists.
+/// POSITION accessor exists; every animation channel targets a node that exists by a property
+/// glTF names (the crate validates channels' samplers only, and unwraps both).
 pub fn check_references(root: &json::Root, source: &str) -> Result<(), String> {
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let at = format!("mesh {source}: animation {a}'s channel {c}");
+            let node = channel.target.node.value();
+            if node >= root.nodes.len() {
+                return Err(format!("{at} targets node {node}, which does not exist"));
+            }
+            if !matches!(channel.target.path, Checked::Valid(_)) {
+                return Err(format!(
+                    "{at} animates a property glTF does not name (translation, rotation, scale, weights)"
+                ));
+            }
+        }
+    }
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = primitive
@@ -178,6 +193,7 @@ pub fn check_document(
         .iter()
         .any(|e| e == super::gltf_quantized::EXTENSION);
     super::gltf_instancing::check(root, buffer_lengths, source)?;
+    check_skins_and_animation(root, buffer_lengths, source)?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let at = format!("mesh {source}: mesh {m} primitive {p}");
@@ -194,8 +210,9 @@ pub fn check_document(
             }
             let mut position_count = None;
             let mut normal_count = None;
-            // Texture coordinates' counts, which must be the positions' (glTF 2.0, 3.7.2.1).
-            let mut uv_counts = Vec::new();
+            // Texture coordinates', joints' and weights' counts, which must be the positions'
+            // (glTF 2.0, 3.7.2.1).
+            let mut counts: Vec<(String, usize, u64)> = Vec::new();
             for (semantic, index) in &primitive.attributes {
                 let accessor = accessor(root, index.value(), &at)?;
                 let (expected, name) = match semantic {
@@ -215,7 +232,31 @@ pub fn check_document(
                             )?;
                         }
                         let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
-                        uv_counts.push((*set, index.value(), count));
+                        counts.push((format!("TEXCOORD_{set}"), index.value(), count));
+                        continue;
+                    }
+                    // Skins' influences (`gltf_pose`): joints as unsigned integers, weights as
+                    // FLOAT or normalized unsigned integers (glTF 2.0, 3.7.3.3).
+                    Checked::Valid(json::mesh::Semantic::Joints(set)) => {
+                        let (ty, component) = kinds(accessor);
+                        let integer =
+                            matches!(component, Some(ComponentType::U8 | ComponentType::U16));
+                        if ty != Some(Type::Vec4) || !integer || accessor.normalized {
+                            return Err(format!(
+                                "{at}: JOINTS_{set} (accessor {}) is {}, not VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT",
+                                index.value(),
+                                describe(accessor)
+                            ));
+                        }
+                        let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
+                        counts.push((format!("JOINTS_{set}"), index.value(), count));
+                        continue;
+                    }
+                    Checked::Valid(json::mesh::Semantic::Weights(set)) => {
+                        let name = format!("WEIGHTS_{set}");
+                        check_kinds(accessor, index.value(), &[Type::Vec4], &name, &at)?;
+                        let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
+                        counts.push((name, index.value(), count));
                         continue;
                     }
                     Checked::Valid(json::mesh::Semantic::Colors(set)) => {
@@ -270,9 +311,35 @@ pub fn check_document(
             {
                 return Err(format!("{at}: {normals} normals for {vertices} positions"));
             }
-            if let Some((set, index, count)) = uv_counts.iter().find(|(_, _, n)| *n != vertices) {
+            for (k, target) in primitive.targets.iter().flatten().enumerate() {
+                let attributes = [
+                    (&target.positions, "POSITION"),
+                    (&target.normals, "NORMAL"),
+                    (&target.tangents, "TANGENT"),
+                ];
+                for (index, name) in attributes {
+                    let Some(index) = index else { continue };
+                    let name = format!("morph target {k}'s {name}");
+                    let accessor = accessor(root, index.value(), &at)?;
+                    let (ty, component) = kinds(accessor);
+                    let float = ty == Some(Type::Vec3)
+                        && component == Some(ComponentType::F32)
+                        && !accessor.normalized;
+                    let unit = !name.ends_with("POSITION");
+                    if !(float || quantized && quantized_kind(accessor, Type::Vec3, unit)) {
+                        return Err(format!(
+                            "{at}: {name} (accessor {}) is {}, not VEC3 of FLOAT",
+                            index.value(),
+                            describe(accessor)
+                        ));
+                    }
+                    let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
+                    counts.push((name, index.value(), count));
+                }
+            }
+            if let Some((name, index, count)) = counts.iter().find(|(_, _, n)| *n != vertices) {
                 return Err(format!(
-                    "{at}: TEXCOORD_{set} (accessor {index}) has {count} texture coordinates for {vertices} positions"
+                    "{at}: {name} (accessor {index}) has {count} values for {vertices} positions"
                 ));
             }
             let corners = match &primitive.indices {
@@ -550,6 +617,96 @@ fn check_view(
             "{at}: buffer view {view_index} names buffer {buffer}, which does not exist"
         )),
     }
+}
+
+/// Checks what the pose reads beside primitives (`gltf_pose`): skins' inverse bind matrices
+/// (MAT4 of FLOAT, at least one per joint) and joints, and the first animation's key times
+/// (SCALAR of FLOAT) and values (the kinds glTF 2.0, 3.11 allows for the property: FLOAT, or
+/// normalized integers for rotations and weights).
+fn check_skins_and_animation(
+    root: &json::Root,
+    buffer_lengths: &[usize],
+    source: &str,
+) -> Result<(), String> {
+    for (s, skin) in root.skins.iter().enumerate() {
+        let at = format!("mesh {source}: skin {s}");
+        if let Some(joint) = skin.joints.iter().find(|j| j.value() >= root.nodes.len()) {
+            return Err(format!(
+                "{at} names joint node {}, which does not exist",
+                joint.value()
+            ));
+        }
+        let Some(index) = &skin.inverse_bind_matrices else {
+            continue;
+        };
+        let accessor = accessor(root, index.value(), &at)?;
+        let (ty, component) = kinds(accessor);
+        if ty != Some(Type::Mat4) || component != Some(ComponentType::F32) || accessor.normalized {
+            return Err(format!(
+                "{at}: its inverseBindMatrices (accessor {}) are {}, not MAT4 of FLOAT",
+                index.value(),
+                describe(accessor)
+            ));
+        }
+        let count = check_accessor(root, buffer_lengths, index.value(), &at)?;
+        if count < skin.joints.len() as u64 {
+            return Err(format!(
+                "{at} has {count} inverseBindMatrices for {} joints",
+                skin.joints.len()
+            ));
+        }
+    }
+    let Some(animation) = root.animations.first() else {
+        return Ok(());
+    };
+    for (c, channel) in animation.channels.iter().enumerate() {
+        let at = format!("mesh {source}: animation 0's channel {c}");
+        let Some(sampler) = animation.samplers.get(channel.sampler.value()) else {
+            return Err(format!(
+                "{at} names sampler {}, which does not exist",
+                channel.sampler.value()
+            ));
+        };
+        let input = accessor(root, sampler.input.value(), &at)?;
+        if kinds(input) != (Some(Type::Scalar), Some(ComponentType::F32)) || input.normalized {
+            return Err(format!(
+                "{at}: its key times (accessor {}) are {}, not SCALAR of FLOAT",
+                sampler.input.value(),
+                describe(input)
+            ));
+        }
+        check_accessor(root, buffer_lengths, sampler.input.value(), &at)?;
+        let output = accessor(root, sampler.output.value(), &at)?;
+        let (ty, component) = kinds(output);
+        use json::animation::Property;
+        let (expected, integers) = match channel.target.path {
+            Checked::Valid(Property::Translation | Property::Scale) => (Type::Vec3, false),
+            Checked::Valid(Property::Rotation) => (Type::Vec4, true),
+            _ => (Type::Scalar, true),
+        };
+        let component_ok = match component {
+            Some(ComponentType::F32) => !output.normalized,
+            Some(
+                ComponentType::I8 | ComponentType::U8 | ComponentType::I16 | ComponentType::U16,
+            ) => integers && output.normalized,
+            _ => false,
+        };
+        if ty != Some(expected) || !component_ok {
+            return Err(format!(
+                "{at}: its values (accessor {}) are {}, not {} of FLOAT{}",
+                sampler.output.value(),
+                describe(output),
+                format!("{expected:?}").to_uppercase(),
+                if integers {
+                    " or normalized integers"
+                } else {
+                    ""
+                }
+            ));
+        }
+        check_accessor(root, buffer_lengths, sampler.output.value(), &at)?;
+    }
+    Ok(())
 }
 
 /// Checks that the nodes form trees: children exist, no node has two parents, and none is its

@@ -306,7 +306,14 @@ pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
 fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
     let (bytes, _) = super::inputs::read(path, source, super::mesh::MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read {source}: {e}"))?;
-    let document = super::gltf_check::parse(&bytes, source)?.document;
+    let gltf::Gltf { document, blob } = super::gltf_check::parse(&bytes, source)?;
+    // Cameras and lights are posed as the meshes are (`mesh::load` read the buffers once
+    // already; they are read again only for an animation).
+    let buffers = match document.animations().next() {
+        Some(_) => super::gltf_check::read_buffers(&document, blob, path.parent(), source)?,
+        None => Vec::new(),
+    };
+    let pose = super::gltf_pose::Pose::new(&document, &buffers, source)?;
     let Some(scene) = document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -326,9 +333,7 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
         .collect();
     // Finite: `mesh::load` checked that the nodes form trees.
     while let Some((node, parent)) = stack.pop() {
-        let local =
-            DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|x| x as f64)));
-        let world = parent * local;
+        let world = parent * pose.local(&node);
         if let Some(camera) = node.camera() {
             let name = camera
                 .name()
@@ -469,8 +474,8 @@ const READ_EXTENSIONS: [&str; 8] = [
 
 /// One note naming what `document` holds that rt-gpu does not render (nothing is dropped
 /// silently): primitives of points or lines, vertex colours beyond COLOR_0 (and its alpha
-/// where the material is not opaque), texture coordinates beyond TEXCOORD_1, morph targets,
-/// skins, animations and extensions it does not read. `None` when there is nothing.
+/// where the material is not opaque), texture coordinates beyond TEXCOORD_1, animations'
+/// motion and extensions it does not read. `None` when there is nothing.
 fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
     let primitives: Vec<gltf::Primitive> = document.meshes().flat_map(|m| m.primitives()).collect();
     let mut unread: Vec<String> = Vec::new();
@@ -493,7 +498,6 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
         .filter_map(|semantic| match semantic {
             gltf::Semantic::Colors(set) if set > 0 => Some(format!("COLOR_{set}")),
             gltf::Semantic::TexCoords(set) if set > 1 => Some(format!("TEXCOORD_{set}")),
-            gltf::Semantic::Joints(_) | gltf::Semantic::Weights(_) => Some("JOINTS/WEIGHTS".into()),
             _ => None,
         })
         .collect();
@@ -509,17 +513,17 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
     attributes.sort();
     attributes.dedup();
     unread.extend(attributes);
-    let targets: usize = primitives.iter().map(|p| p.morph_targets().count()).sum();
-    if targets > 0 {
-        unread.push(count(targets, "morph target", "morph targets"));
-    }
-    for (n, one, many) in [
-        (document.skins().count(), "skin", "skins"),
-        (document.animations().count(), "animation", "animations"),
-    ] {
-        if n > 0 {
-            unread.push(count(n, one, many));
-        }
+    // A still image shows one moment (`gltf_pose`): the motion is what is not rendered.
+    match document.animations().count() {
+        0 => {}
+        1 => unread.push(format!(
+            "its animation's motion (posed at {} s)",
+            super::gltf_pose::TIME
+        )),
+        n => unread.push(format!(
+            "{n} animations' motion (posed at {} s of the first)",
+            super::gltf_pose::TIME
+        )),
     }
     let extensions: Vec<&str> = document
         .extensions_used()
@@ -534,7 +538,7 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
     }
     (!unread.is_empty()).then(|| {
         format!(
-            "note: {source}: not rendered: {} (rt-gpu draws triangles in their rest pose; see scenes/README.md's glTF table)",
+            "note: {source}: not rendered: {} (see scenes/README.md's glTF table)",
             unread.join(", ")
         )
     })

@@ -962,6 +962,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
     let buffers = gltf_check::read_buffers(&document, blob, path.parent(), source)?;
     let lengths: Vec<usize> = buffers.iter().map(|b| b.0.len()).collect();
     gltf_check::check_document(document.as_json(), &lengths, source)?;
+    let pose = super::gltf_pose::Pose::new(&document, &buffers, source)?;
     let roots: Vec<gltf::Node> = match node {
         Some(name) => match document.nodes().find(|n| n.name() == Some(name)) {
             Some(n) if document.nodes().filter(|m| m.name() == Some(name)).count() > 1 => {
@@ -998,8 +999,7 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
         roots.into_iter().map(|n| (n, DMat4::IDENTITY)).collect();
     // Finite: `check_document` found the nodes to be trees.
     while let Some((n, parent)) = stack.pop() {
-        let local = DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
-        let node_world = parent * local;
+        let node_world = parent * pose.local(&n);
         // Points and lines are not drawn (`gltf_scene::read_extras` notes them).
         let drawn: Vec<gltf::Primitive> = n
             .mesh()
@@ -1031,7 +1031,25 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 let Some(read) = attribute(gltf::Semantic::Positions) else {
                     return Err(format!("mesh {source}: a primitive has no positions"));
                 };
-                let read = quantized::vec3(read, buffer).ok_or_else(|| unread("POSITION"))?;
+                let mut read = quantized::vec3(read, buffer).ok_or_else(|| unread("POSITION"))?;
+                let mut normals_read = match attribute(gltf::Semantic::Normals) {
+                    Some(a) => Some(quantized::vec3(a, buffer).ok_or_else(|| unread("NORMAL"))?),
+                    None => None,
+                };
+                // glTF: TANGENT without NORMAL is to be ignored.
+                let mut tangents = match attribute(gltf::Semantic::Tangents) {
+                    Some(a) if normals_read.is_some() => {
+                        Some(quantized::vec4(a, buffer).ok_or_else(|| unread("TANGENT"))?)
+                    }
+                    _ => None,
+                };
+                // Posed (morph targets, skin) before the node places them.
+                let vertices = super::gltf_pose::Vertices {
+                    positions: &mut read,
+                    normals: normals_read.as_deref_mut(),
+                    tangents: tangents.as_deref_mut(),
+                };
+                pose.deform(&n, primitive, &buffers, source, vertices)?;
                 let key = primitive.material().index();
                 let [set0, set1] = super::gltf_textures::uv_sets(&primitive.material(), source)?;
                 // Each set the material reads, transformed as it reads it; TEXCOORD_0 also
@@ -1084,10 +1102,6 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 let base = positions.len() as u32;
                 // Normals transform by the inverse transpose (non-uniform scales bend them).
                 let to_world = DMat3::from_mat4(world).inverse().transpose();
-                let normals_read = match attribute(gltf::Semantic::Normals) {
-                    Some(a) => Some(quantized::vec3(a, buffer).ok_or_else(|| unread("NORMAL"))?),
-                    None => None,
-                };
                 let vertex_normals: Option<Vec<Vec3>> = normals_read.map(|read| {
                     read.into_iter()
                         .map(|n| (to_world * DVec3::from_array(n.map(|x| x as f64))).as_vec3())
@@ -1096,13 +1110,6 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                 // Tangents lie along the surface: they transform as its vectors do, and a
                 // mirroring placement turns the bitangent around.
                 let along = DMat3::from_mat4(world);
-                // glTF: TANGENT without NORMAL is to be ignored.
-                let tangents = match attribute(gltf::Semantic::Tangents) {
-                    Some(a) if vertex_normals.is_some() => {
-                        Some(quantized::vec4(a, buffer).ok_or_else(|| unread("TANGENT"))?)
-                    }
-                    _ => None,
-                };
                 let vertex_tangents: Option<Vec<Vec4>> = tangents.map(|read| {
                     read.into_iter()
                         .map(|[x, y, z, w]| {

@@ -10,6 +10,7 @@ pub mod file;
 pub mod flat;
 pub mod gltf_check;
 pub mod gltf_instancing;
+pub mod gltf_pose;
 pub mod gltf_quantized;
 pub mod gltf_scene;
 pub mod gltf_textures;

@@ -3,7 +3,8 @@
 //! sparse blocks; buffer views' strides, offsets and lengths; buffer and image URIs (devices,
 //! `..`, percent-encoding, data URIs); nodes' graphs and transforms; primitive modes; materials'
 //! factors and extensions (ior, emissive strength, transmission, texture transforms); punctual
-//! lights and cameras at the edges of what the specification allows. Shared by
+//! lights and cameras at the edges of what the specification allows; morph targets, skins and
+//! animations. Shared by
 //! tests/fuzz_mesh_files.rs (stable, seeded) and fuzz/fuzz_targets/gltf_structure.rs
 //! (libFuzzer), which include it by path.
 
@@ -133,7 +134,7 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
     let accessors = array_len(doc, "accessors");
     let nodes = array_len(doc, "nodes");
     let materials = array_len(doc, "materials");
-    match c.below(12) {
+    match c.below(13) {
         // Accessors: counts, views, types, sparse blocks.
         0 => {
             let kind = c.below(7);
@@ -373,6 +374,55 @@ fn mutate_once(doc: &mut Value, c: &mut impl Choices) {
             let camera_index = index(c, 1);
             if let Some(n) = element(doc, "nodes", c) {
                 n["camera"] = camera_index;
+            }
+        }
+        // The pose (issue 62): morph targets and weights, skins and their joints' influences,
+        // an animation's channel.
+        11 => {
+            let kind = c.below(4);
+            let (a, b, d) = (
+                index(c, accessors),
+                index(c, accessors),
+                index(c, accessors),
+            );
+            let (node, joint) = (index(c, nodes), index(c, nodes));
+            let targets = 1 + c.below(3);
+            let weights = vec_of(c, targets);
+            let path = *pick(c, &["translation", "rotation", "scale", "weights", "other"]);
+            let interpolation = *pick(c, &["LINEAR", "STEP", "CUBICSPLINE", "OTHER"]);
+            match kind {
+                0 => {
+                    let Some(m) = element(doc, "meshes", c) else {
+                        return;
+                    };
+                    m["weights"] = weights;
+                    if let Some(p) = element(m, "primitives", c) {
+                        p["targets"] = json!([{ "POSITION": a, "NORMAL": b, "TANGENT": d }]);
+                    }
+                }
+                1 => {
+                    doc["skins"] = json!([{ "joints": [node, joint], "inverseBindMatrices": a }]);
+                    if let Some(n) = element(doc, "nodes", c) {
+                        n["skin"] = json!(0);
+                    }
+                    if let Some(m) = element(doc, "meshes", c)
+                        && let Some(p) = element(m, "primitives", c)
+                    {
+                        object_at(p, "attributes")["JOINTS_0"] = b;
+                        object_at(p, "attributes")["WEIGHTS_0"] = d;
+                    }
+                }
+                2 => {
+                    if let Some(n) = element(doc, "nodes", c) {
+                        n["weights"] = weights;
+                    }
+                }
+                _ => {
+                    doc["animations"] = json!([{
+                        "samplers": [{ "input": a, "output": b, "interpolation": interpolation }],
+                        "channels": [{ "sampler": 0, "target": { "node": node, "path": path } }]
+                    }]);
+                }
             }
         }
         // The scene's roots.
