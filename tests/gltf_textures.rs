@@ -704,45 +704,9 @@ fn see_through_surfaces_render_alike_every_way() {
     let scene = see_through_scene(dir.path(), 0.6, false);
     let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("valid");
     assert!(flat.see_through);
-    renders_alike_every_way("see-through", &scene, || {
+    common::renders_alike_every_way("see-through", &scene, || {
         see_through_scene(&dir.path().join("denser"), 0.63, false)
     });
-}
-
-/// `scene` renders the same estimator every way: naive against nee on the CPU, the GPU against
-/// the CPU with nee (Welch z + Sidak at family-wise 0.01, tests/common/stats.rs; 24x18 at
-/// 4 096 and 2 048 spp); and the negative control `changed` on the GPU is told apart. Returns
-/// the CPU's nee film.
-fn renders_alike_every_way(
-    label: &str,
-    scene: &Scene,
-    changed: impl FnOnce() -> Scene,
-) -> rt_gpu::film::Film {
-    use common::stats::compare;
-    let naive = common::render_cpu(scene, &common::opts(24, 18, 4096, 5, 1));
-    let nee = common::render_cpu(scene, &common::nee_opts(24, 18, 2048, 5, 2));
-    let verdict = compare(&naive, &nee);
-    eprintln!("{label}, naive vs nee: {verdict:?}");
-    assert!(verdict.passed(), "{label}: {verdict:?}");
-    #[cfg(feature = "gpu")]
-    {
-        use common::gpu::{render_gpu, renderer};
-        let Some(gpu) = renderer() else { return nee };
-        let tuning = rt_gpu::gpu::Tuning::default();
-        let opts = common::nee_opts(24, 18, 2048, 5, 3);
-        let verdict = compare(&nee, &render_gpu(&gpu, scene, &opts, &tuning));
-        eprintln!("{label}, cpu vs gpu: {verdict:?}");
-        assert!(verdict.passed(), "{label}: {verdict:?}");
-        let verdict = compare(&nee, &render_gpu(&gpu, &changed(), &opts, &tuning));
-        eprintln!("{label}, the negative control on the gpu: {verdict:?}");
-        assert!(
-            !verdict.passed(),
-            "{label}: the negative control went undetected"
-        );
-    }
-    #[cfg(not(feature = "gpu"))]
-    let _ = changed;
-    nee
 }
 
 /// The kernel's closest hits of rays straight down onto the see-through scene (its meshes
@@ -941,7 +905,7 @@ fn alpha_cuts_emitters_for_every_ray() {
         &dir.path().join("blended"),
         &emitter(r#""alphaMode": "BLEND","#, 0.5),
     );
-    let nee = renders_alike_every_way("blended emitter", &blended, || {
+    let nee = common::renders_alike_every_way("blended emitter", &blended, || {
         lit_by_emitter(
             &dir.path().join("denser"),
             &emitter(r#""alphaMode": "BLEND","#, 0.55),
@@ -1020,7 +984,7 @@ fn emissive_materials_keep_their_surface_on_both_backends() {
     );
     assert!(flat.lights.len() >= 2, "the triangle is an area light");
 
-    renders_alike_every_way("emissive surface", &scene, || {
+    common::renders_alike_every_way("emissive surface", &scene, || {
         emissive_surface_scene(&dir.path().join("brighter"), [0.84, 0.63, 0.42])
     });
 }
@@ -1296,7 +1260,7 @@ fn the_same_but_for_the_set(second: &Scene, plain: &Scene, first: &Scene) {
 }
 
 /// Issue 62: MultiUVTest's case, a base colour on TEXCOORD_0 and an emission and normal map on
-/// TEXCOORD_1, renders the same estimator every way ([`renders_alike_every_way`]: naive vs
+/// TEXCOORD_1, renders the same estimator every way ([`common::renders_alike_every_way`]: naive vs
 /// nee, CPU vs GPU, Welch z + Sidak); negative control: the emission and normal map read from
 /// TEXCOORD_0 instead, on the GPU.
 #[test]
@@ -1308,7 +1272,7 @@ fn two_uv_sets_render_alike_every_way() {
         UVS_A,
         Some(UVS_B),
     );
-    renders_alike_every_way("two UV sets", &mixed, || {
+    common::renders_alike_every_way("two UV sets", &mixed, || {
         two_set_scene(
             &dir.path().join("first"),
             &two_set_material(0, 0, true),

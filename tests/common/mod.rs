@@ -356,3 +356,39 @@ pub fn cornell_with_disks() -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/disks.toml");
     rt_gpu::scene::file::load(&path).expect("scenes/disks.toml")
 }
+
+/// `scene` renders the same estimator every way: naive against nee on the CPU, the GPU against
+/// the CPU with nee (Welch z + Sidak at family-wise 0.01, tests/common/stats.rs; 24x18 at
+/// 4 096 and 2 048 spp); and the negative control `changed` on the GPU is told apart. Returns
+/// the CPU's nee film.
+pub fn renders_alike_every_way(
+    label: &str,
+    scene: &Scene,
+    changed: impl FnOnce() -> Scene,
+) -> rt_gpu::film::Film {
+    use crate::common::stats::compare;
+    let naive = render_cpu(scene, &opts(24, 18, 4096, 5, 1));
+    let nee = render_cpu(scene, &nee_opts(24, 18, 2048, 5, 2));
+    let verdict = compare(&naive, &nee);
+    eprintln!("{label}, naive vs nee: {verdict:?}");
+    assert!(verdict.passed(), "{label}: {verdict:?}");
+    #[cfg(feature = "gpu")]
+    {
+        use crate::common::gpu::{render_gpu, renderer};
+        let Some(gpu) = renderer() else { return nee };
+        let tuning = rt_gpu::gpu::Tuning::default();
+        let opts = nee_opts(24, 18, 2048, 5, 3);
+        let verdict = compare(&nee, &render_gpu(&gpu, scene, &opts, &tuning));
+        eprintln!("{label}, cpu vs gpu: {verdict:?}");
+        assert!(verdict.passed(), "{label}: {verdict:?}");
+        let verdict = compare(&nee, &render_gpu(&gpu, &changed(), &opts, &tuning));
+        eprintln!("{label}, the negative control on the gpu: {verdict:?}");
+        assert!(
+            !verdict.passed(),
+            "{label}: the negative control went undetected"
+        );
+    }
+    #[cfg(not(feature = "gpu"))]
+    let _ = changed;
+    nee
+}
