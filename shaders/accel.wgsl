@@ -20,7 +20,7 @@ var<private> loop_iterations: u32;
 var<private> budget_spent: bool;
 
 // Where the ray enters the box if it meets it within [0, t_max], else -1 (see box_entry in
-// src/accel.rs).
+// src/accel/mod.rs).
 fn box_entry(box_min: vec3f, box_max: vec3f, origin: vec3f, inverse: vec3f, t_max: f32) -> f32 {
     let t0 = (box_min - origin) * inverse;
     let t1 = (box_max - origin) * inverse;
@@ -80,7 +80,7 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 // together): a top-level leaf's instances are pushed as stack entries marked ENTER_INSTANCE;
 // popping one moves the ray into the instance's mesh coordinates (not renormalised: t stays
 // the scene ray's) and descends its mesh's BVH from its root; once the stack is back at the
-// height it had then, the scene's ray is restored (see consider_instance in src/cpu/shapes.rs,
+// height it had then, the scene's ray is restored (see consider_instance in src/cpu/intersect.rs,
 // which re-enters the CPU's traversal instead).
 //
 // One iteration per interior node entered (`entering`: a node's or a leaf's reference), with

@@ -1,5 +1,5 @@
 // The viewer's display pass: each window pixel shows its film pixel's 8-bit levels, decided on
-// the accumulator's exact sums in place (twin of src/levels.rs): level k where sum >= n x
+// the accumulator's exact sums in place (twin of src/film/levels.rs): level k where sum >= n x
 // threshold k, compared as wide integers, so that the window shows what the image file of the
 // same samples holds, byte for byte. The host prepends `struct Display` (generated from
 // `GpuDisplay`) and the accumulator's layout constants (ACCUM_WORDS, ACCUM_COUNT,

@@ -1,4 +1,4 @@
-// Ray-shape intersection (twin: src/cpu/shapes.rs). `Hit` is generated from src/shared/ray.rs.
+// Ray-shape intersection (twin: src/cpu/intersect.rs). `Hit` is generated from src/shared/ray.rs.
 
 fn primitive_kind(primitive: u32) -> u32 {
     return primitive >> PRIMITIVE_INDEX_BITS;
@@ -16,7 +16,7 @@ const NO_CLOSEST = Closest(vec3f(0.0, 1.0, 0.0), 3.4e38, vec4f(0.0), 0u, 0u, fal
 
 // Whether a hit at t on primitive `packed` replaces the closest so far: nearer, or as near and
 // earlier in the order of packed references (coincident surfaces resolve the same whatever
-// order a BVH traversal meets them in; see consider in src/cpu/shapes.rs).
+// order a BVH traversal meets them in; see consider in src/cpu/intersect.rs).
 fn replaces(t: f32, packed: u32, c: ptr<function, Closest>) -> bool {
     return t > 0.0 && (t < (*c).t || (t == (*c).t && (!(*c).found || packed < (*c).primitive)));
 }
@@ -30,7 +30,7 @@ fn replaces_in_order(t: f32, c: ptr<function, Closest>) -> bool {
 
 //#if INSTANCES
 // `replaces` for triangle `triangle` of the instance packed as `packed`: as near and the same
-// instance, the earlier triangle wins (see replaces in src/cpu/shapes.rs).
+// instance, the earlier triangle wins (see replaces in src/cpu/intersect.rs).
 fn replaces_in_instance(t: f32, packed: u32, triangle: u32, c: ptr<function, Closest>) -> bool {
     let earlier = packed < (*c).primitive || (packed == (*c).primitive && triangle < (*c).triangle);
     return t > 0.0 && (t < (*c).t || (t == (*c).t && (!(*c).found || earlier)));
@@ -145,7 +145,7 @@ fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
 
 // Distance along the ray to triangle tri and the barycentric weights of its second and third
 // corners there, or t = -1 for a miss: watertight (Woop, Benthin and Wald 2013; see
-// hit_triangle in src/cpu/shapes.rs).
+// hit_triangle in src/cpu/intersect.rs).
 fn triangle_hit(tri: Triangle, ray: Ray, sh: Shear) -> vec3f {
     let q0 = permute(tri.p0 - ray.origin, sh.kz);
     let q1 = permute(tri.p1 - ray.origin, sh.kz);
@@ -182,7 +182,7 @@ fn consider_triangle(tri: Triangle, index: u32, ray: Ray, sh: Shear, c: ptr<func
 }
 
 // The weighted corners and a bound on the point's error (see triangle_surface in
-// src/cpu/shapes.rs).
+// src/cpu/intersect.rs).
 fn triangle_surface(c: Closest) -> Surface {
     let tri = triangles[primitive_index(c.primitive)];
     let b0 = 1.0 - c.weights.x - c.weights.y;
@@ -195,7 +195,7 @@ fn triangle_surface(c: Closest) -> Surface {
 //#if TRIANGLES
 //#if INSTANCES
 // triangle_surface for a triangle of an instance's mesh, placed (see instanced_triangle_surface
-// in src/cpu/shapes.rs).
+// in src/cpu/intersect.rs).
 fn instanced_triangle_surface(c: Closest) -> Surface {
     let inst = instances[primitive_index(c.primitive)];
     let tri = triangles[c.triangle];
@@ -350,7 +350,7 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
 
 //#if TRIANGLE_UVS || TRIANGLE_UVS1
 // Three corners' texture coordinates interpolated at weights (twin: interpolated_uv in
-// src/cpu/shapes.rs).
+// src/cpu/intersect.rs).
 fn corner_uvs_at(uv0: vec2f, uv1: vec2f, uv2: vec2f, weights: vec2f) -> vec2f {
     return (1.0 - weights.x - weights.y) * uv0 + weights.x * uv1 + weights.y * uv2;
 }
@@ -380,7 +380,7 @@ fn interpolated_uv1(i: u32, weights: vec2f) -> vec2f {
 
 //#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
 // The hit on c's second texture coordinates where the scene's materials read them, else uv,
-// its first (twin: second_uv in src/cpu/shapes.rs).
+// its first (twin: second_uv in src/cpu/intersect.rs).
 fn second_uv(c: Closest, uv: vec2f) -> vec2f {
 //#if TRIANGLE_UVS1
     if primitive_kind(c.primitive) == KIND_TRIANGLE {
@@ -402,7 +402,7 @@ fn corner_color(at: u32) -> vec3f {
 }
 
 // The vertex colour at the hit on c: its triangle's corner colours interpolated, white on a
-// shape (twin: vertex_color in src/cpu/shapes.rs).
+// shape (twin: vertex_color in src/cpu/intersect.rs).
 fn vertex_color(c: Closest) -> vec3f {
     var i = 0u;
     if primitive_kind(c.primitive) == KIND_TRIANGLE {
@@ -425,7 +425,7 @@ fn corner_normal(at: u32) -> vec3f {
 
 // Triangle i's corner normals interpolated at weights, unit, turned into the hemisphere of the
 // unit geometric normal `outward`; `outward` where they cancel (twin: shading_normal in
-// src/cpu/shapes.rs).
+// src/cpu/intersect.rs).
 fn shading_normal(i: u32, weights: vec2f, outward: vec3f) -> vec3f {
     return interpolated_normal(corner_normal(9u * i), corner_normal(9u * i + 3u), corner_normal(9u * i + 6u),
         weights, outward);
@@ -460,7 +460,7 @@ fn interpolated_normal(n0: vec3f, n1: vec3f, n2: vec3f, weights: vec2f, outward:
 //#endif
 
 // Whether unit dir leaves hit below its geometric surface although the shading normal allowed
-// it: such a scattered path ends (twin: below_surface in src/cpu/shapes.rs).
+// it: such a scattered path ends (twin: below_surface in src/cpu/intersect.rs).
 fn below_surface(hit: Hit, dir: vec3f) -> bool {
 //#if SHADING_NORMALS
     return any(hit.shading != hit.normal) && dot(dir, hit.normal) <= 0.0;

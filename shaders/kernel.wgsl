@@ -4,7 +4,7 @@
 // count of samples taken (so the host can prove no loop was cut short), M2 and the count of
 // invalid samples, each channel's exponent that its mean and M2 are scaled by (8 bits each: see
 // the sample loop), then the exact sums (film.wgsl) of the even-index and of the
-// odd-index samples (the replicas of a stratified sampler, see src/film.rs; renders without
+// odd-index samples (the replicas of a stratified sampler, see src/film/mod.rs; renders without
 // them put every sample in the first). Updated sample by sample in sample order, so the result
 // does not depend on how a render is sliced into dispatches.
 @group(0) @binding(BINDING_ACCUM) var<storage, read_write> accum: array<u32>;

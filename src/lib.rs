@@ -9,23 +9,16 @@ pub mod backend;
 pub mod converge;
 pub mod cpu;
 pub mod film;
-pub mod film_file;
 #[cfg(feature = "gpu")]
 pub mod gpu;
-pub mod levels;
 pub mod material;
 pub mod options;
-pub mod output;
-#[cfg(feature = "plot")]
-pub mod plot;
-pub mod progressive;
 pub mod render;
 pub mod scene;
 pub mod shape;
 pub mod shared;
 #[cfg(feature = "viewer")]
 pub mod viewer;
-pub mod wide_bvh;
 
 thread_local! {
     static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };

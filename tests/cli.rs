@@ -52,7 +52,7 @@ fn renders_each_format_with_a_summary_line() {
         assert!(bytes.starts_with(magic), "{ext} header");
     }
     // The PFM holds linear radiance that reads back to the right size, all finite.
-    let (w, h, rgb) = rt_gpu::output::read_pfm(&dir.path().join("out.pfm")).expect("reads");
+    let (w, h, rgb) = rt_gpu::film::output::read_pfm(&dir.path().join("out.pfm")).expect("reads");
     assert_eq!((w, h, rgb.len()), (16, 12, 192));
     assert!(rgb.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
     // No temporary files are left behind.
@@ -805,7 +805,7 @@ fn target_error_stops_near_the_true_error() {
         ..RenderOptions::new(32, 32, 8192, scene.defaults.max_depth)
     };
     let reference = common::render_cpu(&scene, &reference_opts);
-    let reference_noise = rt_gpu::converge::estimated_rmse(&reference);
+    let reference_noise = reference.estimated_rmse();
     let mean = reference.image_mean();
     let mean = (mean[0] + mean[1] + mean[2]) as f64 / 3.0;
     // Cornell at 32x32 on the CPU with `sampler`, seed 9, and `limits`, into `output`.
@@ -841,7 +841,7 @@ fn target_error_stops_near_the_true_error() {
             "{summary}"
         );
         let target: f64 = target.parse().expect("a number");
-        let (film, _) = rt_gpu::film_file::read(&dir.path().join("t.exr")).expect("film file");
+        let (film, _) = rt_gpu::film::file::read(&dir.path().join("t.exr")).expect("film file");
         let mse: f64 = film
             .pixels
             .iter()
@@ -859,7 +859,7 @@ fn target_error_stops_near_the_true_error() {
         let spp = spp_reached(&out).to_string();
         let plain = render(sampler, &["--spp", &spp], "p.exr");
         assert!(plain.status.success(), "{}", stderr(&plain));
-        let (plain, _) = rt_gpu::film_file::read(&dir.path().join("p.exr")).expect("film file");
+        let (plain, _) = rt_gpu::film::file::read(&dir.path().join("p.exr")).expect("film file");
         assert!(
             film.pixels
                 .iter()
@@ -882,7 +882,7 @@ fn scene_reading_files(dir: &Path) {
         for (i, p) in film.pixels.iter_mut().enumerate() {
             p.add_indexed(glam::Vec3::new(0.2, 0.5, 0.1 * i as f32), 0);
         }
-        rt_gpu::output::write_image(&dir.join(name), &film).expect("writes an image");
+        rt_gpu::film::output::write_image(&dir.join(name), &film).expect("writes an image");
     };
     image("tex.png", 2);
     image("kd.png", 2);

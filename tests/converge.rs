@@ -4,7 +4,7 @@
 mod common;
 
 use glam::Vec3;
-use rt_gpu::converge::{ConvergeOptions, errors, estimated_rmse, fit_loglog, run};
+use rt_gpu::converge::{ConvergeOptions, errors, fit_loglog, run};
 use rt_gpu::render::{Backend, GpuChoice, Integrator};
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Background, Material, Shape};
@@ -72,8 +72,8 @@ fn self_estimated_error_tracks_the_true_error() {
     for spp in [8, 32] {
         let film = common::render_cpu(&scene, &common::opts(24, 24, spp, 10, 2));
         let mse = errors(&film.mean_rgb(), &reference.mean_rgb()).rmse.powi(2);
-        let truth = (mse - estimated_rmse(&reference).powi(2)).sqrt();
-        let estimate = estimated_rmse(&film);
+        let truth = (mse - reference.estimated_rmse().powi(2)).sqrt();
+        let estimate = film.estimated_rmse();
         let ratio = estimate / truth;
         assert!(
             (1.0 / 1.5..=1.5).contains(&ratio),
@@ -169,7 +169,7 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
     assert!(csv.starts_with("series,spp,seconds,gpu_seconds,rmse,relmse,mae,estimated_rmse\n"));
     assert_eq!(csv.lines().count(), report.rungs.len() + 1);
     let stem = dir.path().join("converge");
-    rt_gpu::plot::write_plot(&report, "test", &stem).expect("plots");
+    rt_gpu::converge::plot::write_plot(&report, "test", &stem).expect("plots");
     let svg = std::fs::read_to_string(stem.with_extension("svg")).expect("svg written");
     assert!(svg.contains("<svg") && svg.contains("cpu-naive"));
     let png = std::fs::read(stem.with_extension("png")).expect("png written");

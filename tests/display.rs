@@ -6,11 +6,11 @@
 mod common;
 
 use common::gpu::renderer;
+use rt_gpu::film::output::Transfer;
 use rt_gpu::film::{Film, PixelStats};
 use rt_gpu::gpu::display::{DisplayPass, accumulator_words, read_texture};
 use rt_gpu::gpu::{GpuBackend, GpuContext};
 use rt_gpu::options::SamplerKind;
-use rt_gpu::output::Transfer;
 use rt_gpu::render::{GpuChoice, Integrator, RenderBackend, RenderOptions};
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::flat::FlatScene;

@@ -7,7 +7,7 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use rt_gpu::cpu::shapes::hit_sphere;
+use rt_gpu::cpu::intersect::hit_sphere;
 use rt_gpu::film::PixelStats;
 use rt_gpu::scene::flat::{FlatScene, Sphere};
 use rt_gpu::scene::{Background, Material, Shape};

@@ -100,12 +100,12 @@ fn corpus(dir: &Path) -> Vec<(Vec<u8>, &'static str)> {
             p.add_indexed(glam::Vec3::new(0.1 * i as f32, 1e-20, 1e20), s);
         }
     }
-    let meta = rt_gpu::film_file::FilmMeta {
+    let meta = rt_gpu::film::file::FilmMeta {
         identity: "scene=0 size=3x2".to_string(),
         samples: std::iter::once(0..4).collect(),
         device: "fuzz".to_string(),
     };
-    let film = rt_gpu::film_file::encode(&film, Some(&meta)).expect("encodes");
+    let film = rt_gpu::film::file::encode(&film, Some(&meta)).expect("encodes");
     vec![
         (CUBE_OBJ.as_bytes().to_vec(), "obj"),
         (gltf.clone(), "gltf"),
@@ -135,7 +135,7 @@ fn one_line_naming(e: &str, name: &str) -> Result<(), String> {
 fn check(path: &Path, name: &str, extension: &str) -> Result<(), String> {
     let one_line = |e: &str| one_line_naming(e, name);
     if extension == "exr" {
-        return match rt_gpu::film_file::read(path) {
+        return match rt_gpu::film::file::read(path) {
             Ok((film, _)) if film.pixels.iter().all(|p| p.mean().is_finite()) => Ok(()),
             Ok(_) => Err("a film read back with a non-finite pixel".into()),
             Err(e) => one_line(&format!("{e:#}")),

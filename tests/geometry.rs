@@ -3,7 +3,7 @@
 mod common;
 
 use glam::Vec3;
-use rt_gpu::cpu::shapes::{hit_quad, hit_sphere, intersect};
+use rt_gpu::cpu::intersect::{hit_quad, hit_sphere, intersect};
 use rt_gpu::scene::flat::{FlatScene, Quad, Sphere};
 use rt_gpu::scene::{Background, Material, Object, Shape, Transform};
 use rt_gpu::shared::ray::Ray;

@@ -75,7 +75,7 @@ fn hit_at_centroid(scene: &Scene) -> rt_gpu::shared::ray::Hit {
         origin: Vec3::new(0.0, -1.0 / 3.0, 1.0) - flat.origin.as_vec3(),
         dir: -Vec3::Z,
     };
-    rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits")
+    rt_gpu::cpu::intersect::intersect(&flat, &ray).expect("hits")
 }
 
 #[test]
@@ -530,7 +530,7 @@ fn hit_at(scene: &Scene, x: f32, y: f32) -> Option<rt_gpu::shared::ray::Hit> {
         origin: Vec3::new(x, y, 1.0) - flat.origin.as_vec3(),
         dir: -Vec3::Z,
     };
-    rt_gpu::cpu::shapes::intersect(&flat, &ray)
+    rt_gpu::cpu::intersect::intersect(&flat, &ray)
 }
 
 /// alphaMode MASK: rays pass where the base colour texture's alpha (times the factor's) is
@@ -650,7 +650,7 @@ translate = [0.7, 0, 0.3]
 /// none).
 #[test]
 fn a_shadow_ray_passes_see_through_surfaces_where_a_path_does() {
-    use rt_gpu::cpu::shapes::{intersect, stopped_before};
+    use rt_gpu::cpu::intersect::{intersect, stopped_before};
     for twice in [false, true] {
         let dir = tempfile::tempdir().expect("temp dir");
         let scene = see_through_scene(dir.path(), 0.6, twice);
@@ -748,9 +748,9 @@ fn gpu_rays_pass_see_through_surfaces_where_cpu_rays_do() {
             let primitive =
                 |hit: Option<rt_gpu::shared::ray::Hit>| hit.map(|h| h.primitive.packed());
             let gpu_primitive = (g.hit == 1).then_some(g.primitive);
-            differ +=
-                (primitive(rt_gpu::cpu::shapes::intersect(&flat, &ray)) != gpu_primitive) as usize;
-            differ_opaque += (primitive(rt_gpu::cpu::shapes::intersect(&opaque, &ray))
+            differ += (primitive(rt_gpu::cpu::intersect::intersect(&flat, &ray)) != gpu_primitive)
+                as usize;
+            differ_opaque += (primitive(rt_gpu::cpu::intersect::intersect(&opaque, &ray))
                 != gpu_primitive) as usize;
         }
         eprintln!(
@@ -970,7 +970,7 @@ fn emissive_materials_keep_their_surface_on_both_backends() {
         origin: Vec3::new(-0.5, -0.5, 2.0) - flat.origin.as_vec3(),
         dir: -Vec3::Z,
     };
-    let hit = rt_gpu::cpu::shapes::intersect(&flat, &ray).expect("hits the triangle");
+    let hit = rt_gpu::cpu::intersect::intersect(&flat, &ray).expect("hits the triangle");
     let reflected = glow.eval(Vec3::Z, Vec3::new(0.3, 0.0, 1.0).normalize(), &hit);
     assert!(
         reflected.x > 0.1 && reflected.x > reflected.z,

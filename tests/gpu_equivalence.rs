@@ -8,7 +8,7 @@ use common::gpu::{render_gpu, render_gpu_with, renderer};
 use common::stats::compare;
 use glam::Vec3;
 use rt_gpu::cpu::camera::generate_ray;
-use rt_gpu::cpu::shapes::intersect;
+use rt_gpu::cpu::intersect::intersect;
 use rt_gpu::gpu::{GpuError, Tuning};
 use rt_gpu::options::SamplerKind;
 use rt_gpu::scene::Material;

@@ -488,7 +488,7 @@ fn mtl_map_options_and_emission_are_read_or_refused_never_guessed() {
     for (i, p) in film.pixels.iter_mut().enumerate() {
         p.add_indexed(glam::Vec3::new(0.5, 0.4 + 0.1 * i as f32, 1.0), 0);
     }
-    rt_gpu::output::write_image(&d.join("my tex.png"), &film).expect("writes");
+    rt_gpu::film::output::write_image(&d.join("my tex.png"), &film).expect("writes");
     let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl paint\nf 1/1 2/2 3/3\n";
     static CASE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let load_with = |mtl: &str| {

@@ -13,7 +13,7 @@ use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use glam::Vec3;
 use rt_gpu::accel::Bvh;
-use rt_gpu::cpu::shapes::intersect;
+use rt_gpu::cpu::intersect::intersect;
 #[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::render::RenderOptions;

@@ -407,7 +407,7 @@ fn smooth_sphere_obj(rings: u32, segments: u32) -> String {
 /// normals go through a non-uniform node scale by the inverse transpose too.
 #[test]
 fn vertex_normals_shade_and_transform() {
-    use rt_gpu::cpu::shapes::intersect;
+    use rt_gpu::cpu::intersect::intersect;
     use rt_gpu::shared::ray::Ray;
     let dir = tempfile::tempdir().expect("temp dir");
     write(

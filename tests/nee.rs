@@ -13,8 +13,8 @@ use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, opts, render_cpu};
 use glam::Vec3;
+use rt_gpu::cpu::intersect::{hit_quad, hit_sphere, hit_triangle};
 use rt_gpu::cpu::lights;
-use rt_gpu::cpu::shapes::{hit_quad, hit_sphere, hit_triangle};
 #[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
 use rt_gpu::render::RenderOptions;

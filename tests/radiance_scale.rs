@@ -113,7 +113,7 @@ fn films_of_any_radiance_scale_resume_and_merge_bit_identically() {
             };
             let mut merged = render(backend, gpu.as_ref(), &scene, &first);
             // The first part goes through a film file, as a checkpoint does.
-            let meta = rt_gpu::film_file::FilmMeta {
+            let meta = rt_gpu::film::file::FilmMeta {
                 identity: "scene=0 size=12x8".to_string(),
                 samples: std::iter::once(0..5).collect(),
                 device: backend.to_string(),
@@ -121,10 +121,10 @@ fn films_of_any_radiance_scale_resume_and_merge_bit_identically() {
             let path = dir.path().join("part.exr");
             std::fs::write(
                 &path,
-                rt_gpu::film_file::encode(&merged, Some(&meta)).expect("encodes"),
+                rt_gpu::film::file::encode(&merged, Some(&meta)).expect("encodes"),
             )
             .expect("writes");
-            let (read, _) = rt_gpu::film_file::read(&path).expect("reads");
+            let (read, _) = rt_gpu::film::file::read(&path).expect("reads");
             assert_eq!(
                 read.pixels, merged.pixels,
                 "{backend} x {scale:e}: film file"

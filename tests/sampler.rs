@@ -157,9 +157,7 @@ fn error_estimates_track_the_true_error_under_sobol() {
     }
     for (backend, a, b) in renders {
         let measured = mean_squared_difference(&a, &b).sqrt();
-        let estimated = (rt_gpu::converge::estimated_rmse(&a).powi(2)
-            + rt_gpu::converge::estimated_rmse(&b).powi(2))
-        .sqrt();
+        let estimated = (a.estimated_rmse().powi(2) + b.estimated_rmse().powi(2)).sqrt();
         let ratio = estimated / measured;
         assert!(
             (1.0 / 1.5..=1.5).contains(&ratio),

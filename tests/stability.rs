@@ -15,7 +15,7 @@ use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, render_cpu, scene, triangulated};
 use glam::Vec3;
-use rt_gpu::cpu::shapes::intersect;
+use rt_gpu::cpu::intersect::intersect;
 use rt_gpu::film::Film;
 #[cfg(feature = "gpu")]
 use rt_gpu::gpu::{GpuRenderer, Tuning};

@@ -268,8 +268,8 @@ fn moves_restart_the_film_and_the_printed_camera_renders_the_view() {
         bytes(&d.join("saved.png")) == shown,
         "Ctrl+S's PNG is not what the window shows"
     );
-    let saved = rt_gpu::film_file::read(&d.join("saved.exr")).expect("a film file");
-    let batch = rt_gpu::film_file::read(&d.join("moved-batch.exr")).expect("a film file");
+    let saved = rt_gpu::film::file::read(&d.join("saved.exr")).expect("a film file");
+    let batch = rt_gpu::film::file::read(&d.join("moved-batch.exr")).expect("a film file");
     assert!(
         saved.0.pixels == batch.0.pixels,
         "Ctrl+S's film differs from the batch film"

@@ -22,7 +22,7 @@ fuzz_target!(|data: &[u8]| {
     let path = dir.join(&name);
     std::fs::write(&path, file).expect("writes the input");
     let error = if extension == "exr" {
-        rt_gpu::film_file::read(&path).err().map(|e| format!("{e:#}"))
+        rt_gpu::film::file::read(&path).err().map(|e| format!("{e:#}"))
     } else {
         rt_gpu::scene::mesh::load(&path, &name, None).err()
     };

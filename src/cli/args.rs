@@ -3,9 +3,9 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use rt_gpu::film::check_image_size;
-use rt_gpu::film_file;
+use rt_gpu::film::file as film_file;
+use rt_gpu::film::output::Transfer;
 use rt_gpu::options::SamplerKind;
-use rt_gpu::output::Transfer;
 use rt_gpu::render::{Backend, GpuChoice, Integrator, RenderOptions};
 use rt_gpu::scene::Scene;
 use rt_gpu::scene::file::MAX_DEPTH_LIMIT;

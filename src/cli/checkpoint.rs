@@ -3,8 +3,8 @@
 
 use anyhow::bail;
 use rt_gpu::film::Film;
-use rt_gpu::film_file::{self, FilmMeta};
-use rt_gpu::output::PendingOutput;
+use rt_gpu::film::file::{self as film_file, FilmMeta};
+use rt_gpu::film::output::PendingOutput;
 use std::path::{Path, PathBuf};
 
 /// Writes checkpoints on a thread of their own while the next passes render (encoding a

@@ -84,7 +84,7 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
     let target = report.target_rmse(args.target_rmse);
     write!(std::io::stdout().lock(), "{}", report.table(target))?;
     let csv = args.output.join("converge.csv");
-    rt_gpu::output::write_atomically(&csv, |out| {
+    rt_gpu::film::output::write_atomically(&csv, |out| {
         use std::io::Write;
         Ok(out.write_all(report.csv().as_bytes())?)
     })?;
@@ -92,7 +92,7 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
         "{} {width}x{height}, max depth {}",
         scene.name, options.max_depth
     );
-    match rt_gpu::plot::write_plot(&report, &title, &args.output.join("converge")) {
+    match rt_gpu::converge::plot::write_plot(&report, &title, &args.output.join("converge")) {
         Ok(()) => say!(
             "wrote {}, {} and {}",
             csv.display(),
@@ -116,7 +116,7 @@ fn check_outputs_are_not_inputs(
 ) -> anyhow::Result<()> {
     let inputs: Vec<&std::path::Path> = scene_file.into_iter().chain(scene.input_paths()).collect();
     for name in ["converge.csv", "converge.svg", "converge.png"] {
-        rt_gpu::output::check_not_input(&dir.join(name), &inputs)?;
+        rt_gpu::film::output::check_not_input(&dir.join(name), &inputs)?;
     }
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Ok(());
@@ -127,7 +127,7 @@ fn check_outputs_are_not_inputs(
             .to_string_lossy()
             .starts_with("reference-")
         {
-            rt_gpu::output::check_not_input(&entry.path(), &inputs)?;
+            rt_gpu::film::output::check_not_input(&entry.path(), &inputs)?;
         }
     }
     Ok(())

@@ -2,8 +2,8 @@
 
 use super::args::MergeArgs;
 use super::shown_radiance;
-use rt_gpu::film_file;
-use rt_gpu::output::{ImageFormat, PendingOutput};
+use rt_gpu::film::file as film_file;
+use rt_gpu::film::output::{ImageFormat, PendingOutput};
 use std::io::Write;
 use std::path::Path;
 
@@ -39,7 +39,7 @@ pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
         merged.width,
         merged.height,
         shown_radiance(mean),
-        rt_gpu::converge::estimated_rmse(&merged),
+        merged.estimated_rmse(),
         args.output.display()
     );
     Ok(())

@@ -9,10 +9,10 @@ use super::shown_radiance;
 use super::signals::{GRACEFUL, STOP_SIGNAL};
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use rt_gpu::film::file::{self as film_file, FilmMeta};
+use rt_gpu::film::output::{FileLock, ImageFormat, PendingOutput};
 use rt_gpu::film::{Film, check_memory};
-use rt_gpu::film_file::{self, FilmMeta};
-use rt_gpu::output::{FileLock, ImageFormat, PendingOutput};
-use rt_gpu::progressive::{Job, Outcome, Progress};
+use rt_gpu::render::progressive::{Job, Outcome, Progress};
 use rt_gpu::render::{Backend, GpuChoice, RenderOptions, Rendered, Session};
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::scene::{Scene, file};
@@ -84,7 +84,7 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     print_summary(&plan, &passes.rendered, seconds, resumed_at, done);
     if let Some(target) = args.target_error {
         let target = super::shown_number(target);
-        let reached = rt_gpu::progressive::relative_error(&passes.rendered.film);
+        let reached = rt_gpu::render::progressive::relative_error(&passes.rendered.film);
         let black = passes.rendered.film.image_mean() == glam::DVec3::ZERO;
         if black && passes.outcome == Outcome::TargetReached {
             note!(
@@ -304,7 +304,7 @@ fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<(Option<P
         );
     }
     if let Some(c) = &checkpoint
-        && rt_gpu::output::resolved(c) == rt_gpu::output::resolved(output)
+        && rt_gpu::film::output::resolved(c) == rt_gpu::film::output::resolved(output)
     {
         bail!(
             "the checkpoint {} and the output {} are the same file: name them apart",
@@ -508,7 +508,7 @@ fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32
         plan.opts.sampler.name(),
         samples / seconds / 1e6,
         shown_radiance(film.image_mean()),
-        rt_gpu::converge::estimated_rmse(film),
+        film.estimated_rmse(),
         plan.output.display()
     );
     if film.invalid_samples > 0 {

@@ -35,7 +35,9 @@ pub fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
                 std::fs::remove_file(&path)
                     .with_context(|| format!("cannot replace the link {}", path.display()))?;
             }
-            rt_gpu::output::write_atomically(&path, |out| Ok(out.write_all(text.as_bytes())?))?;
+            rt_gpu::film::output::write_atomically(&path, |out| {
+                Ok(out.write_all(text.as_bytes())?)
+            })?;
         }
     }
     Ok(())

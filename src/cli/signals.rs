@@ -31,7 +31,7 @@ pub fn install_signal_handler() {
                 );
                 continue;
             }
-            rt_gpu::output::remove_pending_files();
+            rt_gpu::film::output::remove_pending_files();
             if GRACEFUL.load(Ordering::SeqCst) {
                 note!("\ninterrupted: the last checkpoint is kept");
             } else {

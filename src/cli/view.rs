@@ -4,7 +4,7 @@ use super::args::{RenderBackendArg, ViewArgs};
 use super::scenes::resolve_scene;
 use anyhow::{Context, bail};
 use rt_gpu::film::check_memory;
-use rt_gpu::output::ImageFormat;
+use rt_gpu::film::output::ImageFormat;
 use rt_gpu::render::Backend;
 use rt_gpu::scene::flat::FlatScene;
 use rt_gpu::viewer::{ViewConfig, run};

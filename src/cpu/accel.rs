@@ -7,9 +7,9 @@
 
 use super::lanes::{Lanes, equal_bits};
 use super::triangle_blocks::ShearedRay;
+use crate::accel::wide::{EMPTY, LEAF, TRIANGLES, WIDTH, WideBvh, WideNode};
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, inverse_direction};
 use crate::shared::ray::Ray;
-use crate::wide_bvh::{EMPTY, LEAF, TRIANGLES, WIDTH, WideBvh, WideNode};
 use std::mem::MaybeUninit;
 
 /// Pending children of a wide traversal. Its slots are not cleared when it is made: a ray's
@@ -258,7 +258,7 @@ mod tests {
     }
 
     use crate::accel::tests::{numbers, random_items};
-    use crate::wide_bvh::WideBvh;
+    use crate::accel::wide::WideBvh;
     use glam::Vec3;
 
     /// Leaves of boxes, tested by a closure.

@@ -1,5 +1,5 @@
 //! Up to four quads tested against a ray together, for scenes whose shapes are tested in turn
-//! (`shapes::closest_in_turn`): [`crate::shape::quad::hit_quad`]'s operations in its order,
+//! (`intersect::closest_in_turn`): [`crate::shape::quad::hit_quad`]'s operations in its order,
 //! lane by lane, so each lane's distance is bit for bit the one it gives its quad (Rust never
 //! fuses a multiply and an add unasked; SSE's division is IEEE's, as f32's is).
 

@@ -1,5 +1,5 @@
 //! Up to four spheres tested against a ray together, for scenes whose few shapes are tested
-//! in turn (`shapes::closest_in_turn`): [`crate::shape::sphere::hit_sphere`]'s operations in
+//! in turn (`intersect::closest_in_turn`): [`crate::shape::sphere::hit_sphere`]'s operations in
 //! its order, lane by lane, so each lane's distance is bit for bit the one it gives its sphere
 //! (Rust never fuses a multiply and an add unasked; SSE's square root is IEEE's, as
 //! `f32::sqrt` is).

@@ -17,9 +17,9 @@
 //! boundaries are stepped through without ending a segment.
 
 use super::background::background;
+use super::intersect::{intersect, intersect_light, stopped_before};
 use super::lights;
 use super::medium::{free_flight, hg_pdf, sample_hg, transmittance};
-use super::shapes::{intersect, intersect_light, stopped_before};
 use crate::material::Medium;
 use crate::options::{Integrator, RenderOptions};
 use crate::scene::Material;

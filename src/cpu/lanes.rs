@@ -1,10 +1,10 @@
-//! `WIDTH` floats handled as one (`wide_bvh::WIDTH`): eight in an AVX2 register where the build
+//! `WIDTH` floats handled as one (`accel::wide::WIDTH`): eight in an AVX2 register where the build
 //! targets a CPU with AVX2, else four in an SSE register, else four in an array with SSE's
 //! semantics. A wide node's boxes and a triangle block's triangles are tested through it, so the
 //! tests are written once for every width; each operation is the IEEE one of its scalar twin
 //! (no fused multiply-add), and `min`/`max` are SSE's: `a < b ? a : b`, `a > b ? a : b`.
 
-pub use crate::wide_bvh::WIDTH;
+pub use crate::accel::wide::WIDTH;
 
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 mod imp {

@@ -9,11 +9,11 @@ pub mod environment;
 pub mod four_quads;
 pub mod four_spheres;
 pub mod integrator;
+pub mod intersect;
 pub mod lanes;
 pub mod lights;
 pub mod medium;
 pub mod ray_count;
-pub mod shapes;
 pub mod triangle_blocks;
 
 use crate::backend::{RenderBackend, Rendered};

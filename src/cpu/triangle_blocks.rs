@@ -1,12 +1,12 @@
-//! A block's triangles tested against a ray together (`wide_bvh::TriangleBlock`, `WIDTH` lanes
-//! of `cpu/lanes.rs`): the watertight test of [`super::shapes::hit_triangle`], its
+//! A block's triangles tested against a ray together (`accel::wide::TriangleBlock`, `WIDTH` lanes
+//! of `cpu/lanes.rs`): the watertight test of [`super::intersect::hit_triangle`], its
 //! ray-dependent part (which axis becomes z, the shear) computed once per ray, and the rest lane
 //! by lane in the same operations in the same order, so that each lane's distance and weights
 //! are bit for bit the ones `hit_triangle` gives its triangle (no fused multiply-add).
 
 use super::lanes::{Lanes, equal_bits};
+use crate::accel::wide::{EMPTY, TriangleBlock, WIDTH};
 use crate::shared::ray::Ray;
-use crate::wide_bvh::{EMPTY, TriangleBlock, WIDTH};
 
 /// A ray in the frame of the watertight test: the ray, the axes that become x, y and z (z the
 /// dominant one) and the shear (`-d.x / d.z`, `-d.y / d.z`, `1 / d.z` in that frame).
@@ -109,7 +109,8 @@ impl ShearedRay {
                 material: 0,
                 light: 0,
             };
-            if let Some((t, b1, b2)) = super::shapes::hit_triangle(&triangle, &self.ray, 0.0, t_max)
+            if let Some((t, b1, b2)) =
+                super::intersect::hit_triangle(&triangle, &self.ray, 0.0, t_max)
             {
                 out.t[lane] = t;
                 out.b1[lane] = b1;

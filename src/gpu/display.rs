@@ -6,7 +6,7 @@
 use super::context::{GpuContext, GpuError};
 use super::shader::validate;
 use crate::film::Film;
-use crate::levels::Levels;
+use crate::film::levels::Levels;
 use crate::shared::exact_sum::SUM_WORDS;
 use crate::shared::layout::{
     ACCUM_COUNT, ACCUM_EVEN_SUM, ACCUM_ODD_SUM, ACCUM_WORDS, GpuDisplay, WgslStruct,

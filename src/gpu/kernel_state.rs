@@ -1,6 +1,6 @@
 //! What the kernel keeps per invocation and no buffer holds, declared once here and generated
 //! into WGSL (`kernel_struct!`): the closest hit of a ray being traced and the path under way.
-//! The CPU keeps the same state its own way (`cpu::shapes`' candidate, `cpu::integrator`'s loop).
+//! The CPU keeps the same state its own way (`cpu::intersect`' candidate, `cpu::integrator`'s loop).
 
 use crate::shared::layout::kernel_struct;
 use crate::shared::primitive::PrimitiveRef;

@@ -1,7 +1,7 @@
 //! Cut-outs and see-through surfaces: glTF's `alphaMode` (MASK with its `alphaCutoff`, BLEND)
 //! on a material, its alpha the base colour's alpha factor times its texture's alpha channel.
 //! Plain data; where a ray meets such a surface, the closest-hit search asks it whether the ray
-//! passes (`cpu::shapes::passes_through`, twin `shaders/alpha.wgsl`), for camera, bounce and
+//! passes (`cpu::intersect::passes_through`, twin `shaders/alpha.wgsl`), for camera, bounce and
 //! shadow rays alike: a masked texel is a hole, a blended one stops a ray with probability
 //! alpha (stochastic opacity, as pbrt-v4 and Cycles render BLEND in a path tracer), decided by a
 //! hash of the ray and the primitive ([`crate::shared::rng::alpha_number`]) so that every test of

@@ -214,12 +214,12 @@ pub struct FlatScene {
     pub instance_depth: u32,
     /// Over every primitive and instance, and after it each instanced mesh's own (see
     /// [`Instance::root`]). The CPU traverses it, but for scenes of a few shapes, which it tests
-    /// in turn (`cpu::shapes`); GPU kernels of small scenes test
+    /// in turn (`cpu::intersect`); GPU kernels of small scenes test
     /// their primitives as straight-line code instead (see `gpu::shader::Features`).
     pub bvh: crate::accel::Bvh,
-    /// The same hierarchy collapsed to `wide_bvh::WIDTH` children per node, which the CPU
+    /// The same hierarchy collapsed to `accel::wide::WIDTH` children per node, which the CPU
     /// traverses.
-    pub wide_bvh: crate::wide_bvh::WideBvh,
+    pub wide_bvh: crate::accel::wide::WideBvh,
     /// The quads four to a block (`shapes.quads` in order), which the CPU tests together where
     /// it tests a scene's shapes in turn; built with the BVH.
     pub quad_blocks: Vec<crate::shape::quad::QuadBlock>,
@@ -422,7 +422,7 @@ impl FlatScene {
             }
             _ => None,
         };
-        self.wide_bvh = crate::wide_bvh::WideBvh::new(&self.bvh, instance_roots, corners);
+        self.wide_bvh = crate::accel::wide::WideBvh::new(&self.bvh, instance_roots, corners);
         self.quad_blocks = crate::shape::quad::QuadBlock::blocks(&self.shapes.quads);
     }
 
@@ -1200,7 +1200,7 @@ impl<'a> Flattener<'a> {
             instances: self.instances,
             instance_depth: 0,
             bvh: crate::accel::Bvh::default(),
-            wide_bvh: crate::wide_bvh::WideBvh::default(),
+            wide_bvh: crate::accel::wide::WideBvh::default(),
             quad_blocks: Vec::new(),
             lights: Vec::new(),
             medium_crossings: 0,

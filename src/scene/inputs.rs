@@ -144,7 +144,7 @@ pub fn read(path: &Path, shown: &str, max_bytes: u64) -> Result<(Vec<u8>, InputF
 pub fn identity_fields(files: &[InputFile]) -> Vec<String> {
     files
         .iter()
-        .map(|f| crate::film_file::file_field(&f.shown, &f.hex_digest()))
+        .map(|f| crate::film::file::file_field(&f.shown, &f.hex_digest()))
         .collect()
 }
 

@@ -217,7 +217,7 @@ impl Mesh {
                     kept_colors.push(corners.map(|c| c.clamp(Vec3::ZERO, Vec3::ONE)));
                 }
                 if let Some(Some(corners)) = tangent_frames.then(|| tangents[i]) {
-                    // A tangent of no length bends nothing (`cpu::shapes::normal_mapped`).
+                    // A tangent of no length bends nothing (`cpu::intersect::normal_mapped`).
                     kept_tangents.push(corners.map(|t| {
                         let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
                         t.truncate().normalize_or_zero().extend(sign)

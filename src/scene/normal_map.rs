@@ -1,7 +1,7 @@
 //! Normal maps: an image of tangent-space normals that bends a mesh's shading normal, as glTF's
 //! `normalTexture` and Blender's Normal Map node (tangent space) define it. Plain data, and with
 //! serde its scene-file syntax `normal_map = { image = "file.png", scale = 1.0 }` on the
-//! materials that take one. Applied where a hit is completed (`cpu::shapes::normal_mapped`, twin
+//! materials that take one. Applied where a hit is completed (`cpu::intersect::normal_mapped`, twin
 //! `shaders/normal_map.wgsl`), with MikkTSpace tangents (`scene::tangents`).
 
 use crate::scene::file::checked;

@@ -33,7 +33,7 @@ kernel_struct! {
         /// The geometric normal, facing the incoming ray: it decides sides and offsets.
         normal: Vec3,
         /// The normal materials shade with, on `normal`'s side: a mesh's interpolated vertex
-        /// normals (see `cpu::shapes::shading_normal`), else `normal` itself.
+        /// normals (see `cpu::intersect::shading_normal`), else `normal` itself.
         shading: Vec3,
         material: u32,
         front_face: bool,

@@ -8,11 +8,11 @@
 pub mod controls;
 pub mod film;
 
-use crate::film_file::{self, FilmMeta};
+use crate::film::file::{self as film_file, FilmMeta};
+use crate::film::output::{PendingOutput, Transfer};
 use crate::gpu::display::{DisplayPass, read_texture, shows_levels_exactly};
 use crate::gpu::{Features, GpuContext};
 use crate::options::{Backend, RenderOptions};
-use crate::output::{PendingOutput, Transfer};
 use crate::render::GpuChoice;
 use crate::scene::Scene;
 use crate::scene::flat::FlatScene;
@@ -524,7 +524,7 @@ impl Viewer {
             .is_none_or(|(_, at)| at.elapsed().as_secs_f64() > ERROR_SECONDS);
         if stale && spp >= 4 {
             let film = self.film.film()?;
-            self.error_estimate = Some((crate::converge::estimated_rmse(&film), Instant::now()));
+            self.error_estimate = Some((film.estimated_rmse(), Instant::now()));
         }
         let error = match self.error_estimate {
             Some((e, _)) if spp >= 4 => format!(", RMSE ~{e:.2e}"),

@@ -13,6 +13,10 @@
 //! and odd sample indices into (`crate::shared::sampler::REPLICAS`): the film keeps the odd samples'
 //! sum beside the overall one.
 
+pub mod file;
+pub mod levels;
+pub mod output;
+
 use crate::shared::exact_sum::ExactSum;
 use glam::{DVec3, Vec3};
 
@@ -267,6 +271,16 @@ impl Film {
             invalid_samples: 0,
             stratified: false,
         }
+    }
+
+    /// The render's own estimate of its RMSE: the root of the mean variance of its pixel means
+    /// (from independent randomisations under a stratified sampler; see
+    /// [`Film::variance_of_mean`]).
+    pub fn estimated_rmse(&self) -> f64 {
+        let sum: f64 = (self.pixels.iter())
+            .map(|p| self.variance_of_mean(p).element_sum())
+            .sum();
+        (sum / (self.pixels.len() * 3).max(1) as f64).sqrt()
     }
 
     /// The variance of `pixel`'s mean: from its replicas when the samples were stratified

@@ -108,7 +108,7 @@ pub fn at_least(sum: &ExactSum, n: u64, threshold: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::Transfer;
+    use crate::film::output::Transfer;
     use crate::shared::rng::Rng;
 
     fn srgb(x: f32, _: f32) -> u8 {

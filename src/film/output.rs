@@ -3,7 +3,7 @@
 //! never clobbers an existing image.
 
 use crate::film::Film;
-use crate::levels::Levels;
+use crate::film::levels::Levels;
 use anyhow::Context;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -135,7 +135,7 @@ pub fn encode_image(
             text.flush()?;
         }
         // The film's whole state, without what would let rt-gpu continue or merge it.
-        ImageFormat::Exr => return crate::film_file::encode(film, None),
+        ImageFormat::Exr => return crate::film::file::encode(film, None),
         ImageFormat::Pfm => {
             let mut bytes = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
             // PFM stores rows bottom to top; -1.0 marks little-endian.
@@ -366,7 +366,7 @@ impl PendingOutput {
     pub fn commit_render(
         self,
         film: &Film,
-        meta: &crate::film_file::FilmMeta,
+        meta: &crate::film::file::FilmMeta,
         transfer: Option<Transfer>,
     ) -> anyhow::Result<()> {
         if ImageFormat::from_path(&self.shown)? == ImageFormat::Exr {
@@ -377,8 +377,12 @@ impl PendingOutput {
     }
 
     /// Writes `film` as a film file (an EXR image that rt-gpu can continue or merge).
-    pub fn commit_film(self, film: &Film, meta: &crate::film_file::FilmMeta) -> anyhow::Result<()> {
-        let bytes = crate::film_file::encode(film, Some(meta))
+    pub fn commit_film(
+        self,
+        film: &Film,
+        meta: &crate::film::file::FilmMeta,
+    ) -> anyhow::Result<()> {
+        let bytes = crate::film::file::encode(film, Some(meta))
             .with_context(|| format!("cannot encode {}", self.shown.display()))?;
         self.commit(&bytes)
     }

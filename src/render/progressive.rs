@@ -54,13 +54,13 @@ pub struct Job<'a> {
 const MIN_ESTIMATE_SPP: u32 = 2 * REPLICAS;
 
 /// The film's estimated relative error: its self-estimated RMSE (the replicas' spread for
-/// stratified samples, see `converge::estimated_rmse`) over its mean radiance; 0 for a black
+/// stratified samples, see `Film::estimated_rmse`) over its mean radiance; 0 for a black
 /// image.
 pub fn relative_error(film: &Film) -> f64 {
     let mean = film.image_mean();
     let mean = (mean[0] + mean[1] + mean[2]) / 3.0;
     if mean > 0.0 {
-        crate::converge::estimated_rmse(film) / mean
+        film.estimated_rmse() / mean
     } else {
         0.0
     }

@@ -1,6 +1,8 @@
 //! The backends that render: a [`RenderBackend`] per device, made ready once (a [`Session`])
 //! for many renders. What a render is asked to do is in [`crate::options`].
 
+pub mod progressive;
+
 pub use crate::backend::{RenderBackend, Rendered};
 use crate::cpu::CpuBackend;
 #[cfg(feature = "gpu")]

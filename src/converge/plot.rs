@@ -1,7 +1,7 @@
 //! The convergence plot: RMSE against seconds, log-log, one line per series, as SVG and PNG.
 
 use crate::converge::Report;
-use crate::output::write_atomically;
+use crate::film::output::write_atomically;
 use anyhow::{Context, anyhow};
 use plotters::prelude::*;
 use std::path::Path;

@@ -1,9 +1,11 @@
 //! Error against run time: ladders of renders at 1, 2, 4, ... spp per series (backend x
 //! integrator), each compared with a reference image, with log-log fits of RMSE against seconds.
 
-use crate::film::Film;
+#[cfg(feature = "plot")]
+pub mod plot;
+
+use crate::film::output::{read_pfm, write_atomically, write_image};
 use crate::options::SamplerKind;
-use crate::output::{read_pfm, write_atomically, write_image};
 use crate::render::{Backend, GpuChoice, Integrator, RenderOptions, Session};
 use crate::scene::flat::FlatScene;
 use anyhow::{Context, bail};
@@ -35,17 +37,6 @@ pub fn errors(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Errors {
         relmse: rel / n,
         mae: abs / n,
     }
-}
-
-/// A render's own estimate of its RMSE: the root of the mean variance of its pixel means (from
-/// independent randomisations under a stratified sampler; see `Film::variance_of_mean`).
-pub fn estimated_rmse(film: &Film) -> f64 {
-    let sum: f64 = film
-        .pixels
-        .iter()
-        .map(|p| film.variance_of_mean(p).element_sum())
-        .sum();
-    (sum / (film.pixels.len() * 3).max(1) as f64).sqrt()
 }
 
 /// The image errors are measured against, with its own noise where known.
@@ -312,7 +303,7 @@ fn reference(
         .render(&o.scene, &opts, &|f| progress.advance(f))?
         .film;
     progress.finish();
-    let noise = estimated_rmse(&film);
+    let noise = film.estimated_rmse();
     write_image(&mean_path, &film)?;
     write_atomically(&noise_path, |out| Ok(writeln!(out, "{noise} {spp}")?))?;
     Ok(Reference {
@@ -426,7 +417,7 @@ pub fn run_with(o: &ConvergeOptions, progress: &dyn Progress) -> anyhow::Result<
                 gpu_seconds: rendered.gpu_seconds,
                 samples_per_second: o.width as f64 * o.height as f64 * spp as f64 / seconds,
                 errors: errors(&film.mean_rgb(), &reference.rgb),
-                estimated_rmse: estimated_rmse(film),
+                estimated_rmse: film.estimated_rmse(),
             });
             spent += seconds;
             last = seconds;
