@@ -224,7 +224,7 @@ fn invalid_shaders_and_scenes_are_clear_errors() {
     let scene = builtin("cornell").expect("built-in");
     let flat = FlatScene::new(&scene, 8, 8).expect("valid");
     let features = rt_gpu::gpu::Features::of(&flat);
-    match gpu.kernel_from_source(
+    match gpu.checked_kernel_from_source(
         features,
         "@compute @workgroup_size(1) fn render() { let x: u32 = 1.5; }".into(),
         "render",
@@ -250,6 +250,55 @@ fn invalid_shaders_and_scenes_are_clear_errors() {
     bad.objects[0].material = 99;
     let err = FlatScene::new(&bad, 8, 8).expect_err("invalid material index");
     assert!(err.to_string().contains("material 99"), "{err}");
+}
+
+/// Issue 64: the kernel rendering runs without wgpu's bounds checks and loop guards, on the
+/// argument of its SAFETY note that every index is in range; with them kept (`checked_kernel`)
+/// it renders the same bits: a check that clamped an index or ended a loop would change them.
+/// Every built-in scene and shipped scene files of meshes, instances, textures, media and a
+/// Blender glTF file, both integrators.
+#[test]
+fn the_unchecked_kernel_renders_what_the_checked_one_does() {
+    let Some(gpu) = renderer() else { return };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes: Vec<(String, rt_gpu::scene::Scene)> =
+        ["cornell", "cornell-smoke", "spheres", "showcase"]
+            .iter()
+            .map(|name| (name.to_string(), builtin(name).expect("built-in")))
+            .collect();
+    for file in ["meshes.toml", "textured.toml", "materials.toml"] {
+        let scene =
+            rt_gpu::scene::file::load(&root.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        scenes.push((file.to_string(), scene));
+    }
+    let worn = root.join("blender/worn.glb");
+    let (scene, _) = rt_gpu::scene::gltf_scene::load(&worn, "worn.glb", None).expect("loads");
+    scenes.push(("blender/worn.glb".into(), scene));
+    for (name, scene) in &scenes {
+        for opts in [
+            common::opts(24, 16, 2, 5, 3),
+            common::nee_opts(24, 16, 2, 5, 3),
+        ] {
+            let flat = FlatScene::new(scene, opts.width, opts.height).expect("valid");
+            let features = rt_gpu::gpu::Features::of(&flat).for_render(&flat, &opts);
+            let render = |kernel| {
+                let tuning = Tuning::default();
+                gpu.render(&kernel, &flat, &opts, &tuning, &|_| {})
+                    .expect("renders")
+                    .0
+            };
+            let unchecked = render(gpu.kernel(&flat, features, "render").expect("compiles"));
+            let checked = render(
+                gpu.checked_kernel(&flat, features, "render")
+                    .expect("compiles"),
+            );
+            assert!(
+                unchecked.pixels == checked.pixels,
+                "{name}, {:?}: the checked kernel renders other bits",
+                opts.integrator
+            );
+        }
+    }
 }
 
 /// The general kernel (every feature, scene in storage buffers) renders what the specialised one

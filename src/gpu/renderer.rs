@@ -163,7 +163,9 @@ impl GpuRenderer {
         GpuRenderer { ctx }
     }
 
-    /// Builds, validates and compiles the kernel for `features` and `scene`.
+    /// Builds, validates and compiles the kernel for `features` and `scene`, without wgpu's
+    /// bounds checks and loop guards (a large cost in the hot loops), which the kernel's own
+    /// bounds make unneeded.
     pub fn kernel(
         &self,
         scene: &FlatScene,
@@ -171,33 +173,7 @@ impl GpuRenderer {
         entry_point: &str,
     ) -> Result<Kernel, GpuError> {
         let source = compose(&features, scene).map_err(GpuError::Shader)?;
-        self.kernel_from_source(features, source, entry_point)
-    }
-
-    /// Compiles WGSL `source`; errors come back as [`GpuError::Shader`], never a panic.
-    pub fn kernel_from_source(
-        &self,
-        features: Features,
-        source: String,
-        entry_point: &str,
-    ) -> Result<Kernel, GpuError> {
-        validate(&source).map_err(GpuError::Shader)?;
-        let device = &self.ctx.device;
-        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene"),
-            entries: &layout_entries(&features),
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scene"),
-            bind_group_layouts: &[Some(&bind_group_layout)],
-            immediate_size: 0,
-        });
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let descriptor = wgpu::ShaderModuleDescriptor {
-            label: Some("rt-gpu kernel"),
-            source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
-        };
-        // SAFETY: `source` was composed (`shader::compose`) for the scene whose buffers
+        // SAFETY: `source` is composed (`shader::compose`) for the scene whose buffers
         // `scene_buffers` binds, with its `Features::of`; every dynamic index is then in range:
         // - BVH stack (`traverse`): entering a top-level node at depth k, the stack holds <= k
         //   entries; a top-level leaf pushes <= L = `largest_instance_leaf` instances; inside an
@@ -220,19 +196,86 @@ impl GpuRenderer {
         //   code is composed only for scenes with a light (`Features::with_integrator`), and
         //   `check_kernel` refuses a kernel whose features or source are not this render's.
         // - Corner normals exist (9 floats per triangle) wherever SHADING_NORMALS is on, corner
-        //   texture coordinates (6 floats per triangle) wherever TRIANGLE_UVS is, and corner
-        //   tangents (12 floats per triangle) wherever NORMAL_MAPS is, and corner colours (9
-        //   floats per triangle) wherever VERTEX_COLORS is.
+        //   texture coordinates (6 floats per triangle) wherever TRIANGLE_UVS is, their second
+        //   set (6) wherever TRIANGLE_UVS1 is, corner tangents (12) wherever NORMAL_MAPS is, and
+        //   corner colours (9) wherever VERTEX_COLORS is.
         // - A normal map's texels lie in the images array: its size is its image's, and its
         //   start where `ImageArray` placed that image; texel indices are wrapped into it.
         // - accum: gid < tile_size <= (width, tile_rows), and the buffer holds tile_rows x width
         //   x ACCUM_WORDS words (below 2^32: `max_tile_pixels`); debug outputs hold a slot per
         //   invocation (`run_debug`).
-        // So wgpu's injected bounds checks and loop guards, a large cost in these hot loops,
-        // are dropped.
-        let module = unsafe {
-            device.create_shader_module_trusted(descriptor, wgpu::ShaderRuntimeChecks::unchecked())
+        unsafe {
+            self.compile(
+                features,
+                source,
+                entry_point,
+                wgpu::ShaderRuntimeChecks::unchecked(),
+            )
+        }
+    }
+
+    /// [`GpuRenderer::kernel`] with wgpu's bounds checks and loop guards kept: the same
+    /// kernel, safe whatever it indexes (tests compare its images with the unchecked one's).
+    pub fn checked_kernel(
+        &self,
+        scene: &FlatScene,
+        features: Features,
+        entry_point: &str,
+    ) -> Result<Kernel, GpuError> {
+        let source = compose(&features, scene).map_err(GpuError::Shader)?;
+        self.checked_kernel_from_source(features, source, entry_point)
+    }
+
+    /// Compiles any WGSL `source` with wgpu's runtime checks; errors come back as
+    /// [`GpuError::Shader`], never a panic.
+    pub fn checked_kernel_from_source(
+        &self,
+        features: Features,
+        source: String,
+        entry_point: &str,
+    ) -> Result<Kernel, GpuError> {
+        // SAFETY: with wgpu's runtime checks on, any source is safe to run.
+        unsafe {
+            self.compile(
+                features,
+                source,
+                entry_point,
+                wgpu::ShaderRuntimeChecks::checked(),
+            )
+        }
+    }
+
+    /// Compiles WGSL `source` with `checks`; errors come back as [`GpuError::Shader`].
+    ///
+    /// # Safety
+    /// Unless `checks` are wgpu's full runtime checks, every index the kernel makes must be in
+    /// range of what it binds: `source` composed by `shader::compose` for the scene it renders
+    /// (see the SAFETY note in [`GpuRenderer::kernel`]).
+    unsafe fn compile(
+        &self,
+        features: Features,
+        source: String,
+        entry_point: &str,
+        checks: wgpu::ShaderRuntimeChecks,
+    ) -> Result<Kernel, GpuError> {
+        validate(&source).map_err(GpuError::Shader)?;
+        let device = &self.ctx.device;
+        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &layout_entries(&features),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&bind_group_layout)],
+            immediate_size: 0,
+        });
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let descriptor = wgpu::ShaderModuleDescriptor {
+            label: Some("rt-gpu kernel"),
+            source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
         };
+        // SAFETY: the caller vouches for `source` where `checks` are not wgpu's full checks.
+        let module = unsafe { device.create_shader_module_trusted(descriptor, checks) };
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry_point),
             layout: Some(&pipeline_layout),
@@ -625,7 +668,7 @@ impl GpuRenderer {
         }
         // The unchecked kernel's indices are in range only for the scene it was composed for
         // (its stack depth, capacities and inlined primitives): see the SAFETY note in
-        // `kernel_from_source`.
+        // `kernel`.
         if compose(&kernel.features, scene).map_err(GpuError::Shader)? != kernel.source {
             return Err(GpuError::Runtime(
                 "this kernel was composed for another scene: compile one for this scene".into(),
