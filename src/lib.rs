@@ -13,6 +13,8 @@ pub mod film;
 pub mod gpu;
 pub mod material;
 pub mod options;
+pub mod params;
+pub mod placement;
 pub mod render;
 pub mod scene;
 pub mod shape;

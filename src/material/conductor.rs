@@ -7,7 +7,7 @@
 
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::{BsdfSample, Lobe, MaterialModel, reflect};
-use crate::scene::file::checked;
+use crate::params::checked;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::ray::{Hit, below_surface};

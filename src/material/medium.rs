@@ -8,7 +8,7 @@ use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::ray::Hit;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::sampler::Sampler;
-use crate::scene::file::checked;
+use crate::params::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 

@@ -9,7 +9,7 @@ use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
-use crate::scene::file::checked;
+use crate::params::checked;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 

@@ -21,7 +21,7 @@ use super::plastic::default_ior;
 use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
 use crate::material::texture;
 use crate::scene::alpha::Alpha;
-use crate::scene::file::checked;
+use crate::params::checked;
 use crate::scene::image::Image;
 use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::Texture;

@@ -12,7 +12,7 @@ use super::coat::Coat;
 use super::coat_table::COAT_TABLE_SIZE;
 use super::{BsdfSample, MaterialModel};
 use crate::material::texture;
-use crate::scene::file::checked;
+use crate::params::checked;
 use crate::scene::image::Image;
 use crate::scene::texture::Texture;
 use crate::shared::layout::GpuMaterial;

@@ -4,7 +4,7 @@
 //! materials that take one. Applied where a hit is completed (`cpu::intersect::normal_mapped`, twin
 //! `shaders/normal_map.wgsl`), with MikkTSpace tangents (`scene::tangents`).
 
-use crate::scene::file::checked;
+use crate::params::checked;
 use crate::scene::image::Image;
 use serde::{Deserialize, Serialize};
 

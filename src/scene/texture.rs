@@ -5,7 +5,7 @@
 //! checker in the surface's UV coordinates) or `{ image = "file.png" }` (an image in UV
 //! coordinates, bilinear, wrapping; see `scene::image` for formats).
 
-use crate::scene::file::checked;
+use crate::params::checked;
 use crate::scene::image::Image;
 use glam::{DVec3, Vec3};
 use serde::de::{self, MapAccess, SeqAccess, Visitor};

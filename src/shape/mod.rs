@@ -12,7 +12,7 @@ pub mod disk;
 pub mod quad;
 pub mod sphere;
 
-use crate::scene::Transform;
+use crate::placement::Transform;
 use crate::shared::constants::MIN_LIGHT_COSINE;
 use crate::shared::layout::{KIND_ENVIRONMENT, WgslStruct};
 use crate::shared::primitive::{KIND_INSTANCE, KIND_TRIANGLE, PRIMITIVE_KINDS};

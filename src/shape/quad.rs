@@ -4,8 +4,8 @@
 use super::{
     LightSample, ShapeParams, SurfaceLight, SurfaceShape, area_pdf, area_sample, pad, plane_surface,
 };
-use crate::scene::file::checked;
-use crate::scene::{MAX_EXTENT, MIN_SIZE, Transform};
+use crate::params::checked;
+use crate::placement::{MAX_EXTENT, MIN_SIZE, Transform};
 use crate::shared::layout::{WgslStruct, WgslType, gpu_struct};
 use crate::shared::ray::Ray;
 use bytemuck::{Pod, Zeroable};

@@ -2,8 +2,8 @@
 //! onto its surface at its radius, sampled as a light uniformly in the cone it subtends.
 
 use super::{LightSample, ShapeParams, SurfaceLight, SurfaceShape};
-use crate::scene::file::checked;
-use crate::scene::{MAX_EXTENT, MIN_SIZE, Transform};
+use crate::params::checked;
+use crate::placement::{MAX_EXTENT, MIN_SIZE, Transform};
 use crate::shared::layout::{WgslStruct, WgslType, gpu_struct};
 use crate::shared::ray::{POINT_ERROR, Ray};
 use crate::shared::warp::basis;
