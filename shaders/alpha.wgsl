@@ -1,4 +1,4 @@
-// See-through surfaces (twin: passes_through in src/cpu/intersect.rs; scene::alpha): whether a
+// See-through surfaces (twin: passes_through in src/cpu/intersect.rs; assets::alpha): whether a
 // ray passes a triangle of a MASK or BLEND material where it meets it.
 
 //#if ALPHA

@@ -1,7 +1,7 @@
 // The environment light (twin: src/cpu/environment.rs): what an escaped ray sees, and
 // directions sampled in proportion to filtered luminance above the sky's mean x sin(theta),
 // with their solid-angle pdf (the distribution is built on the host:
-// scene::environment::Distribution). Its
+// assets::environment::Distribution). Its
 // texels and CDFs (with its cells' densities) are in `images` (see ImageArray in
 // src/gpu/layout.rs).
 

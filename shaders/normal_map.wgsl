@@ -1,4 +1,4 @@
-// Normal maps (twin: normal_mapped in src/cpu/intersect.rs; scene::normal_map).
+// Normal maps (twin: normal_mapped in src/cpu/intersect.rs; assets::normal_map).
 
 //#if NORMAL_MAPS
 fn corner_tangent(at: u32) -> vec4f {

@@ -1,4 +1,4 @@
-// Texture lookups (twin: src/material/texture.rs): a material's albedo at a hit.
+// Texture lookups (twins: src/material/texture.rs, and src/assets/image_lookup.rs for reading images): a material's albedo at a hit.
 
 //#if CHECKER || UV_CHECKER
 // floor(x) mod 2, as 0 or 1, in f32 arithmetic (exact below 2^24; no integer conversion).

@@ -5,6 +5,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod assets;
 pub mod backend;
 pub mod converge;
 pub mod cpu;

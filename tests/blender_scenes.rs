@@ -5,10 +5,10 @@
 mod common;
 
 use glam::Vec3;
+use rt_gpu::assets::texture::Texture;
 use rt_gpu::material::Pbr;
 use rt_gpu::scene::gltf_scene::{load, read_extras};
 use rt_gpu::scene::punctual::Punctual;
-use rt_gpu::scene::texture::Texture;
 use rt_gpu::scene::{Background, Material, Scene};
 use std::path::Path;
 
@@ -410,15 +410,15 @@ const QUADRANTS: [(u32, u32, [f32; 3]); 4] = [
 
 /// `image`'s corners hold the script's quadrant colours, decoded from sRGB (within 8-bit
 /// rounding).
-fn assert_quadrants(image: &rt_gpu::scene::image::Image, what: &str) {
-    use rt_gpu::scene::image::srgb_to_linear;
+fn assert_quadrants(image: &rt_gpu::assets::image::Image, what: &str) {
+    use rt_gpu::assets::image::srgb_to_linear;
     let linear = QUADRANTS.map(|(x, y, srgb)| (x, y, srgb.map(srgb_to_linear)));
     assert_texels(image, &linear, 0.005, what);
 }
 
 /// `image` is 64x64 and holds at each (x, y) of `texels` its linear value, within `tolerance`.
 fn assert_texels(
-    image: &rt_gpu::scene::image::Image,
+    image: &rt_gpu::assets::image::Image,
     texels: &[(u32, u32, [f32; 3])],
     tolerance: f32,
     what: &str,
@@ -543,7 +543,7 @@ fn blenders_textured_scene_renders_as_in_cycles() {
         .copied()
         .collect();
     let upside_down =
-        rt_gpu::scene::image::Image::from_linear("flipped", image.width, image.height, texels)
+        rt_gpu::assets::image::Image::from_linear("flipped", image.width, image.height, texels)
             .expect("valid")
             .leak();
     lambertian.albedo = Texture::Image(upside_down);
@@ -666,7 +666,7 @@ const TILTS: [(u32, u32, [f32; 3]); 4] = [
     (63, 63, [0.25, 0.5, 0.933]),
 ];
 
-fn assert_tilts(map: Option<&rt_gpu::scene::normal_map::NormalMap>, what: &str) {
+fn assert_tilts(map: Option<&rt_gpu::assets::normal_map::NormalMap>, what: &str) {
     let map = map.unwrap_or_else(|| panic!("{what}: no normal map"));
     assert_eq!(map.scale, 1.0, "{what}");
     assert_texels(map.image, &TILTS, 0.003, what);
@@ -731,8 +731,8 @@ const BUMPY_REGIONS: [(&str, [usize; 2], [usize; 2]); 5] = [
 /// map when given.
 fn bumpy_lambert(
     normal_map: impl Fn(
-        rt_gpu::scene::normal_map::NormalMap,
-    ) -> Option<rt_gpu::scene::normal_map::NormalMap>,
+        rt_gpu::assets::normal_map::NormalMap,
+    ) -> Option<rt_gpu::assets::normal_map::NormalMap>,
 ) -> Scene {
     let (mut scene, _) = blender_file("bumpy.glb");
     for m in &mut scene.materials {
@@ -751,15 +751,15 @@ fn bumpy_lambert(
 /// wrong sign).
 #[cfg(feature = "gpu")]
 fn green_flipped(
-    map: rt_gpu::scene::normal_map::NormalMap,
-) -> rt_gpu::scene::normal_map::NormalMap {
+    map: rt_gpu::assets::normal_map::NormalMap,
+) -> rt_gpu::assets::normal_map::NormalMap {
     let texels = map
         .image
         .texels
         .chunks_exact(3)
         .flat_map(|t| [t[0], 1.0 - t[1], t[2]])
         .collect();
-    let image = rt_gpu::scene::image::Image::from_linear(
+    let image = rt_gpu::assets::image::Image::from_linear(
         "green flipped",
         map.image.width,
         map.image.height,
@@ -767,7 +767,7 @@ fn green_flipped(
     )
     .expect("valid")
     .leak();
-    rt_gpu::scene::normal_map::NormalMap { image, ..map }
+    rt_gpu::assets::normal_map::NormalMap { image, ..map }
 }
 
 /// Under a low sun, each quadrant of the normal-mapped floor is as bright as its tilt makes it.
@@ -838,7 +838,7 @@ const WORN_TEXELS: [(u32, u32, [f32; 3]); 4] = [
 /// meshes' texture coordinates: Blender's 0..1 UVs span 0..2 on the floor, 0..1.5 on the cube.
 #[test]
 fn blenders_metallic_roughness_and_samplers_arrive_as_the_script_set_them() {
-    use rt_gpu::scene::image_lookup::{Filter, ImageLookup, Wrap};
+    use rt_gpu::assets::image_lookup::{Filter, ImageLookup, Wrap};
     let (scene, _) = blender_file("worn.glb");
     let nearest = ImageLookup {
         filter: Filter::Nearest,

@@ -11,13 +11,13 @@ mod common;
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use glam::{Vec2, Vec3};
+use rt_gpu::assets::environment::Environment;
+use rt_gpu::assets::image::{Image, with_base_dir};
 use rt_gpu::cpu::environment;
 #[cfg(feature = "gpu")]
 use rt_gpu::gpu::Tuning;
-use rt_gpu::scene::environment::Environment;
 use rt_gpu::scene::file::{load, parse, to_toml};
 use rt_gpu::scene::flat::FlatScene;
-use rt_gpu::scene::image::{Image, with_base_dir};
 use rt_gpu::scene::{Background, Material, Scene, Shape};
 use std::f32::consts::PI;
 use std::path::Path;
@@ -395,13 +395,13 @@ fn gpu_matches_cpu_under_an_environment() {
 fn gpu_image_lookups_match_the_cpu() {
     let Some(gpu) = renderer() else { return };
     let flat = FlatScene::new(&textured_scene(), 8, 8).expect("valid");
-    let textured: Vec<(u32, rt_gpu::scene::texture::Texture)> = flat
+    let textured: Vec<(u32, rt_gpu::assets::texture::Texture)> = flat
         .materials
         .iter()
         .enumerate()
         .filter_map(|(i, m)| match m {
             Material::Lambertian(l)
-                if matches!(l.albedo, rt_gpu::scene::texture::Texture::Image(_)) =>
+                if matches!(l.albedo, rt_gpu::assets::texture::Texture::Image(_)) =>
             {
                 Some((i as u32, l.albedo))
             }
@@ -544,7 +544,7 @@ fn every_supported_format_loads() {
     let dir = tempfile::tempdir().unwrap();
     let grey = 0.5f32;
     // 128 of 255, and 32896 of 65535, are 128 / 255 decoded from sRGB.
-    let linear_grey = rt_gpu::scene::image::srgb_to_linear(128.0 / 255.0);
+    let linear_grey = rt_gpu::assets::image::srgb_to_linear(128.0 / 255.0);
     let eight = image::RgbImage::from_raw(2, 1, vec![128, 128, 128, 0, 0, 0]).unwrap();
     let sixteen = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(
         2,
@@ -565,7 +565,7 @@ fn every_supported_format_loads() {
         ("c.exr", grey, 1e-6),
         ("c.hdr", grey, 1e-2),
     ] {
-        let image = rt_gpu::scene::image::load(&dir.path().join(name), name)
+        let image = rt_gpu::assets::image::load(&dir.path().join(name), name)
             .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!((image.width, image.height), (2, 1), "{name}");
         let first = image.texel(0, 0);

@@ -128,10 +128,10 @@ fn closed_emitting_sphere_gives_the_geometric_series() {
 /// 0.98, must break each bound. Both backends.
 #[test]
 fn normal_maps_keep_a_lossless_surface_lossless() {
+    use rt_gpu::assets::environment::Environment;
+    use rt_gpu::assets::image::Image;
+    use rt_gpu::assets::normal_map::NormalMap;
     use rt_gpu::scene::Scene;
-    use rt_gpu::scene::environment::Environment;
-    use rt_gpu::scene::image::Image;
-    use rt_gpu::scene::normal_map::NormalMap;
     #[cfg(feature = "gpu")]
     let gpu = common::gpu::renderer();
     // A 4 x 4 map of normals tilted 60 degrees toward 16 azimuths.

@@ -339,7 +339,7 @@ fn a_gltf_scene_under_its_sky_matches_on_both_backends() {
     let rt_gpu::scene::Material::Pbr(pbr) = &mut brighter.materials[0] else {
         panic!("pbr");
     };
-    pbr.base_color = rt_gpu::scene::texture::Texture::Colour(Vec3::new(0.8, 0.5, 0.3) * 1.02);
+    pbr.base_color = rt_gpu::assets::texture::Texture::Colour(Vec3::new(0.8, 0.5, 0.3) * 1.02);
     let verdict = compare(&cpu, &render_gpu(&gpu, &brighter, &opts(2), &tuning));
     eprintln!("gpu with a 2% brighter base colour: {verdict:?}");
     assert!(

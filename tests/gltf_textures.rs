@@ -6,9 +6,9 @@
 mod common;
 
 use glam::{Vec2, Vec3};
+use rt_gpu::assets::image::srgb_to_linear;
+use rt_gpu::assets::texture::Texture;
 use rt_gpu::scene::gltf_scene::load;
-use rt_gpu::scene::image::srgb_to_linear;
-use rt_gpu::scene::texture::Texture;
 use rt_gpu::scene::{Material, Scene};
 use std::path::{Path, PathBuf};
 
@@ -360,7 +360,7 @@ fn a_normal_map_turns_with_normals_that_point_against_the_winding() {
 /// once and held with each.
 #[test]
 fn samplers_arrive_as_the_images_lookup() {
-    use rt_gpu::scene::image_lookup::{Filter, ImageLookup, Wrap};
+    use rt_gpu::assets::image_lookup::{Filter, ImageLookup, Wrap};
     let dir = tempfile::tempdir().expect("temp dir");
     write_png(dir.path());
     let with_sampler = |sampler: &str| {
@@ -796,7 +796,7 @@ fn an_image_used_with_many_factors_and_samplers_is_held_once() {
     );
     std::fs::write(&path, text).expect("writes");
     let (scene, _) = load(&path, "tri.gltf", None).expect("loads");
-    let images: Vec<&rt_gpu::scene::image::Image> = (scene.materials.iter())
+    let images: Vec<&rt_gpu::assets::image::Image> = (scene.materials.iter())
         .map(|m| match m {
             Material::Pbr(pbr) => match pbr.base_color {
                 Texture::Image(image) => image,
@@ -1059,7 +1059,7 @@ fn a_transmission_texture_scales_the_factor_at_each_hit() {
         let Some(gpu) = renderer() else { return };
         // Lit from one side (a quarter of the environment white), so that what the glass
         // lets through differs from what the coat reflects.
-        let quarter = rt_gpu::scene::image::Image::from_linear(
+        let quarter = rt_gpu::assets::image::Image::from_linear(
             "quarter",
             4,
             1,
@@ -1069,7 +1069,7 @@ fn a_transmission_texture_scales_the_factor_at_each_hit() {
         .leak();
         let mut scene = scene.clone();
         scene.background = rt_gpu::scene::Background::Environment(
-            rt_gpu::scene::environment::Environment::new(quarter, 1.0, 0.0).expect("valid"),
+            rt_gpu::assets::environment::Environment::new(quarter, 1.0, 0.0).expect("valid"),
         );
         let opts = |seed| common::nee_opts(24, 24, 512, 6, seed);
         let cpu = common::render_cpu(&scene, &opts(1));

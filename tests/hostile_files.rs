@@ -325,7 +325,7 @@ fn png_header_only(width: u32, height: u32) -> Vec<u8> {
 
 #[test]
 fn images_are_checked_from_their_headers_and_radiance_files_of_any_writer_load() {
-    use rt_gpu::scene::image::load as load_image;
+    use rt_gpu::assets::image::load as load_image;
     let dir = tempfile::tempdir().expect("tempdir");
     let d = dir.path();
     // 16384^2: refused from the header, before gigabytes are decoded.
@@ -370,7 +370,7 @@ fn images_the_gpu_cannot_hold_are_refused_from_their_headers() {
     let capacity = rt_gpu::gpu::renderer::image_capacity(&limits);
     // Just over what the adapter holds, within what an image may have (lavapipe: 16384x4097).
     let (width, height) = (16384u64, capacity / 16384 + 1);
-    if width * height > rt_gpu::scene::image::MAX_TEXELS {
+    if width * height > rt_gpu::assets::image::MAX_TEXELS {
         return eprintln!("skipping: {} holds any image rt-gpu reads", info.name);
     }
     let dir = tempfile::tempdir().expect("tempdir");
@@ -502,7 +502,7 @@ fn mtl_map_options_and_emission_are_read_or_refused_never_guessed() {
     let parts = load_with("newmtl paint\nmap_Kd -s 2 2 1 my tex.png\n").expect("loads");
     let source = match parts[0].material {
         Some(rt_gpu::scene::Material::Pbr(pbr)) => match pbr.base_color {
-            rt_gpu::scene::texture::Texture::Image(image) => image.source.clone(),
+            rt_gpu::assets::texture::Texture::Image(image) => image.source.clone(),
             other => panic!("{other:?}"),
         },
         other => panic!("{other:?}"),
@@ -534,7 +534,7 @@ fn mtl_map_options_and_emission_are_read_or_refused_never_guessed() {
     match parts[0].material {
         Some(rt_gpu::scene::Material::Light(light)) => assert_eq!(
             light.alpha.map(|a| (a.mode, a.factor)),
-            Some((rt_gpu::scene::alpha::AlphaMode::Blend, 0.25))
+            Some((rt_gpu::assets::alpha::AlphaMode::Blend, 0.25))
         ),
         other => panic!("{other:?}"),
     }

@@ -71,8 +71,9 @@ fn obj_polygons_negative_indices_and_missing_normals() {
     assert!(!flat.bvh.nodes.is_empty());
     // And written back, it reads the same.
     let text = to_toml(&scene);
-    let again = rt_gpu::scene::image::with_base_dir(dir.path(), || parse(&text, "again.toml", "s"))
-        .expect("written scene parses");
+    let again =
+        rt_gpu::assets::image::with_base_dir(dir.path(), || parse(&text, "again.toml", "s"))
+            .expect("written scene parses");
     assert_eq!(again.objects, scene.objects);
     // A mirroring scale keeps the front face on the same side of the surface.
     let mirrored = write(
@@ -286,7 +287,7 @@ fn gltf_node_transforms_selection_and_materials() {
     let flat = FlatScene::new(&scene, 8, 8).expect("flattens");
     assert_eq!(flat.lights.len(), 1);
     // And written back (each part its own object), it reads the same.
-    let again = rt_gpu::scene::image::with_base_dir(dir.path(), || {
+    let again = rt_gpu::assets::image::with_base_dir(dir.path(), || {
         parse(&to_toml(&scene), "again.toml", "s")
     })
     .expect("written scene parses");

@@ -14,13 +14,13 @@ mod common;
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare_scaled;
 use common::{nee_opts, render_cpu};
+use rt_gpu::assets::texture::Texture;
 use rt_gpu::film::Film;
 #[cfg(feature = "gpu")]
 use rt_gpu::gpu::{GpuRenderer, Tuning};
 #[cfg(feature = "gpu")]
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::builtin::builtin;
-use rt_gpu::scene::texture::Texture;
 use rt_gpu::scene::{Material, Scene};
 
 /// The Cornell box with its light's radiance times `scale`.

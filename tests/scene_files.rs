@@ -371,7 +371,7 @@ fn the_documented_example_parses() {
     let start = doc.find("```toml\n").expect("a toml block") + "```toml\n".len();
     let end = start + doc[start..].find("```").expect("closed");
     // Its image paths are relative to scenes/, as a file there would have them.
-    let scene = rt_gpu::scene::image::with_base_dir(
+    let scene = rt_gpu::assets::image::with_base_dir(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
         || parse(&doc[start..end], "scenes/README.md", "example"),
     )

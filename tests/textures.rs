@@ -189,7 +189,7 @@ fn gpu_texture_lookups_match_the_cpu() {
     let Some(gpu) = renderer() else { return };
     let scene = textured();
     let flat = FlatScene::new(&scene, 8, 8).expect("valid");
-    let textures: Vec<(u32, rt_gpu::scene::texture::Texture)> = flat
+    let textures: Vec<(u32, rt_gpu::assets::texture::Texture)> = flat
         .materials
         .iter()
         .enumerate()
@@ -235,14 +235,14 @@ fn gpu_texture_lookups_match_the_cpu() {
         let cpu_value = rt_gpu::material::texture::value(texture, &hit);
         // Negative control: the same comparison against checkers 2% larger must disagree.
         let larger = match *texture {
-            rt_gpu::scene::texture::Texture::Checker(c) => {
-                rt_gpu::scene::texture::Texture::Checker(rt_gpu::scene::texture::Checker {
+            rt_gpu::assets::texture::Texture::Checker(c) => {
+                rt_gpu::assets::texture::Texture::Checker(rt_gpu::assets::texture::Checker {
                     scale: c.scale * 1.02,
                     ..c
                 })
             }
-            rt_gpu::scene::texture::Texture::UvChecker(c) => {
-                rt_gpu::scene::texture::Texture::UvChecker(rt_gpu::scene::texture::Checker {
+            rt_gpu::assets::texture::Texture::UvChecker(c) => {
+                rt_gpu::assets::texture::Texture::UvChecker(rt_gpu::assets::texture::Checker {
                     scale: c.scale * 1.02,
                     ..c
                 })
@@ -252,10 +252,10 @@ fn gpu_texture_lookups_match_the_cpu() {
         differ_from_larger +=
             (gpu_value != rt_gpu::material::texture::value(&larger, &hit)) as usize;
         let (even, odd) = match texture {
-            rt_gpu::scene::texture::Texture::Checker(c)
-            | rt_gpu::scene::texture::Texture::UvChecker(c) => (c.even, c.odd),
-            rt_gpu::scene::texture::Texture::Colour(c) => (*c, *c),
-            rt_gpu::scene::texture::Texture::Image(_) => unreachable!("no images here"),
+            rt_gpu::assets::texture::Texture::Checker(c)
+            | rt_gpu::assets::texture::Texture::UvChecker(c) => (c.even, c.odd),
+            rt_gpu::assets::texture::Texture::Colour(c) => (*c, *c),
+            rt_gpu::assets::texture::Texture::Image(_) => unreachable!("no images here"),
         };
         assert!(
             gpu_value == even || gpu_value == odd,
@@ -280,8 +280,8 @@ fn gpu_texture_lookups_match_the_cpu() {
 #[cfg(feature = "gpu")]
 #[test]
 fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
-    use rt_gpu::scene::image_lookup::{Filter, ImageLookup, Wrap};
-    use rt_gpu::scene::texture::Texture;
+    use rt_gpu::assets::image_lookup::{Filter, ImageLookup, Wrap};
+    use rt_gpu::assets::texture::Texture;
     let Some(gpu) = renderer() else { return };
     let mut text = String::from(
         "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\n[materials]\n",
@@ -355,7 +355,7 @@ fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
         let cpu_value = rt_gpu::material::texture::value(&l.albedo, &hit);
         worst = worst.max((gpu_value - cpu_value).abs().max_element());
         let default = image.with_lookup(ImageLookup::default());
-        let as_default = rt_gpu::material::texture::image_at(&default, *uv);
+        let as_default = rt_gpu::assets::image_lookup::image_at(&default, *uv);
         differ_from_default += ((gpu_value - as_default).abs().max_element() > 1e-3) as usize;
     }
     eprintln!(
@@ -458,7 +458,7 @@ material = "bulb"
 "#;
 
 fn textured_lights(text: &str) -> Scene {
-    rt_gpu::scene::image::with_base_dir(std::path::Path::new("scenes"), || {
+    rt_gpu::assets::image::with_base_dir(std::path::Path::new("scenes"), || {
         parse(text, "lights.toml", "lights")
     })
     .unwrap_or_else(|e| panic!("{e}"))

@@ -310,7 +310,7 @@ pub struct RenderOptionArgs {
 /// `--background`'s value: a colour, `sky`, or an image read (into `inputs`) as an environment.
 fn background_arg(
     arg: &str,
-    inputs: &mut Vec<rt_gpu::scene::inputs::InputFile>,
+    inputs: &mut Vec<rt_gpu::assets::inputs::InputFile>,
 ) -> anyhow::Result<rt_gpu::scene::Background> {
     use rt_gpu::scene::Background;
     if arg == "sky" {
@@ -330,12 +330,12 @@ fn background_arg(
         }
         return Ok(Background::Constant(colour));
     }
-    let (image, read) = rt_gpu::scene::inputs::recorded(|| {
-        rt_gpu::scene::image::load(std::path::Path::new(arg), arg)
+    let (image, read) = rt_gpu::assets::inputs::recorded(|| {
+        rt_gpu::assets::image::load(std::path::Path::new(arg), arg)
     });
     let image = image.map_err(|e| anyhow::anyhow!("--background: {e}"))?;
     inputs.extend(read);
-    let environment = rt_gpu::scene::environment::Environment::new(image, 1.0, 0.0)
+    let environment = rt_gpu::assets::environment::Environment::new(image, 1.0, 0.0)
         .map_err(|e| anyhow::anyhow!("--background: {e}"))?;
     Ok(Background::Environment(environment))
 }

@@ -52,7 +52,7 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     let writes_film = plan.checkpoint.is_some() || plan.format == ImageFormat::Exr;
     let identity = if writes_film {
         let digest = file::digest(&plan.scene);
-        let files = rt_gpu::scene::inputs::identity_fields(&plan.scene.inputs);
+        let files = rt_gpu::assets::inputs::identity_fields(&plan.scene.inputs);
         film_file::identity(digest, &files, plan.backend, &plan.opts, args.unspecialised)
     } else {
         String::new()
@@ -134,7 +134,7 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
         });
         let loaded = match &chosen {
             Some((Backend::Gpu, _)) => {
-                rt_gpu::scene::image::with_device_check(rt_gpu::render::image_check(&gpu), || {
+                rt_gpu::assets::image::with_device_check(rt_gpu::render::image_check(&gpu), || {
                     load(args, scene_arg, partial, &gpu, &chosen)
                 })
             }

@@ -1,9 +1,9 @@
 //! The environment light (twin: `shaders/environment.wgsl`): what an escaped ray sees, and
 //! directions sampled in proportion to filtered luminance above the sky's mean x sin(theta) (see
-//! `scene::environment`), with their solid-angle pdf.
+//! `assets::environment`), with their solid-angle pdf.
 
-use crate::material::texture::bilinear;
-use crate::scene::environment::Environment;
+use crate::assets::environment::Environment;
+use crate::assets::image_lookup::bilinear;
 use crate::shared::angles;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -100,7 +100,7 @@ fn pdf_at(env: &Environment, local: Vec3, s: f32, t: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::image::Image;
+    use crate::assets::image::Image;
 
     fn environment(width: u32, height: u32, f: impl Fn(u32, u32) -> f32) -> Environment {
         let mut texels = Vec::new();

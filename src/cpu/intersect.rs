@@ -2,9 +2,9 @@
 
 use super::accel::{Leaves, reach};
 use super::four_spheres::LaneHits;
+use crate::assets::image_lookup::UvSet;
+use crate::assets::normal_map::NormalMap;
 use crate::scene::flat::{FlatScene, Instance, Triangle};
-use crate::scene::image_lookup::UvSet;
-use crate::scene::normal_map::NormalMap;
 use crate::shape::quad::{Quad, QuadBlock};
 use crate::shape::sphere::Sphere;
 use crate::shape::{ShapeKind, ShapeVisitor, SurfaceShape};
@@ -298,7 +298,7 @@ impl<const FIRST: bool> Leaves for InInstance<'_, FIRST> {
 
 /// Whether `ray` passes through triangle `triangle` (of material `material`) at barycentric
 /// weights `weights`, the primitive keyed `key` (as [`Candidate::key`]): never for opaque
-/// materials; see `scene::alpha` (twin: `shaders/alpha.wgsl`).
+/// materials; see `assets::alpha` (twin: `shaders/alpha.wgsl`).
 #[inline]
 fn passes_through(
     scene: &FlatScene,
@@ -319,7 +319,7 @@ fn passes_through(
                 UvSet::Second => scene.triangle_uvs1.get(triangle as usize).or(first),
             };
             let uv = corners.map_or(weights, |uvs| interpolated_uv(uvs, weights));
-            crate::material::texture::image_at(image, uv).x
+            crate::assets::image_lookup::image_at(image, uv).x
         }
         None => 1.0,
     };
@@ -726,7 +726,7 @@ pub fn normal_mapped(
     }
     let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
     let bitangent = sign * shading.cross(tangent);
-    let texel = crate::material::texture::image_at(map.image, uv);
+    let texel = crate::assets::image_lookup::image_at(map.image, uv);
     let local = (2.0 * texel - Vec3::ONE) * Vec3::new(map.scale, map.scale, 1.0);
     let n = local.x * tangent + local.y * bitangent + local.z * shading;
     let len2 = n.dot(n);

@@ -506,7 +506,7 @@ fn read_exr(path: &Path) -> anyhow::Result<Image<Layers<AnyChannels<FlatSamples>
 /// A render's identity as a film file records it: the scene's digest and every option that
 /// changes its samples (not the sample range: that is what checkpoints and shards differ in).
 ///
-/// `files` are the files the scene read, each `file:NAME=DIGEST` (`scene::inputs`), so that a
+/// `files` are the files the scene read, each `file:NAME=DIGEST` (`assets::inputs`), so that a
 /// film of a scene whose texture or mesh changed since is told apart, naming the file.
 pub fn identity(
     scene_digest: u64,

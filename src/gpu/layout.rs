@@ -2,11 +2,11 @@
 //! shared structs of `shared::layout`, the render's parameters, and the WGSL text of the shared
 //! declarations and constants.
 
+use crate::assets::image::Image;
+use crate::assets::texture::Texture;
 use crate::options::RenderOptions;
 use crate::scene::Background;
 use crate::scene::flat::{FlatScene, Light, LightShape};
-use crate::scene::image::Image;
-use crate::scene::texture::Texture;
 use crate::shared::layout::*;
 
 /// The kernel's BVH: the host's interior nodes, in their order (the root's first), each with
@@ -91,19 +91,19 @@ fn wgsl_constants() -> String {
         ("TEXTURE_IMAGE", TEXTURE_IMAGE.literal()),
         (
             "WRAP_CLAMP",
-            crate::scene::image_lookup::WRAP_CLAMP.literal(),
+            crate::assets::image_lookup::WRAP_CLAMP.literal(),
         ),
         (
             "WRAP_MIRROR",
-            crate::scene::image_lookup::WRAP_MIRROR.literal(),
+            crate::assets::image_lookup::WRAP_MIRROR.literal(),
         ),
         (
             "LOOKUP_NEAREST",
-            crate::scene::image_lookup::LOOKUP_NEAREST.literal(),
+            crate::assets::image_lookup::LOOKUP_NEAREST.literal(),
         ),
         (
             "LOOKUP_UV1",
-            crate::scene::image_lookup::LOOKUP_UV1.literal(),
+            crate::assets::image_lookup::LOOKUP_UV1.literal(),
         ),
         (
             "MIN_ALPHA",
@@ -113,15 +113,15 @@ fn wgsl_constants() -> String {
             "INDEX_MATCHED",
             crate::material::dielectric::INDEX_MATCHED.literal(),
         ),
-        ("ALPHA_MASK", crate::scene::alpha::ALPHA_MASK.literal()),
-        ("ALPHA_BLEND", crate::scene::alpha::ALPHA_BLEND.literal()),
+        ("ALPHA_MASK", crate::assets::alpha::ALPHA_MASK.literal()),
+        ("ALPHA_BLEND", crate::assets::alpha::ALPHA_BLEND.literal()),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("KIND_POINT", KIND_POINT.literal()),
         ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
-        ("ONE_BELOW", crate::scene::environment::ONE_BELOW.literal()),
+        ("ONE_BELOW", crate::assets::environment::ONE_BELOW.literal()),
         (
             "SUBDIVIDED_MAX_TEXELS",
-            crate::scene::environment::SUBDIVIDED_MAX_TEXELS.literal(),
+            crate::assets::environment::SUBDIVIDED_MAX_TEXELS.literal(),
         ),
         (
             "KIND_TRIANGLE",
@@ -257,7 +257,7 @@ pub struct SceneBuffers {
 /// Every image a scene reads, in one array of vec4f (the kernel's `images`): each image's
 /// texels (one vec4f each: RGB and 0, rows from the top), and after them the environment's
 /// CDFs (a vec4f per value: the rows of cells', then each row's cells', whose entry k below the
-/// row's width holds cell k's density in .z; `scene::environment::Distribution`). Positions
+/// row's width holds cell k's density in .z; `assets::environment::Distribution`). Positions
 /// count vec4fs.
 #[derive(Clone, Debug, Default)]
 pub struct ImageArray {

@@ -24,7 +24,7 @@
 use super::coat::coat_fresnel;
 use super::fresnel::refract_cos;
 use super::microfacet::Ggx;
-use crate::scene::image::Image;
+use crate::assets::image::Image;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::sync::Mutex;

@@ -5,8 +5,8 @@ use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::warp::{cosine_pdf, unit_vector};
 use crate::shared::ray::{Hit, below_surface};
 use crate::material::texture;
-use crate::scene::normal_map::NormalMap;
-use crate::scene::texture::Texture;
+use crate::assets::normal_map::NormalMap;
+use crate::assets::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 /// `{ type = "lambertian", albedo = [r, g, b], emission = [r, g, b], normal_map = { image, scale } }`.
 /// `emission` (optional, both faces) makes it glow, as the furnace tests need; `albedo` may be a
-/// texture; `normal_map` (optional) bends meshes' shading normals (`scene::normal_map`).
+/// texture; `normal_map` (optional) bends meshes' shading normals (`assets::normal_map`).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lambertian {

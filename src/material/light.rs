@@ -2,13 +2,13 @@
 //! (along the shape's normal) unless `two_sided`, and reflects nothing. Random numbers: 0.
 
 use super::{BsdfSample, MaterialModel};
-use crate::scene::alpha::Alpha;
+use crate::assets::alpha::Alpha;
 use crate::shared::ray::Hit;
 use crate::material::texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;
-use crate::scene::texture::{self as textures, Texture};
+use crate::assets::texture::{self as textures, Texture};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 

@@ -5,7 +5,7 @@ use super::{BsdfSample, Lobe, MaterialModel, reflect};
 use crate::shared::warp::unit_vector;
 use crate::shared::ray::Hit;
 use crate::material::texture;
-use crate::scene::texture::Texture;
+use crate::assets::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::sampler::Sampler;

@@ -7,10 +7,10 @@
 //! struct) and its WGSL twin, add one line to `registry!` below (which gives it its scene-file
 //! `type` name, kernel kind and feature), document it in `scenes/README.md`.
 
-use crate::scene::alpha::Alpha;
-use crate::scene::image::Image;
-use crate::scene::normal_map::NormalMap;
-use crate::scene::texture::Texture;
+use crate::assets::alpha::Alpha;
+use crate::assets::image::Image;
+use crate::assets::normal_map::NormalMap;
+use crate::assets::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::MaterialParams;
 use crate::shared::ray::Hit;
@@ -78,7 +78,7 @@ pub trait MaterialModel {
     fn parameter_image(&self) -> Option<&'static Image> {
         None
     }
-    /// How rays see through it, if they may (`scene::alpha`; the closest-hit search asks).
+    /// How rays see through it, if they may (`assets::alpha`; the closest-hit search asks).
     fn alpha(&self) -> Option<&Alpha> {
         None
     }

@@ -20,11 +20,11 @@ use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
 use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
 use crate::material::texture;
-use crate::scene::alpha::Alpha;
+use crate::assets::alpha::Alpha;
 use crate::params::checked;
-use crate::scene::image::Image;
-use crate::scene::normal_map::NormalMap;
-use crate::scene::texture::Texture;
+use crate::assets::image::Image;
+use crate::assets::normal_map::NormalMap;
+use crate::assets::texture::Texture;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::{MaterialParams, material_params};
 use crate::shared::ray::{Hit, below_surface};
@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 /// `{ type = "pbr", base_color = [0.8, 0.7, 0.2], metallic = 1.0, roughness = 0.35, ior = 1.5,
 /// transmission = 0 }`; the defaults are glTF's (metallic 1, roughness 1, ior 1.5,
 /// transmission 0); `base_color` may be any texture; `normal_map = { image, scale }` (optional)
-/// bends meshes' shading normals (glTF's `normalTexture`; `scene::normal_map`);
+/// bends meshes' shading normals (glTF's `normalTexture`; `assets::normal_map`);
 /// `metallic_roughness = "file.png"` (optional, linear) scales metallic by its blue channel and
 /// roughness by its green one (glTF's metallicRoughnessTexture); `emission = { radiance,
 /// strength, two_sided }` (optional, as a `light`'s; a colour or an image) glows on top of
@@ -92,7 +92,7 @@ impl TryFrom<PbrDoc> for Pbr {
     fn try_from(d: PbrDoc) -> Result<Self, String> {
         super::fresnel::check_ior(d.ior)?;
         let metallic_roughness = match d.metallic_roughness {
-            Some(name) => Some(crate::scene::image::load_named_linear(&name)?),
+            Some(name) => Some(crate::assets::image::load_named_linear(&name)?),
             None => None,
         };
         Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
@@ -178,7 +178,8 @@ impl Pbr {
         let Some(image) = self.metallic_roughness else {
             return *self;
         };
-        let texel = texture::image_at(image, texture::uv_at(image.lookup, hit));
+        let uv = texture::uv_at(image.lookup, hit);
+        let texel = crate::assets::image_lookup::image_at(image, uv);
         let roughness = self.roughness * texel.y;
         Pbr {
             metallic: self.metallic * texel.z,

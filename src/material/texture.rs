@@ -1,12 +1,11 @@
-//! Texture lookups (twin: `shaders/texture.wgsl`) and the surface coordinates they use.
+//! A material's texture at a hit (twin: `shaders/texture.wgsl`, whose image reading is
+//! `assets::image_lookup`'s twin) and the surface coordinates it reads.
 
-use crate::scene::image::Image;
-use crate::scene::image_lookup::{Filter, ImageLookup, UvSet, Wrap};
-use crate::scene::texture::Texture;
+use crate::assets::image_lookup::{ImageLookup, UvSet, image_at};
+use crate::assets::texture::Texture;
 use crate::shared::layout::{GpuMaterial, TEXTURE_CHECKER, TEXTURE_IMAGE, TEXTURE_UV_CHECKER};
 use crate::shared::ray::Hit;
 use glam::{Vec2, Vec3};
-use std::f32::consts::PI;
 
 /// A material's colour (albedo, base colour) from `texture` at `hit`: the texture's value times
 /// the hit's vertex colour (glTF's base colour x COLOR_0; twin: albedo_at in
@@ -44,82 +43,6 @@ pub fn uv_at(lookup: ImageLookup, hit: &Hit) -> Vec2 {
     }
 }
 
-/// Integer-valued texel index `i` of an axis of `n` texels, brought into 0..n by `mode`, in f32
-/// arithmetic as the kernel does it.
-#[inline]
-fn wrapped(mode: Wrap, i: f32, n: f32) -> u32 {
-    match mode {
-        Wrap::Repeat => wrap(i, n),
-        Wrap::Clamp => i.clamp(0.0, n - 1.0) as u32,
-        Wrap::Mirror => {
-            // Period 2n: the image, then the image reversed.
-            let m = i - 2.0 * n * (i / (2.0 * n)).floor();
-            let mirrored = if m >= n { 2.0 * n - 1.0 - m } else { m };
-            mirrored.clamp(0.0, n - 1.0) as u32
-        }
-    }
-}
-
-/// `image` filtered bilinearly at image coordinates (s, t) (s across, t down, [0, 1] spans
-/// the image once; texel centres at half-integers), wrapping around both edges: how
-/// environments read their images.
-#[inline]
-pub fn bilinear(image: &Image, s: f32, t: f32) -> Vec3 {
-    filtered(image, ImageLookup::default(), s, t)
-}
-
-/// `image` at surface coordinates `uv` (u across, v up; [0, 1] spans the image once) as its
-/// lookup says: wrapped on each axis and filtered (without its factor, which only a surface's
-/// colour, [`value`], applies).
-#[inline]
-pub fn image_at(image: &Image, uv: Vec2) -> Vec3 {
-    filtered(image, image.lookup, uv.x, 1.0 - uv.y)
-}
-
-/// `image` at image coordinates (s, t), wrapped and filtered as `lookup` says.
-#[inline]
-fn filtered(image: &Image, lookup: ImageLookup, s: f32, t: f32) -> Vec3 {
-    let (w, h) = (image.width as f32, image.height as f32);
-    if lookup.filter == Filter::Nearest {
-        let x = wrapped(lookup.wrap_u, (s * w).floor(), w);
-        let y = wrapped(lookup.wrap_v, (t * h).floor(), h);
-        return image.texel(x, y);
-    }
-    let x = s * w - 0.5;
-    let y = t * h - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let (x0, x1) = neighbours(lookup.wrap_u, x0, w);
-    let (y0, y1) = neighbours(lookup.wrap_v, y0, h);
-    let top = image.texel(x0, y0) * (1.0 - fx) + image.texel(x1, y0) * fx;
-    let bottom = image.texel(x0, y1) * (1.0 - fx) + image.texel(x1, y1) * fx;
-    top * (1.0 - fy) + bottom * fy
-}
-
-/// Integer-valued texel index `i` and the next, each brought into 0..n by `mode` as
-/// [`wrapped`] brings them: where both are inside already (nearly every lookup), they are
-/// themselves whatever the mode.
-#[inline(always)]
-fn neighbours(mode: Wrap, i: f32, n: f32) -> (u32, u32) {
-    if i >= 0.0 && i + 1.0 < n {
-        let i = i as u32;
-        return (i, i + 1);
-    }
-    (wrapped(mode, i, n), wrapped(mode, i + 1.0, n))
-}
-
-/// Integer-valued `i` wrapped into 0..n, in f32 arithmetic as the kernel does it (clamped,
-/// for coordinates so large that rounding leaves them outside).
-#[inline]
-fn wrap(i: f32, n: f32) -> u32 {
-    // Nearly every index is inside already, where the formula gives i itself: its division
-    // was a fifth of a bilinear lookup's time.
-    if (0.0..n).contains(&i) {
-        return i as u32;
-    }
-    (i - n * (i / n).floor()).clamp(0.0, n - 1.0) as u32
-}
-
 /// floor(x) mod 2, as 0 or 1, in f32 arithmetic (exact below 2^24; no integer conversion,
 /// whose overflow WGSL leaves undefined).
 #[inline]
@@ -131,16 +54,6 @@ fn parity(x: f32) -> f32 {
 #[inline]
 fn pick(parities: f32, even: Vec3, odd: Vec3) -> Vec3 {
     if parity(parities) == 0.0 { even } else { odd }
-}
-
-/// A sphere's surface coordinates at unit outward direction `n` from its centre: u the
-/// longitude from -x round through +z... (u = (atan2(-z, x) + pi) / 2 pi), v the latitude from
-/// the south pole (v = acos(-y) / pi), as in Ray Tracing: The Next Week.
-#[inline]
-pub fn sphere_uv(n: Vec3) -> Vec2 {
-    let u = (crate::shared::angles::atan2(-n.z, n.x) + PI) / (2.0 * PI);
-    let v = crate::shared::angles::acos(-n.y) / PI;
-    Vec2::new(u, v)
 }
 
 impl GpuMaterial {
@@ -181,7 +94,7 @@ impl GpuMaterial {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::texture::Checker;
+    use crate::assets::texture::Checker;
     use crate::shared::primitive::PrimitiveRef;
 
     fn hit_at(point: Vec3, uv: Vec2) -> Hit {
@@ -243,75 +156,5 @@ mod tests {
             let expected = if parity == 0.0 { c.even } else { c.odd };
             assert_eq!(value(&moved, &hit_at(p, Vec2::ZERO)), expected, "{p}");
         }
-    }
-
-    /// The shortcut for a texel and its neighbour inside the image gives what wrapping each
-    /// does, in every mode, at and around both edges.
-    #[test]
-    fn neighbours_are_the_wrapped_texels() {
-        for mode in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
-            for n in [1.0f32, 2.0, 5.0] {
-                for i in -7..12 {
-                    let i = i as f32;
-                    let expected = (wrapped(mode, i, n), wrapped(mode, i + 1.0, n));
-                    assert_eq!(neighbours(mode, i, n), expected, "{mode:?} {i} of {n}");
-                }
-            }
-        }
-    }
-
-    /// A 3x2 image whose texels hold their own (x, y, 0), read at u beyond [0, 1] each way.
-    #[test]
-    fn images_wrap_and_filter_as_their_lookup_says() {
-        use crate::scene::image_lookup::{Filter, ImageLookup, Wrap};
-        let texels = (0..2)
-            .flat_map(|y| (0..3).flat_map(move |x| [x as f32, y as f32, 0.0]))
-            .collect();
-        let image = Image::from_linear("xy", 3, 2, texels).expect("valid");
-        let read = |wrap_u, filter, u: f32| {
-            let lookup = ImageLookup {
-                wrap_u,
-                wrap_v: Wrap::Repeat,
-                filter,
-                ..ImageLookup::default()
-            };
-            // v = 0.75: row 0's centre (t = 0.25), so only x varies.
-            image_at(&image.with_lookup(lookup), Vec2::new(u, 0.75))
-        };
-        let x = |wrap, filter, u| read(wrap, filter, u).x;
-        // Nearest: u = -0.1 is texel -1, u = 1.2 texel 3 (of 0..3).
-        assert_eq!(x(Wrap::Repeat, Filter::Nearest, -0.1), 2.0);
-        assert_eq!(x(Wrap::Clamp, Filter::Nearest, -0.1), 0.0);
-        assert_eq!(x(Wrap::Mirror, Filter::Nearest, -0.1), 0.0);
-        assert_eq!(x(Wrap::Repeat, Filter::Nearest, 1.2), 0.0);
-        assert_eq!(x(Wrap::Clamp, Filter::Nearest, 1.2), 2.0);
-        assert_eq!(x(Wrap::Mirror, Filter::Nearest, 1.2), 2.0);
-        // Mirror's period is twice the image: texel 4 is texel 1, texel 6 texel 0 again.
-        assert_eq!(x(Wrap::Mirror, Filter::Nearest, 1.5), 1.0);
-        assert_eq!(x(Wrap::Mirror, Filter::Nearest, 2.1), 0.0);
-        assert_eq!(x(Wrap::Clamp, Filter::Nearest, 0.5), 1.0);
-        // Linear, halfway between texel centres 2 and 3 (u = 1): repeat blends texel 2 with
-        // texel 0, clamp and mirror keep texel 2.
-        assert_eq!(x(Wrap::Repeat, Filter::Linear, 1.0), 1.0);
-        assert_eq!(x(Wrap::Clamp, Filter::Linear, 1.0), 2.0);
-        assert_eq!(x(Wrap::Mirror, Filter::Linear, 1.0), 2.0);
-        // The default lookup is the bilinear repeat environments use.
-        for u in [-0.7, 0.1, 0.5, 1.3] {
-            assert_eq!(
-                image_at(&image, Vec2::new(u, 0.3)),
-                bilinear(&image, u, 0.7),
-                "{u}"
-            );
-        }
-    }
-
-    #[test]
-    fn sphere_uv_follows_the_book() {
-        assert!((sphere_uv(Vec3::X) - Vec2::new(0.5, 0.5)).length() < 1e-6);
-        assert!((sphere_uv(Vec3::Y) - Vec2::new(0.5, 1.0)).length() < 1e-6);
-        assert!((sphere_uv(Vec3::NEG_Y).y).abs() < 1e-6);
-        assert!((sphere_uv(Vec3::NEG_X) - Vec2::new(0.0, 0.5)).length() < 1e-6);
-        assert!((sphere_uv(Vec3::Z) - Vec2::new(0.25, 0.5)).length() < 1e-6);
-        assert!((sphere_uv(Vec3::NEG_Z) - Vec2::new(0.75, 0.5)).length() < 1e-6);
     }
 }

@@ -122,11 +122,11 @@ pub fn auto_backend_seeing(look: &AdapterLook, gpu: &GpuChoice, scene: &FlatScen
     }
 }
 
-/// What `--backend gpu` asks of each image a scene loads (`scene::image::with_device_check`):
+/// What `--backend gpu` asks of each image a scene loads (`assets::image::with_device_check`):
 /// that the adapter `gpu` names holds it. Adapters are asked only for an image larger than any
 /// holds (wgpu's default limits: 8192 rows), so other scenes never wait for the drivers.
 #[cfg(feature = "gpu")]
-pub fn image_check(gpu: &GpuChoice) -> crate::scene::image::DeviceCheck {
+pub fn image_check(gpu: &GpuChoice) -> crate::assets::image::DeviceCheck {
     let gpu = gpu.clone();
     let look = std::sync::OnceLock::new();
     std::sync::Arc::new(move |texels: u64| {

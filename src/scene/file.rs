@@ -50,8 +50,9 @@ pub fn load(path: &Path) -> anyhow::Result<Scene> {
         .unwrap_or_else(|| "scene".into());
     // Image paths in the file are relative to its directory.
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (scene, inputs) =
-        super::inputs::recorded(|| super::image::with_base_dir(dir, || parse(text, &file, &name)));
+    let (scene, inputs) = crate::assets::inputs::recorded(|| {
+        crate::assets::image::with_base_dir(dir, || parse(text, &file, &name))
+    });
     Ok(Scene { inputs, ..scene? })
 }
 
@@ -957,9 +958,9 @@ fn background(background_doc: Option<Spanned<BackgroundDoc>>) -> Result<Backgrou
         Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
         Some(BackgroundDoc::Named(n)) if n == "sky" => Background::Sky,
         Some(BackgroundDoc::Environment(e)) => {
-            let image = super::image::load_named(&e.image)
+            let image = crate::assets::image::load_named(&e.image)
                 .map_err(|m| (background_span.clone(), format!("background: {m}")))?;
-            let env = super::environment::Environment::new(
+            let env = crate::assets::environment::Environment::new(
                 image,
                 e.strength.map_or(1.0, |s| s.0),
                 e.rotate_y.map_or(0.0, |r| r.0),
@@ -1001,7 +1002,7 @@ fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
     }
     let mut known: Vec<String> = Vec::new();
     for (source, scale, transform) in files {
-        let path = super::image::resolve(source);
+        let path = crate::assets::image::resolve(source);
         match super::gltf_scene::named_camera(&path, source, name)? {
             Ok(camera) => {
                 let place = |p: Vec3| transform.apply_point(p * scale);

@@ -4,10 +4,10 @@
 //! transforms rays per hit; only a mesh placed more than once is kept in its own coordinates
 //! and instanced (see [`Instance`]), its rays transformed into them.
 
-use super::image_lookup::UvSet;
 use super::mesh::Mesh;
-use super::texture::Texture;
 use super::{Background, Material, Scene, SceneError, Shape};
+use crate::assets::image_lookup::UvSet;
+use crate::assets::texture::Texture;
 use crate::shape::{ShapeKind, ShapeVisitor, ShapeVisitorMut, SurfaceShape};
 use crate::shared::primitive::{
     KIND_INSTANCE, KIND_TRIANGLE, MAX_PRIMITIVES_PER_KIND, PrimitiveRef,
@@ -234,7 +234,7 @@ pub struct FlatScene {
     pub medium_crossings: u32,
     /// Whether some material's texture needs surface (UV) coordinates: hits compute them.
     pub uv_textures: bool,
-    /// Whether some material is see-through (`scene::alpha`): the closest-hit search asks it.
+    /// Whether some material is see-through (`assets::alpha`): the closest-hit search asks it.
     pub see_through: bool,
     /// Where each box's six quads begin in `quads` (in the order of [`box_faces`]): kernels
     /// with the scene inlined test the six as one, as the slabs between opposite faces (see
@@ -283,7 +283,7 @@ pub enum LightShape {
     /// surface facing it.
     Directional { toward: Vec3, irradiance: Vec3 },
     /// The environment (always the last light): directions by its image's distribution.
-    Environment(super::environment::Environment),
+    Environment(crate::assets::environment::Environment),
 }
 
 impl LightShape {
@@ -642,8 +642,8 @@ fn punctual_light(
     origin: DVec3,
     radius: f64,
 ) -> (f64, LightShape) {
-    use super::environment::luminance;
     use super::punctual::Punctual;
+    use crate::assets::environment::luminance;
     use std::f64::consts::PI;
     let lum = |c: Vec3| luminance(c.x, c.y, c.z);
     let relative = |p: Vec3| (p.as_dvec3() - origin).as_vec3();

@@ -152,7 +152,7 @@ pub fn read_buffers(
                         Some(dir) => dir.join(&relative),
                         None => Path::new(&relative).to_path_buf(),
                     };
-                    super::inputs::read(&path, &beside(source, &relative), MAX_BUFFER_BYTES)
+                    crate::assets::inputs::read(&path, &beside(source, &relative), MAX_BUFFER_BYTES)
                         .map_err(|e| format!("mesh {source}: buffer {i} ({shown_uri}): {e}"))?
                         .0
                 }

@@ -7,11 +7,11 @@
 //! vertical field of view and its `aspectRatio`, where given, the image's default width over
 //! height.
 
-use super::environment::Environment;
-use super::image::Image;
 use super::mesh;
 use super::punctual::Punctual;
 use super::{Background, Camera, Object, RenderDefaults, Scene, Shape, Transform};
+use crate::assets::environment::Environment;
+use crate::assets::image::Image;
 use glam::{DMat4, DVec3, Vec3};
 use std::path::Path;
 use std::sync::OnceLock;
@@ -61,7 +61,8 @@ pub fn load(
     source: &str,
     camera: Option<&str>,
 ) -> Result<(Scene, Vec<String>), String> {
-    let (loaded, inputs) = super::inputs::recorded(|| load_unrecorded(path, source, camera));
+    let (loaded, inputs) =
+        crate::assets::inputs::recorded(|| load_unrecorded(path, source, camera));
     loaded.map(|(scene, notes)| (Scene { inputs, ..scene }, notes))
 }
 
@@ -304,7 +305,7 @@ pub fn read_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
 }
 
 fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> {
-    let (bytes, _) = super::inputs::read(path, source, super::mesh::MAX_MESH_FILE_BYTES)
+    let (bytes, _) = crate::assets::inputs::read(path, source, super::mesh::MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read {source}: {e}"))?;
     let gltf::Gltf { document, blob } = super::gltf_check::parse(&bytes, source)?;
     // Cameras and lights are posed as the meshes are (`mesh::load` read the buffers once

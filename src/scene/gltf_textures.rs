@@ -8,10 +8,10 @@
 //! normal textures with their scale. `KHR_texture_transform` is applied to the mesh's texture
 //! coordinates (`uv_sets`: one per set and material). Not read: TEXCOORD_2 and beyond.
 
-use super::image::{self, Image};
-use super::image_lookup::{Filter, ImageLookup, UvSet, Wrap};
-use super::normal_map::NormalMap;
-use super::texture::Texture;
+use crate::assets::image::{self, Image};
+use crate::assets::image_lookup::{Filter, ImageLookup, UvSet, Wrap};
+use crate::assets::normal_map::NormalMap;
+use crate::assets::texture::Texture;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Component, Path};
@@ -176,7 +176,7 @@ impl<'a> FileTextures<'a> {
                         (x as f32 + 0.5) / w as f32,
                         1.0 - (y as f32 + 0.5) / h as f32,
                     );
-                    crate::material::texture::image_at(transmission, uv).x
+                    crate::assets::image_lookup::image_at(transmission, uv).x
                 };
                 let [_, g, b] = match metallic_roughness {
                     Some(mr) => mr.texel(x, y).to_array(),
@@ -306,8 +306,8 @@ impl<'a> FileTextures<'a> {
             None => Path::new(&relative).to_path_buf(),
         };
         let shown = beside(self.source, &relative);
-        let (bytes, _) =
-            super::inputs::read(&path, &shown, image::MAX_IMAGE_FILE_BYTES).map_err(|e| {
+        let (bytes, _) = crate::assets::inputs::read(&path, &shown, image::MAX_IMAGE_FILE_BYTES)
+            .map_err(|e| {
                 let relative = super::file::quoted(&relative);
                 format!("cannot read image {name} ({relative}): {e}")
             })?;

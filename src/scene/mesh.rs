@@ -7,7 +7,7 @@
 //! file's winding: counter-clockwise seen from the front.
 
 use super::Material;
-use super::normal_map::NormalMap;
+use crate::assets::normal_map::NormalMap;
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -266,7 +266,7 @@ impl Mesh {
 pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
     type FileVersion = (PathBuf, u64, std::time::SystemTime, Option<String>);
     /// The parts read, and the files their reading read (the file, its buffers, its images).
-    type Loaded = (Vec<&'static Mesh>, Vec<super::inputs::InputFile>);
+    type Loaded = (Vec<&'static Mesh>, Vec<crate::assets::inputs::InputFile>);
     static CACHE: OnceLock<Mutex<HashMap<FileVersion, Loaded>>> = OnceLock::new();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     if !meta.is_file() {
@@ -277,10 +277,10 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'stati
     let key = (canonical, meta.len(), modified, node.map(str::to_string));
     let cache = CACHE.get_or_init(Default::default);
     if let Some((parts, inputs)) = cache.lock().map_err(|_| "mesh cache poisoned")?.get(&key) {
-        inputs.iter().for_each(super::inputs::note);
+        inputs.iter().for_each(crate::assets::inputs::note);
         return Ok(parts.clone());
     }
-    let (parts, inputs) = super::inputs::recorded(|| read_parts(path, source, node));
+    let (parts, inputs) = crate::assets::inputs::recorded(|| read_parts(path, source, node));
     let parts = parts?;
     cache
         .lock()
@@ -336,7 +336,7 @@ fn read_parts(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'sta
 /// Loads the mesh a scene file names as `source`, relative to the scene file's directory (see
 /// `image::with_base_dir`).
 pub fn load_named(source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
-    load(&super::image::resolve(source), source, node)
+    load(&crate::assets::image::resolve(source), source, node)
 }
 
 fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
@@ -377,7 +377,7 @@ pub(super) fn read_obj_text(path: &Path, source: &str, text: &str) -> Result<Vec
     // file the check refuses its result (or panic) is dropped unread.
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // The material library is read on another thread: what it reads is the scene's too.
-    let recorders = super::inputs::Recorders::current();
+    let recorders = crate::assets::inputs::Recorders::current();
     let refused = std::sync::Mutex::new(Vec::new());
     let parse = || {
         recorders.install(|| {
@@ -532,7 +532,7 @@ fn read_one_mtl(base_dir: &Path, name: &Path, source: &str) -> Result<tobj::MTLL
         .parent()
         .unwrap_or(Path::new(""))
         .join(name);
-    let (bytes, _) = super::inputs::read(&path, &shown.to_string_lossy(), MAX_MTL_BYTES)
+    let (bytes, _) = crate::assets::inputs::read(&path, &shown.to_string_lossy(), MAX_MTL_BYTES)
         .map_err(|e| format!("cannot be read: {e}"))?;
     // tobj panics on some malformed lines (`Kd 1 2`): such a library reads as malformed.
     match crate::caught_quietly(|| tobj::load_mtl_buf(&mut std::io::Cursor::new(bytes))) {
@@ -566,8 +566,8 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
     let dissolve =
         m.dissolve
             .filter(|d| d.is_finite() && *d < 1.0)
-            .map(|d| crate::scene::alpha::Alpha {
-                mode: crate::scene::alpha::AlphaMode::Blend,
+            .map(|d| crate::assets::alpha::Alpha {
+                mode: crate::assets::alpha::AlphaMode::Blend,
                 factor: d.max(0.0),
                 image: None,
             });
@@ -601,7 +601,7 @@ fn mtl_material(m: &tobj::Material, folder: &Path, source: &str) -> Result<Mater
         0.0
     });
     let base = match &m.diffuse_texture {
-        Some(map) => crate::scene::texture::Texture::Image(mtl_image(
+        Some(map) => crate::assets::texture::Texture::Image(mtl_image(
             map, "map_Kd", true, folder, source, &m.name,
         )?),
         None => colour(m.diffuse)
@@ -777,7 +777,7 @@ fn mtl_image(
     folder: &Path,
     source: &str,
     material: &str,
-) -> Result<&'static super::image::Image, String> {
+) -> Result<&'static crate::assets::image::Image, String> {
     use std::path::Component;
     let (_, name) = map_options(map)
         .map_err(|e| format!("mesh {source}: material \"{material}\"'s {slot} \"{map}\": {e}"))?;
@@ -796,13 +796,13 @@ fn mtl_image(
         .parent()
         .unwrap_or(Path::new(""))
         .join(relative);
-    super::image::load_as(&folder.join(relative), &shown.to_string_lossy(), srgb)
+    crate::assets::image::load_as(&folder.join(relative), &shown.to_string_lossy(), srgb)
 }
 
 /// An OBJ file's text: UTF-8, or Latin-1 (which some exporters write; OBJ's syntax is ASCII, so
 /// only names and comments can differ). UTF-16 is refused with what to do.
 fn obj_text(path: &Path, source: &str) -> Result<String, String> {
-    let (bytes, _) = super::inputs::read(path, source, MAX_MESH_FILE_BYTES)
+    let (bytes, _) = crate::assets::inputs::read(path, source, MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
         return Err(format!(
@@ -954,7 +954,7 @@ fn read_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>,
 
 fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Mesh>, String> {
     use super::gltf_check;
-    let (bytes, _) = super::inputs::read(path, source, MAX_MESH_FILE_BYTES)
+    let (bytes, _) = crate::assets::inputs::read(path, source, MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     gltf_check::check_container(&bytes, path, source)?;
     let gltf::Gltf { document, blob } = gltf_check::parse(&bytes, source)?;
@@ -1349,8 +1349,8 @@ fn material_of(
     m: &gltf::Material,
     textures: &mut super::gltf_textures::FileTextures,
 ) -> Result<Material, String> {
+    use crate::assets::texture::Texture;
     use crate::material::{Light, Pbr};
-    use crate::scene::texture::Texture;
     let name = &super::file::quoted(m.name().unwrap_or(""));
     check_material_values(m, textures.source())?;
     let pbr = m.pbr_metallic_roughness();
@@ -1372,16 +1372,16 @@ fn material_of(
                 None => None,
             };
             let cutoff = m.alpha_cutoff().unwrap_or(0.5);
-            Some(crate::scene::alpha::Alpha {
+            Some(crate::assets::alpha::Alpha {
                 mode: match mode {
-                    gltf::material::AlphaMode::Mask => crate::scene::alpha::AlphaMode::Mask {
+                    gltf::material::AlphaMode::Mask => crate::assets::alpha::AlphaMode::Mask {
                         cutoff: if cutoff.is_finite() {
                             cutoff.max(0.0)
                         } else {
                             0.5
                         },
                     },
-                    _ => crate::scene::alpha::AlphaMode::Blend,
+                    _ => crate::assets::alpha::AlphaMode::Blend,
                 },
                 factor: unit(pbr.base_color_factor()[3]),
                 image,

@@ -3,9 +3,7 @@
 //! A [`Scene`] is what a user describes (boxes, instances, named materials); [`flat::FlatScene`] is
 //! what the backends trace (world-space spheres and quads, resolved material indices).
 
-pub mod alpha;
 pub mod builtin;
-pub mod environment;
 pub mod file;
 pub mod flat;
 pub mod gltf_check;
@@ -14,16 +12,11 @@ pub mod gltf_pose;
 pub mod gltf_quantized;
 pub mod gltf_scene;
 pub mod gltf_textures;
-pub mod image;
-pub mod image_lookup;
-pub mod inputs;
 pub mod media;
 pub mod mesh;
-pub mod normal_map;
 mod obj_parallel;
 pub mod punctual;
 pub mod tangents;
-pub mod texture;
 
 use glam::Vec3;
 
@@ -73,7 +66,7 @@ pub enum Background {
     /// White at the horizon blending to (0.5, 0.7, 1.0) overhead, by the ray's y.
     Sky,
     /// An equirectangular HDR image, sampled as a light by next-event estimation.
-    Environment(environment::Environment),
+    Environment(crate::assets::environment::Environment),
 }
 
 /// Defaults a scene carries for how it is rendered; the CLI may override them.
@@ -99,7 +92,7 @@ pub struct Scene {
     pub defaults: RenderDefaults,
     /// The files the scene read (images, meshes, ...) besides the scene file itself: outputs
     /// must not overwrite them, and films record their digests.
-    pub inputs: Vec<inputs::InputFile>,
+    pub inputs: Vec<crate::assets::inputs::InputFile>,
 }
 
 /// Problems in a scene that any source (built-in, file, test) can have.

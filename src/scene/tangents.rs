@@ -2,7 +2,7 @@
 //! as Blender and glTF's reference viewers compute them (the `mikktspace` crate), so a normal
 //! map baked against Blender's frames bends normals here as it does there.
 
-use crate::scene::image_lookup::UvSet;
+use crate::assets::image_lookup::UvSet;
 use crate::scene::mesh::Mesh;
 use glam::{Vec2, Vec3, Vec4};
 

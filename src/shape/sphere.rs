@@ -151,7 +151,7 @@ impl SurfaceShape for Sphere {
         (point, POINT_ERROR * scale)
     }
     fn uv(&self, point: Vec3, _along_ray: Vec3) -> Vec2 {
-        crate::material::texture::sphere_uv((point - self.center) / self.radius.abs())
+        sphere_uv((point - self.center) / self.radius.abs())
     }
     /// `position` its centre, `size` |radius| (a hollow sphere emits too).
     fn as_light(&self) -> (f64, SurfaceLight) {
@@ -205,5 +205,30 @@ impl SurfaceShape for Sphere {
             light: self.light,
             _pad: [0; 2],
         }
+    }
+}
+
+/// A sphere's surface coordinates at unit outward direction `n` from its centre: u the
+/// longitude from -x round through +z... (u = (atan2(-z, x) + pi) / 2 pi), v the latitude from
+/// the south pole (v = acos(-y) / pi), as in Ray Tracing: The Next Week.
+#[inline]
+pub fn sphere_uv(n: Vec3) -> Vec2 {
+    let u = (crate::shared::angles::atan2(-n.z, n.x) + PI) / (2.0 * PI);
+    let v = crate::shared::angles::acos(-n.y) / PI;
+    Vec2::new(u, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_uv_follows_the_book() {
+        assert!((sphere_uv(Vec3::X) - Vec2::new(0.5, 0.5)).length() < 1e-6);
+        assert!((sphere_uv(Vec3::Y) - Vec2::new(0.5, 1.0)).length() < 1e-6);
+        assert!((sphere_uv(Vec3::NEG_Y).y).abs() < 1e-6);
+        assert!((sphere_uv(Vec3::NEG_X) - Vec2::new(0.0, 0.5)).length() < 1e-6);
+        assert!((sphere_uv(Vec3::Z) - Vec2::new(0.25, 0.5)).length() < 1e-6);
+        assert!((sphere_uv(Vec3::NEG_Z) - Vec2::new(0.75, 0.5)).length() < 1e-6);
     }
 }

@@ -332,9 +332,9 @@ gpu_struct! {
         texture_odd: [f32; 3],
         /// How the albedo's image is read (`ImageLookup::bits`).
         texture_lookup: u32,
-        /// See `scene::texture::Checker::shift`.
+        /// See `assets::texture::Checker::shift`.
         texture_shift: [f32; 3],
-        /// Its normal map (`scene::normal_map`): where its texels start in the images array,
+        /// Its normal map (`assets::normal_map`): where its texels start in the images array,
         /// its width and height (0: none), its scale and how it is read.
         normal_map_image: u32,
         normal_map_size: [f32; 2],
@@ -346,7 +346,7 @@ gpu_struct! {
         parameter_image_size: [f32; 2],
         parameter_image: u32,
         parameter_image_lookup: u32,
-        /// See-through surfaces (`scene::alpha`): the alpha factor, where the alpha image's
+        /// See-through surfaces (`assets::alpha`): the alpha factor, where the alpha image's
         /// texels start, its size (0: none) and how it is read, the mode (`ALPHA_*`; opaque
         /// 0) and MASK's cutoff.
         alpha_factor: f32,
@@ -404,7 +404,7 @@ gpu_struct! {
         sky: u32,
         /// Russian roulette from this many segments on; 0: off.
         roulette_depth: u32,
-        /// The environment (see `scene::environment`): cos and sin of its rotation about y,
+        /// The environment (see `assets::environment`): cos and sin of its rotation about y,
         environment_rotation: [f32; 2],
         /// where its texels and its CDFs (rows of cells, then each row's cells, with their
         /// densities) start in the images array,

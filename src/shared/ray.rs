@@ -40,7 +40,7 @@ kernel_struct! {
         /// Which primitive was hit.
         primitive: PrimitiveRef,
         /// Surface coordinates, for textures (zero unless the scene's textures need them): a
-        /// sphere's longitude and latitude (`material::texture::sphere_uv`), a quad's (a, b).
+        /// sphere's longitude and latitude (`shape::sphere::sphere_uv`), a quad's (a, b).
         uv: Vec2,
         /// A mesh's second texture coordinates (glTF's TEXCOORD_1) where a material reads them
         /// (`ImageLookup::uv_set`), else `uv`.

@@ -17,7 +17,7 @@ pub fn pcg_hash(input: u32) -> u32 {
 /// A see-through surface's number in [0, 1) for a ray (`origin`, `dir`) meeting primitive
 /// `primitive` (packed; an instance's `triangle`, else 0): a hash of all of them, so that each
 /// test of one ray against one surface draws the same number and surfaces behind one another
-/// draw independent ones (see `scene::alpha`).
+/// draw independent ones (see `assets::alpha`).
 #[inline]
 pub fn alpha_number(origin: [f32; 3], dir: [f32; 3], primitive: u32, triangle: u32) -> f32 {
     let mut h = pcg_hash(primitive ^ pcg_hash(triangle));

@@ -683,7 +683,7 @@ impl Viewer {
         let meta = FilmMeta {
             identity: film_file::identity(
                 crate::scene::file::digest(&self.scene),
-                &crate::scene::inputs::identity_fields(&self.scene.inputs),
+                &crate::assets::inputs::identity_fields(&self.scene.inputs),
                 config.backend,
                 &opts,
                 config.gpu.everything,

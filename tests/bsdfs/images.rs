@@ -7,10 +7,10 @@ use super::*;
 use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, opts, render_cpu};
+use rt_gpu::assets::texture::Texture;
 use rt_gpu::material::conductor::METALS;
 use rt_gpu::material::{Conductor, Dielectric, Pbr, Plastic};
 use rt_gpu::scene::builtin::builtin;
-use rt_gpu::scene::texture::Texture;
 use rt_gpu::scene::{Scene, Shape};
 
 /// The Cornell box with microfacet materials: the short box rough gold (0.3), its glass ball a

@@ -30,11 +30,11 @@ fn wo(degrees: f32) -> Vec3 {
 
 /// A normal map (any: the hit's shading normal stands for what it gives), which makes a
 /// microsurface of a material that only reflects.
-fn map() -> rt_gpu::scene::normal_map::NormalMap {
-    let image = rt_gpu::scene::image::Image::from_linear("flat", 1, 1, vec![0.5, 0.5, 1.0])
+fn map() -> rt_gpu::assets::normal_map::NormalMap {
+    let image = rt_gpu::assets::image::Image::from_linear("flat", 1, 1, vec![0.5, 0.5, 1.0])
         .expect("valid")
         .leak();
-    rt_gpu::scene::normal_map::NormalMap { image, scale: 1.0 }
+    rt_gpu::assets::normal_map::NormalMap { image, scale: 1.0 }
 }
 
 fn lambertian(albedo: f32) -> Material {

@@ -3,8 +3,8 @@
 
 use super::histogram::{Histogram, sample_vs_pdf_in};
 use super::*;
+use rt_gpu::assets::texture::Texture;
 use rt_gpu::material::Pbr;
-use rt_gpu::scene::texture::Texture;
 
 fn pbr(base: Vec3, metallic: f32, roughness: f32, transmission: f32) -> Material {
     Material::Pbr(Pbr::new(

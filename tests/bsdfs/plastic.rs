@@ -3,8 +3,8 @@
 
 use super::histogram::sample_vs_pdf;
 use super::*;
+use rt_gpu::assets::texture::Texture;
 use rt_gpu::material::{Lobe, Plastic};
-use rt_gpu::scene::texture::Texture;
 
 fn plastic(albedo: Vec3, ior: f32, roughness: f32) -> Material {
     Material::Plastic(Plastic::new(Texture::Colour(albedo), ior, roughness))

@@ -4,8 +4,8 @@
 //! materials that take one. Applied where a hit is completed (`cpu::intersect::normal_mapped`, twin
 //! `shaders/normal_map.wgsl`), with MikkTSpace tangents (`scene::tangents`).
 
+use crate::assets::image::Image;
 use crate::params::checked;
-use crate::scene::image::Image;
 use serde::{Deserialize, Serialize};
 
 /// Texels hold (x, y, z) of the normal in the tangent frame as `2 * value - 1` (linear 8- or
@@ -36,7 +36,7 @@ fn one() -> f32 {
 impl TryFrom<NormalMapDoc> for NormalMap {
     type Error = String;
     fn try_from(d: NormalMapDoc) -> Result<Self, String> {
-        let image = crate::scene::image::load_named_linear(&d.image)?;
+        let image = crate::assets::image::load_named_linear(&d.image)?;
         let map = NormalMap {
             image,
             scale: d.scale,

@@ -7,7 +7,7 @@
 //! hash of the ray and the primitive ([`crate::shared::rng::alpha_number`]) so that every test of
 //! one ray against one surface agrees.
 
-use crate::scene::image::Image;
+use crate::assets::image::Image;
 
 /// How alpha decides whether a ray passes.
 #[derive(Clone, Copy, Debug, PartialEq)]

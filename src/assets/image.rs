@@ -37,7 +37,7 @@ pub struct Image {
     /// The largest value of each channel of `texels`, and their mean (without `factor`).
     channel_max: glam::Vec3,
     raw_mean: glam::Vec3,
-    /// Built on first use by an environment light (see `scene::environment`).
+    /// Built on first use by an environment light (see `assets::environment`).
     pub(crate) sampling: OnceLock<super::environment::Distribution>,
 }
 

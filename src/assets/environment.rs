@@ -353,7 +353,7 @@ mod tests {
                     let s = (x as f32 + (a as f32 + 0.5) / 4.0) / w as f32;
                     let t = (y as f32 + (b as f32 + 0.5) / 4.0) / h as f32;
                     let t = t.clamp(0.5 / rows, 1.0 - 0.5 / rows);
-                    let v = crate::material::texture::bilinear(image, s, t);
+                    let v = crate::assets::image_lookup::bilinear(image, s, t);
                     sum += luminance(v.x, v.y, v.z) / 16.0;
                 }
                 sum

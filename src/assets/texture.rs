@@ -3,10 +3,10 @@
 //! scene-file syntax: `[r, g, b]`, `{ checker = { scale, even, odd } }` (a solid checker in
 //! space, as in Ray Tracing: The Next Week) or `{ uv_checker = { scale, even, odd } }` (a
 //! checker in the surface's UV coordinates) or `{ image = "file.png" }` (an image in UV
-//! coordinates, bilinear, wrapping; see `scene::image` for formats).
+//! coordinates, bilinear, wrapping; see `assets::image` for formats).
 
+use crate::assets::image::Image;
 use crate::params::checked;
-use crate::scene::image::Image;
 use glam::{DVec3, Vec3};
 use serde::de::{self, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -46,7 +46,7 @@ impl From<Vec3> for Texture {
 }
 
 /// Largest checker scale accepted (the scene's extent).
-pub const MAX_SCALE: f32 = crate::scene::MAX_EXTENT;
+pub const MAX_SCALE: f32 = crate::placement::MAX_EXTENT;
 
 impl Texture {
     /// Its parameter ranges (the colours are checked as they are read).
@@ -169,7 +169,9 @@ impl<'de> Visitor<'de> for TextureVisitor {
             "uv_checker" => Texture::UvChecker(map.next_value()?),
             "image" => {
                 let source: String = map.next_value()?;
-                Texture::Image(crate::scene::image::load_named(&source).map_err(de::Error::custom)?)
+                Texture::Image(
+                    crate::assets::image::load_named(&source).map_err(de::Error::custom)?,
+                )
             }
             other => {
                 return Err(de::Error::unknown_field(
