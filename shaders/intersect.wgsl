@@ -91,7 +91,7 @@ struct BoxHit {
 // The box between the planes of its opposite faces, -x and +x, -y and +y, -z and +z: where the
 // ray crosses them (`low`, `high`: each face's quad_distance before its edges are tested, so
 // that a face coincident with another quad meets the ray at the same t), whether it crosses
-// them at all (not where it runs parallel to them: |denominator| < 1e-8, as for quads) and, if
+// them at all (not where it runs parallel to them: |denominator| < PARALLEL_DENOMINATOR, as for quads) and, if
 // not, whether its origin lies between them. The ray is inside the box where it is between
 // all three pairs: it enters at the latest entry, if that lies ahead, or else leaves at the
 // earliest exit.

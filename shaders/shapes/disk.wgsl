@@ -2,10 +2,10 @@
 
 // Distance along the ray to disk s, or -1 for a miss: where it crosses the plane (from the
 // ray's origin to the centre first, as for quads), if within the radius. Rays parallel to the
-// plane (|denom| < 1e-8) miss.
+// plane (|denom| < PARALLEL_DENOMINATOR) miss.
 fn disk_distance(s: Disk, ray: Ray) -> f32 {
     let denom = dot(s.normal, ray.dir);
-    let facing = abs(denom) >= 1e-8;
+    let facing = abs(denom) >= PARALLEL_DENOMINATOR;
     let to_center = s.center - ray.origin;
     let t = dot(s.normal, to_center) / select(1.0, denom, facing);
     let planar = t * ray.dir - to_center;
@@ -27,7 +27,7 @@ fn consider_disk(s: Disk, index: u32, ray: Ray, in_order: bool, c: ptr<function,
         let from_center = ray.origin + t * ray.dir - s.center;
         let angle = atan2(dot(from_center, s.bitangent), dot(from_center, s.tangent));
         let u = select(angle, angle + 2.0 * PI, angle < 0.0) / (2.0 * PI);
-        (*c).uv = vec2f(min(u, 1.0 - 5.9604645e-8), length(from_center) / s.radius);
+        (*c).uv = vec2f(min(u, ONE_BELOW), length(from_center) / s.radius);
 //#endif
     }
 }

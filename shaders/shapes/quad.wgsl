@@ -1,14 +1,14 @@
 // A parallelogram (twin: src/shape/quad.rs). `Closest::shape.w` keeps its plane's offset.
 
 // Distance along the ray to quad q, or -1 for a miss. Branch-free: SIMD drivers run every
-// branch for some lane anyway. Rays parallel to the plane (|denom| < 1e-8) miss; their
+// branch for some lane anyway. Rays parallel to the plane (|denom| < PARALLEL_DENOMINATOR) miss; their
 // division is replaced by a harmless one. From the ray's origin to the corner first: exact
 // far from the world's origin, where n . q - n . o would cancel. A quad counts as hit up to
 // edge_tolerance (a fraction of each edge) past its edges, so that rays cannot slip between
 // the quads meeting at a box edge (see src/shape/quad.rs).
 fn quad_distance(q: Quad, ray: Ray) -> f32 {
     let denom = dot(q.normal, ray.dir);
-    let facing = abs(denom) >= 1e-8;
+    let facing = abs(denom) >= PARALLEL_DENOMINATOR;
     let to_corner = q.q - ray.origin;
     let t = dot(q.normal, to_corner) / select(1.0, denom, facing);
     let planar = t * ray.dir - to_corner;

@@ -323,8 +323,7 @@ impl Distribution {
     }
 }
 
-/// The largest f32 below 1.
-pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+pub use crate::shared::constants::ONE_BELOW;
 
 #[cfg(test)]
 mod tests {

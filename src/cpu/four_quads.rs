@@ -26,9 +26,13 @@ pub fn hits(_quads: &[Quad], block: &QuadBlock, ray: &Ray, t_max: f32) -> LaneHi
         let dir = [splat(ray.dir.x), splat(ray.dir.y), splat(ray.dir.z)];
         let denom = dot(normal, dir);
         let magnitude = _mm_andnot_ps(splat(-0.0), denom);
-        // A NaN denominator fails this as `denom.abs() < 1e-8` passes it; its t is NaN then,
+        // A NaN denominator fails this as `denom.abs() < PARALLEL_DENOMINATOR` passes it; its t
+        // is NaN then,
         // which fails the range test below as it does one lane at a time.
-        let crossing = _mm_cmpnlt_ps(magnitude, splat(1e-8));
+        let crossing = _mm_cmpnlt_ps(
+            magnitude,
+            splat(crate::shared::constants::PARALLEL_DENOMINATOR),
+        );
         let to_corner = [
             _mm_sub_ps(row(&block.q[0]), splat(ray.origin.x)),
             _mm_sub_ps(row(&block.q[1]), splat(ray.origin.y)),

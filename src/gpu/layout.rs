@@ -118,7 +118,11 @@ fn wgsl_constants() -> String {
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("KIND_POINT", KIND_POINT.literal()),
         ("KIND_DIRECTIONAL", KIND_DIRECTIONAL.literal()),
-        ("ONE_BELOW", crate::assets::environment::ONE_BELOW.literal()),
+        ("ONE_BELOW", crate::shared::constants::ONE_BELOW.literal()),
+        (
+            "PARALLEL_DENOMINATOR",
+            crate::shared::constants::PARALLEL_DENOMINATOR.literal(),
+        ),
         (
             "SUBDIVIDED_MAX_TEXELS",
             crate::assets::environment::SUBDIVIDED_MAX_TEXELS.literal(),

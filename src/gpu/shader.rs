@@ -658,7 +658,7 @@ fn box_test(b: usize, first: usize, faces: &[GpuQuad]) -> String {
         "fn box_test_{b}(ray: Ray) -> BoxHit {{
 {corners}    let low_denominator = {low_denominator};
     let high_denominator = {high_denominator};
-    let crosses = abs(low_denominator) >= vec3f(1e-8);
+    let crosses = abs(low_denominator) >= vec3f(PARALLEL_DENOMINATOR);
     let low_numerator = {low_numerator};
     let high_numerator = {high_numerator};
     let between = (low_numerator >= vec3f(0.0)) & (high_numerator >= vec3f(0.0));
@@ -704,7 +704,7 @@ fn quad_distance_inlined(i: usize, q: &GpuQuad) -> String {
     format!(
         "fn quad_distance_{i}(ray: Ray) -> f32 {{
     let denom = {denom};
-    let facing = abs(denom) >= 1e-8;
+    let facing = abs(denom) >= PARALLEL_DENOMINATOR;
     let to_corner = {corner} - ray.origin;
     let t = {distance} / select(1.0, denom, facing);
     let planar = t * ray.dir - to_corner;

@@ -114,7 +114,7 @@ impl Disk {
 #[inline]
 pub fn hit_disk(disk: &Disk, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
     let denom = disk.normal.dot(ray.dir);
-    if denom.abs() < 1e-8 {
+    if denom.abs() < crate::shared::constants::PARALLEL_DENOMINATOR {
         return None;
     }
     let to_center = disk.center - ray.origin;
@@ -174,7 +174,7 @@ impl SurfaceShape for Disk {
         let angle = y.atan2(x);
         let u = if angle < 0.0 { angle + 2.0 * PI } else { angle } / (2.0 * PI);
         Vec2::new(
-            u.min(1.0 - f32::EPSILON / 2.0),
+            u.min(crate::shared::constants::ONE_BELOW),
             from_center.length() / self.radius,
         )
     }

@@ -177,7 +177,7 @@ fn edge_tolerance(q: Vec3, u: Vec3, v: Vec3) -> f32 {
 #[inline]
 pub fn hit_quad(quad: &Quad, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
     let denom = quad.normal.dot(ray.dir);
-    if denom.abs() < 1e-8 {
+    if denom.abs() < crate::shared::constants::PARALLEL_DENOMINATOR {
         return None;
     }
     // From the ray's origin to the quad's corner first: far from the world's origin the two

@@ -9,5 +9,12 @@ pub const MAX_SURVIVAL: f32 = 0.95;
 /// overflow); BSDF sampling alone covers them, with full weight.
 pub const MIN_LIGHT_COSINE: f32 = 1e-7;
 
+/// Below this |n . d| a ray runs parallel to a plane (a quad's, a disk's) and misses it: it has
+/// no single crossing point.
+pub const PARALLEL_DENOMINATOR: f32 = 1e-8;
+
+/// The largest f32 below 1 (1 - 2^-24): what keeps a coordinate of [0, 1] below 1.
+pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// The sky background's colour straight up (white at the horizon).
 pub const SKY_ZENITH: [f32; 3] = [0.5, 0.7, 1.0];
