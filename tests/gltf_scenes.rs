@@ -783,14 +783,14 @@ fn assert_positions(path: &Path, expected: [[f32; 3]; 3]) {
 
 /// Issue 62: morph targets move the vertices by their weights (they were ignored: the rest
 /// pose was drawn): the mesh's default weights, the node's over them, the first animation's
-/// at 0 s over both (a linear key from -1 s to 1 s: halfway).
+/// at 0 s over both (keys at 0 s and 1 s: the first's value).
 #[test]
 fn morph_targets_move_vertices_by_their_weights() {
     let dir = tempfile::tempdir().expect("temp dir");
     // Accessor 1: a target lifting every vertex by 1 along z.
     let lift = (floats(&[0.0, 0.0, 1.0].repeat(3)), 5126, "VEC3", 3);
-    let times = (floats(&[-1.0, 1.0]), 5126, "SCALAR", 2);
-    let keyed = (floats(&[0.2, 0.6]), 5126, "SCALAR", 2);
+    let times = (floats(&[0.0, 1.0]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[0.4, 0.6]), 5126, "SCALAR", 2);
     let at = |z: f32| [[-1.0, -1.0, z], [1.0, -1.0, z], [0.0, 1.0, z]];
     let target = |doc: &mut serde_json::Value| {
         doc["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{ "POSITION": 1 }]);
@@ -809,14 +809,41 @@ fn morph_targets_move_vertices_by_their_weights() {
         },
     );
     assert_positions(&node_weights, at(0.25));
-    let animated = write_posed_gltf(dir.path(), "animated.gltf", &[lift, times, keyed], |doc| {
-        target(doc);
-        doc["animations"] = serde_json::json!([{
-            "samplers": [{ "input": 2, "output": 3 }],
-            "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }]
-        }]);
-    });
+    let animated = write_posed_gltf(
+        dir.path(),
+        "animated.gltf",
+        &[lift.clone(), times, keyed],
+        |doc| {
+            target(doc);
+            doc["animations"] = serde_json::json!([{
+                "samplers": [{ "input": 2, "output": 3 }],
+                "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }]
+            }]);
+        },
+    );
     assert_positions(&animated, at(0.4));
+    // A sparse block in a buffer view with a byteStride (glTF forbids it; the gltf crate's
+    // reader panicked on one shorter than an element) is refused in one line.
+    let indices = (vec![0u8, 0, 0, 0], 5121, "SCALAR", 1);
+    let strided = write_posed_gltf(
+        dir.path(),
+        "strided.gltf",
+        &[lift.clone(), indices],
+        |doc| {
+            target(doc);
+            doc["bufferViews"][1]["byteStride"] = 4.into();
+            doc["accessors"][1]["sparse"] = serde_json::json!({
+                "count": 1,
+                "indices": { "bufferView": 2, "componentType": 5121 },
+                "values": { "bufferView": 1 }
+            });
+        },
+    );
+    let error = rt_gpu::scene::mesh::load(&strided, "strided.gltf", None).expect_err("stride");
+    assert!(
+        error.contains("byteStride") && !error.contains('\n'),
+        "{error}"
+    );
     let (_, notes) = load(&animated, "animated.gltf", None).expect("loads");
     assert!(
         notes
@@ -863,9 +890,9 @@ fn skinned_meshes_are_placed_by_their_joints() {
         [[-1.0, -1.0, 0.0], [1.0, -1.0, 2.0], [0.0, 1.0, 1.0]],
     );
 
-    // Joint 1 animated from (0, 0, 0) at -1 s to (0, 0, 4) at 1 s: (0, 0, 2) at 0 s.
-    let times = (floats(&[-1.0, 1.0]), 5126, "SCALAR", 2);
-    let keyed = (floats(&[0.0, 0.0, 0.0, 0.0, 0.0, 4.0]), 5126, "VEC3", 2);
+    // Joint 1 animated from (0, 0, 2) at 0 s to (0, 0, 4) at 1 s: (0, 0, 2) at 0 s.
+    let times = (floats(&[0.0, 1.0]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[0.0, 0.0, 2.0, 0.0, 0.0, 4.0]), 5126, "VEC3", 2);
     let arrays = [joints.clone(), weights.clone(), times, keyed];
     let animated = write_posed_gltf(dir.path(), "animated.gltf", &arrays, |doc| {
         skinned("[0, 0, 0]")(doc);
@@ -891,16 +918,39 @@ fn skinned_meshes_are_placed_by_their_joints() {
         error.contains("joint 7") && error.contains("beyond.gltf") && !error.contains('\n'),
         "{error}"
     );
+
+    // The skinned node's own transform neither mirrors the mesh (its winding and front face
+    // stay the file's) nor, where it flattens space, refuses the file (a review found both).
+    for (name, scale) in [("mirrored.gltf", "[-1, 1, 1]"), ("flat.gltf", "[0, 1, 1]")] {
+        let scale: serde_json::Value = serde_json::from_str(scale).expect("json");
+        let path = write_posed_gltf(dir.path(), name, &arrays, |doc| {
+            skinned("[0, 0, 0]")(doc);
+            doc["nodes"][0]["scale"] = scale.clone();
+        });
+        let meshes = rt_gpu::scene::mesh::load(&path, name, None).unwrap_or_else(|e| panic!("{e}"));
+        let mesh = &meshes[0];
+        let [a, b, c] = mesh.triangles[0].map(|i| mesh.positions[i as usize]);
+        let normal = (b - a).cross(c - a);
+        assert!(
+            normal.z > 0.0 && normal.x.abs() < 1e-6,
+            "{name}: winding turned: {normal}"
+        );
+        assert_positions(
+            &path,
+            [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]],
+        );
+    }
 }
 
-/// Issue 62: the first animation places nodes at 0 s (it was ignored): a translation keyed from
-/// (0, 0, 0) at -1 s to (2, 0, 0) at 1 s moves the triangle by (1, 0, 0), whatever the node's
-/// own translation; a channel whose values do not fit its keys is refused in one line.
+/// Issue 62: the first animation places nodes at 0 s (it was ignored): a translation keyed
+/// (1, 0, 0) at 0 s and (3, 0, 0) at 1 s moves the triangle by (1, 0, 0), whatever the node's
+/// own translation; a channel whose values do not fit its keys, or keyed before 0 s (which glTF
+/// forbids), is refused in one line.
 #[test]
 fn the_first_animation_places_nodes_at_time_zero() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let times = (floats(&[-1.0, 1.0]), 5126, "SCALAR", 2);
-    let keyed = (floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0]), 5126, "VEC3", 2);
+    let times = (floats(&[0.0, 1.0]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[1.0, 0.0, 0.0, 3.0, 0.0, 0.0]), 5126, "VEC3", 2);
     let animate = |doc: &mut serde_json::Value| {
         doc["nodes"][0]["translation"] = serde_json::json!([9, 9, 9]);
         doc["animations"] = serde_json::json!([{
@@ -916,6 +966,15 @@ fn the_first_animation_places_nodes_at_time_zero() {
     let error = rt_gpu::scene::mesh::load(&path, "short.gltf", None).expect_err("1 value");
     assert!(
         error.contains("animation 0's channel 0") && !error.contains('\n'),
+        "{error}"
+    );
+    // Key times below 0 are refused (glTF forbids them; -3e38..3e38 once sampled a NaN).
+    let early = (floats(&[-3e38, 3e38]), 5126, "SCALAR", 2);
+    let keyed = (floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0]), 5126, "VEC3", 2);
+    let path = write_posed_gltf(dir.path(), "early.gltf", &[early, keyed], animate);
+    let error = rt_gpu::scene::mesh::load(&path, "early.gltf", None).expect_err("below 0");
+    assert!(
+        error.contains("below 0") && !error.contains('\n'),
         "{error}"
     );
 }

@@ -549,6 +549,19 @@ pub(super) fn check_accessor(
         ];
         for (name, view, offset, size) in blocks {
             let what = format!("accessor {index}'s sparse {name}");
+            // glTF 2.0, 3.6.2.4: their views hold them packed (the crate's reader would step
+            // by a stride and panic on one shorter than an element).
+            if let Some(stride) = root
+                .buffer_views
+                .get(view.value())
+                .and_then(|v| v.byte_stride)
+            {
+                return Err(format!(
+                    "{at}: {what} lie in buffer view {} with a byteStride ({}), which glTF forbids for sparse blocks",
+                    view.value(),
+                    stride.0
+                ));
+            }
             let bytes = n.saturating_mul(size);
             check_view(
                 root,

@@ -20,6 +20,19 @@ pub struct Pose {
     global: Vec<DMat4>,
     /// Each node's morph weights where the animation sets them.
     weights: Vec<Option<Vec<f32>>>,
+    /// Each node's parent (`None` for a root).
+    parent: Vec<Option<usize>>,
+}
+
+/// Where [`Pose::deform`] leaves a primitive's vertices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Placed {
+    /// In its node's coordinates: the node places them.
+    ByNode,
+    /// In the scene's coordinates, placed by its skin's joints (glTF: the skinned node's own
+    /// transform does not apply); `mirrored` where the joints' matrices mirror the mesh (a
+    /// negative determinant), which turns its winding around as a mirroring node does.
+    BySkin { mirrored: bool },
 }
 
 /// A node's translation, rotation and scale, as a file or an animation gives them.
@@ -74,15 +87,15 @@ impl Pose {
             })
             .collect();
         // Parents before children: from every node no other node names as a child.
-        let mut has_parent = vec![false; nodes];
+        let mut parent = vec![None; nodes];
         for node in document.nodes() {
             for child in node.children() {
-                has_parent[child.index()] = true;
+                parent[child.index()] = Some(node.index());
             }
         }
         let mut global = vec![DMat4::IDENTITY; nodes];
         let mut stack: Vec<(gltf::Node, DMat4)> = (document.nodes())
-            .filter(|n| !has_parent[n.index()])
+            .filter(|n| parent[n.index()].is_none())
             .map(|n| (n, DMat4::IDENTITY))
             .collect();
         // Finite: `gltf_check` found the nodes to be trees.
@@ -95,7 +108,23 @@ impl Pose {
             local,
             global,
             weights,
+            parent,
         })
+    }
+
+    /// The scene's coordinates as seen from a reader that starts at node `root` with the
+    /// identity (as `mesh::load` does for a node picked by name): the inverse of its parent's
+    /// transform; the identity for a root of the scene (or a parent that flattens the space).
+    pub fn scene_frame(&self, root: &gltf::Node) -> DMat4 {
+        let Some(Some(parent)) = self.parent.get(root.index()) else {
+            return DMat4::IDENTITY;
+        };
+        let inverse = self.global[*parent].inverse();
+        if inverse.is_finite() && self.global[*parent].determinant() != 0.0 {
+            inverse
+        } else {
+            DMat4::IDENTITY
+        }
     }
 
     /// `node`'s transform relative to its parent, as posed.
@@ -116,9 +145,9 @@ impl Pose {
     }
 
     /// Moves `primitive`'s vertices (`positions`) and their `normals` and `tangents` (where it
-    /// has them; tangents' w untouched) into the pose, in the coordinates of `node`, which
-    /// places it: by its morph targets, then by its node's skin. An error naming `source`
-    /// where a target's or a skin's data does not fit the primitive.
+    /// has them; tangents' w untouched) into the pose: by its morph targets, then by its node's
+    /// skin; says where that leaves them. An error naming `source` where a target's or a skin's
+    /// data does not fit the primitive.
     pub fn deform(
         &self,
         node: &gltf::Node,
@@ -126,9 +155,9 @@ impl Pose {
         buffers: &[gltf::buffer::Data],
         source: &str,
         vertices: Vertices<'_>,
-    ) -> Result<(), String> {
+    ) -> Result<Placed, String> {
         let Some(mesh) = node.mesh() else {
-            return Ok(());
+            return Ok(Placed::ByNode);
         };
         let at = |what: String| {
             format!(
@@ -173,24 +202,23 @@ impl Pose {
                     normals,
                     tangents,
                 };
-                self.skin(node, &skin, primitive, buffers, vertices)
+                self.skin(&skin, primitive, buffers, vertices)
             }
-            None => Ok(()),
+            None => Ok(Placed::ByNode),
         }
         .map_err(at)
     }
 
-    /// Moves the vertices of `primitive` by the joints of `skin` (which `node` holds): each by
-    /// its joints' matrices weighed by its weights, into `node`'s coordinates (glTF: the skinned
-    /// mesh is placed by its joints, not by its node, whose transform is taken out again).
+    /// Moves the vertices of `primitive` by the joints of `skin`: each by its joints' matrices
+    /// weighed by its weights, into the scene's coordinates (glTF: a skinned mesh is placed by
+    /// its joints, not by its node).
     fn skin(
         &self,
-        node: &gltf::Node,
         skin: &gltf::Skin,
         primitive: &gltf::Primitive,
         buffers: &[gltf::buffer::Data],
         vertices: Vertices<'_>,
-    ) -> Result<(), String> {
+    ) -> Result<Placed, String> {
         let Vertices {
             positions,
             mut normals,
@@ -200,15 +228,8 @@ impl Pose {
         let reader = primitive.reader(buffer);
         let Some(first) = reader.read_joints(0) else {
             // A skinned node's primitive without joints is drawn as it stands.
-            return Ok(());
+            return Ok(Placed::ByNode);
         };
-        let to_node = self.global[node.index()].inverse();
-        if !to_node.is_finite() {
-            return Err(format!(
-                "has a skin but its node's transform cannot be inverted ({})",
-                self.global[node.index()]
-            ));
-        }
         let inverse_binds: Vec<DMat4> = match skin.reader(buffer).read_inverse_bind_matrices() {
             Some(m) => m
                 .map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from))))
@@ -218,7 +239,7 @@ impl Pose {
         let joints: Vec<DMat4> = (skin.joints().enumerate())
             .map(|(j, joint)| {
                 let bind = inverse_binds.get(j).copied().unwrap_or(DMat4::IDENTITY);
-                to_node * self.global[joint.index()] * bind
+                self.global[joint.index()] * bind
             })
             .collect();
         // Every set of four influences (JOINTS_n with WEIGHTS_n).
@@ -256,6 +277,8 @@ impl Pose {
             set += 1;
             sets = reader.read_joints(set);
         }
+        // Vertices whose joints mirror them, against those they do not.
+        let mut mirrored = 0i64;
         for (i, influence) in influences.iter().enumerate() {
             // Weights should sum to 1: they are scaled so; a vertex no joint moves stays.
             let total: f64 = influence.iter().map(|(_, w)| w).sum();
@@ -265,6 +288,7 @@ impl Pose {
             let m = influence
                 .iter()
                 .fold(DMat4::ZERO, |m, &(j, w)| m + joints[j] * (w / total));
+            mirrored += if m.determinant() < 0.0 { 1 } else { -1 };
             let p = m.transform_point3(DVec3::from_array(positions[i].map(f64::from)));
             positions[i] = p.as_vec3().to_array();
             let linear = DMat3::from_mat4(m);
@@ -279,7 +303,9 @@ impl Pose {
                 t[..3].copy_from_slice(&v.as_vec3().to_array());
             }
         }
-        Ok(())
+        Ok(Placed::BySkin {
+            mirrored: mirrored > 0,
+        })
     }
 }
 
@@ -424,6 +450,12 @@ fn channel_value<'a>(
             "has {} key times and {} values, which do not fit",
             times.len(),
             values.len()
+        ));
+    }
+    if times[0] < 0.0 {
+        return Err(format!(
+            "has a key time {} below 0, which glTF forbids",
+            times[0]
         ));
     }
     if let Some(bad) = times.windows(2).find(|w| !(w[0] < w[1])) {

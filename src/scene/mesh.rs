@@ -990,6 +990,11 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
             None => return Err(format!("mesh {source} has no scene")),
         },
     };
+    // Where skinned primitives, posed in the scene's coordinates, lie in the reader's.
+    let skin_frame = match (node, roots.first()) {
+        (Some(_), Some(root)) => pose.scene_frame(root),
+        _ => DMat4::IDENTITY,
+    };
     // Parts by glTF material (None: primitives without one), in order of first use.
     let mut parts: Vec<Part> = Vec::new();
     // Vertices and triangles placed so far, in every part: nodes and instances may place one
@@ -1049,7 +1054,13 @@ fn read_checked_gltf(path: &Path, source: &str, node: Option<&str>) -> Result<Ve
                     normals: normals_read.as_deref_mut(),
                     tangents: tangents.as_deref_mut(),
                 };
-                pose.deform(&n, primitive, &buffers, source, vertices)?;
+                // A skinned primitive is placed by its joints in the scene, not by its node.
+                let (world, flip) = match pose.deform(&n, primitive, &buffers, source, vertices)? {
+                    super::gltf_pose::Placed::ByNode => (world, flip),
+                    super::gltf_pose::Placed::BySkin { mirrored } => {
+                        (skin_frame, (skin_frame.determinant() < 0.0) != mirrored)
+                    }
+                };
                 let key = primitive.material().index();
                 let [set0, set1] = super::gltf_textures::uv_sets(&primitive.material(), source)?;
                 // Each set the material reads, transformed as it reads it; TEXCOORD_0 also
