@@ -86,6 +86,16 @@ impl Candidate {
     fn key(&self) -> (u32, u32) {
         (self.primitive.packed(), self.triangle)
     }
+
+    /// The index in `FlatScene::triangles` of the triangle hit (an instance's in its mesh), whose
+    /// corner attributes the hit interpolates; `None` on a shape.
+    fn triangle_index(&self) -> Option<u32> {
+        match self.primitive {
+            PrimitiveRef::Triangle(i) => Some(i),
+            PrimitiveRef::Instance(_) => Some(self.triangle),
+            PrimitiveRef::Shape { .. } => None,
+        }
+    }
 }
 
 /// Whether a hit at `t` on the primitive keyed `key` replaces the closest so far (see
@@ -390,12 +400,10 @@ fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
 /// shaders/intersect.wgsl).
 #[inline]
 fn vertex_color(scene: &FlatScene, found: &Candidate) -> Vec3 {
-    let triangle = match found.primitive {
-        PrimitiveRef::Triangle(i) => i,
-        PrimitiveRef::Instance(_) => found.triangle,
-        PrimitiveRef::Shape { .. } => return Vec3::ONE,
-    };
-    match scene.triangle_colors.get(triangle as usize) {
+    let corners = found
+        .triangle_index()
+        .and_then(|i| scene.triangle_colors.get(i as usize));
+    match corners {
         Some(&[c0, c1, c2]) => {
             let (b1, b2) = (found.weights.x, found.weights.y);
             (1.0 - b1 - b2) * c0 + b1 * c1 + b2 * c2
@@ -408,12 +416,10 @@ fn vertex_color(scene: &FlatScene, found: &Candidate) -> Vec3 {
 /// materials read them, else `uv`, its first (twin: `second_uv` in shaders/intersect.wgsl).
 #[inline]
 fn second_uv(scene: &FlatScene, found: &Candidate, uv: Vec2) -> Vec2 {
-    let triangle = match found.primitive {
-        PrimitiveRef::Triangle(i) => i,
-        PrimitiveRef::Instance(_) => found.triangle,
-        PrimitiveRef::Shape { .. } => return uv,
-    };
-    match scene.triangle_uvs1.get(triangle as usize) {
+    let corners = found
+        .triangle_index()
+        .and_then(|i| scene.triangle_uvs1.get(i as usize));
+    match corners {
         Some(uvs) => interpolated_uv(uvs, found.weights),
         None => uv,
     }

@@ -852,18 +852,17 @@ impl<'a> Flattener<'a> {
                 .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
         // Decided before copying, as `uv_textures` is after: Blender writes TEXCOORD_0 on every
         // mesh, textured or not, and large meshes should not carry coordinates nothing reads.
-        let textured = scene
-            .objects
-            .iter()
-            .any(|o| reads_uvs(&scene.materials[o.material as usize]))
+        // Asked once per material: a scene may place a material on many objects.
+        let reads: Vec<(bool, bool)> = (scene.materials.iter())
+            .map(|m| (reads_uvs(m), reads_uv1(m)))
+            .collect();
+        let textured = scene.objects.iter().any(|o| reads[o.material as usize].0)
             && scene
                 .objects
                 .iter()
                 .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
-        let textured1 = scene.objects.iter().any(|o| {
-            matches!(o.shape, Shape::Mesh { .. })
-                && reads_uv1(&scene.materials[o.material as usize])
-        });
+        let textured1 = (scene.objects.iter())
+            .any(|o| matches!(o.shape, Shape::Mesh { .. }) && reads[o.material as usize].1);
         let coloured = scene
             .objects
             .iter()
