@@ -66,9 +66,7 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
             return;
         }
 //#endif
-        (*c).t = h.x;
-        (*c).found = true;
-        (*c).primitive = packed;
+        record_hit(h.x, packed, c);
         (*c).triangle = triangle;
         (*c).weights = h.yz;
     }

@@ -1,7 +1,7 @@
 // Angles of directions (twin: src/shared/angles.rs): atan2 and acos as the same short
 // polynomials, within 5e-7 rad of the exact angles.
 
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS || ENVIRONMENT
+//#if READS_UVS || ENVIRONMENT
 // atan(a) for a in [0, 1]: a + a^3 p(a^2).
 fn atan_unit(a: f32) -> f32 {
     let t = a * a;

@@ -28,6 +28,14 @@ fn replaces_in_order(t: f32, c: ptr<function, Closest>) -> bool {
     return t > 0.0 && (t < (*c).t || (t == (*c).t && !(*c).found));
 }
 
+// Makes primitive `packed`, met at t, the closest so far (once `replaces` says it is): what a
+// shape keeps to complete the hit, each sets beside it.
+fn record_hit(t: f32, packed: u32, c: ptr<function, Closest>) {
+    (*c).t = t;
+    (*c).found = true;
+    (*c).primitive = packed;
+}
+
 //#if INSTANCES
 // `replaces` for triangle `triangle` of the instance packed as `packed`: as near and the same
 // instance, the earlier triangle wins (see replaces in src/cpu/intersect.rs).
@@ -172,9 +180,7 @@ fn consider_triangle(tri: Triangle, index: u32, ray: Ray, sh: Shear, c: ptr<func
             return;
         }
 //#endif
-        (*c).t = h.x;
-        (*c).found = true;
-        (*c).primitive = (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index;
+        record_hit(h.x, (KIND_TRIANGLE << PRIMITIVE_INDEX_BITS) | index, c);
         (*c).material = tri.material;
         (*c).outward = cross(tri.p1 - tri.p0, tri.p2 - tri.p0);
         (*c).weights = h.yz;
@@ -244,9 +250,7 @@ fn intersect_emitter(ray: Ray, hit: ptr<function, Hit>) -> bool {
 // Only the distance and the index of primitive `packed` met at t, for `intersect_emitter`.
 fn consider_first(t: f32, packed: u32, c: ptr<function, Closest>) {
     if replaces_in_order(t, c) {
-        (*c).t = t;
-        (*c).found = true;
-        (*c).primitive = packed;
+        record_hit(t, packed, c);
     }
 }
 //#else
@@ -312,7 +316,7 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
 //#if VERTEX_COLORS
     (*hit).color = vertex_color(c);
 //#endif
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if READS_UVS
     (*hit).uv = shape_hit_uv(c, surface.point);
 //#if TRIANGLES
     if primitive_kind(c.primitive) == KIND_TRIANGLE || primitive_kind(c.primitive) == KIND_INSTANCE {
@@ -378,7 +382,7 @@ fn interpolated_uv1(i: u32, weights: vec2f) -> vec2f {
 }
 //#endif
 
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if READS_UVS
 // The hit on c's second texture coordinates where the scene's materials read them, else uv,
 // its first (twin: second_uv in src/cpu/intersect.rs).
 fn second_uv(c: Closest, uv: vec2f) -> vec2f {

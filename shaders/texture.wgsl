@@ -8,7 +8,7 @@ fn parity(x: f32) -> f32 {
 }
 //#endif
 
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if READS_UVS
 // A sphere's (longitude, latitude) at unit outward direction n (Ray Tracing: The Next Week).
 fn sphere_uv(n: vec3f) -> vec2f {
     let u = (polynomial_atan2(-n.z, n.x) + PI) / (2.0 * PI);

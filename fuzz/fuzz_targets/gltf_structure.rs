@@ -1,12 +1,12 @@
 //! Coverage-guided fuzzing of glTF files rendered whole, with a structure-aware mutator (issue
 //! 61): libFuzzer's inputs are glTF JSON documents (beside the shipped lamp's buffer), mutated by
-//! tests/common/gltf_mutations.rs (accessors' counts and sparse blocks, views, URIs, nodes,
+//! tests/it/common/gltf_mutations.rs (accessors' counts and sparse blocks, views, URIs, nodes,
 //! materials and their extensions, lights, cameras) as well as byte by byte. Each is loaded as
 //! `rt-gpu FILE.gltf` loads it and, where accepted, rendered on the CPU at 6x4, 1 spp:
 //! no panic, errors and notes one line, finite samples. Seeds: `fuzz/README.md`.
 #![no_main]
 
-#[path = "../../tests/common/gltf_mutations.rs"]
+#[path = "../../tests/it/common/gltf_mutations.rs"]
 mod gltf_mutations;
 
 use libfuzzer_sys::{fuzz_mutator, fuzz_target};

@@ -6,7 +6,7 @@ writes it (glTF 2.0 .glb, and .obj + .mtl), with a Cycles render of each as a re
 With SCENE names, only those scenes are built (the others' files stay as they are).
 
 Blender 3.4 (Debian's `blender` package, with `python3-numpy` for the glTF exporter). The
-values set here are the ones tests/blender_scenes.rs expects to read back; the outputs are
+values set here are the ones tests/it/blender_scenes.rs expects to read back; the outputs are
 committed under scenes/blender/, so tests never need Blender.
 
 Scenes:
@@ -16,7 +16,7 @@ Scenes:
   `spheres-lambert-cycles.exr` renders it with the floor and the cube as Cycles' Diffuse BSDF
   (Lambert) instead of the Principled BSDF's diffuse, for `spheres-lambert.toml`, which places
   the file's objects with rt-gpu's `lambertian` there: where both renderers model the same
-  thing, their images must agree (tests/blender_scenes.rs).
+  thing, their images must agree (tests/it/blender_scenes.rs).
 - `lamps`: the same objects lit by a point light, a spot light and a sun (KHR_lights_punctual),
   with a second camera; `lamps-lambert-cycles.exr` as `spheres-lambert-cycles.exr`.
 - `lamps-no-spot`: only `lamps-no-spot-lambert-cycles.exr`, Cycles' render of `lamps`' Lambert

@@ -15,13 +15,11 @@ fn disk_distance(s: Disk, ray: Ray) -> f32 {
 fn consider_disk(s: Disk, index: u32, ray: Ray, in_order: bool, c: ptr<function, Closest>) {
     let t = disk_distance(s, ray);
     if select(replaces(t, (KIND_DISK << PRIMITIVE_INDEX_BITS) | index, c), replaces_in_order(t, c), in_order) {
-        (*c).t = t;
-        (*c).found = true;
-        (*c).primitive = (KIND_DISK << PRIMITIVE_INDEX_BITS) | index;
+        record_hit(t, (KIND_DISK << PRIMITIVE_INDEX_BITS) | index, c);
         (*c).material = s.material;
         (*c).outward = s.normal;
         (*c).shape.w = s.d;
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if READS_UVS
         // Polar: the angle from the tangent over 2 pi, the distance from the centre over the
         // radius (see Disk::uv).
         let from_center = ray.origin + t * ray.dir - s.center;

@@ -28,13 +28,11 @@ fn consider_quad(q: Quad, index: u32, ray: Ray, in_order: bool, c: ptr<function,
 // quad_distance per quad, its constant zeros left out (see inline_scene in src/gpu/shader.rs).
 fn consider_quad_at(t: f32, q: Quad, index: u32, ray: Ray, in_order: bool, c: ptr<function, Closest>) {
     if select(replaces(t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index, c), replaces_in_order(t, c), in_order) {
-        (*c).t = t;
-        (*c).found = true;
-        (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index;
+        record_hit(t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | index, c);
         (*c).material = q.material;
         (*c).outward = q.normal;
         (*c).shape.w = q.d;
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if READS_UVS
         let along_corner = ray.origin + t * ray.dir - q.q;
         (*c).uv = vec2f(dot(along_corner, q.alpha_axis), dot(along_corner, q.beta_axis));
 //#endif

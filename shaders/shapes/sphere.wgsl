@@ -16,9 +16,7 @@ fn sphere_distance(s: Sphere, ray: Ray) -> f32 {
 fn consider_sphere(s: Sphere, index: u32, ray: Ray, in_order: bool, c: ptr<function, Closest>) {
     let t = sphere_distance(s, ray);
     if select(replaces(t, (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index, c), replaces_in_order(t, c), in_order) {
-        (*c).t = t;
-        (*c).found = true;
-        (*c).primitive = (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index;
+        record_hit(t, (KIND_SPHERE << PRIMITIVE_INDEX_BITS) | index, c);
         (*c).material = s.material;
         (*c).outward = (ray.origin + t * ray.dir - s.center) / s.radius;
         (*c).shape = vec4f(s.center, s.radius);
@@ -35,7 +33,7 @@ fn sphere_surface(c: Closest, along_ray: vec3f, n: vec3f) -> Surface {
     return Surface(point, POINT_ERROR * (max(ce.x, max(ce.y, ce.z)) + abs(radius)));
 }
 
-//#if UV_CHECKER || IMAGE_TEXTURE || NORMAL_MAPS || METALLIC_ROUGHNESS
+//#if READS_UVS
 fn sphere_hit_uv(c: Closest, point: vec3f) -> vec2f {
     return sphere_uv((point - c.shape.xyz) / abs(c.shape.w));
 }

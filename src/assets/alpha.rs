@@ -8,6 +8,7 @@
 //! one ray against one surface agrees.
 
 use crate::assets::image::Image;
+use std::sync::Arc;
 
 /// How alpha decides whether a ray passes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,11 +22,11 @@ pub enum AlphaMode {
 /// A see-through material's alpha: `factor` x the red channel of `image` (the texture's alpha
 /// channel, decoded linear into every channel; none: 1), read through the surface's UVs with the
 /// image's own lookup.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Alpha {
     pub mode: AlphaMode,
     pub factor: f32,
-    pub image: Option<&'static Image>,
+    pub image: Option<Arc<Image>>,
 }
 
 /// `GpuMaterial::alpha_mode` of opaque materials and of each [`AlphaMode`].

@@ -7,11 +7,12 @@
 //! column u, image row 1 - v (row 0 is the sky straight up).
 
 use super::image::Image;
+use std::sync::Arc;
 
 /// `background = { image = "sky.hdr", strength = 1, rotate_y = 0 }`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
-    pub image: &'static Image,
+    pub image: Arc<Image>,
     /// Multiplies the image's radiance.
     pub strength: f32,
     /// Turns the sky about +y (degrees, as objects turn).
@@ -24,11 +25,7 @@ pub struct Environment {
 pub const MAX_STRENGTH: f32 = 1e6;
 
 impl Environment {
-    pub fn new(
-        image: &'static Image,
-        strength: f32,
-        rotate_y_degrees: f32,
-    ) -> Result<Self, String> {
+    pub fn new(image: Arc<Image>, strength: f32, rotate_y_degrees: f32) -> Result<Self, String> {
         if !(0.0..=MAX_STRENGTH).contains(&strength) {
             return Err(format!(
                 "background strength must be in [0, {MAX_STRENGTH:e}], got {strength}"
@@ -49,10 +46,10 @@ impl Environment {
     }
 
     /// The tables that sample it (built once per image).
-    pub fn distribution(&self) -> &'static Distribution {
+    pub fn distribution(&self) -> &Distribution {
         self.image
             .sampling
-            .get_or_init(|| Distribution::new(self.image))
+            .get_or_init(|| Distribution::new(&self.image))
     }
 
     /// Its power on a disc of radius `radius` facing any way: pi r^2 times the integral of its

@@ -1,14 +1,14 @@
 //! Images that textures and environment lights read: decoded once per file into linear RGB f32
 //! (looked up by `src/material/texture.rs` and `src/cpu/environment.rs`, twins in `shaders/`).
 //!
-//! A decoded image lives for the rest of the process and is shared: materials and backgrounds
-//! are small `Copy` data that hold a `&'static Image`, so the same file loaded twice (the same
-//! path, size and modification time) is decoded and kept once.
+//! A decoded image is shared: materials and backgrounds hold an `Arc<Image>`, and the same file
+//! loaded again while one is held (the same path, size and modification time) is decoded once.
+//! An image nothing holds any more is freed (a scene reloaded without it, a dropped scene).
 
 use super::inputs::InputFile;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 /// Longest image side accepted.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
@@ -133,9 +133,9 @@ impl Image {
         }
     }
 
-    /// Leaks `self` for the rest of the process (see the module's documentation).
-    pub fn leak(self) -> &'static Image {
-        Box::leak(Box::new(self))
+    /// `self`, to be held by the materials and backgrounds that read it.
+    pub fn shared(self) -> Arc<Image> {
+        Arc::new(self)
     }
 }
 
@@ -168,18 +168,25 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 /// Reads the image at `path` (PNG, JPEG, OpenEXR or Radiance HDR): 8- and 16-bit images are
 /// decoded from sRGB, floating-point ones are linear; alpha is ignored. `source` is the path as
 /// the scene wrote it. Errors are one line naming the file.
-pub fn load(path: &Path, source: &str) -> Result<&'static Image, String> {
+pub fn load(path: &Path, source: &str) -> Result<Arc<Image>, String> {
     load_as(path, source, true)
 }
+
+/// A file as it was when decoded (its path, size and modification time), and its encoding.
+type FileVersion = (PathBuf, u64, std::time::SystemTime, bool);
+
+/// The images decoded from files, while something holds them: a file loaded again (by another
+/// scene, or the viewer's reload) while its image is held is not decoded again, and an image
+/// nothing holds is freed.
+static FILES: OnceLock<Mutex<Held>> = OnceLock::new();
+
+/// Each file's image while held, and the file as read (for the film's record of inputs).
+type Held = HashMap<FileVersion, (Weak<Image>, InputFile)>;
 
 /// [`load`], with 8- and 16-bit values taken as sRGB only where `srgb` (colours), else as
 /// linear (data such as normal maps). Each file is decoded once per encoding; the file is
 /// recorded as one the scene reads (`inputs`), on a cache hit too.
-pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, String> {
-    /// A file as it was when decoded (its path, size and modification time), and its encoding.
-    type FileVersion = (PathBuf, u64, std::time::SystemTime, bool);
-    type Cache = HashMap<FileVersion, (&'static Image, InputFile)>;
-    static CACHE: OnceLock<Mutex<Cache>> = OnceLock::new();
+pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<Arc<Image>, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read image {source}: {e}"))?;
     if !meta.is_file() {
         return Err(format!("image {source} is not a file"));
@@ -187,23 +194,41 @@ pub fn load_as(path: &Path, source: &str, srgb: bool) -> Result<&'static Image, 
     let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
     let key = (canonical, meta.len(), modified, srgb);
-    let cache = CACHE.get_or_init(Default::default);
-    if let Some((image, input)) = cache.lock().map_err(|_| "image cache poisoned")?.get(&key) {
+    let cache = FILES.get_or_init(Default::default);
+    let held = cache
+        .lock()
+        .map_err(|_| "image cache poisoned")?
+        .get(&key)
+        .and_then(|(image, input)| Some((image.upgrade()?, input.clone())));
+    if let Some((image, input)) = held {
         // As this scene names it (another may have named it otherwise).
         super::inputs::note(&InputFile {
             shown: source.to_string(),
-            ..input.clone()
+            ..input
         });
         return Ok(image);
     }
     let (bytes, input) = super::inputs::read(path, source, MAX_IMAGE_FILE_BYTES)
         .map_err(|e| format!("cannot read image {source}: {e}"))?;
-    let image = decode_file(bytes, source, srgb)?.leak();
-    cache
-        .lock()
-        .map_err(|_| "image cache poisoned")?
-        .insert(key, (image, input));
+    let image = decode_file(bytes, source, srgb)?.shared();
+    let mut cache = cache.lock().map_err(|_| "image cache poisoned")?;
+    // Images no scene holds any more are gone: so are their entries.
+    cache.retain(|_, (image, _)| image.strong_count() > 0);
+    cache.insert(key, (Arc::downgrade(&image), input));
     Ok(image)
+}
+
+/// How many decoded image files are held (by scenes, materials, backgrounds) at present: what
+/// a reloaded scene frees shows here.
+pub fn files_held() -> usize {
+    let cache = FILES.get_or_init(Default::default);
+    let cache = cache
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    cache
+        .values()
+        .filter(|(image, _)| image.strong_count() > 0)
+        .count()
 }
 
 /// Largest image file read (a path may name anything): an uncompressed RGBA f32 OpenEXR of the
@@ -412,46 +437,6 @@ fn decode_from<R: std::io::BufRead + std::io::Seek>(
     // As `ImageReader::decode` does: the decoded buffer must fit the allocation limit.
     limits().reserve(decoder.total_bytes()).map_err(error)?;
     image::DynamicImage::from_decoder(decoder).map_err(error)
-}
-
-thread_local! {
-    /// The directory image and mesh paths in the scene file being read are relative to.
-    static BASE_DIR: std::cell::RefCell<Option<PathBuf>> = const { std::cell::RefCell::new(None) };
-}
-
-/// Runs `f` (which reads a scene file) with image paths taken relative to `dir`.
-pub fn with_base_dir<R>(dir: &Path, f: impl FnOnce() -> R) -> R {
-    /// Puts the previous directory back, however `f` ends.
-    struct Restore(Option<PathBuf>);
-    impl Drop for Restore {
-        fn drop(&mut self) {
-            let previous = self.0.take();
-            BASE_DIR.with(|b| *b.borrow_mut() = previous);
-        }
-    }
-    let _restore = Restore(BASE_DIR.with(|b| b.replace(Some(dir.to_path_buf()))));
-    f()
-}
-
-/// Loads the image a scene file names as `source`: relative to the scene file's directory
-/// (see [`with_base_dir`]), else to the working directory.
-pub fn load_named(source: &str) -> Result<&'static Image, String> {
-    load(&resolve(source), source)
-}
-
-/// [`load_named`] for data (a normal map): 8- and 16-bit values are linear.
-pub fn load_named_linear(source: &str) -> Result<&'static Image, String> {
-    load_as(&resolve(source), source, false)
-}
-
-/// A path a scene file names (an image, a mesh): relative to the scene file's directory (see
-/// [`with_base_dir`]), else to the working directory.
-pub fn resolve(source: &str) -> PathBuf {
-    let path = Path::new(source);
-    BASE_DIR.with(|b| match &*b.borrow() {
-        Some(dir) if path.is_relative() => dir.join(path),
-        _ => path.to_path_buf(),
-    })
 }
 
 #[cfg(test)]

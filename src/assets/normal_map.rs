@@ -7,14 +7,15 @@
 use crate::assets::image::Image;
 use crate::params::checked;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Texels hold (x, y, z) of the normal in the tangent frame as `2 * value - 1` (linear 8- or
 /// 16-bit values: OpenGL's convention, green toward +v, as glTF and Blender write them); `scale`
 /// multiplies x and y (glTF's `normalTexture.scale`).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "NormalMapDoc", into = "NormalMapDoc")]
 pub struct NormalMap {
-    pub image: &'static Image,
+    pub image: Arc<Image>,
     pub scale: f32,
 }
 
@@ -36,7 +37,7 @@ fn one() -> f32 {
 impl TryFrom<NormalMapDoc> for NormalMap {
     type Error = String;
     fn try_from(d: NormalMapDoc) -> Result<Self, String> {
-        let image = crate::assets::image::load_named_linear(&d.image)?;
+        let image = crate::assets::loader::data_image(&d.image)?;
         let map = NormalMap {
             image,
             scale: d.scale,

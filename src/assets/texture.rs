@@ -7,12 +7,14 @@
 
 use crate::assets::image::Image;
 use crate::params::checked;
+use crate::shared::feature::MaterialFeature;
 use glam::{DVec3, Vec3};
 use serde::de::{self, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::sync::Arc;
 
 /// An albedo: every value in [0, 1].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Texture {
     Colour(Vec3),
     /// Cubes of edge `scale` (scene units) alternating between `even` and `odd` through space.
@@ -20,7 +22,7 @@ pub enum Texture {
     /// Squares alternating in UV: `scale` of them across u in [0, 1] and as many across v.
     UvChecker(Checker),
     /// An image across u and v in [0, 1] (u along its rows, v up its columns), repeating.
-    Image(&'static Image),
+    Image(Arc<Image>),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
@@ -90,12 +92,12 @@ impl Texture {
     }
 
     /// The kernel feature its evaluation needs, if any.
-    pub fn feature(&self) -> Option<&'static str> {
+    pub fn feature(&self) -> Option<MaterialFeature> {
         match self {
             Texture::Colour(_) => None,
-            Texture::Checker(_) => Some("CHECKER"),
-            Texture::UvChecker(_) => Some("UV_CHECKER"),
-            Texture::Image(_) => Some("IMAGE_TEXTURE"),
+            Texture::Checker(_) => Some(MaterialFeature::Checker),
+            Texture::UvChecker(_) => Some(MaterialFeature::UvChecker),
+            Texture::Image(_) => Some(MaterialFeature::ImageTexture),
         }
     }
 
@@ -169,9 +171,7 @@ impl<'de> Visitor<'de> for TextureVisitor {
             "uv_checker" => Texture::UvChecker(map.next_value()?),
             "image" => {
                 let source: String = map.next_value()?;
-                Texture::Image(
-                    crate::assets::image::load_named(&source).map_err(de::Error::custom)?,
-                )
+                Texture::Image(crate::assets::loader::image(&source).map_err(de::Error::custom)?)
             }
             other => {
                 return Err(de::Error::unknown_field(

@@ -132,7 +132,7 @@ pub enum Command {
     /// Watch a scene converge in a window and move the camera: drag to orbit, right-drag or
     /// shift-drag to pan, wheel to dolly, W A S D Q E to fly; any move starts the film again.
     /// Ctrl+S writes the film (an .exr film file and a .png beside it), C prints the camera as
-    /// a [camera] table for the scene file, R restarts, Esc quits.
+    /// a [camera] table for the scene file, R restarts, F5 reads the scene file again, Esc quits.
     #[cfg(feature = "viewer")]
     View(ViewArgs),
     /// List the GPU adapters wgpu can see (pick one with --adapter).
@@ -253,7 +253,7 @@ pub struct ViewArgs {
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// Test aid: a scripted input (orbit:DX,DY, pan:DX,DY, dolly:N, fly:F,R,U, save, camera,
-    /// restart, quit) or a wait (spp:N), run in order; repeatable.
+    /// restart, reload, quit) or a wait (spp:N), run in order; repeatable.
     #[arg(long = "step", value_name = "STEP", hide = true, value_parser = rt_gpu::viewer::Step::parse)]
     pub steps: Vec<rt_gpu::viewer::Step>,
     /// Test aid: exit once the script has run and the film holds N samples per pixel.
@@ -266,7 +266,7 @@ pub struct ViewArgs {
 
 /// The options that say what a render computes and where, shared by a batch render and the
 /// viewer: the same flags give both the same estimator, hence the same image.
-#[derive(Args)]
+#[derive(Args, Clone)]
 pub struct RenderOptionArgs {
     /// The camera of a glTF scene (.glb, .gltf) to render through, by name [default: its
     /// first; one framing the scene if it has none].

@@ -1,11 +1,10 @@
 //! The `rt-gpu` command line, one file per subcommand: `render` (the default: a scene to an
-//! image, with `checkpoint` for long renders), `view` (a window), `scenes`, `devices`,
+//! image, run by the library's `render::request`), `view` (a window), `scenes`, `devices`,
 //! `bench`, `converge` and `merge`; `args` is the syntax of them all, `signals` how a render stops on Ctrl-C. The
 //! library renders; these files parse options, draw progress bars and print summaries.
 
 pub mod args;
 pub mod bench;
-pub mod checkpoint;
 pub mod converge;
 pub mod devices;
 pub mod host_cpu;

@@ -3,43 +3,31 @@
 //! checkpoints), the outputs written, and a one-line summary.
 
 use super::args::{RenderArgs, RenderBackendArg};
-use super::checkpoint::{CheckpointWriter, pass_seconds, resume_from};
 use super::scenes::resolve_scene;
 use super::shown_radiance;
 use super::signals::{GRACEFUL, STOP_SIGNAL};
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use rt_gpu::film::file::{self as film_file, FilmMeta};
-use rt_gpu::film::output::{FileLock, ImageFormat, PendingOutput};
-use rt_gpu::film::{Film, check_memory};
-use rt_gpu::render::progressive::{Job, Outcome, Progress};
-use rt_gpu::render::{Backend, GpuChoice, RenderOptions, Rendered, Session};
+use rt_gpu::film::file as film_file;
+use rt_gpu::film::output::ImageFormat;
+use rt_gpu::render::progressive::{Outcome, Progress};
+use rt_gpu::render::request::{Checkpoint, Finished, Hooks, Request};
+use rt_gpu::render::{Backend, GpuChoice};
+use rt_gpu::scene::Scene;
 use rt_gpu::scene::flat::FlatScene;
-use rt_gpu::scene::{Scene, file};
 use std::io::Write;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use std::time::Instant;
 
-/// A render as the command line asks for it, every option checked.
+/// A render as the command line asks for it, every option checked: the library's request, and
+/// what the summary says of it.
 struct Plan {
-    scene: Scene,
-    scene_file: Option<PathBuf>,
-    backend: Backend,
-    /// Why `--backend auto` chose `backend`.
+    request: Request,
+    /// Why `--backend auto` chose the request's backend.
     backend_reason: Option<String>,
-    /// The sample indices rendered.
-    range: Range<u32>,
     /// Only some of the render's samples (--samples, --shard): a film file for `rt-gpu merge`.
     partial: bool,
-    output: PathBuf,
-    format: ImageFormat,
-    checkpoint: Option<PathBuf>,
-    checkpoint_every: f64,
-    flat: FlatScene,
-    opts: RenderOptions,
-    gpu: GpuChoice,
 }
 
 pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
@@ -47,69 +35,48 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     if args.print_shader {
         return print_shader(&plan);
     }
-    check_memory(plan.opts.width, plan.opts.height).map_err(anyhow::Error::msg)?;
-    // Only film files carry the identity (digesting a scene of many objects takes a while).
-    let writes_film = plan.checkpoint.is_some() || plan.format == ImageFormat::Exr;
-    let identity = if writes_film {
-        let digest = file::digest(&plan.scene);
-        let files = rt_gpu::assets::inputs::identity_fields(&plan.scene.inputs);
-        film_file::identity(digest, &files, plan.backend, &plan.opts, args.unspecialised)
-    } else {
-        String::new()
-    };
-    // Held until the render ends: a second render checkpointing to the same file is refused.
-    let checkpoint_lock = match &plan.checkpoint {
-        Some(c) => Some(FileLock::acquire(c)?),
-        None => None,
-    };
-    let resume = match &args.resume {
-        Some(path) => Some(resume_from(path, &identity, &plan.range)?),
-        None => None,
-    };
-    let pending = claim_outputs(&plan)?;
-
-    let resumed_at = resume.as_ref().map_or(plan.range.start, |(_, done)| *done);
-    let session = Session::new(plan.backend, &plan.gpu, &plan.flat, plan.opts.integrator)?;
-    let device = session.device();
-    let meta = |done: u32| FilmMeta {
-        identity: identity.clone(),
-        samples: std::iter::once(plan.range.start..done).collect(),
-        device: device.clone(),
-    };
-    let start = Instant::now();
-    let mut passes = run_passes(args, &plan, &session, resume, &meta)?;
-    let seconds = start.elapsed().as_secs_f64();
-    let done = plan.range.start + passes.rendered.film.pixels.first().map_or(0, |p| p.n) as u32;
-    write_outputs(args, &plan, pending, &mut passes, &meta(done))?;
-    print_summary(&plan, &passes.rendered, seconds, resumed_at, done);
+    let progress = ProgressBar::new(1000).with_style(
+        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    // With a checkpoint, Ctrl-C ends the pass in flight and writes it.
+    GRACEFUL.store(plan.request.checkpoint.is_some(), Ordering::SeqCst);
+    let finished = plan.request.run(&Hooks {
+        progress: &|p| show_progress(&progress, args.time, &p),
+        stop: &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0,
+    });
+    progress.finish_and_clear();
+    let finished = finished?;
+    let done = finished.done;
+    print_summary(&plan, &finished);
     if let Some(target) = args.target_error {
         let target = super::shown_number(target);
-        let reached = rt_gpu::render::progressive::relative_error(&passes.rendered.film);
-        let black = passes.rendered.film.image_mean() == glam::DVec3::ZERO;
-        if black && passes.outcome == Outcome::TargetReached {
+        let film = &finished.rendered.film;
+        let reached = rt_gpu::render::progressive::relative_error(film);
+        let black = film.image_mean() == glam::DVec3::ZERO;
+        if black && finished.outcome == Outcome::TargetReached {
             note!(
                 "target error {target}: the image is exactly black at {done} spp (every sample 0), so it has no relative error to estimate: more samples would change nothing"
             );
-        } else if passes.outcome == Outcome::TargetReached {
+        } else if finished.outcome == Outcome::TargetReached {
             note!(
                 "target error {target} reached at {done} spp (estimated relative error {reached:.3e})"
             );
-        } else if passes.outcome != Outcome::Stopped {
+        } else if finished.outcome != Outcome::Stopped {
             note!(
                 "target error {target} not reached: estimated relative error {reached:.3e} at {done} spp"
             );
         }
     }
-    if passes.outcome == Outcome::Stopped {
+    if finished.outcome == Outcome::Stopped {
         let signal = STOP_SIGNAL.load(Ordering::SeqCst);
-        if let Some(c) = &plan.checkpoint {
+        if let Some(c) = &plan.request.checkpoint {
             note!(
                 "stopped at sample {done}: continue with the same command and --resume {}",
-                c.display()
+                c.path.display()
             );
         }
-        // Exiting runs no destructors: the lock file goes now.
-        drop(checkpoint_lock);
         std::process::exit(128 + signal);
     }
     Ok(())
@@ -150,8 +117,8 @@ fn plan(args: &RenderArgs) -> anyhow::Result<Plan> {
         });
         let mut plan = loaded?;
         if let Some(look) = look {
-            let auto = rt_gpu::render::auto_backend_seeing(&look, &gpu, &plan.flat);
-            (plan.backend, plan.backend_reason) = (auto.backend, Some(auto.reason));
+            let auto = rt_gpu::render::auto_backend_seeing(&look, &gpu, &plan.request.flat);
+            (plan.request.backend, plan.backend_reason) = (auto.backend, Some(auto.reason));
         }
         Ok(plan)
     })
@@ -185,8 +152,8 @@ fn load(
             );
         }
     }
-    let (output, format) = output_path(args, &scene, &range, partial)?;
-    let (checkpoint, checkpoint_every) = checkpoint_path(args, &output)?;
+    let output = output_path(args, &scene, &range, partial)?;
+    let checkpoint = checkpoint_path(args, &output)?;
     let (width, height) = args.options.size(&scene);
     if let Some(t) = args.time
         && !(t > 0.0 && t.is_finite())
@@ -200,19 +167,22 @@ fn load(
     let opts = args.options.render_options(&scene, range.clone());
     let (backend, backend_reason) = chosen.clone().unwrap_or((Backend::Cpu, None));
     Ok(Plan {
-        scene,
-        scene_file,
-        backend,
+        request: Request {
+            scene,
+            scene_file,
+            flat,
+            opts,
+            backend,
+            gpu: gpu.clone(),
+            budget: args.time,
+            target_error: args.target_error,
+            output: Some(output),
+            gamma: args.gamma,
+            checkpoint,
+            unspecialised: args.unspecialised,
+        },
         backend_reason,
-        range,
         partial,
-        output,
-        format,
-        checkpoint,
-        checkpoint_every,
-        flat,
-        opts,
-        gpu: gpu.clone(),
     })
 }
 
@@ -268,13 +238,13 @@ fn sample_range(args: &RenderArgs) -> anyhow::Result<Range<u32>> {
     })
 }
 
-/// Where the image goes (-o, or named after the scene) and its format.
+/// Where the image goes (-o, or named after the scene), its format checked.
 fn output_path(
     args: &RenderArgs,
     scene: &Scene,
     range: &Range<u32>,
     partial: bool,
-) -> anyhow::Result<(PathBuf, ImageFormat)> {
+) -> anyhow::Result<PathBuf> {
     let output = args.output.clone().unwrap_or_else(|| {
         PathBuf::from(if partial {
             format!("{}-samples-{}-{}.exr", scene.name, range.start, range.end)
@@ -289,11 +259,11 @@ fn output_path(
             output.display()
         );
     }
-    Ok((output, format))
+    Ok(output)
 }
 
 /// Where checkpoints go, if anywhere (--checkpoint, or --resume's file), and how often.
-fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<(Option<PathBuf>, f64)> {
+fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<Option<Checkpoint>> {
     let checkpoint = args.checkpoint.clone().or_else(|| args.resume.clone());
     if let Some(c) = &checkpoint
         && ImageFormat::from_path(c).ok() != Some(ImageFormat::Exr)
@@ -332,95 +302,20 @@ fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<(Option<P
     if args.checkpoint_every.is_some() && checkpoint.is_none() {
         bail!("--checkpoint-every needs --checkpoint FILE (or --resume FILE)");
     }
-    Ok((checkpoint, checkpoint_every))
+    Ok(checkpoint.map(|path| Checkpoint {
+        path,
+        every: checkpoint_every,
+        resume: args.resume.is_some(),
+    }))
 }
 
 /// --print-shader: the kernel this render would run, on stdout.
 fn print_shader(plan: &Plan) -> anyhow::Result<()> {
-    let features = plan
-        .gpu
-        .features(&plan.flat, plan.opts.integrator)
-        .for_render(&plan.flat, &plan.opts);
-    let source = rt_gpu::gpu::shader::compose(&features, &plan.flat).map_err(anyhow::Error::msg)?;
+    let Request { flat, opts, .. } = &plan.request;
+    let features = (plan.request.gpu.features(flat, opts.integrator)).for_render(flat, opts);
+    let source = rt_gpu::gpu::shader::compose(&features, flat).map_err(anyhow::Error::msg)?;
     std::io::stdout().lock().write_all(source.as_bytes())?;
     Ok(())
-}
-
-/// Claims the output (and checks the checkpoint can be claimed) now, so that an unwritable
-/// destination fails before a long render, not after it.
-fn claim_outputs(plan: &Plan) -> anyhow::Result<PendingOutput> {
-    let inputs: Vec<&Path> = (plan.scene_file.iter().map(|p| p.as_path()))
-        .chain(plan.scene.input_paths())
-        .collect();
-    let pending = PendingOutput::claim(&plan.output, &inputs)?;
-    if let Some(c) = &plan.checkpoint {
-        // Fail now, not at the first checkpoint a minute in.
-        drop(PendingOutput::claim(c, &inputs)?);
-    }
-    Ok(pending)
-}
-
-/// What the passes left: the render, why they ended, the checkpoints still to finish and the
-/// first checkpoint that could not be written.
-struct Passes {
-    rendered: Rendered,
-    outcome: Outcome,
-    checkpoints: CheckpointWriter,
-    checkpoint_failure: Option<anyhow::Error>,
-}
-
-/// Runs the render's passes with a progress bar, writing a checkpoint every
-/// `plan.checkpoint_every` seconds, until its samples or time are done or a signal stops it.
-fn run_passes(
-    args: &RenderArgs,
-    plan: &Plan,
-    session: &Session,
-    resume: Option<(Film, u32)>,
-    meta: &dyn Fn(u32) -> FilmMeta,
-) -> anyhow::Result<Passes> {
-    let progress = ProgressBar::new(1000).with_style(
-        ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:40}] {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    let checkpointing = plan.checkpoint.is_some();
-    let job = Job {
-        session,
-        scene: &plan.flat,
-        opts: plan.opts,
-        budget: args.time,
-        pass_seconds: pass_seconds(checkpointing.then_some(plan.checkpoint_every), args.time),
-        target_error: args.target_error,
-    };
-    let mut last_checkpoint = Instant::now();
-    let checkpoint_failure: std::cell::RefCell<Option<anyhow::Error>> = Default::default();
-    let mut checkpoints = CheckpointWriter::new(plan.checkpoint.clone());
-    GRACEFUL.store(checkpointing, Ordering::SeqCst);
-    let (rendered, outcome) = job.run(
-        resume,
-        &mut |film, done| {
-            // A checkpoint that cannot be written stops the render; the image so far is still
-            // written before the error is reported.
-            if last_checkpoint.elapsed().as_secs_f64() >= plan.checkpoint_every
-                && checkpoint_failure.borrow().is_none()
-            {
-                if let Err(e) = checkpoints.write(film, meta(done)) {
-                    *checkpoint_failure.borrow_mut() = Some(e);
-                }
-                last_checkpoint = Instant::now();
-            }
-            Ok(())
-        },
-        &|p| show_progress(&progress, args.time, &p),
-        &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0 || checkpoint_failure.borrow().is_some(),
-    )?;
-    progress.finish_and_clear();
-    Ok(Passes {
-        rendered,
-        outcome,
-        checkpoints,
-        checkpoint_failure: checkpoint_failure.into_inner(),
-    })
 }
 
 /// The progress bar at `p`: samples per pixel reached, of how many, and the time left.
@@ -442,45 +337,22 @@ fn show_progress(progress: &ProgressBar, budget: Option<f64>, p: &Progress) {
     progress.set_message(format!("{:.0}{total} spp{eta}", p.spp.floor()));
 }
 
-/// Writes the last checkpoint and the image (the image even when the checkpoint fails, which
-/// is then the error).
-fn write_outputs(
-    args: &RenderArgs,
-    plan: &Plan,
-    pending: PendingOutput,
-    passes: &mut Passes,
-    meta: &FilmMeta,
-) -> anyhow::Result<()> {
-    let film = &passes.rendered.film;
-    // The last checkpoint and an .exr output hold the same film file: encoded once (a 512x512
-    // film takes about 0.3 s), written twice.
-    let output_is_film = plan.format == ImageFormat::Exr;
-    let encoded = if passes.checkpoints.writes() || output_is_film {
-        Some(film_file::encode(film, Some(meta))?)
-    } else {
-        None
-    };
-    let checkpointed = match passes.checkpoint_failure.take() {
-        Some(e) => Err(e),
-        None => passes.checkpoints.finish(encoded.as_deref()),
-    };
-    match &encoded {
-        Some(bytes) if output_is_film => pending.commit(bytes)?,
-        _ => pending.commit_image(film, args.gamma)?,
-    }
-    checkpointed.with_context(|| {
-        format!(
-            "the image was written to {}, but not the checkpoint",
-            plan.output.display()
-        )
-    })
-}
-
 /// The summary line on stderr, and the warnings and notes the render calls for.
-fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32, done: u32) {
+fn print_summary(plan: &Plan, finished: &Finished) {
+    let Plan { request, .. } = plan;
+    let Finished {
+        rendered,
+        seconds,
+        resumed_at,
+        done,
+        ..
+    } = finished;
+    let (seconds, resumed_at, done) = (*seconds, *resumed_at, *done);
+    let first = request.opts.first_sample;
+    let output = request.output.as_deref().unwrap_or(Path::new("-"));
     let film = &rendered.film;
-    let (width, height) = (plan.opts.width, plan.opts.height);
-    let spp = done - plan.range.start;
+    let (width, height) = (request.opts.width, request.opts.height);
+    let spp = done - first;
     // This run's samples: a resumed render's earlier ones took no time here.
     let samples = width as f64 * height as f64 * (done - resumed_at) as f64;
     let gpu_time = match (rendered.gpu_seconds, rendered.longest_dispatch_seconds) {
@@ -488,28 +360,28 @@ fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32
         (None, Some(d)) => format!(" (longest dispatch {:.0} ms)", d * 1e3),
         _ => String::new(),
     };
-    let mut shown_samples = if plan.range.start > 0 || plan.partial {
-        format!("samples {}..{done}", plan.range.start)
+    let mut shown_samples = if first > 0 || plan.partial {
+        format!("samples {first}..{done}")
     } else {
         format!("{spp} spp")
     };
-    if resumed_at > plan.range.start {
+    if resumed_at > first {
         shown_samples += &format!(" (resumed at {resumed_at})");
     }
     note!(
         "{}: {width}x{height}, {shown_samples}, {} [{}]{}, {}, {}, {seconds:.2} s{gpu_time}, {:.2} Msamples/s, mean radiance {}, estimated RMSE {:.3e} -> {}",
-        plan.scene.name,
-        plan.backend.name(),
+        request.scene.name,
+        request.backend.name(),
         rendered.device,
         plan.backend_reason
             .as_ref()
             .map_or(String::new(), |why| format!(" (auto: {why})")),
-        plan.opts.integrator.name(),
-        plan.opts.sampler.name(),
+        request.opts.integrator.name(),
+        request.opts.sampler.name(),
         samples / seconds / 1e6,
         shown_radiance(film.image_mean()),
         film.estimated_rmse(),
-        plan.output.display()
+        output.display()
     );
     if film.invalid_samples > 0 {
         note!(
@@ -517,9 +389,9 @@ fn print_summary(plan: &Plan, rendered: &Rendered, seconds: f64, resumed_at: u32
             film.invalid_samples
         );
     }
-    if plan.backend == Backend::Gpu
+    if request.backend == Backend::Gpu
         && rendered.device.contains("llvmpipe")
-        && !rt_gpu::gpu::Features::of(&plan.flat).inline_scene
+        && !rt_gpu::gpu::Features::of(&request.flat).inline_scene
     {
         note!(
             "note: lavapipe traces scenes through their BVH 3-10x slower than `--backend cpu` does on the same cores (`--backend cpu`, or `auto` without --adapter, runs them there)"

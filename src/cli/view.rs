@@ -64,5 +64,15 @@ pub fn view(args: &ViewArgs) -> anyhow::Result<()> {
         script: args.steps.clone(),
         exit_after_spp: args.exit_after_spp,
         screenshot: args.screenshot.clone(),
+        reload: Some(Box::new(reloader(args))),
     })
+}
+
+/// Reads the scene again as `view` first read it (F5 in the window).
+fn reloader(args: &ViewArgs) -> impl Fn() -> anyhow::Result<rt_gpu::scene::Scene> + use<> {
+    let (scene, options) = (args.scene.clone(), args.options.clone());
+    move || {
+        let (scene, _) = resolve_scene(&scene, options.camera.as_deref())?;
+        options.with_background(scene)
+    }
 }

@@ -13,6 +13,6 @@ pub fn background(bg: &Background, dir: Vec3) -> Vec3 {
             let t = 0.5 * (dir.y + 1.0);
             (1.0 - t) * Vec3::ONE + t * Vec3::from(SKY_ZENITH)
         }
-        Background::Environment(env) => super::environment::radiance(&env, dir),
+        Background::Environment(ref env) => super::environment::radiance(env, dir),
     }
 }

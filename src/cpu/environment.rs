@@ -28,7 +28,7 @@ fn image_coordinates(local: Vec3) -> (f32, f32) {
 #[inline]
 fn radiance_at(env: &Environment, s: f32, t: f32) -> Vec3 {
     let h = env.image.height as f32;
-    bilinear(env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength
+    bilinear(&env.image, s, t.clamp(0.5 / h, 1.0 - 0.5 / h)) * env.strength
 }
 
 /// Radiance arriving from the environment along unit direction `dir`.
@@ -111,7 +111,7 @@ mod tests {
         }
         let image = Image::from_linear("test", width, height, texels)
             .unwrap()
-            .leak();
+            .shared();
         Environment::new(image, 1.0, 30.0).unwrap()
     }
 

@@ -181,9 +181,9 @@ fn escaped(scene: &FlatScene, nee: bool, bsdf_pdf: f32, dir: Vec3) -> Vec3 {
     if let Some(index) = scene.environment_light()
         && nee
         && bsdf_pdf > 0.0
-        && let LightShape::Environment(env) = scene.lights[index].shape
+        && let LightShape::Environment(env) = &scene.lights[index].shape
     {
-        let (radiance, pdf) = super::environment::radiance_and_pdf(&env, dir);
+        let (radiance, pdf) = super::environment::radiance_and_pdf(env, dir);
         let light_pdf = scene.lights[index].pick * pdf;
         return lights::power_heuristic(bsdf_pdf, light_pdf) * radiance;
     }
@@ -329,7 +329,7 @@ pub fn light_arriving(
 ) -> Option<Vec3> {
     let light = &scene.lights[index];
     let environment = match light.shape {
-        LightShape::Environment(env) => Some(env),
+        LightShape::Environment(ref env) => Some(env),
         _ => None,
     };
     // A punctual light: what it sends to `from`, reached unless something lies before `reach`.
@@ -350,7 +350,7 @@ pub fn light_arriving(
     };
     let mut ray = Ray { origin: from, dir };
     // What the ray finds where nothing stops it first: the environment, or nothing.
-    let escaped = || environment.map(|env| super::environment::radiance(&env, dir));
+    let escaped = || environment.map(|env| super::environment::radiance(env, dir));
     if medium == 0 && scene.medium_crossings == 0 {
         // No medium on the way (the loop below, without its cost).
         if at_infinity || punctual.is_some() {

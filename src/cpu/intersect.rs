@@ -321,7 +321,7 @@ fn passes_through(
     let Some(alpha) = scene.materials[material as usize].alpha() else {
         return false;
     };
-    let texture = match alpha.image {
+    let texture = match &alpha.image {
         Some(image) => {
             let first = scene.triangle_uvs.get(triangle as usize);
             let corners = match image.lookup.uv_set {
@@ -732,7 +732,7 @@ pub fn normal_mapped(
     }
     let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
     let bitangent = sign * shading.cross(tangent);
-    let texel = crate::assets::image_lookup::image_at(map.image, uv);
+    let texel = crate::assets::image_lookup::image_at(&map.image, uv);
     let local = (2.0 * texel - Vec3::ONE) * Vec3::new(map.scale, map.scale, 1.0);
     let n = local.x * tangent + local.y * bitangent + local.z * shading;
     let len2 = n.dot(n);

@@ -38,7 +38,7 @@ pub fn pdf(light: &Light, x: Vec3, p: Vec3, dir: Vec3) -> f32 {
         LightShape::Triangle {
             normal, inv_area, ..
         } => shape::area_pdf(light.pick, normal, inv_area, x, p, dir),
-        LightShape::Environment(env) => light.pick * environment::pdf(&env, dir),
+        LightShape::Environment(ref env) => light.pick * environment::pdf(env, dir),
         // A ray never meets a light of no area.
         LightShape::Point { .. } | LightShape::Directional { .. } => 0.0,
     }
@@ -104,8 +104,8 @@ pub fn sample(light: &Light, x: Vec3, u1: f32, u2: f32) -> Option<LightSample> {
             pdf: light.pick,
             point: x + toward,
         }),
-        LightShape::Environment(env) => {
-            let (dir, pdf) = environment::sample(&env, u1, u2)?;
+        LightShape::Environment(ref env) => {
+            let (dir, pdf) = environment::sample(env, u1, u2)?;
             let pdf = light.pick * pdf;
             (pdf > 0.0).then_some(LightSample {
                 dir,

@@ -8,6 +8,7 @@ use crate::options::RenderOptions;
 use crate::scene::Background;
 use crate::scene::flat::{FlatScene, Light, LightShape};
 use crate::shared::layout::*;
+use std::sync::Arc;
 
 /// The kernel's BVH: the host's interior nodes, in their order (the root's first), each with
 /// its two children's boxes and references (`GpuBvhNode`); the same hierarchy the CPU
@@ -268,7 +269,7 @@ pub struct ImageArray {
     /// The values, four per vec4f (empty in a plan).
     pub values: Vec<f32>,
     /// (image, where its texels start).
-    placed: Vec<(&'static Image, u32)>,
+    placed: Vec<(Arc<Image>, u32)>,
     /// Where the environment's texels and its CDFs start.
     pub environment: Option<[u32; 2]>,
     /// How many values it holds (at least 1: a binding cannot be empty).
@@ -276,8 +277,8 @@ pub struct ImageArray {
 }
 
 /// The image of a material's emission on top of its surface, if it has one.
-fn emission_image(m: &crate::scene::Material) -> Option<&'static Image> {
-    match m.emission()?.radiance {
+fn emission_image(m: &crate::scene::Material) -> Option<&Arc<Image>> {
+    match &m.emission()?.radiance {
         Texture::Image(image) => Some(image),
         _ => None,
     }
@@ -294,10 +295,10 @@ impl ImageArray {
     }
 
     /// The largest of the materials' images (what an error about their size names).
-    pub fn largest_texture(&self) -> Option<&'static Image> {
+    pub fn largest_texture(&self) -> Option<Arc<Image>> {
         self.placed
             .iter()
-            .map(|(image, _)| *image)
+            .map(|(image, _)| image.clone())
             .max_by_key(|i| i.width as u64 * i.height as u64)
     }
 
@@ -314,8 +315,8 @@ impl ImageArray {
         let mut len = 0u64;
         // Each image's texels once, however many materials (or the environment) read them,
         // through however many lookups and factors.
-        let mut place = |out: &mut ImageArray, image: &'static Image| {
-            if let Some(&(_, at)) = out.placed.iter().find(|(i, _)| same_texels(i, image)) {
+        let mut place = |out: &mut ImageArray, image: Arc<Image>| {
+            if let Some(&(_, at)) = out.placed.iter().find(|(i, _)| same_texels(i, &image)) {
                 return at;
             }
             let at = len as u32;
@@ -332,9 +333,9 @@ impl ImageArray {
         for image in scene.materials.iter().flat_map(|m| m.images()) {
             place(&mut out, image);
         }
-        if let Background::Environment(env) = scene.background {
+        if let Background::Environment(env) = &scene.background {
             let d = env.distribution();
-            let texels = place(&mut out, env.image);
+            let texels = place(&mut out, env.image.clone());
             // Its CDFs, a vec4f per value: (value, the guide's slot as a number, density, 0),
             // the guide 0 past a table's last slot. The rows' table (cells' rows + 1), then each
             // row's cells' (cells across + 1 each), each entry but the last holding its cell's
@@ -425,12 +426,12 @@ impl SceneBuffers {
                     }
                 }
                 if let Some(map) = m.normal_map() {
-                    gpu.normal_map_image = images.texels_of(map.image);
+                    gpu.normal_map_image = images.texels_of(&map.image);
                 }
                 if let Some(image) = m.parameter_image() {
                     gpu.parameter_image = images.texels_of(image);
                 }
-                if let Some(image) = m.alpha().and_then(|a| a.image) {
+                if let Some(image) = m.alpha().and_then(|a| a.image.as_ref()) {
                     gpu.alpha_image = images.texels_of(image);
                 }
                 if let Some(image) = emission_image(m) {
@@ -616,7 +617,7 @@ pub fn base_params(scene: &FlatScene, opts: &RenderOptions) -> GpuParams {
         Background::Environment(_) => ([0.0; 3], 0),
     };
     let mut environment = ([1.0, 0.0], [0; 2], [0; 2], 0.0);
-    if let Background::Environment(env) = scene.background {
+    if let Background::Environment(env) = &scene.background {
         let slots = ImageArray::plan(scene).environment.unwrap_or_default();
         environment = (
             env.rotation,

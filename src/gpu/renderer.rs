@@ -32,7 +32,7 @@ fn loop_cost(
     traversal_weight: u64,
 ) -> (LoopCost, u64) {
     let max_depth = opts.max_depth;
-    let rays_per_trace = if features.has("MEDIA") {
+    let rays_per_trace = if features.has_material(crate::material::MaterialFeature::Media) {
         2 + scene.medium_crossings as u64
     } else {
         1
@@ -475,7 +475,7 @@ impl GpuRenderer {
         let image_rows = texel_rows(buffers.images.bytes() / 16);
         if buffers.images.bytes() / 16 > image_capacity(&self.ctx.limits) {
             let environment = match &scene.background {
-                crate::scene::Background::Environment(env) => Some(env.image),
+                crate::scene::Background::Environment(env) => Some(env.image.clone()),
                 _ => None,
             };
             let largest = buffers

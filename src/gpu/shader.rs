@@ -4,7 +4,7 @@
 //! without glass no dielectric branch.
 
 use crate::gpu::layout::SceneBuffers;
-use crate::material::{self, KINDS, MaterialKind};
+use crate::material::{KINDS, MaterialFeature, MaterialKind};
 use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::Background;
 use crate::scene::flat::FlatScene;
@@ -85,7 +85,7 @@ pub struct Features {
     pub instances: bool,
     /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
     pub bvh: bool,
-    /// The material features on, as bits in the order of [`material::features`]: each material
+    /// The material features on, as [`MaterialFeature::bit`]s: each material
     /// kind the scene uses, and the extra features its instances need.
     pub materials: u32,
     /// A camera with an aperture.
@@ -184,7 +184,7 @@ impl Features {
         let mut materials = 0;
         for (m, _) in scene.materials.iter().zip(&used).filter(|(_, used)| **used) {
             for feature in std::iter::once(m.kind().feature).chain(m.extra_features()) {
-                materials |= material_bit(feature);
+                materials |= feature.bit();
             }
         }
         // Uniform arrays have a fixed size: the next power of two (fewer distinct kernels).
@@ -254,7 +254,9 @@ impl Features {
             shapes: (1 << shape::KINDS.len()) - 1,
             triangles: true,
             bvh: true,
-            materials: (1 << material::features().len()) - 1,
+            materials: MaterialFeature::ALL
+                .iter()
+                .fold(0, |bits, f| bits | f.bit()),
             uniform_scene: false,
             uniform_bvh: false,
             inline_scene: false,
@@ -267,8 +269,8 @@ impl Features {
     /// surfaces or media to take light samples at, nee computes exactly what naive does, so
     /// the kernel leaves it out.
     pub fn with_integrator(self, scene: &FlatScene, integrator: Integrator) -> Self {
-        let samples_lights =
-            scene.materials.iter().any(|m| m.samples_lights()) || self.has("MEDIA");
+        let samples_lights = scene.materials.iter().any(|m| m.samples_lights())
+            || self.has_material(MaterialFeature::Media);
         Features {
             nee: integrator == Integrator::Nee && !scene.lights.is_empty() && samples_lights,
             ..self
@@ -285,9 +287,7 @@ impl Features {
 
     /// The material kinds whose code the kernel holds.
     pub fn kinds(&self) -> impl Iterator<Item = &'static MaterialKind> + '_ {
-        KINDS
-            .iter()
-            .filter(|k| self.materials & material_bit(k.feature) != 0)
+        KINDS.iter().filter(|k| self.has_material(k.feature))
     }
 
     /// Every switch by name, in a fixed order: what `//#if` blocks test. The material
@@ -304,9 +304,7 @@ impl Features {
                     .map(|(name, switch)| (*name, *switch(&mut copy))),
             )
             .collect();
-        let materials = material::features()
-            .into_iter()
-            .map(|name| (name, self.materials & material_bit(name) != 0));
+        let materials = (MaterialFeature::ALL.iter()).map(|&f| (f.name(), self.has_material(f)));
         let geometry = shape::KINDS.len() + GEOMETRY_SWITCHES;
         flags.splice(geometry..geometry, materials);
         flags
@@ -326,10 +324,10 @@ impl Features {
             };
             return Ok(());
         }
-        let bit = material_bit(name);
-        if bit == 0 {
+        let Some(feature) = MaterialFeature::named(name) else {
             return Err(format!("unknown shader feature {name}"));
-        }
+        };
+        let bit = feature.bit();
         self.materials = if on {
             self.materials | bit
         } else {
@@ -338,26 +336,38 @@ impl Features {
         Ok(())
     }
 
-    /// Whether switch `name` is on (false for a name that is not one).
-    pub fn has(&self, name: &str) -> bool {
-        self.enabled(name) == Ok(true)
+    /// Whether the kernel holds material feature `feature`.
+    pub fn has_material(&self, feature: MaterialFeature) -> bool {
+        self.materials & feature.bit() != 0
     }
 
+    /// Whether the kernel holds the shape kind `kind`.
+    pub fn has_shape(&self, kind: &ShapeKind) -> bool {
+        let position = shape::KINDS.iter().position(|k| k.name == kind.name);
+        position.is_some_and(|p| self.shapes & 1 << p != 0)
+    }
+
+    /// Whether hits compute surface (UV) coordinates: a material looks something up at them,
+    /// or a normal map bends normals by them (the derived switch `READS_UVS`).
+    pub fn reads_uvs(&self) -> bool {
+        self.normal_maps
+            || MaterialFeature::ALL
+                .iter()
+                .any(|&f| f.reads_uvs() && self.has_material(f))
+    }
+
+    /// Whether switch `name` (one of [`Features::flags`], or a derived switch) is on; an error
+    /// for a name that is neither.
     fn enabled(&self, name: &str) -> Result<bool, String> {
+        if name == "READS_UVS" {
+            return Ok(self.reads_uvs());
+        }
         self.flags()
             .iter()
             .find(|(n, _)| *n == name)
             .map(|(_, on)| *on)
             .ok_or_else(|| format!("unknown shader feature {name}"))
     }
-}
-
-/// The bit of material feature `name` in [`Features::materials`]; 0 if there is none.
-fn material_bit(name: &str) -> u32 {
-    material::features()
-        .iter()
-        .position(|f| *f == name)
-        .map_or(0, |i| 1 << i)
 }
 
 /// The kernel source for `features`, built for `scene` (whose primitives it may hold as constants).
@@ -402,15 +412,14 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
     }
     for (name, source) in MODULES {
         out.push_str(&format!("\n// ---- {name} ----\n"));
-        out.push_str(&preprocess(source, features).map_err(|e| format!("shaders/{name}: {e}"))?);
+        out.push_str(&preprocess(source, name, features)?);
         if *name == "materials.wgsl" {
             for kind in features.kinds() {
                 let name = format!("materials/{}.wgsl", kind.name);
-                out.push_str(&format!("\n// ---- {name} ----\n"));
+                out.push_str(&format!("\n// ---- {name}'s parameters, generated ----\n"));
                 out.push_str(&(kind.params_wgsl)(kind.name));
-                out.push_str(
-                    &preprocess(kind.wgsl, features).map_err(|e| format!("shaders/{name}: {e}"))?,
-                );
+                out.push_str(&format!("\n// ---- {name} ----\n"));
+                out.push_str(&preprocess(kind.wgsl, &name, features)?);
             }
             out.push_str(&material_dispatch(features));
         }
@@ -450,7 +459,7 @@ fn material_dispatch(features: &Features) -> String {
     out.push_str("fn emitted(m: Material, hit: Hit) -> vec3f {\n    var out = vec3f(0.0);\n");
     for kind in features.kinds() {
         if let Some(feature) = kind.emits_under
-            && features.enabled(feature) == Ok(true)
+            && features.has_material(feature)
         {
             out.push_str(&case(kind, "emitted(m, hit)"));
         }
@@ -505,7 +514,7 @@ fn material_dispatch(features: &Features) -> String {
 /// `consider_<name>` with the shape as a constant.
 fn inline_scene(scene: &FlatScene, features: &Features) -> String {
     let constants = shape_constants(scene);
-    let held = |k: &ShapeKind| features.has(k.feature);
+    let held = |k: &ShapeKind| features.has_shape(k);
     let quads: Vec<GpuQuad> = if features.shapes & 1 << quad_position() != 0 {
         scene.shapes.quads.iter().map(SurfaceShape::gpu).collect()
     } else {
@@ -670,9 +679,7 @@ fn box_test(b: usize, first: usize, faces: &[GpuQuad]) -> String {
 fn consider_box_{b}(ray: Ray, c: ptr<function, Closest>) {{
     let hit = box_test_{b}(ray);
     if replaces_in_order(hit.t, c) {{
-        (*c).t = hit.t;
-        (*c).found = true;
-        (*c).primitive = (KIND_QUAD << PRIMITIVE_INDEX_BITS) | ({first}u + hit.face);
+        record_hit(hit.t, (KIND_QUAD << PRIMITIVE_INDEX_BITS) | ({first}u + hit.face), c);
         (*c).material = {material};
         (*c).outward = {outward};
         (*c).shape.w = {offset};
@@ -818,41 +825,82 @@ fn inline_lights(scene: &FlatScene) -> String {
     out
 }
 
-pub(super) fn preprocess(source: &str, features: &Features) -> Result<String, String> {
+/// `source` (the module `shaders/{name}`) with the blocks `features` turns off left out. Where
+/// lines were left out, a `//# shaders/{name}:LINE` line says where the next one comes from,
+/// so that an error in the composed kernel names its `.wgsl` file and line ([`validate`]).
+pub(super) fn preprocess(source: &str, name: &str, features: &Features) -> Result<String, String> {
+    let located = |number: usize, e: &str| format!("shaders/{name}:{}: {e}", number + 1);
     // Each open block: (whether its branch is kept, whether the enclosing text is kept).
     let mut stack: Vec<(bool, bool)> = Vec::new();
     let mut keep = true;
+    let mut skipped = false;
     let mut out = String::new();
     for (number, line) in source.lines().enumerate() {
         let directive = line.trim();
         if let Some(condition) = directive.strip_prefix("//#if ") {
             let mut value = false;
-            for name in condition.split("||") {
+            for feature in condition.split("||") {
                 value |= features
-                    .enabled(name.trim())
-                    .map_err(|e| format!("line {}: {e}", number + 1))?;
+                    .enabled(feature.trim())
+                    .map_err(|e| located(number, &e))?;
             }
             stack.push((value, keep));
             keep = keep && value;
         } else if directive == "//#else" {
             let &(value, outer) = stack
                 .last()
-                .ok_or(format!("line {}: #else without #if", number + 1))?;
+                .ok_or_else(|| located(number, "#else without #if"))?;
             keep = outer && !value;
         } else if directive == "//#endif" {
             let (_, outer) = stack
                 .pop()
-                .ok_or(format!("line {}: #endif without #if", number + 1))?;
+                .ok_or_else(|| located(number, "#endif without #if"))?;
             keep = outer;
         } else if keep {
+            if skipped {
+                out.push_str(&format!("{SOURCE_MARK}shaders/{name}:{}\n", number + 1));
+            }
             out.push_str(line);
             out.push('\n');
+            skipped = false;
+            continue;
         }
+        skipped = true;
     }
     if !stack.is_empty() {
-        return Err("#if without #endif".into());
+        return Err(format!("shaders/{name}: #if without #endif"));
     }
     Ok(out)
+}
+
+/// Starts a line of the composed kernel that says where the next line comes from.
+const SOURCE_MARK: &str = "//# ";
+
+/// Where line `line` (1-based) of a composed kernel comes from: `shaders/FILE.wgsl:LINE`, or
+/// the generated part it is in (`// ---- NAME ----` headers start each part); `None` for
+/// WGSL that is not a composed kernel.
+pub fn source_of(kernel: &str, line: usize) -> Option<String> {
+    let lines: Vec<&str> = kernel.lines().take(line.saturating_sub(1)).collect();
+    for (index, text) in lines.iter().enumerate().rev() {
+        let below = lines.len() - index;
+        if let Some(mark) = text.strip_prefix(SOURCE_MARK)
+            && let Some((file, first)) = mark.rsplit_once(':')
+            && let Ok(first) = first.parse::<usize>()
+        {
+            return Some(format!("{file}:{}", first + below - 1));
+        }
+        if let Some(part) = text
+            .strip_prefix("// ---- ")
+            .and_then(|t| t.strip_suffix(" ----"))
+        {
+            return Some(if part.ends_with(".wgsl") {
+                format!("shaders/{part}:{below}")
+            } else {
+                format!("{part} (line {line} of the composed kernel: rt-gpu SCENE --print-shader)")
+            });
+        }
+    }
+    None
 }
 
 /// Parses and validates WGSL with naga, as wgpu will; the error is one line.
@@ -860,9 +908,16 @@ pub fn validate(
     source: &str,
 ) -> Result<(wgpu::naga::Module, wgpu::naga::valid::ModuleInfo), String> {
     use wgpu::naga;
+    // Named where a composed kernel's line comes from, not only by its line in the kernel.
+    let at = |location: Option<naga::SourceLocation>| {
+        location
+            .and_then(|l| source_of(source, l.line_number as usize))
+            .map_or(String::new(), |place| format!("{place}: "))
+    };
     let module = naga::front::wgsl::parse_str(source).map_err(|e| {
         format!(
-            "WGSL parse error: {}",
+            "{}WGSL parse error: {}",
+            at(e.location(source)),
             e.emit_to_string(source).replace('\n', " ")
         )
     })?;
@@ -873,7 +928,8 @@ pub fn validate(
     .validate(&module)
     .map_err(|e| {
         format!(
-            "WGSL validation error: {}",
+            "{}WGSL validation error: {}",
+            at(e.location(source)),
             e.emit_to_string(source).replace('\n', " ")
         )
     })?;

@@ -9,28 +9,19 @@ use super::bindings::shape_binding;
 use super::shader::{Features, preprocess};
 use crate::shape::{KINDS, ShapeKind};
 
-/// The features under which hits compute surface coordinates (the kernel's `Hit::uv`).
-const UV_FEATURES: [&str; 4] = [
-    "UV_CHECKER",
-    "IMAGE_TEXTURE",
-    "NORMAL_MAPS",
-    "METALLIC_ROUGHNESS",
-];
-
 /// The shapes' part of the kernel composed with `features`.
 pub fn wgsl(features: &Features) -> Result<String, String> {
     let held: Vec<(usize, &ShapeKind)> = (KINDS.iter().enumerate())
-        .filter(|(_, k)| features.has(k.feature))
+        .filter(|(_, k)| features.has_shape(k))
         .collect();
     let mut out = String::from("\n// ---- the shapes' arrays and twins, generated ----\n");
     for &(position, kind) in &held {
         out.push_str(&array_declaration(position, kind, features));
     }
     for &(_, kind) in &held {
-        out.push_str(&format!("\n// ---- shapes/{}.wgsl ----\n", kind.name));
-        let twin = preprocess(kind.wgsl, features)
-            .map_err(|e| format!("shaders/shapes/{}.wgsl: {e}", kind.name))?;
-        out.push_str(&twin);
+        let name = format!("shapes/{}.wgsl", kind.name);
+        out.push_str(&format!("\n// ---- {name} ----\n"));
+        out.push_str(&preprocess(kind.wgsl, &name, features)?);
     }
     let kinds: Vec<&ShapeKind> = held.iter().map(|(_, k)| *k).collect();
     out.push_str("\n// ---- the shape interface, generated ----\n");
@@ -79,7 +70,7 @@ fn dispatch_functions(held: &[&ShapeKind], features: &Features) -> String {
         &by_kind(others, "kind", assign_surface),
         "    return out;\n",
     ));
-    let uv = UV_FEATURES.iter().any(|f| features.has(f));
+    let uv = features.reads_uvs();
     let uv_dispatch = by_kind(if uv { held } else { &[] }, "kind", |k| {
         assign(format!("{}_hit_uv(c, point)", k.name))
     });

@@ -47,7 +47,7 @@ const COSINE_NODES: usize = 32;
 pub struct CoatTable {
     /// 1 - T at the table's cosines, in every channel of a [`COAT_TABLE_SIZE`] x 1 image: the
     /// GPU's images array holds it.
-    pub image: Image,
+    pub image: std::sync::Arc<Image>,
     /// K: 2 int_0^1 R_inside(mu) mu dmu, the coat's reflectance of diffuse light from the base.
     pub internal_reflectance: f32,
 }
@@ -89,7 +89,8 @@ impl CoatTable {
         let source = format!("coat table (ior {ior}, alpha {alpha})");
         CoatTable {
             image: Image::from_linear(&source, COAT_TABLE_SIZE as u32, 1, texels)
-                .expect("opacities are finite and in [0, 1]"),
+                .expect("opacities are finite and in [0, 1]")
+                .shared(),
             internal_reflectance,
         }
     }

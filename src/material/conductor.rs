@@ -5,6 +5,7 @@
 //! between microfacets at high roughness is not put back (no Kulla-Conty term). Random numbers
 //! per sample: 2 when rough, none when smooth.
 
+use crate::shared::feature::MaterialFeature;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::{BsdfSample, Lobe, MaterialModel, reflect};
 use crate::params::checked;
@@ -129,9 +130,9 @@ material_params! {
 
 impl MaterialModel for Conductor {
     type Params = ConductorParams;
-    const FEATURE: &'static str = "CONDUCTOR";
+    const FEATURE: MaterialFeature = MaterialFeature::Conductor;
     /// Rough conductors.
-    const EXTRA_FEATURES: &'static [&'static str] = &["MICROFACET"];
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Microfacet];
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -171,7 +172,7 @@ impl MaterialModel for Conductor {
         Ok(())
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
+    fn extra_features(&self) -> Vec<MaterialFeature> {
         if self.samples_lights() {
             Self::EXTRA_FEATURES.to_vec()
         } else {

@@ -10,6 +10,7 @@
 //! each object alike, so the factors cancel. The BTDF is then pbrt-v4's in its importance form,
 //! the same for light sampling as for sampled directions.
 
+use crate::shared::feature::MaterialFeature;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::fresnel::{fresnel, refract_cos};
 use super::{BsdfSample, Lobe, MaterialModel, Medium, reflect};
@@ -175,9 +176,9 @@ material_params! {
 
 impl MaterialModel for Dielectric {
     type Params = DielectricParams;
-    const FEATURE: &'static str = "DIELECTRIC";
+    const FEATURE: MaterialFeature = MaterialFeature::Dielectric;
     /// Glass filled with a medium; rough glass.
-    const EXTRA_FEATURES: &'static [&'static str] = &["MEDIA", "MICROFACET"];
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Media, MaterialFeature::Microfacet];
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -189,13 +190,13 @@ impl MaterialModel for Dielectric {
         self.medium.as_ref().map_or(Ok(()), Medium::check)
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
+    fn extra_features(&self) -> Vec<MaterialFeature> {
         let mut out = Vec::new();
         if self.medium.is_some() {
-            out.push("MEDIA");
+            out.push(MaterialFeature::Media);
         }
         if self.samples_lights() {
-            out.push("MICROFACET");
+            out.push(MaterialFeature::Microfacet);
         }
         out
     }

@@ -1,6 +1,7 @@
 //! Ideal diffuse reflection (twin: `shaders/materials/lambertian.wgsl`). Random numbers per
 //! sample: 2.
 
+use crate::shared::feature::MaterialFeature;
 use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::warp::{cosine_pdf, unit_vector};
 use crate::shared::ray::{Hit, below_surface};
@@ -17,7 +18,7 @@ use serde::{Deserialize, Serialize};
 /// `{ type = "lambertian", albedo = [r, g, b], emission = [r, g, b], normal_map = { image, scale } }`.
 /// `emission` (optional, both faces) makes it glow, as the furnace tests need; `albedo` may be a
 /// texture; `normal_map` (optional) bends meshes' shading normals (`assets::normal_map`).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lambertian {
     pub albedo: Texture,
@@ -36,9 +37,9 @@ material_params! {
 
 impl MaterialModel for Lambertian {
     type Params = LambertianParams;
-    const FEATURE: &'static str = "LAMBERTIAN";
+    const FEATURE: MaterialFeature = MaterialFeature::Lambertian;
     /// Lambertian surfaces with emission; textured albedos.
-    const EXTRA_FEATURES: &'static [&'static str] = &["EMISSIVE", "CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Emissive, MaterialFeature::Checker, MaterialFeature::UvChecker, MaterialFeature::ImageTexture];
 
     fn validate(&self) -> Result<(), String> {
         self.albedo.validate_albedo()
@@ -50,15 +51,15 @@ impl MaterialModel for Lambertian {
             ..self
         }
     }
-    const EMITS_UNDER: Option<&'static str> = Some("EMISSIVE");
+    const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::Emissive);
     const SAMPLES_LIGHTS: bool = true;
 
-    fn textures(&self) -> Vec<Texture> {
-        vec![self.albedo]
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.albedo]
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
-        let emissive = (self.emission != Vec3::ZERO).then_some("EMISSIVE");
+    fn extra_features(&self) -> Vec<MaterialFeature> {
+        let emissive = (self.emission != Vec3::ZERO).then_some(MaterialFeature::Emissive);
         emissive.into_iter().chain(self.albedo.feature()).collect()
     }
 

@@ -1,6 +1,7 @@
 //! A diffuse area light (twin: `shaders/materials/light.wgsl`). It emits from its front face
 //! (along the shape's normal) unless `two_sided`, and reflects nothing. Random numbers: 0.
 
+use crate::shared::feature::MaterialFeature;
 use super::{BsdfSample, MaterialModel};
 use crate::assets::alpha::Alpha;
 use crate::shared::ray::Hit;
@@ -14,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 /// `{ type = "light", radiance = [r, g, b], strength = 1, two_sided = false }`; `radiance` may
 /// be a texture (whose values `strength` scales).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Light {
     #[serde(with = "textures::radiance")]
@@ -52,10 +53,10 @@ material_params! {
 
 impl MaterialModel for Light {
     type Params = LightParams;
-    const FEATURE: &'static str = "LIGHT";
+    const FEATURE: MaterialFeature = MaterialFeature::Light;
     /// Textured radiance.
-    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE", "ALPHA"];
-    const EMITS_UNDER: Option<&'static str> = Some("LIGHT");
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Checker, MaterialFeature::UvChecker, MaterialFeature::ImageTexture, MaterialFeature::Alpha];
+    const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::Light);
 
     fn validate(&self) -> Result<(), String> {
         if !(0.0..=MAX_STRENGTH).contains(&self.strength) {
@@ -74,12 +75,12 @@ impl MaterialModel for Light {
         }
     }
 
-    fn textures(&self) -> Vec<Texture> {
-        vec![self.radiance]
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.radiance]
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
-        let alpha = self.alpha.map(|_| "ALPHA");
+    fn extra_features(&self) -> Vec<MaterialFeature> {
+        let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
         self.radiance.feature().into_iter().chain(alpha).collect()
     }
 

@@ -4,6 +4,7 @@
 //! with smoke or fog: rays pass its surface unchanged (the path loop steps through it without
 //! counting a segment) and scatter inside it. A dielectric's `medium` fills the glass instead.
 
+use crate::shared::feature::MaterialFeature;
 use super::{BsdfSample, Lobe, MaterialModel};
 use crate::shared::ray::Hit;
 use crate::shared::layout::GpuMaterial;
@@ -61,16 +62,16 @@ impl Medium {
 
 impl MaterialModel for Medium {
     type Params = crate::shared::params::NoParams;
-    const FEATURE: &'static str = "MEDIUM";
+    const FEATURE: MaterialFeature = MaterialFeature::Medium;
     /// Any scene with a medium inside some object.
-    const EXTRA_FEATURES: &'static [&'static str] = &["MEDIA"];
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Media];
     const INVISIBLE: bool = true;
 
     fn validate(&self) -> Result<(), String> {
         self.check()
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
+    fn extra_features(&self) -> Vec<MaterialFeature> {
         Self::EXTRA_FEATURES.to_vec()
     }
 

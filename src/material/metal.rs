@@ -1,6 +1,7 @@
 //! Mirror reflection perturbed by `fuzz` (twin: `shaders/materials/metal.wgsl`), as the original
 //! project's metal; rays fuzzed below the surface are absorbed. Random numbers per sample: 2.
 
+use crate::shared::feature::MaterialFeature;
 use super::{BsdfSample, Lobe, MaterialModel, reflect};
 use crate::shared::warp::unit_vector;
 use crate::shared::ray::Hit;
@@ -15,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 /// `{ type = "metal", albedo = [r, g, b], fuzz = 0.1 }`; `fuzz` in [0, 1], default 0; `albedo`
 /// may be a texture.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Metal {
     pub albedo: Texture,
@@ -32,9 +33,9 @@ material_params! {
 
 impl MaterialModel for Metal {
     type Params = MetalParams;
-    const FEATURE: &'static str = "METAL";
+    const FEATURE: MaterialFeature = MaterialFeature::Metal;
     /// Textured albedos.
-    const EXTRA_FEATURES: &'static [&'static str] = &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE"];
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Checker, MaterialFeature::UvChecker, MaterialFeature::ImageTexture];
 
     fn validate(&self) -> Result<(), String> {
         if !(0.0..=1.0).contains(&self.fuzz) {
@@ -43,11 +44,11 @@ impl MaterialModel for Metal {
         self.albedo.validate_albedo()
     }
 
-    fn textures(&self) -> Vec<Texture> {
-        vec![self.albedo]
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.albedo]
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
+    fn extra_features(&self) -> Vec<MaterialFeature> {
         self.albedo.feature().into_iter().collect()
     }
 

@@ -40,7 +40,7 @@ use glam::Vec3;
 /// Scatterings on the shading facet a sampled walk may take before it is given up (its light
 /// lost). A walk goes on after a scattering only when light is shadowed twice (by `wt`, then
 /// by `wp`), more often the steeper the tilt: enough that a white lambertian keeps its albedo
-/// at any tilt a normal map gives (tests/bsdfs/microsurface.rs; docs/benchmarks.md).
+/// at any tilt a normal map gives (tests/it/bsdfs/microsurface.rs; docs/benchmarks.md).
 pub const MAX_SCATTERINGS: u32 = 64;
 
 /// Below this sine of its tilt, a shading normal is the geometric normal (no microsurface).

@@ -11,11 +11,13 @@ use crate::assets::alpha::Alpha;
 use crate::assets::image::Image;
 use crate::assets::normal_map::NormalMap;
 use crate::assets::texture::Texture;
+pub use crate::shared::feature::MaterialFeature;
 use crate::shared::layout::GpuMaterial;
 use crate::shared::params::MaterialParams;
 use crate::shared::ray::Hit;
 use crate::shared::sampler::Sampler;
 use glam::Vec3;
+use std::sync::Arc;
 
 /// What each material provides: pbrt-v4's and Mitsuba 3's BSDF interface (`sample`, `eval`,
 /// `pdf`; see [`bsdf`]) and its emission. The CPU methods are the reference twins of the WGSL
@@ -27,12 +29,12 @@ pub trait MaterialModel {
     /// WGSL twin reads them with `<name>_params(m)`.
     type Params: MaterialParams;
     /// The kernel feature that includes its WGSL twin: the file name in upper case.
-    const FEATURE: &'static str;
+    const FEATURE: MaterialFeature;
     /// Features its WGSL twin's `//#if` blocks may test beyond [`Self::FEATURE`].
-    const EXTRA_FEATURES: &'static [&'static str] = &[];
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[];
     /// The feature under which the kernel calls its twin's `<name>_emitted`; `None`: it never
     /// emits, and its twin has no `<name>_emitted`.
-    const EMITS_UNDER: Option<&'static str> = None;
+    const EMITS_UNDER: Option<MaterialFeature> = None;
     /// Whether next-event estimation may sample lights at it: its BSDF can have a lobe that is
     /// neither a delta (a light sample never picks a mirror's direction) nor absent. Its twin
     /// then has `<name>_eval` and `<name>_pdf`.
@@ -49,7 +51,7 @@ pub trait MaterialModel {
         Ok(())
     }
     /// The [`Self::EXTRA_FEATURES`] this instance needs.
-    fn extra_features(&self) -> Vec<&'static str> {
+    fn extra_features(&self) -> Vec<MaterialFeature> {
         Vec::new()
     }
     /// This material in a flat scene whose coordinates are relative to `origin` (solid
@@ -61,7 +63,7 @@ pub trait MaterialModel {
         self
     }
     /// The textures it reads (the GPU's image array holds their images).
-    fn textures(&self) -> Vec<Texture> {
+    fn textures(&self) -> Vec<&Texture> {
         Vec::new()
     }
     /// The medium filling the object it is the surface of, if any.
@@ -75,7 +77,7 @@ pub trait MaterialModel {
     }
     /// An image of parameters, if it has one (`pbr`'s metallic-roughness texture, per point;
     /// a rough `plastic`'s coat table, per cosine): the GPU's image array holds it.
-    fn parameter_image(&self) -> Option<&'static Image> {
+    fn parameter_image(&self) -> Option<&Arc<Image>> {
         None
     }
     /// How rays see through it, if they may (`assets::alpha`; the closest-hit search asks).
@@ -131,9 +133,9 @@ pub struct MaterialKind {
     pub name: &'static str,
     /// `GpuMaterial::kind`; the WGSL constant `MAT_<FEATURE>`.
     pub kind: u32,
-    pub feature: &'static str,
-    pub extra_features: &'static [&'static str],
-    pub emits_under: Option<&'static str>,
+    pub feature: MaterialFeature,
+    pub extra_features: &'static [MaterialFeature],
+    pub emits_under: Option<MaterialFeature>,
     pub samples_lights: bool,
     pub samples_lights_per_instance: bool,
     pub invisible: bool,
@@ -148,7 +150,7 @@ macro_rules! registry {
         $(pub mod $module; pub use $module::$ty;)+
 
         /// A material of any kind; scene files name the kind with `type = "<file name>"`.
-        #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+        #[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
         #[serde(tag = "type", rename_all = "snake_case")]
         pub enum Material {
             $($ty($ty),)+
@@ -205,13 +207,13 @@ macro_rules! registry {
                 }
                 match self { $(Material::$ty(m) => m.validate(),)+ }
             }
-            pub fn extra_features(&self) -> Vec<&'static str> {
+            pub fn extra_features(&self) -> Vec<MaterialFeature> {
                 match self { $(Material::$ty(m) => m.extra_features(),)+ }
             }
-            pub fn textures(&self) -> Vec<Texture> {
+            pub fn textures(&self) -> Vec<&Texture> {
                 match self { $(Material::$ty(m) => m.textures(),)+ }
             }
-            pub fn parameter_image(&self) -> Option<&'static Image> {
+            pub fn parameter_image(&self) -> Option<&Arc<Image>> {
                 match self { $(Material::$ty(m) => m.parameter_image(),)+ }
             }
             #[inline]
@@ -223,16 +225,16 @@ macro_rules! registry {
             }
             /// Every image it reads: its textures', its normal map's, its parameter image, its
             /// alpha's and its emission's (an image may come more than once).
-            pub fn images(&self) -> Vec<&'static Image> {
-                let textures = self.textures().into_iter().chain(self.emission().map(|e| e.radiance));
+            pub fn images(&self) -> Vec<Arc<Image>> {
+                let textures = self.textures().into_iter().chain(self.emission().map(|e| &e.radiance));
                 let textures = textures.filter_map(|t| match t {
                     Texture::Image(image) => Some(image),
                     _ => None,
                 });
-                let maps = (self.normal_map().map(|n| n.image).into_iter())
+                let maps = (self.normal_map().map(|n| &n.image).into_iter())
                     .chain(self.parameter_image())
-                    .chain(self.alpha().and_then(|a| a.image));
-                textures.chain(maps).collect()
+                    .chain(self.alpha().and_then(|a| a.image.as_ref()));
+                textures.chain(maps).cloned().collect()
             }
             pub fn relocated(self, origin: glam::DVec3) -> Self {
                 match self { $(Material::$ty(m) => Material::$ty(m.relocated(origin)),)+ }
@@ -309,8 +311,8 @@ macro_rules! registry {
                     |n| ([n.image.width as f32, n.image.height as f32], n.scale, n.image.lookup.bits()),
                 );
                 let (alpha_mode, alpha_cutoff) = self.alpha().map_or((0, 0.0), |a| a.gpu_mode());
-                let alpha_image = self.alpha().and_then(|a| a.image);
-                let (emission, emission_image) = match self.emission().map(|e| (e.radiance, e.strength)) {
+                let alpha_image = self.alpha().and_then(|a| a.image.as_ref());
+                let (emission, emission_image) = match self.emission().map(|e| (&e.radiance, e.strength)) {
                     Some((Texture::Image(image), strength)) => (image.factor * strength, Some(image)),
                     Some((texture, strength)) => (texture.mean() * strength, None),
                     None => (glam::Vec3::ZERO, None),
@@ -370,19 +372,6 @@ impl Material {
     }
 }
 
-/// Every kernel feature a material can turn on, each once.
-pub fn features() -> Vec<&'static str> {
-    let mut out = Vec::new();
-    for kind in KINDS {
-        for feature in std::iter::once(&kind.feature).chain(kind.extra_features) {
-            if !out.contains(feature) {
-                out.push(*feature);
-            }
-        }
-    }
-    out
-}
-
 /// Mirror reflection of `d` about unit normal `n`.
 #[inline]
 pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
@@ -396,7 +385,12 @@ mod tests {
     #[test]
     fn registry_names_agree() {
         for kind in KINDS {
-            assert_eq!(kind.feature, kind.name.to_uppercase(), "{}", kind.name);
+            assert_eq!(
+                kind.feature.name(),
+                kind.name.to_uppercase(),
+                "{}",
+                kind.name
+            );
             assert!(kind.wgsl.contains(&format!("fn {}_sample(", kind.name)));
             assert_eq!(
                 kind.emits_under.is_some(),

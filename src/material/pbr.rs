@@ -15,6 +15,8 @@
 //! direction is weighed by the whole mix over the mix's density (one-sample MIS); a delta one
 //! by its component's weight alone.
 
+use crate::shared::feature::MaterialFeature;
+use std::sync::Arc;
 use super::coat::Coat;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
@@ -40,7 +42,7 @@ use serde::{Deserialize, Serialize};
 /// roughness by its green one (glTF's metallicRoughnessTexture); `emission = { radiance,
 /// strength, two_sided }` (optional, as a `light`'s; a colour or an image) glows on top of
 /// what it reflects (glTF's emissive materials).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
     pub base_color: Texture,
@@ -49,7 +51,7 @@ pub struct Pbr {
     pub ior: f32,
     pub transmission: f32,
     pub normal_map: Option<NormalMap>,
-    pub metallic_roughness: Option<&'static Image>,
+    pub metallic_roughness: Option<Arc<Image>>,
     /// Whether `metallic_roughness`'s red channel scales `transmission` too (glTF's
     /// transmissionTexture, merged into that image where a file is read:
     /// `FileTextures::transmission`; not in scene files yet).
@@ -92,7 +94,7 @@ impl TryFrom<PbrDoc> for Pbr {
     fn try_from(d: PbrDoc) -> Result<Self, String> {
         super::fresnel::check_ior(d.ior)?;
         let metallic_roughness = match d.metallic_roughness {
-            Some(name) => Some(crate::assets::image::load_named_linear(&name)?),
+            Some(name) => Some(crate::assets::loader::data_image(&name)?),
             None => None,
         };
         Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
@@ -155,7 +157,7 @@ impl Pbr {
 
     /// This material with its metallic and roughness scaled by `image`'s blue and green
     /// channels.
-    pub fn with_metallic_roughness(self, image: Option<&'static Image>) -> Self {
+    pub fn with_metallic_roughness(self, image: Option<Arc<Image>>) -> Self {
         Pbr {
             metallic_roughness: image,
             ..self
@@ -172,16 +174,24 @@ impl Pbr {
         Pbr { emission, ..self }
     }
 
-    /// This material at `hit`: its metallic and roughness scaled by its metallic-roughness
-    /// image there (then without one), as the kernel's `with_albedo_at` resolves them.
-    fn at(&self, hit: &Hit) -> Pbr {
-        let Some(image) = self.metallic_roughness else {
-            return *self;
+    /// Its lobes at `hit`: the base colour looked up, metallic and roughness scaled by its
+    /// metallic-roughness image there, as the kernel's `with_albedo_at` resolves them.
+    fn at(&self, hit: &Hit) -> Lobes {
+        let lobes = Lobes {
+            base: texture::albedo(&self.base_color, hit),
+            metallic: self.metallic,
+            transmission: self.transmission,
+            ior: self.ior,
+            roughness: self.roughness,
+            coat: self.coat,
+        };
+        let Some(image) = &self.metallic_roughness else {
+            return lobes;
         };
         let uv = texture::uv_at(image.lookup, hit);
         let texel = crate::assets::image_lookup::image_at(image, uv);
         let roughness = self.roughness * texel.y;
-        Pbr {
+        Lobes {
             metallic: self.metallic * texel.z,
             transmission: if self.transmission_in_red {
                 self.transmission * texel.x
@@ -189,33 +199,155 @@ impl Pbr {
                 self.transmission
             },
             roughness,
-            metallic_roughness: None,
             coat: Coat {
                 alpha: Coat::alpha_of(roughness),
                 ..self.coat
             },
-            ..*self
+            ..lobes
         }
     }
 
     /// The weights of the coat, the glass and the metal in the mix.
     fn weights(&self) -> (f32, f32, f32) {
-        let dielectric = 1.0 - self.metallic;
-        (
-            dielectric * (1.0 - self.transmission),
-            dielectric * self.transmission,
-            self.metallic,
-        )
+        weights(self.metallic, self.transmission)
     }
 
     fn ggx(&self) -> Option<Ggx> {
-        (self.coat.alpha > 0.0).then_some(Ggx {
-            alpha: self.coat.alpha,
-        })
+        ggx(&self.coat)
+    }
+}
+
+/// The weights of the coat, the glass and the metal in the mix.
+fn weights(metallic: f32, transmission: f32) -> (f32, f32, f32) {
+    let dielectric = 1.0 - metallic;
+    (
+        dielectric * (1.0 - transmission),
+        dielectric * transmission,
+        metallic,
+    )
+}
+
+/// The rough lobes' distribution; `None`: smooth.
+fn ggx(coat: &Coat) -> Option<Ggx> {
+    (coat.alpha > 0.0).then_some(Ggx { alpha: coat.alpha })
+}
+
+/// A pbr material's lobes at one hit (textures looked up): what its BSDF evaluates, samples
+/// and gives the pdf of.
+#[derive(Clone, Copy)]
+struct Lobes {
+    base: Vec3,
+    metallic: f32,
+    transmission: f32,
+    ior: f32,
+    roughness: f32,
+    coat: Coat,
+}
+
+impl Lobes {
+    fn weights(&self) -> (f32, f32, f32) {
+        weights(self.metallic, self.transmission)
+    }
+
+    fn ggx(&self) -> Option<Ggx> {
+        ggx(&self.coat)
     }
 
     fn glass(&self) -> Dielectric {
         Dielectric::rough(self.ior, self.roughness)
+    }
+
+    fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+        let (w_coat, w_glass, _) = self.weights();
+        let base = self.base;
+        let u = sampler.next_f32();
+        let chosen = if u < w_coat {
+            let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
+            self.coat.sample(base, wo, hit, numbers)?
+        } else if u < w_coat + w_glass {
+            let s = self.glass().sample(wo, hit, sampler)?;
+            // A direction within rounding of where the glass's own density vanishes: not one
+            // for the other components' densities to weigh.
+            if !s.lobe.is_delta() && !(self.glass().pdf(wo, s.wi, hit) > 0.0) {
+                return None;
+            }
+            BsdfSample {
+                weight: s.weight * transmission_tint(base, s.lobe.is_transmission()),
+                ..s
+            }
+        } else {
+            let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+            let frame = Frame::new(hit.shading);
+            let wo_local = frame.to_local(wo);
+            if !(wo_local.z > MIN_COSINE) {
+                return None;
+            }
+            let Some(ggx) = self.ggx() else {
+                let wi = reflect(-wo, hit.shading);
+                return (!below_surface(hit, wi)).then(|| BsdfSample {
+                    weight: schlick(base, wo_local.z),
+                    wi,
+                    pdf: 0.0,
+                    lobe: Lobe::DELTA_REFLECTION,
+                });
+            };
+            let m = ggx.sample_visible(wo_local, u1, u2);
+            let wi_local = reflect(-wo_local, m);
+            let wi = frame.to_world(wi_local);
+            // Below the surface the metal's own density is lost mass: the path ends, as a
+            // conductor's does, rather than count under the other components' densities.
+            if !(wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
+                return None;
+            }
+            BsdfSample {
+                weight: Vec3::ZERO,
+                wi,
+                pdf: 0.0,
+                lobe: Lobe::GLOSSY_REFLECTION,
+            }
+        };
+        if chosen.lobe.is_delta() {
+            return Some(chosen);
+        }
+        let pdf = self.pdf(wo, chosen.wi, hit);
+        (pdf > 0.0).then(|| BsdfSample {
+            weight: self.eval(wo, chosen.wi, hit) / pdf,
+            pdf,
+            ..chosen
+        })
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+        let (w_coat, w_glass, w_metal) = self.weights();
+        let base = self.base;
+        let mut f = Vec3::ZERO;
+        if w_coat > 0.0 {
+            f += w_coat * self.coat.eval(base, wo, wi, hit);
+        }
+        if w_glass > 0.0 {
+            let tint = transmission_tint(base, wi.dot(hit.shading) < 0.0);
+            f += w_glass * tint * self.glass().eval(wo, wi, hit);
+        }
+        if w_metal > 0.0 {
+            f += w_metal * self.metal(base, wo, wi, hit).0;
+        }
+        f
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+        let (w_coat, w_glass, w_metal) = self.weights();
+        let base = self.base;
+        let mut pdf = 0.0;
+        if w_coat > 0.0 {
+            pdf += w_coat * self.coat.pdf(base, wo, wi, hit);
+        }
+        if w_glass > 0.0 {
+            pdf += w_glass * self.glass().pdf(wo, wi, hit);
+        }
+        if w_metal > 0.0 {
+            pdf += w_metal * self.metal(base, wo, wi, hit).1;
+        }
+        pdf
     }
 
     /// The metal's BSDF x cos and pdf at (wo, wi), rough only.
@@ -257,20 +389,20 @@ material_params! {
 
 impl MaterialModel for Pbr {
     type Params = PbrParams;
-    const FEATURE: &'static str = "PBR";
+    const FEATURE: MaterialFeature = MaterialFeature::Pbr;
     /// Rough; glass in the mix; textured base colours.
-    const EXTRA_FEATURES: &'static [&'static str] = &[
-        "MICROFACET",
-        "DIELECTRIC",
-        "METALLIC_ROUGHNESS",
-        "ALPHA",
-        "CHECKER",
-        "UV_CHECKER",
-        "IMAGE_TEXTURE",
-        "PBR_EMISSION",
+    const EXTRA_FEATURES: &'static [MaterialFeature] = &[
+        MaterialFeature::Microfacet,
+        MaterialFeature::Dielectric,
+        MaterialFeature::MetallicRoughness,
+        MaterialFeature::Alpha,
+        MaterialFeature::Checker,
+        MaterialFeature::UvChecker,
+        MaterialFeature::ImageTexture,
+        MaterialFeature::PbrEmission,
     ];
     /// Emissive pbr.
-    const EMITS_UNDER: Option<&'static str> = Some("PBR_EMISSION");
+    const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::PbrEmission);
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -291,7 +423,7 @@ impl MaterialModel for Pbr {
             }
             emission.validate()?;
         }
-        if let Some(image) = self.metallic_roughness
+        if let Some(image) = &self.metallic_roughness
             && image.max_value() > 1.0
         {
             return Err(format!(
@@ -302,14 +434,14 @@ impl MaterialModel for Pbr {
         self.base_color.validate_albedo()
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
-        let rough = (self.roughness * self.roughness >= MIN_ALPHA).then_some("MICROFACET");
-        let glass = (self.weights().1 > 0.0).then_some("DIELECTRIC");
-        let image = self.metallic_roughness.map(|_| "METALLIC_ROUGHNESS");
-        let alpha = self.alpha.map(|_| "ALPHA");
-        let emission = self.emission.map(|e| {
-            let image = matches!(e.radiance, Texture::Image(_)).then_some("IMAGE_TEXTURE");
-            std::iter::once("PBR_EMISSION").chain(image)
+    fn extra_features(&self) -> Vec<MaterialFeature> {
+        let rough = (self.roughness * self.roughness >= MIN_ALPHA).then_some(MaterialFeature::Microfacet);
+        let glass = (self.weights().1 > 0.0).then_some(MaterialFeature::Dielectric);
+        let image = self.metallic_roughness.as_ref().map(|_| MaterialFeature::MetallicRoughness);
+        let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
+        let emission = self.emission.as_ref().map(|e| {
+            let image = matches!(e.radiance, Texture::Image(_)).then_some(MaterialFeature::ImageTexture);
+            std::iter::once(MaterialFeature::PbrEmission).chain(image)
         });
         rough
             .into_iter()
@@ -334,15 +466,15 @@ impl MaterialModel for Pbr {
     }
 
     fn emitted(&self, hit: &Hit) -> Vec3 {
-        self.emission.map_or(Vec3::ZERO, |e| e.emitted(hit))
+        self.emission.as_ref().map_or(Vec3::ZERO, |e| e.emitted(hit))
     }
 
     fn area_light(&self) -> Option<(Vec3, bool)> {
-        self.emission.and_then(|e| e.area_light())
+        self.emission.as_ref().and_then(|e| e.area_light())
     }
 
-    fn textures(&self) -> Vec<Texture> {
-        vec![self.base_color]
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.base_color]
     }
 
     fn normal_map(&self) -> Option<&NormalMap> {
@@ -357,8 +489,8 @@ impl MaterialModel for Pbr {
         (1.0 - least_metallic) * (1.0 - least_transmission) > 0.0 || self.ggx().is_some()
     }
 
-    fn parameter_image(&self) -> Option<&'static Image> {
-        self.metallic_roughness
+    fn parameter_image(&self) -> Option<&Arc<Image>> {
+        self.metallic_roughness.as_ref()
     }
 
     fn alpha(&self) -> Option<&Alpha> {
@@ -370,99 +502,15 @@ impl MaterialModel for Pbr {
     }
 
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
-        let this = self.at(hit);
-        let (w_coat, w_glass, _) = this.weights();
-        let base = texture::albedo(&this.base_color, hit);
-        let u = sampler.next_f32();
-        let chosen = if u < w_coat {
-            let numbers = (sampler.next_f32(), sampler.next_f32(), sampler.next_f32());
-            this.coat.sample(base, wo, hit, numbers)?
-        } else if u < w_coat + w_glass {
-            let s = this.glass().sample(wo, hit, sampler)?;
-            // A direction within rounding of where the glass's own density vanishes: not one
-            // for the other components' densities to weigh.
-            if !s.lobe.is_delta() && !(this.glass().pdf(wo, s.wi, hit) > 0.0) {
-                return None;
-            }
-            BsdfSample {
-                weight: s.weight * transmission_tint(base, s.lobe.is_transmission()),
-                ..s
-            }
-        } else {
-            let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
-            let frame = Frame::new(hit.shading);
-            let wo_local = frame.to_local(wo);
-            if !(wo_local.z > MIN_COSINE) {
-                return None;
-            }
-            let Some(ggx) = this.ggx() else {
-                let wi = reflect(-wo, hit.shading);
-                return (!below_surface(hit, wi)).then(|| BsdfSample {
-                    weight: schlick(base, wo_local.z),
-                    wi,
-                    pdf: 0.0,
-                    lobe: Lobe::DELTA_REFLECTION,
-                });
-            };
-            let m = ggx.sample_visible(wo_local, u1, u2);
-            let wi_local = reflect(-wo_local, m);
-            let wi = frame.to_world(wi_local);
-            // Below the surface the metal's own density is lost mass: the path ends, as a
-            // conductor's does, rather than count under the other components' densities.
-            if !(wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
-                return None;
-            }
-            BsdfSample {
-                weight: Vec3::ZERO,
-                wi,
-                pdf: 0.0,
-                lobe: Lobe::GLOSSY_REFLECTION,
-            }
-        };
-        if chosen.lobe.is_delta() {
-            return Some(chosen);
-        }
-        let pdf = this.pdf(wo, chosen.wi, hit);
-        (pdf > 0.0).then(|| BsdfSample {
-            weight: this.eval(wo, chosen.wi, hit) / pdf,
-            pdf,
-            ..chosen
-        })
+        self.at(hit).sample(wo, hit, sampler)
     }
 
     fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
-        let this = self.at(hit);
-        let (w_coat, w_glass, w_metal) = this.weights();
-        let base = texture::albedo(&this.base_color, hit);
-        let mut f = Vec3::ZERO;
-        if w_coat > 0.0 {
-            f += w_coat * this.coat.eval(base, wo, wi, hit);
-        }
-        if w_glass > 0.0 {
-            let tint = transmission_tint(base, wi.dot(hit.shading) < 0.0);
-            f += w_glass * tint * this.glass().eval(wo, wi, hit);
-        }
-        if w_metal > 0.0 {
-            f += w_metal * this.metal(base, wo, wi, hit).0;
-        }
-        f
+        self.at(hit).eval(wo, wi, hit)
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
-        let this = self.at(hit);
-        let (w_coat, w_glass, w_metal) = this.weights();
-        let base = texture::albedo(&this.base_color, hit);
-        let mut pdf = 0.0;
-        if w_coat > 0.0 {
-            pdf += w_coat * this.coat.pdf(base, wo, wi, hit);
-        }
-        if w_glass > 0.0 {
-            pdf += w_glass * this.glass().pdf(wo, wi, hit);
-        }
-        if w_metal > 0.0 {
-            pdf += w_metal * this.metal(base, wo, wi, hit).1;
-        }
-        pdf
+        self.at(hit).pdf(wo, wi, hit)
     }
 
     /// albedo (and texture_*): base colour; metallic_roughness_*: its image; its
@@ -470,6 +518,7 @@ impl MaterialModel for Pbr {
     fn gpu(&self) -> GpuMaterial {
         let size = self
             .metallic_roughness
+            .as_ref()
             .map_or([0.0; 2], |i| [i.width as f32, i.height as f32]);
         GpuMaterial {
             params: PbrParams {
@@ -484,7 +533,7 @@ impl MaterialModel for Pbr {
             }
             .words(),
             parameter_image_size: size,
-            parameter_image_lookup: self.metallic_roughness.map_or(0, |i| i.lookup.bits()),
+            parameter_image_lookup: self.metallic_roughness.as_ref().map_or(0, |i| i.lookup.bits()),
             ..GpuMaterial::with_albedo(&self.base_color)
         }
     }

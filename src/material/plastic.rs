@@ -8,6 +8,8 @@
 //! functions of (wo, wi), as light sampling, MIS and the kernel-against-CPU tests need, at the
 //! cost of a lambertian base and a clear coat.
 
+use crate::shared::feature::MaterialFeature;
+use std::sync::Arc;
 use super::coat::Coat;
 use super::coat_table::COAT_TABLE_SIZE;
 use super::{BsdfSample, MaterialModel};
@@ -25,7 +27,7 @@ use serde::{Deserialize, Serialize};
 /// `{ type = "plastic", albedo = [0.6, 0.05, 0.05], ior = 1.5, roughness = 0.2 }`: the base's
 /// albedo (any texture, in [0, 1]), the coat's index (default 1.5) and roughness in [0, 1]
 /// (default 0: smooth; below 0.01 too), GGX alpha = roughness^2.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PlasticDoc", into = "PlasticDoc")]
 pub struct Plastic {
     pub albedo: Texture,
@@ -95,11 +97,11 @@ material_params! {
 
 impl MaterialModel for Plastic {
     type Params = PlasticParams;
-    const FEATURE: &'static str = "PLASTIC";
+    const FEATURE: MaterialFeature = MaterialFeature::Plastic;
     /// Textured albedos and a rough coat's table (shaders/microfacet.wgsl is included for it
     /// without a feature).
-    const EXTRA_FEATURES: &'static [&'static str] =
-        &["CHECKER", "UV_CHECKER", "IMAGE_TEXTURE", "COAT_TABLE"];
+    const EXTRA_FEATURES: &'static [MaterialFeature] =
+        &[MaterialFeature::Checker, MaterialFeature::UvChecker, MaterialFeature::ImageTexture, MaterialFeature::CoatTable];
     const SAMPLES_LIGHTS: bool = true;
 
     fn validate(&self) -> Result<(), String> {
@@ -110,13 +112,13 @@ impl MaterialModel for Plastic {
         self.albedo.validate_albedo()
     }
 
-    fn extra_features(&self) -> Vec<&'static str> {
-        let table = self.coat.table.map(|_| "COAT_TABLE");
+    fn extra_features(&self) -> Vec<MaterialFeature> {
+        let table = self.coat.table.map(|_| MaterialFeature::CoatTable);
         self.albedo.feature().into_iter().chain(table).collect()
     }
 
     /// A rough coat's table (`CoatTable`).
-    fn parameter_image(&self) -> Option<&'static Image> {
+    fn parameter_image(&self) -> Option<&Arc<Image>> {
         self.coat.table.map(|t| &t.image)
     }
 
@@ -127,8 +129,8 @@ impl MaterialModel for Plastic {
         }
     }
 
-    fn textures(&self) -> Vec<Texture> {
-        vec![self.albedo]
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.albedo]
     }
 
     fn reflects_only(&self) -> bool {

@@ -1,7 +1,11 @@
 //! The backends that render: a [`RenderBackend`] per device, made ready once (a [`Session`])
-//! for many renders. What a render is asked to do is in [`crate::options`].
+//! for many renders. What a render is asked to do is in [`crate::options`]; a whole render, from
+//! a request to its written outputs, is [`request`] (passes in [`progressive`], checkpoints in
+//! [`checkpoint`]).
 
+pub mod checkpoint;
 pub mod progressive;
+pub mod request;
 
 pub use crate::backend::{RenderBackend, Rendered};
 use crate::cpu::CpuBackend;

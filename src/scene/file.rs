@@ -8,12 +8,14 @@ use super::punctual::Punctual;
 use super::{
     Background, Camera, Material, Object, RenderDefaults, Scene, SceneError, Shape, Transform,
 };
+use crate::assets::loader::Loader;
 use crate::params::{Colour, Num, V3};
 use glam::Vec3;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::Path;
+use std::sync::Arc;
 use toml::Spanned;
 
 pub use crate::film::MAX_IMAGE_SIDE;
@@ -48,11 +50,10 @@ pub fn load(path: &Path) -> anyhow::Result<Scene> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    // Image paths in the file are relative to its directory.
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let (scene, inputs) = crate::assets::inputs::recorded(|| {
-        crate::assets::image::with_base_dir(dir, || parse(text, &file, &name))
-    });
+    // Paths in the file are relative to its directory.
+    let loader = Loader::for_file(path);
+    let (scene, inputs) =
+        crate::assets::inputs::recorded(|| parse_with(&loader, text, &file, &name));
     Ok(Scene { inputs, ..scene? })
 }
 
@@ -95,8 +96,25 @@ pub(crate) fn quoted(text: &str) -> String {
     )
 }
 
-/// Parses scene-file text; `file` names it in errors.
+/// Parses scene-file text; `file` names it in errors. The files it names are relative to the
+/// working directory (see [`parse_with`]).
 pub fn parse(text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError> {
+    parse_with(&Loader::working_directory(), text, file, name)
+}
+
+/// Parses scene-file text, reading the images and meshes it names through `loader`; `file`
+/// names it in errors.
+pub fn parse_with(
+    loader: &Loader,
+    text: &str,
+    file: &str,
+    name: &str,
+) -> Result<Scene, SceneFileError> {
+    // Serde reaches the loader from the material readers (see `assets::loader`).
+    loader.during(|| parse_in(loader, text, file, name))
+}
+
+fn parse_in(loader: &Loader, text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError> {
     let located = |span: Option<Range<usize>>, message: String| {
         let mut offset = span.map(|s| s.start).unwrap_or(0).min(text.len());
         while !text.is_char_boundary(offset) {
@@ -171,7 +189,7 @@ pub fn parse(text: &str, file: &str, name: &str) -> Result<Scene, SceneFileError
         }
         None => toml::from_str(text).map_err(|e| toml_error(e, 0))?,
     };
-    doc.into_scene(name)
+    doc.into_scene(loader, name)
         .map_err(|(span, message)| located(span, message))
 }
 
@@ -601,21 +619,21 @@ fn lookup_material(index: &BTreeMap<String, u32>, name: &str) -> Result<u32, Str
 }
 
 impl SceneDoc {
-    fn into_scene(self, name: &str) -> Result<Scene, Located> {
+    fn into_scene(self, loader: &Loader, name: &str) -> Result<Scene, Located> {
         let defaults = render_defaults(self.render.as_ref())?;
-        let background = background(self.render.and_then(|r| r.background))?;
+        let background = background(loader, self.render.and_then(|r| r.background))?;
         let mut materials = SceneMaterials::new(self.materials)?;
         let mut objects = Vec::new();
         let mut object_spans = Vec::new();
         for spanned in self.objects {
             let span = Some(spanned.span());
             // A mesh file gives one object per part (material).
-            for object in object(spanned.into_inner(), &span, &mut materials)? {
+            for object in object(loader, spanned.into_inner(), &span, &mut materials)? {
                 object_spans.push(span.clone());
                 objects.push(object);
             }
         }
-        let camera = camera(self.camera, &objects)?;
+        let camera = camera(loader, self.camera, &objects)?;
         let mut punctual = Vec::new();
         for spanned in self.lights {
             let span = Some(spanned.span());
@@ -647,7 +665,7 @@ impl SceneDoc {
             .iter()
             .zip(names)
             .map(|(m, name)| {
-                let doc = *m;
+                let doc = m.clone();
                 (name.clone(), Spanned::new(0..0, doc))
             })
             .collect();
@@ -671,7 +689,7 @@ impl SceneDoc {
                             max: V3::from(max),
                         })
                     }
-                    Shape::Mesh { mesh, scale } => {
+                    Shape::Mesh { ref mesh, scale } => {
                         doc.mesh = Some(MeshDoc {
                             file: mesh.source.clone(),
                             node: mesh.node.clone(),
@@ -695,12 +713,14 @@ impl SceneDoc {
                     match scene.background {
                         Background::Constant(c) => BackgroundDoc::Colour(Colour(V3::from(c))),
                         Background::Sky => BackgroundDoc::Named("sky".into()),
-                        Background::Environment(e) => BackgroundDoc::Environment(EnvironmentDoc {
-                            image: e.image.source.clone(),
-                            strength: Some(Num(e.strength)),
-                            rotate_y: (e.rotate_y_degrees != 0.0)
-                                .then_some(Num(e.rotate_y_degrees)),
-                        }),
+                        Background::Environment(ref e) => {
+                            BackgroundDoc::Environment(EnvironmentDoc {
+                                image: e.image.source.clone(),
+                                strength: Some(Num(e.strength)),
+                                rotate_y: (e.rotate_y_degrees != 0.0)
+                                    .then_some(Num(e.rotate_y_degrees)),
+                            })
+                        }
                     },
                 )),
             }),
@@ -769,13 +789,13 @@ impl SceneMaterials {
     fn of_part(
         &mut self,
         named: Option<&str>,
-        mesh: Option<&'static super::mesh::Mesh>,
+        mesh: Option<&super::mesh::Mesh>,
         span: &Option<Range<usize>>,
     ) -> Result<u32, Located> {
         if let Some(name) = named {
             return lookup_material(&self.index, name).map_err(|e| (span.clone(), e));
         }
-        let Some((mesh, own)) = mesh.and_then(|m| m.material.map(|x| (m, x))) else {
+        let Some((mesh, own)) = mesh.and_then(|m| m.material.clone().map(|x| (m, x))) else {
             let what = match mesh {
                 Some(m) => format!(
                     "mesh {} part \"{}\" has no material of its own{}",
@@ -811,15 +831,16 @@ impl SceneMaterials {
 
 /// The objects one `[[object]]` places: one, or one per part of its mesh file.
 fn object(
+    loader: &Loader,
     o: ObjectDoc,
     span: &Option<Range<usize>>,
     materials: &mut SceneMaterials,
 ) -> Result<Vec<Object>, Located> {
-    let parts = object_shapes(&o, span)?;
+    let parts = object_shapes(loader, &o, span)?;
     let mut placed = Vec::new();
     for (shape, mesh) in parts {
         shape.validate().map_err(|e| (span.clone(), e))?;
-        let material = materials.of_part(o.material.as_deref(), mesh, span)?;
+        let material = materials.of_part(o.material.as_deref(), mesh.as_deref(), span)?;
         placed.push((shape, material));
     }
     let transform = object_transform(&o)?;
@@ -835,10 +856,14 @@ fn object(
 
 /// An `[[object]]`'s shape: its sphere, quad or box, or its mesh's parts (with the mesh, whose
 /// own material it may take).
+/// A shape an object places, and the mesh part it is (whose own material it may take).
+type ShapePart = (Shape, Option<Arc<super::mesh::Mesh>>);
+
 fn object_shapes(
+    loader: &Loader,
     o: &ObjectDoc,
     span: &Option<Range<usize>>,
-) -> Result<Vec<(Shape, Option<&'static super::mesh::Mesh>)>, Located> {
+) -> Result<Vec<ShapePart>, Located> {
     let mut shapes = o.surfaces();
     if let Some(b) = &o.cuboid {
         shapes.push(Shape::Cuboid {
@@ -847,15 +872,14 @@ fn object_shapes(
         });
     }
     let one_kind = shapes.len() + o.mesh.is_some() as usize;
-    let mut parts: Vec<(Shape, Option<&'static super::mesh::Mesh>)> =
-        shapes.into_iter().map(|s| (s, None)).collect();
+    let mut parts: Vec<ShapePart> = shapes.into_iter().map(|s| (s, None)).collect();
     if let Some(m) = &o.mesh {
-        let meshes =
-            super::mesh::load_named(&m.file, m.node.as_deref()).map_err(|e| (span.clone(), e))?;
+        let meshes = super::mesh::load(&loader.resolve(&m.file), &m.file, m.node.as_deref())
+            .map_err(|e| (span.clone(), e))?;
         let meshes = match m.part {
             None => meshes,
             Some(p) => match meshes.get(p as usize) {
-                Some(mesh) => vec![*mesh],
+                Some(mesh) => vec![mesh.clone()],
                 None => {
                     return Err((
                         span.clone(),
@@ -865,11 +889,15 @@ fn object_shapes(
             },
         };
         let scale = o.scale.map_or(Vec3::ONE, ScaleDoc::vec);
-        parts.extend(
-            meshes
-                .into_iter()
-                .map(|mesh| (Shape::Mesh { mesh, scale }, Some(mesh))),
-        );
+        parts.extend(meshes.into_iter().map(|mesh| {
+            (
+                Shape::Mesh {
+                    mesh: mesh.clone(),
+                    scale,
+                },
+                Some(mesh),
+            )
+        }));
     } else if o.scale.is_some() {
         return Err((span.clone(), "`scale` applies to meshes only".into()));
     }
@@ -951,14 +979,17 @@ fn render_defaults(render: Option<&RenderDoc>) -> Result<RenderDefaults, Located
 }
 
 /// `[render] background`: a colour, the sky or an environment image (loaded here).
-fn background(background_doc: Option<Spanned<BackgroundDoc>>) -> Result<Background, Located> {
+fn background(
+    loader: &Loader,
+    background_doc: Option<Spanned<BackgroundDoc>>,
+) -> Result<Background, Located> {
     let background_span = background_doc.as_ref().map(|b| b.span());
     Ok(match background_doc.map(Spanned::into_inner) {
         None => Background::Constant(Vec3::ZERO),
         Some(BackgroundDoc::Colour(c)) => Background::Constant(c.0.vec()),
         Some(BackgroundDoc::Named(n)) if n == "sky" => Background::Sky,
         Some(BackgroundDoc::Environment(e)) => {
-            let image = crate::assets::image::load_named(&e.image)
+            let image = (loader.image(&e.image))
                 .map_err(|m| (background_span.clone(), format!("background: {m}")))?;
             let env = crate::assets::environment::Environment::new(
                 image,
@@ -983,15 +1014,15 @@ fn background(background_doc: Option<Spanned<BackgroundDoc>>) -> Result<Backgrou
 /// The camera named `name` of the first glTF file `objects` place that has one, placed with
 /// the file: the first object that places the file scales, rotates and moves the camera as it
 /// does the file's meshes.
-fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
+fn file_camera(loader: &Loader, name: &str, objects: &[Object]) -> Result<Camera, String> {
     let mut files: Vec<(&str, Vec3, Transform)> = Vec::new();
     for object in objects {
-        if let Shape::Mesh { mesh, scale } = object.shape {
+        if let Shape::Mesh { mesh, scale } = &object.shape {
             let lower = mesh.source.to_ascii_lowercase();
             if (lower.ends_with(".glb") || lower.ends_with(".gltf"))
                 && !files.iter().any(|(f, ..)| *f == mesh.source.as_str())
             {
-                files.push((&mesh.source, scale, object.transform));
+                files.push((&mesh.source, *scale, object.transform));
             }
         }
     }
@@ -1002,7 +1033,7 @@ fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
     }
     let mut known: Vec<String> = Vec::new();
     for (source, scale, transform) in files {
-        let path = crate::assets::image::resolve(source);
+        let path = loader.resolve(source);
         match super::gltf_scene::named_camera(&path, source, name)? {
             Ok(camera) => {
                 let place = |p: Vec3| transform.apply_point(p * scale);
@@ -1030,13 +1061,17 @@ fn file_camera(name: &str, objects: &[Object]) -> Result<Camera, String> {
 
 /// `[camera]`, validated: its own placement, or with `gltf = "NAME"` a camera of one of the
 /// glTF files `objects` place (the first that has one of that name).
-fn camera(camera: Spanned<CameraDoc>, objects: &[Object]) -> Result<Camera, Located> {
+fn camera(
+    loader: &Loader,
+    camera: Spanned<CameraDoc>,
+    objects: &[Object],
+) -> Result<Camera, Located> {
     let camera_span = camera.span();
     let c = camera.into_inner();
     let at = |message: String| (Some(camera_span.clone()), message);
     let (look_from, look_at, up, vfov_degrees) = match (&c.gltf, c.look_from, c.look_at, c.vfov) {
         (Some(name), None, None, None) if c.up.is_none() => {
-            let from_file = file_camera(name, objects).map_err(at)?;
+            let from_file = file_camera(loader, name, objects).map_err(at)?;
             (
                 from_file.look_from,
                 from_file.look_at,

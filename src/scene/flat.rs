@@ -13,6 +13,7 @@ use crate::shared::primitive::{
     KIND_INSTANCE, KIND_TRIANGLE, MAX_PRIMITIVES_PER_KIND, PrimitiveRef,
 };
 use glam::{DVec3, Vec2, Vec3, Vec4};
+use std::sync::Arc;
 
 pub use crate::shape::{Disk, Quad, Shapes, Sphere};
 
@@ -138,10 +139,7 @@ pub const RECENTRE_STEP: f64 = 1024.0;
 /// Whether `material` has a texture looked up by surface (UV) coordinates, a normal map
 /// among them.
 fn reads_uvs(material: &Material) -> bool {
-    let features = material.extra_features();
-    features.contains(&"UV_CHECKER")
-        || features.contains(&"IMAGE_TEXTURE")
-        || features.contains(&"METALLIC_ROUGHNESS")
+    material.extra_features().iter().any(|f| f.reads_uvs())
         || material.normal_map().is_some()
         || material.alpha().is_some_and(|a| a.image.is_some())
 }
@@ -244,7 +242,7 @@ pub struct FlatScene {
 }
 
 /// An emitting primitive as light sampling sees it, picked in proportion to its power.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Light {
     pub shape: LightShape,
     /// Chance of picking this light or one before it; the last light's is exactly 1.
@@ -254,7 +252,7 @@ pub struct Light {
 }
 
 /// How a light is sampled.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum LightShape {
     /// A shape of `crate::shape` of primitive kind `kind`, sampled as that shape samples it.
     Surface {
@@ -327,7 +325,11 @@ impl FlatScene {
             let slot = &mut renumbered[object.material as usize];
             if *slot == u32::MAX {
                 *slot = materials.len() as u32;
-                materials.push(scene.materials[object.material as usize].relocated(origin));
+                materials.push(
+                    scene.materials[object.material as usize]
+                        .clone()
+                        .relocated(origin),
+                );
             }
             primitives.add(object, origin, *slot);
         }
@@ -603,10 +605,10 @@ impl FlatScene {
                 pick: 0.0,
             });
         }
-        if let Background::Environment(env) = self.background {
+        if let Background::Environment(env) = &self.background {
             powers.push(env.power(self.bounding_radius()));
             lights.push(Light {
-                shape: LightShape::Environment(env),
+                shape: LightShape::Environment(env.clone()),
                 cdf: 0.0,
                 pick: 0.0,
             });
@@ -849,7 +851,7 @@ impl<'a> Flattener<'a> {
             || scene
                 .objects
                 .iter()
-                .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
+                .any(|o| matches!(&o.shape, Shape::Mesh { mesh, .. } if !mesh.normals.is_empty()));
         // Decided before copying, as `uv_textures` is after: Blender writes TEXCOORD_0 on every
         // mesh, textured or not, and large meshes should not carry coordinates nothing reads.
         // Asked once per material: a scene may place a material on many objects.
@@ -860,13 +862,13 @@ impl<'a> Flattener<'a> {
             && scene
                 .objects
                 .iter()
-                .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
+                .any(|o| matches!(&o.shape, Shape::Mesh { mesh, .. } if !mesh.uvs.is_empty()));
         let textured1 = (scene.objects.iter())
             .any(|o| matches!(o.shape, Shape::Mesh { .. }) && reads[o.material as usize].1);
         let coloured = scene
             .objects
             .iter()
-            .any(|o| matches!(o.shape, Shape::Mesh { mesh, .. } if !mesh.colors.is_empty()));
+            .any(|o| matches!(&o.shape, Shape::Mesh { mesh, .. } if !mesh.colors.is_empty()));
         let mut flattener = Flattener {
             scene,
             instancing,
@@ -906,11 +908,11 @@ impl<'a> Flattener<'a> {
     /// The key under which `object` could be instanced: a mesh whose material neither emits
     /// nor bounds a medium.
     fn instancing_key(&self, object: &super::Object) -> Option<InstancingKey> {
-        match object.shape {
+        match &object.shape {
             Shape::Mesh { mesh, .. } if self.instancing => {
                 let m = &self.scene.materials[object.material as usize];
                 (m.area_light().is_none() && !m.is_invisible())
-                    .then_some((std::ptr::from_ref(mesh) as usize, object.material))
+                    .then_some((Arc::as_ptr(mesh) as usize, object.material))
             }
             _ => None,
         }
@@ -934,7 +936,7 @@ impl<'a> Flattener<'a> {
                     ));
                 }
             }
-            Shape::Mesh { mesh, scale } => {
+            Shape::Mesh { ref mesh, scale } => {
                 // The UV set its normal map reads, which its tangents follow.
                 let normal_map = (self.scene.materials[object.material as usize].normal_map())
                     .map(|map| map.image.lookup.uv_set);
@@ -1185,7 +1187,7 @@ impl<'a> Flattener<'a> {
         Ok(FlatScene {
             origin,
             camera,
-            background: self.scene.background,
+            background: self.scene.background.clone(),
             materials,
             shapes: self.shapes,
             triangles,

@@ -14,6 +14,7 @@ use crate::assets::environment::Environment;
 use crate::assets::image::Image;
 use glam::{DMat4, DVec3, Vec3};
 use std::path::Path;
+use std::sync::Arc;
 use std::sync::OnceLock;
 
 /// The default image height of a file's render; its width follows the camera's aspect ratio.
@@ -120,7 +121,7 @@ fn load_unrecorded(
         let index = match material_names.iter().position(|n| *n == name) {
             Some(i) => i,
             None => {
-                let own = part.material.unwrap_or_else(default_material);
+                let own = part.material.clone().unwrap_or_else(default_material);
                 own.validate()
                     .map_err(|e| format!("{source} material \"{}\": {e}", part.material_name))?;
                 materials.push(own);
@@ -130,7 +131,7 @@ fn load_unrecorded(
         };
         objects.push(Object {
             shape: Shape::Mesh {
-                mesh: part,
+                mesh: part.clone(),
                 scale: Vec3::ONE,
             },
             material: index as u32,
@@ -205,17 +206,17 @@ fn default_material() -> super::Material {
 /// A sky of radiance 1 from every direction, sampled as a light: what lights a file that
 /// carries none (as a glTF viewer's neutral environment does).
 pub fn uniform_sky() -> Environment {
-    static WHITE: OnceLock<&'static Image> = OnceLock::new();
+    static WHITE: OnceLock<Arc<Image>> = OnceLock::new();
     let image = WHITE.get_or_init(|| {
         Image::from_linear("uniform", 1, 1, vec![1.0; 3])
             .expect("a 1x1 image of ones is valid")
-            .leak()
+            .shared()
     });
-    Environment::new(image, 1.0, 0.0).expect("strength 1, no rotation")
+    Environment::new(image.clone(), 1.0, 0.0).expect("strength 1, no rotation")
 }
 
 /// The box around every part's vertices.
-fn bounds(parts: &[&'static mesh::Mesh]) -> (DVec3, DVec3) {
+fn bounds(parts: &[std::sync::Arc<mesh::Mesh>]) -> (DVec3, DVec3) {
     let mut min = DVec3::splat(f64::INFINITY);
     let mut max = DVec3::splat(f64::NEG_INFINITY);
     for p in parts.iter().flat_map(|m| &m.positions) {

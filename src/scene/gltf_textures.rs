@@ -15,6 +15,7 @@ use crate::assets::texture::Texture;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Component, Path};
+use std::sync::Arc;
 
 /// A glTF file's images, decoded as its materials use them.
 pub struct FileTextures<'a> {
@@ -25,13 +26,13 @@ pub struct FileTextures<'a> {
     /// The file as the user named it, for messages.
     source: &'a str,
     /// Images decoded, by (image index, whether decoded from sRGB).
-    decoded: HashMap<(usize, bool), &'static Image>,
+    decoded: HashMap<(usize, bool), Arc<Image>>,
     /// Decoded images read with a sampler other than the default, by (image index, sRGB, how).
-    sampled: HashMap<(usize, bool, ImageLookup), &'static Image>,
+    sampled: HashMap<(usize, bool, ImageLookup), Arc<Image>>,
     /// Alpha channels of images, by (image index, how it is read); `None`: it has none.
-    alphas: HashMap<(usize, ImageLookup), Option<&'static Image>>,
+    alphas: HashMap<(usize, ImageLookup), Option<Arc<Image>>>,
     /// Factor x image products, by (image index, sRGB, how it is read, the factor's bits).
-    products: HashMap<(usize, bool, ImageLookup, [u32; 3]), &'static Image>,
+    products: HashMap<(usize, bool, ImageLookup, [u32; 3]), Arc<Image>>,
 }
 
 impl<'a> FileTextures<'a> {
@@ -79,12 +80,12 @@ impl<'a> FileTextures<'a> {
             image.lookup,
             factor.to_array().map(f32::to_bits),
         );
-        if let Some(&product) = self.products.get(&key) {
-            return Ok(Texture::Image(product));
+        if let Some(product) = self.products.get(&key) {
+            return Ok(Texture::Image(product.clone()));
         }
         let name = format!("{} x {factor}", image.source);
-        let product = image.scaled(factor, &name)?.leak();
-        self.products.insert(key, product);
+        let product = image.scaled(factor, &name)?.shared();
+        self.products.insert(key, product.clone());
         Ok(Texture::Image(product))
     }
 
@@ -112,13 +113,13 @@ impl<'a> FileTextures<'a> {
         &mut self,
         info: &gltf::texture::Info,
         material: &str,
-    ) -> Result<Option<&'static Image>, String> {
+    ) -> Result<Option<Arc<Image>>, String> {
         let texture = info.texture();
         let index = texture.source().index();
         let set = self.uv_set(set_of(info), material, "baseColorTexture")?;
         let lookup = lookup_of(&texture.sampler(), set);
-        if let Some(&image) = self.alphas.get(&(index, lookup)) {
-            return Ok(image);
+        if let Some(image) = self.alphas.get(&(index, lookup)) {
+            return Ok(image.clone());
         }
         let Some(file_image) = self.document.images().nth(index) else {
             return Err(format!(
@@ -128,8 +129,9 @@ impl<'a> FileTextures<'a> {
         };
         let name = format!("{} image {index}", self.source);
         let bytes = self.bytes(&file_image, &name)?;
-        let image = image::decode_alpha_bytes(&bytes, &name)?.map(|a| a.with_lookup(lookup).leak());
-        self.alphas.insert((index, lookup), image);
+        let image =
+            image::decode_alpha_bytes(&bytes, &name)?.map(|a| a.with_lookup(lookup).shared());
+        self.alphas.insert((index, lookup), image.clone());
         Ok(image)
     }
 
@@ -138,7 +140,7 @@ impl<'a> FileTextures<'a> {
         &mut self,
         info: &gltf::texture::Info,
         material: &str,
-    ) -> Result<&'static Image, String> {
+    ) -> Result<Arc<Image>, String> {
         let set = self.uv_set(set_of(info), material, "metallicRoughnessTexture")?;
         self.sampled(&info.texture(), false, set)
     }
@@ -152,12 +154,12 @@ impl<'a> FileTextures<'a> {
     pub fn transmission(
         &mut self,
         info: &gltf::texture::Info,
-        metallic_roughness: Option<&'static Image>,
+        metallic_roughness: Option<Arc<Image>>,
         material: &str,
-    ) -> Result<&'static Image, String> {
+    ) -> Result<Arc<Image>, String> {
         let set = self.uv_set(set_of(info), material, "transmissionTexture")?;
         let transmission = self.sampled(&info.texture(), false, set)?;
-        let base = metallic_roughness.unwrap_or(transmission);
+        let base = metallic_roughness.as_ref().unwrap_or(&transmission);
         if base.lookup.uv_set != set {
             return Err(format!(
                 "mesh {}: material \"{material}\"'s transmissionTexture and metallicRoughnessTexture read different UV sets; rt-gpu reads them together from one",
@@ -176,9 +178,9 @@ impl<'a> FileTextures<'a> {
                         (x as f32 + 0.5) / w as f32,
                         1.0 - (y as f32 + 0.5) / h as f32,
                     );
-                    crate::assets::image_lookup::image_at(transmission, uv).x
+                    crate::assets::image_lookup::image_at(&transmission, uv).x
                 };
-                let [_, g, b] = match metallic_roughness {
+                let [_, g, b] = match &metallic_roughness {
                     Some(mr) => mr.texel(x, y).to_array(),
                     None => [0.0, 1.0, 1.0],
                 };
@@ -189,7 +191,7 @@ impl<'a> FileTextures<'a> {
         let merged = Image::from_linear(&name, w, h, texels)
             .map_err(|e| format!("mesh {}: {e}", self.source))?
             .with_lookup(base.lookup);
-        Ok(merged.leak())
+        Ok(merged.shared())
     }
 
     /// The UV set `material`'s `slot` reads (`set`, its texCoord); an error beyond the second.
@@ -209,23 +211,24 @@ impl<'a> FileTextures<'a> {
         texture: &gltf::Texture,
         srgb: bool,
         set: UvSet,
-    ) -> Result<&'static Image, String> {
+    ) -> Result<Arc<Image>, String> {
         let index = texture.source().index();
         let image = self.image(index, srgb)?;
         let lookup = lookup_of(&texture.sampler(), set);
         if lookup == image.lookup {
             return Ok(image);
         }
-        Ok(*self
+        Ok(self
             .sampled
             .entry((index, srgb, lookup))
-            .or_insert_with(|| image.with_lookup(lookup).leak()))
+            .or_insert_with(|| image.with_lookup(lookup).shared())
+            .clone())
     }
 
     /// Image `index` decoded (from sRGB where `srgb`), once.
-    fn image(&mut self, index: usize, srgb: bool) -> Result<&'static Image, String> {
-        if let Some(&image) = self.decoded.get(&(index, srgb)) {
-            return Ok(image);
+    fn image(&mut self, index: usize, srgb: bool) -> Result<Arc<Image>, String> {
+        if let Some(image) = self.decoded.get(&(index, srgb)) {
+            return Ok(image.clone());
         }
         let source = self.source;
         let Some(file_image) = self.document.images().nth(index) else {
@@ -238,8 +241,8 @@ impl<'a> FileTextures<'a> {
             None => format!("{source} image {index}"),
         };
         let bytes = self.bytes(&file_image, &name)?;
-        let image = image::decode_bytes(&bytes, &name, srgb)?.leak();
-        self.decoded.insert((index, srgb), image);
+        let image = image::decode_bytes(&bytes, &name, srgb)?.shared();
+        self.decoded.insert((index, srgb), image.clone());
         Ok(image)
     }
 

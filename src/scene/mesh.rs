@@ -1,17 +1,18 @@
 //! Triangle meshes read from OBJ (the `tobj` crate) and glTF 2.0 (the `gltf` crate) files.
 //!
-//! A file is read once per (file version, node) and its meshes live for the rest of the process,
-//! shared: scene objects are plain data holding a `&'static Mesh`, as textures hold images. A
+//! A file is read once per (file version, node) while its meshes are held, shared: scene
+//! objects are plain data holding an `Arc<Mesh>`, as textures hold images. A
 //! file becomes one [`Mesh`] per material it uses (a glTF file's own materials; an OBJ file is
 //! one part), in the frame of the file's root (glTF node transforms applied). Triangles keep the
 //! file's winding: counter-clockwise seen from the front.
 
 use super::Material;
+use crate::assets::inputs::InputFile;
 use crate::assets::normal_map::NormalMap;
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 /// The triangles of one material of a mesh file.
 pub struct Mesh {
@@ -255,19 +256,15 @@ impl Mesh {
         })
     }
 
-    pub fn leak(self) -> &'static Mesh {
-        Box::leak(Box::new(self))
+    pub fn shared(self) -> Arc<Mesh> {
+        Arc::new(self)
     }
 }
 
 /// Reads the mesh file at `path` (`.obj`, `.gltf` or `.glb`), or one node of a glTF file and its
 /// children; `source` is the path as the scene wrote it. Errors are one line naming the file
 /// (and for OBJ the line).
-pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
-    type FileVersion = (PathBuf, u64, std::time::SystemTime, Option<String>);
-    /// The parts read, and the files their reading read (the file, its buffers, its images).
-    type Loaded = (Vec<&'static Mesh>, Vec<crate::assets::inputs::InputFile>);
-    static CACHE: OnceLock<Mutex<HashMap<FileVersion, Loaded>>> = OnceLock::new();
+pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Arc<Mesh>>, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read mesh {source}: {e}"))?;
     if !meta.is_file() {
         return Err(format!("mesh {source} is not a file"));
@@ -275,22 +272,52 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'stati
     let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     let modified = meta.modified().unwrap_or(std::time::UNIX_EPOCH);
     let key = (canonical, meta.len(), modified, node.map(str::to_string));
-    let cache = CACHE.get_or_init(Default::default);
-    if let Some((parts, inputs)) = cache.lock().map_err(|_| "mesh cache poisoned")?.get(&key) {
+    let cache = FILES.get_or_init(Default::default);
+    let held = cache
+        .lock()
+        .map_err(|_| "mesh cache poisoned")?
+        .get(&key)
+        .and_then(|(parts, inputs)| {
+            let parts: Option<Vec<Arc<Mesh>>> = parts.iter().map(Weak::upgrade).collect();
+            Some((parts?, inputs.clone()))
+        });
+    if let Some((parts, inputs)) = held {
         inputs.iter().for_each(crate::assets::inputs::note);
-        return Ok(parts.clone());
+        return Ok(parts);
     }
     let (parts, inputs) = crate::assets::inputs::recorded(|| read_parts(path, source, node));
     let parts = parts?;
-    cache
-        .lock()
-        .map_err(|_| "mesh cache poisoned")?
-        .insert(key, (parts.clone(), inputs));
+    let mut cache = cache.lock().map_err(|_| "mesh cache poisoned")?;
+    // Meshes no scene holds any more are gone: so are their entries.
+    cache.retain(|_, (parts, _)| parts.iter().all(|p| p.strong_count() > 0));
+    cache.insert(key, (parts.iter().map(Arc::downgrade).collect(), inputs));
     Ok(parts)
 }
 
+/// How many mesh files (or nodes of one) are held by scenes at present: what a reloaded scene
+/// frees shows here.
+pub fn files_held() -> usize {
+    let cache = FILES.get_or_init(Default::default);
+    let cache = cache
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let held = |parts: &Vec<Weak<Mesh>>| parts.iter().all(|p| p.strong_count() > 0);
+    cache.values().filter(|(parts, _)| held(parts)).count()
+}
+
+/// A file as it was when read (its path, size and modification time), and the node read.
+type FileVersion = (PathBuf, u64, std::time::SystemTime, Option<String>);
+
+/// The parts read from files, while a scene holds them, and the files their reading read (the
+/// file, its buffers, its images): a file loaded again while held is not read again, and parts
+/// nothing holds are freed.
+static FILES: OnceLock<Mutex<Held>> = OnceLock::new();
+
+/// Each file's parts while held, and the files their reading read.
+type Held = HashMap<FileVersion, (Vec<Weak<Mesh>>, Vec<InputFile>)>;
+
 /// The parts of the mesh file at `path` (see [`load`]).
-fn read_parts(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
+fn read_parts(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Arc<Mesh>>, String> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
@@ -321,22 +348,16 @@ fn read_parts(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<&'sta
     if parts.is_empty() {
         return Err(format!("mesh {source} has no triangles"));
     }
-    let parts: Vec<&'static Mesh> = parts
+    let parts: Vec<Arc<Mesh>> = parts
         .into_iter()
         .enumerate()
         .map(|(i, mut m)| {
             m.part = i as u32;
             m.node = node.map(str::to_string);
-            m.leak()
+            m.shared()
         })
         .collect();
     Ok(parts)
-}
-
-/// Loads the mesh a scene file names as `source`, relative to the scene file's directory (see
-/// `image::with_base_dir`).
-pub fn load_named(source: &str, node: Option<&str>) -> Result<Vec<&'static Mesh>, String> {
-    load(&crate::assets::image::resolve(source), source, node)
 }
 
 fn read_obj(path: &Path, source: &str) -> Result<Vec<Mesh>, String> {
@@ -777,7 +798,7 @@ fn mtl_image(
     folder: &Path,
     source: &str,
     material: &str,
-) -> Result<&'static crate::assets::image::Image, String> {
+) -> Result<std::sync::Arc<crate::assets::image::Image>, String> {
     use std::path::Component;
     let (_, name) = map_options(map)
         .map_err(|e| format!("mesh {source}: material \"{material}\"'s {slot} \"{map}\": {e}"))?;

@@ -39,7 +39,7 @@ pub use crate::material::Material;
 
 pub use crate::placement::{MAX_EXTENT, MIN_SIZE, Transform};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     /// A sphere, a quad, a disk: a shape of `crate::shape`, as the scene describes it.
     Surface(crate::shape::SurfaceParams),
@@ -47,7 +47,7 @@ pub enum Shape {
     Cuboid { min: Vec3, max: Vec3 },
     /// A triangle mesh scaled per axis (before the object's rotation and translation).
     Mesh {
-        mesh: &'static mesh::Mesh,
+        mesh: std::sync::Arc<mesh::Mesh>,
         scale: Vec3,
     },
 }
@@ -60,7 +60,7 @@ pub struct Object {
     pub transform: Transform,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Background {
     Constant(Vec3),
     /// White at the horizon blending to (0.5, 0.7, 1.0) overhead, by the ray's y.
@@ -187,7 +187,7 @@ impl Scene {
             {
                 let name = &self.material_names[object.material as usize];
                 match object.shape {
-                    Shape::Mesh { mesh, .. } if mesh.uvs.is_empty() => {
+                    Shape::Mesh { ref mesh, .. } if mesh.uvs.is_empty() => {
                         return Err(SceneError::Invalid(format!(
                             "material \"{name}\" has a normal map, but mesh {} (part {}) has no texture coordinates to lay it out",
                             mesh.source, mesh.material_name
@@ -236,7 +236,7 @@ impl Shape {
     pub fn validate(&self) -> Result<(), String> {
         match *self {
             Shape::Surface(params) => params.validate()?,
-            Shape::Mesh { mesh, scale } => {
+            Shape::Mesh { ref mesh, scale } => {
                 let size = scale.abs() * mesh.extent;
                 if !scale.is_finite() || scale.abs().min_element() < MIN_SIZE {
                     return Err(format!(

@@ -1,6 +1,6 @@
 //! The structs the kernel shares with the host, `#[repr(C)]` and mirrored one-to-one by WGSL
 //! declarations generated from them (vec3f is 16-byte aligned there, hence the explicit
-//! padding), and the constants of their encodings. `tests/gpu_layout.rs` checks sizes and field
+//! padding), and the constants of their encodings. `tests/it/gpu_layout.rs` checks sizes and field
 //! offsets against naga's layout of the generated WGSL. How a flat scene is packed into them is
 //! `gpu::layout`'s.
 
@@ -80,7 +80,7 @@ impl WgslType for [u32; 2] {
 
 /// A struct the kernel shares: its WGSL declaration and constructor calls are generated from
 /// the Rust definition, so the two cannot drift apart. Fields named `_pad` are explicit padding
-/// where WGSL pads implicitly (a vec3f is 16-byte aligned); `tests/gpu_layout.rs` checks that
+/// where WGSL pads implicitly (a vec3f is 16-byte aligned); `tests/it/gpu_layout.rs` checks that
 /// naga lays the generated declaration out exactly as Rust does.
 pub trait WgslStruct {
     const WGSL_NAME: &'static str;

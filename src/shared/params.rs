@@ -4,7 +4,7 @@
 //! with the functions that read and write it: `<name>_params(m: Material)` and
 //! `<name>_with_params(m, p)`. The kernel's material code reads its parameters by name, never
 //! by a slot shared with the other kinds; the kernel-against-CPU tests of every material's
-//! `sample`, `eval` and `pdf` (`tests/bsdfs`) check what it reads.
+//! `sample`, `eval` and `pdf` (`tests/it/bsdfs`) check what it reads.
 
 /// The 32-bit words `GpuMaterial::params` holds: enough for the largest kind's parameters.
 pub const PARAM_WORDS: usize = 8;

@@ -23,6 +23,8 @@ pub enum Input {
     PrintCamera,
     /// Start the film again (R).
     Restart,
+    /// Read the scene again, as its files are now (F5).
+    Reload,
     /// Quit (Esc).
     Quit,
 }
@@ -72,7 +74,9 @@ pub fn moved(camera: &Camera, input: Input, height: u32) -> Option<Camera> {
                 * (distance * FLY_PER_STEP);
             (from + step, at + step)
         }
-        Input::Save | Input::PrintCamera | Input::Restart | Input::Quit => return None,
+        Input::Save | Input::PrintCamera | Input::Restart | Input::Reload | Input::Quit => {
+            return None;
+        }
     };
     let camera = Camera {
         look_from: look_from.as_vec3(),

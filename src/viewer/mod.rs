@@ -42,7 +42,7 @@ pub enum Step {
 
 impl Step {
     /// `orbit:DX,DY`, `pan:DX,DY`, `dolly:STEPS`, `fly:F,R,U`, `save`, `camera`, `restart`,
-    /// `quit` or `spp:N`.
+    /// `reload`, `quit` or `spp:N`.
     pub fn parse(text: &str) -> Result<Self, String> {
         let (verb, rest) = text.split_once(':').unwrap_or((text, ""));
         let numbers = || -> Result<Vec<f32>, String> {
@@ -72,6 +72,7 @@ impl Step {
             "save" => Input::Save,
             "camera" => Input::PrintCamera,
             "restart" => Input::Restart,
+            "reload" => Input::Reload,
             "quit" => Input::Quit,
             "spp" => {
                 return rest
@@ -82,7 +83,7 @@ impl Step {
             }
             _ => {
                 return Err(format!(
-                    "unknown step '{verb}': expected orbit, pan, dolly, fly, save, camera, restart, quit or spp"
+                    "unknown step '{verb}': expected orbit, pan, dolly, fly, save, camera, restart, reload, quit or spp"
                 ));
             }
         }))
@@ -107,6 +108,8 @@ pub struct ViewConfig {
     pub script: Vec<Step>,
     pub exit_after_spp: Option<u32>,
     pub screenshot: Option<PathBuf>,
+    /// Reads the scene again (F5): its file and what it reads, as they are now.
+    pub reload: Option<Box<dyn Fn() -> anyhow::Result<Scene>>>,
 }
 
 /// Opens the window and runs until it is closed (or the test aids end it).
@@ -217,6 +220,9 @@ struct Viewer {
     display_group: wgpu::BindGroup,
     /// The scene with the current camera, flattened for the current film size.
     scene: Scene,
+    /// The camera the scene's file gave when last read: a reload keeps the window's view
+    /// unless the file's camera changed.
+    file_camera: crate::scene::Camera,
     flat: FlatScene,
     opts: RenderOptions,
     /// Window pixels per film pixel (a window too large for one storage binding shows an
@@ -340,6 +346,7 @@ impl Viewer {
             ctx,
             display,
             display_group,
+            file_camera: scene.camera.clone(),
             scene,
             flat,
             opts,
@@ -611,6 +618,7 @@ impl Viewer {
                 Ok(())
             }
             Input::Restart => self.restart(),
+            Input::Reload => self.reload(config),
             Input::Quit => {
                 event_loop.exit();
                 Ok(())
@@ -638,6 +646,38 @@ impl Viewer {
         self.view_start = Instant::now();
         self.error_estimate = None;
         self.window.request_redraw();
+        Ok(())
+    }
+
+    /// The scene read again (its file edited, say): what the old one read and the new one does
+    /// not (images, meshes) is freed with it. A scene that no longer reads is a warning, and the
+    /// window goes on showing the one it has.
+    fn reload(&mut self, config: &ViewConfig) -> anyhow::Result<()> {
+        let Some(reload) = &config.reload else {
+            return Ok(());
+        };
+        let mut scene = match reload() {
+            Ok(scene) => scene,
+            Err(e) => {
+                warn(&format!("not reloaded: {e:#}"));
+                return Ok(());
+            }
+        };
+        let file_camera = scene.camera.clone();
+        if file_camera == self.file_camera {
+            scene.camera = self.scene.camera.clone();
+        }
+        // The old scene and its flat form go before the new ones are built.
+        self.scene = scene;
+        self.file_camera = file_camera;
+        self.rebuild()?;
+        let _ = writeln!(
+            std::io::stderr().lock(),
+            "reloaded {}: {} image files and {} mesh files held",
+            self.scene.name,
+            crate::assets::image::files_held(),
+            crate::scene::mesh::files_held()
+        );
         Ok(())
     }
 
@@ -757,6 +797,7 @@ fn key_input(key: &Key, modifiers: ModifiersState) -> Option<Input> {
             "r" => Some(Input::Restart),
             _ => None,
         },
+        Key::Named(NamedKey::F5) => Some(Input::Reload),
         _ => None,
     }
 }
