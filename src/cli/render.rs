@@ -180,6 +180,7 @@ fn load(
             gamma: args.gamma,
             checkpoint,
             unspecialised: args.unspecialised,
+            pass_seconds: None,
         },
         backend_reason,
         partial,

@@ -3,8 +3,8 @@
 
 use super::args::SUBCOMMANDS;
 use anyhow::{Context, bail};
-use rt_gpu::scene::builtin::{BUILTINS, builtin};
-use rt_gpu::scene::{Scene, file, gltf_scene};
+use rt_gpu::scene::Scene;
+use rt_gpu::scene::builtin::BUILTINS;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -43,47 +43,20 @@ pub fn list_scenes(export: Option<&Path>, force: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A scene file, a glTF file (seen by its camera named `camera`, else its first), or else a
-/// built-in scene; with the file's path when it is one.
+/// The scene `arg` names (`rt_gpu::scene::source`), its notes printed; with the file's path
+/// when it is one.
 pub fn resolve_scene(arg: &str, camera: Option<&str>) -> anyhow::Result<(Scene, Option<PathBuf>)> {
-    let path = Path::new(arg);
-    let extension = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    if let Some("glb" | "gltf") = extension.as_deref() {
-        let (scene, notes) = gltf_scene::load(path, arg, camera).map_err(anyhow::Error::msg)?;
-        for n in notes {
-            note!("{n}");
-        }
-        return Ok((scene, Some(path.to_path_buf())));
-    }
-    if camera.is_some() {
-        bail!("--camera picks a camera of a glTF file (.glb, .gltf); {arg} is not one");
-    }
-    if extension.as_deref() == Some("obj") {
-        bail!(
-            "{arg} is a mesh (obj), not a scene: place it in a scene file as `[[object]] mesh = {{ file = \"{arg}\" }}` (see scenes/README.md, e.g. scenes/meshes.toml)"
-        );
-    }
-    if path.is_file() || arg.ends_with(".toml") {
-        if builtin(arg).is_some() {
-            note!(
-                "note: rendering the scene file {arg}, not the built-in scene '{arg}' (rename the file to use the built-in)"
-            );
-        }
-        return Ok((file::load(path)?, Some(path.to_path_buf())));
-    }
-    let scene = builtin(arg).with_context(|| {
-        let names: Vec<&str> = BUILTINS.iter().map(|(n, _)| *n).collect();
-        let hint = if SUBCOMMANDS.contains(&arg) {
-            format!(": `{arg}` is a subcommand, so it must come before any option (`rt-gpu {arg} --help`)")
+    let source = rt_gpu::scene::source::resolve(arg, camera).map_err(|e| {
+        if SUBCOMMANDS.contains(&arg) {
+            anyhow::anyhow!(
+                "{e:#}: `{arg}` is a subcommand, so it must come before any option (`rt-gpu {arg} --help`)"
+            )
         } else {
-            String::new()
-        };
-        format!(
-            "'{arg}' is neither a built-in scene ({}) nor a scene file{hint}",
-            names.join(", ")
-        )
+            e
+        }
     })?;
-    Ok((scene, None))
+    for n in source.notes {
+        note!("{n}");
+    }
+    Ok((source.scene, source.file))
 }

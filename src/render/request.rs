@@ -41,6 +41,10 @@ pub struct Request {
     pub checkpoint: Option<Checkpoint>,
     /// The film file's identity says the kernel ran unspecialised.
     pub unspecialised: bool,
+    /// The longest a pass may take, where something between passes needs them short (a
+    /// library caller that checks for Ctrl-C); `None`: as long as the checkpoints and the
+    /// budget allow. Passes continue one another exactly: the image does not depend on them.
+    pub pass_seconds: Option<f64>,
 }
 
 /// Where a long render's film is saved between passes.
@@ -161,7 +165,8 @@ impl Request {
             scene: &self.flat,
             opts: self.opts,
             budget: self.budget,
-            pass_seconds: pass_seconds(every, self.budget),
+            pass_seconds: (self.pass_seconds.into_iter())
+                .fold(pass_seconds(every, self.budget), f64::min),
             target_error: self.target_error,
         };
         let mut last_checkpoint = Instant::now();

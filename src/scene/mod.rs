@@ -16,6 +16,7 @@ pub mod media;
 pub mod mesh;
 mod obj_parallel;
 pub mod punctual;
+pub mod source;
 pub mod tangents;
 
 use glam::Vec3;

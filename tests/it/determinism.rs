@@ -112,6 +112,7 @@ fn a_request_renders_the_plain_render_and_writes_its_output() {
         gamma: None,
         checkpoint: None,
         unspecialised: false,
+        pass_seconds: None,
     };
     let hooks = Hooks {
         progress: &|_| {},

@@ -1,0 +1,282 @@
+//! `import rtgpu`: rt-gpu from Python. A scene is read as the command line reads it
+//! (`rt_gpu::scene::source`), and rendered by the library's render request
+//! (`rt_gpu::render::request`), the same code `rt-gpu SCENE` runs: the same options give the same
+//! film, and so the same bytes. Renders release the GIL, report progress to an optional
+//! callback and stop at Ctrl-C with `KeyboardInterrupt`.
+
+use numpy::{PyArray1, PyArray3, PyArrayMethods};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
+use pyo3::prelude::*;
+use rt_gpu::film::Film;
+use rt_gpu::options::{Backend, DEFAULT_ROULETTE_DEPTH, Integrator, RenderOptions, SamplerKind};
+use rt_gpu::render::progressive::Outcome;
+use rt_gpu::render::request::{Hooks, Request};
+use rt_gpu::render::{GpuChoice, auto_backend};
+use rt_gpu::scene::Scene as RtScene;
+use rt_gpu::scene::flat::FlatScene;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// rt-gpu's one-line message as a `ValueError`.
+fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// A scene: read from a file or a built-in name (`load`), or from TOML text (`load_string`).
+#[pyclass(module = "rtgpu")]
+struct Scene {
+    scene: RtScene,
+    file: Option<PathBuf>,
+}
+
+#[pymethods]
+impl Scene {
+    /// Its name (the file's stem, or the built-in's).
+    #[getter]
+    fn name(&self) -> String {
+        self.scene.name.clone()
+    }
+
+    /// The image size it asks for, (width, height).
+    #[getter]
+    fn size(&self) -> (u32, u32) {
+        (self.scene.defaults.width, self.scene.defaults.height)
+    }
+
+    /// The names of its materials, in their order.
+    #[getter]
+    fn materials(&self) -> Vec<String> {
+        self.scene.material_names.clone()
+    }
+
+    /// Notes of what the file asks for and rt-gpu does not do are printed when it loads.
+    fn __repr__(&self) -> String {
+        let (w, h) = self.size();
+        format!(
+            "<rtgpu.Scene '{}' {w}x{h}, {} objects>",
+            self.scene.name,
+            self.scene.objects.len()
+        )
+    }
+}
+
+/// A finished render: `image` is linear radiance, float32, (height, width, 3), row 0 at the top.
+#[pyclass(module = "rtgpu")]
+struct Render {
+    film: Film,
+    #[pyo3(get)]
+    spp: u32,
+    #[pyo3(get)]
+    backend: String,
+    #[pyo3(get)]
+    device: String,
+    #[pyo3(get)]
+    seconds: f64,
+}
+
+#[pymethods]
+impl Render {
+    /// The mean radiance of each pixel (float32, (height, width, 3)).
+    #[getter]
+    fn image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let (w, h) = (self.film.width as usize, self.film.height as usize);
+        let flat: Vec<f32> = self.film.mean_rgb().into_iter().flatten().collect();
+        PyArray1::from_vec(py, flat).reshape([h, w, 3])
+    }
+
+    /// The film's own estimate of the image's RMSE (from its samples' variance).
+    #[getter]
+    fn estimated_rmse(&self) -> f64 {
+        self.film.estimated_rmse()
+    }
+
+    /// Writes the image as the command line does: the format by the extension (.png, .ppm,
+    /// .exr film file, .pfm), atomically.
+    fn write(&self, path: PathBuf) -> PyResult<()> {
+        rt_gpu::film::output::write_image(&path, &self.film)
+            .map_err(|e| value_error(format!("{e:#}")))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<rtgpu.Render {}x{}, {} spp on {} [{}], {:.2} s>",
+            self.film.width, self.film.height, self.spp, self.backend, self.device, self.seconds
+        )
+    }
+}
+
+/// Reads a scene: a scene file (.toml), a glTF file (.glb, .gltf; `camera` picks one of its
+/// cameras by name), or a built-in scene's name (`rtgpu.scenes()`).
+#[pyfunction]
+#[pyo3(signature = (source, camera = None))]
+fn load(py: Python<'_>, source: &str, camera: Option<&str>) -> PyResult<Scene> {
+    let read = py
+        .detach(|| rt_gpu::scene::source::resolve(source, camera))
+        .map_err(|e| value_error(format!("{e:#}")))?;
+    for note in &read.notes {
+        eprintln!("{note}");
+    }
+    Ok(Scene {
+        scene: read.scene,
+        file: read.file,
+    })
+}
+
+/// Reads a scene from TOML text (the scene-file syntax; paths relative to the working
+/// directory).
+#[pyfunction]
+#[pyo3(signature = (toml, name = "scene"))]
+fn load_string(toml: &str, name: &str) -> PyResult<Scene> {
+    let scene = rt_gpu::scene::file::parse(toml, "<string>", name).map_err(value_error)?;
+    Ok(Scene { scene, file: None })
+}
+
+/// The built-in scenes' names.
+#[pyfunction]
+fn scenes() -> Vec<&'static str> {
+    rt_gpu::scene::builtin::BUILTINS
+        .iter()
+        .map(|(n, _)| *n)
+        .collect()
+}
+
+/// The GPU adapters wgpu sees, by name.
+#[pyfunction]
+fn devices() -> Vec<String> {
+    (rt_gpu::gpu::context::list_adapters().into_iter())
+        .map(|info| format!("{} ({:?}, {:?})", info.name, info.device_type, info.backend))
+        .collect()
+}
+
+/// Renders `scene`: `spp` samples per pixel (or until `time` seconds or the relative error
+/// `target_error`), at `size` (width, height; default the scene's), on `backend` ("auto",
+/// "cpu" or "gpu"), with `integrator` ("nee" or "naive") and `sampler` ("sobol" or
+/// "independent"); the defaults are the command line's. `progress`, if given, is called with
+/// the fraction done. Ctrl-C stops it with `KeyboardInterrupt`.
+#[pyfunction]
+#[pyo3(signature = (scene, spp = 64, size = None, seed = 0, backend = "auto", integrator = "nee",
+    sampler = "sobol", max_depth = None, time = None, target_error = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+fn render(
+    py: Python<'_>,
+    scene: &Scene,
+    spp: u32,
+    size: Option<(u32, u32)>,
+    seed: u32,
+    backend: &str,
+    integrator: &str,
+    sampler: &str,
+    max_depth: Option<u32>,
+    time: Option<f64>,
+    target_error: Option<f64>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Render> {
+    let integrator = match integrator {
+        "nee" => Integrator::Nee,
+        "naive" => Integrator::Naive,
+        other => {
+            return Err(value_error(format!(
+                "integrator must be \"nee\" or \"naive\", not {other:?}"
+            )));
+        }
+    };
+    let sampler = match sampler {
+        "sobol" => SamplerKind::Sobol,
+        "independent" => SamplerKind::Independent,
+        other => {
+            return Err(value_error(format!(
+                "sampler must be \"sobol\" or \"independent\", not {other:?}"
+            )));
+        }
+    };
+    if spp == 0 && time.is_none() && target_error.is_none() {
+        return Err(value_error("spp must be at least 1"));
+    }
+    let (width, height) = size.unwrap_or(scene.size());
+    let spp = match (time, target_error) {
+        (Some(_), _) | (_, Some(_)) if spp == 0 => u32::MAX,
+        _ => spp,
+    };
+    let opts = RenderOptions {
+        width,
+        height,
+        spp,
+        first_sample: 0,
+        seed,
+        max_depth: max_depth.unwrap_or(scene.scene.defaults.max_depth),
+        integrator,
+        sampler,
+        roulette_depth: DEFAULT_ROULETTE_DEPTH,
+    };
+    let gpu = GpuChoice::default();
+    let interrupted = AtomicBool::new(false);
+    let finished = py.detach(|| -> anyhow::Result<_> {
+        let flat = FlatScene::new(&scene.scene, width, height)?;
+        let backend = match backend {
+            "cpu" => Backend::Cpu,
+            "gpu" => Backend::Gpu,
+            "auto" => auto_backend(&gpu, &flat).backend,
+            other => anyhow::bail!("backend must be \"auto\", \"cpu\" or \"gpu\", not {other:?}"),
+        };
+        let request = Request {
+            scene: scene.scene.clone(),
+            scene_file: scene.file.clone(),
+            flat,
+            opts,
+            backend,
+            gpu: gpu.clone(),
+            budget: time,
+            target_error,
+            output: None,
+            gamma: None,
+            checkpoint: None,
+            unspecialised: false,
+            // Ctrl-C is looked for between passes: at least once a second.
+            pass_seconds: Some(1.0),
+        };
+        let hooks = Hooks {
+            progress: &|p| {
+                if let Some(callback) = &progress {
+                    let done = p.spp / p.total_spp as f64;
+                    Python::attach(|py| {
+                        if let Err(e) = callback.call1(py, (done,)) {
+                            e.write_unraisable(py, None);
+                        }
+                    });
+                }
+            },
+            // Between passes: Python's signal handlers run (Ctrl-C sets the flag).
+            stop: &|| {
+                let stop = Python::attach(|py| py.check_signals().is_err());
+                if stop {
+                    interrupted.store(true, Ordering::SeqCst);
+                }
+                stop
+            },
+        };
+        Ok((request.run(&hooks)?, backend))
+    });
+    let (finished, backend) = finished.map_err(|e| value_error(format!("{e:#}")))?;
+    if interrupted.load(Ordering::SeqCst) && finished.outcome == Outcome::Stopped {
+        return Err(PyKeyboardInterrupt::new_err("render stopped"));
+    }
+    Ok(Render {
+        spp: finished.done,
+        backend: backend.name().to_string(),
+        device: finished.rendered.device,
+        seconds: finished.seconds,
+        film: finished.rendered.film,
+    })
+}
+
+#[pymodule]
+fn rtgpu(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Scene>()?;
+    m.add_class::<Render>()?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(load_string, m)?)?;
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(devices, m)?)?;
+    Ok(())
+}

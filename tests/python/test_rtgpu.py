@@ -1,0 +1,129 @@
+"""`import rtgpu` (python/, docs/python.md): arrays of the right shape, the command line's bytes,
+errors as exceptions, Ctrl-C, renders in threads. Run by .ci/run after `pip install .`:
+`pytest tests/python`. GPU tests run where wgpu sees an adapter, and must where
+RT_GPU_REQUIRE_GPU=1 (lavapipe in CI)."""
+
+import _thread
+import os
+import pathlib
+import shutil
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import rtgpu
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def cli():
+    """The rt-gpu binary cargo built beside the tests, else the one on PATH."""
+    for profile in ("debug", "release"):
+        built = ROOT / "target" / profile / "rt-gpu"
+        if built.exists():
+            return str(built)
+    found = shutil.which("rt-gpu")
+    if found is None:
+        pytest.skip("no rt-gpu binary: run cargo build first")
+    return found
+
+
+def has_gpu():
+    if rtgpu.devices():
+        return True
+    if os.environ.get("RT_GPU_REQUIRE_GPU") == "1":
+        pytest.fail("RT_GPU_REQUIRE_GPU=1, and wgpu sees no adapter")
+    return False
+
+
+def test_a_render_is_a_float32_image_of_the_asked_size():
+    scene = rtgpu.load("cornell")
+    assert scene.name == "cornell" and scene.size == (512, 512)
+    r = rtgpu.render(scene, spp=4, size=(40, 30), backend="cpu")
+    image = r.image
+    assert image.shape == (30, 40, 3) and image.dtype == np.float32
+    assert np.isfinite(image).all() and image.mean() > 0.01
+    assert r.spp == 4 and r.backend == "cpu" and r.seconds > 0
+    assert 0 < r.estimated_rmse < 1
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_the_same_bytes_as_the_command_line(tmp_path, backend):
+    if backend == "gpu" and not has_gpu():
+        pytest.skip("no GPU adapter")
+    args = ["cornell", "--spp", "16", "--seed", "3", "--backend", backend, "--size", "64x48"]
+    subprocess.run([cli(), *args, "-o", "cli.pfm"], cwd=tmp_path, check=True, capture_output=True)
+    r = rtgpu.render(rtgpu.load("cornell"), spp=16, seed=3, backend=backend, size=(64, 48))
+    r.write(str(tmp_path / "py.pfm"))
+    assert (tmp_path / "py.pfm").read_bytes() == (tmp_path / "cli.pfm").read_bytes()
+    # The array is the film's mean, rows from the top (the PFM stores them from the bottom).
+    pfm = np.frombuffer((tmp_path / "cli.pfm").read_bytes()[-64 * 48 * 12 :], dtype="<f4")
+    assert np.array_equal(r.image, pfm.reshape(48, 64, 3)[::-1])
+
+
+def test_a_scene_from_text_renders_what_its_parameters_say():
+    def scene(albedo):
+        return rtgpu.load_string(
+            f"""
+[camera]
+look_from = [0, 0, 4]
+look_at = [0, 0, 0]
+vfov = 30
+[render]
+background = [1, 1, 1]
+[materials.grey]
+type = "lambertian"
+albedo = [{albedo}, {albedo}, {albedo}]
+[[object]]
+sphere = {{ center = [0, 0, 0], radius = 1 }}
+material = "grey"
+"""
+        )
+
+    # A lambertian sphere under a white sky of radiance 1, one bounce: it shows its albedo.
+    dim, bright = (
+        rtgpu.render(scene(a), spp=256, size=(16, 16), backend="cpu", max_depth=2).image
+        for a in (0.25, 0.5)
+    )
+    centre = (slice(6, 10), slice(6, 10))
+    assert abs(dim[centre].mean() - 0.25) < 0.01 and abs(bright[centre].mean() - 0.5) < 0.02
+    assert np.allclose(bright[0, 0], 1.0)  # the sky
+
+
+def test_errors_are_value_errors_with_the_one_line_message(tmp_path):
+    with pytest.raises(ValueError, match="neither a built-in scene"):
+        rtgpu.load("no-such-scene")
+    with pytest.raises(ValueError, match="<string>:"):
+        rtgpu.load_string("[camera]\nlook_from = [0, 0")
+    with pytest.raises(ValueError, match="backend"):
+        rtgpu.render(rtgpu.load("cornell"), spp=1, size=(8, 8), backend="tpu")
+    with pytest.raises(ValueError, match="format"):
+        rtgpu.render(rtgpu.load("cornell"), spp=1, size=(8, 8), backend="cpu").write(
+            str(tmp_path / "x.jpg2")
+        )
+
+
+def test_ctrl_c_stops_a_render_with_keyboard_interrupt():
+    # Far more samples than the test waits for; Ctrl-C (SIGINT's handler) a second in.
+    threading.Timer(1.0, _thread.interrupt_main).start()
+    with pytest.raises(KeyboardInterrupt):
+        rtgpu.render(rtgpu.load("cornell"), spp=1_000_000, size=(64, 64), backend="cpu")
+
+
+def test_two_renders_in_threads_give_each_its_own_image():
+    scene = rtgpu.load("cornell")
+    results = {}
+
+    def run(seed):
+        results[seed] = rtgpu.render(scene, spp=8, size=(32, 32), seed=seed, backend="cpu").image
+
+    threads = [threading.Thread(target=run, args=(seed,)) for seed in (1, 2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    alone = rtgpu.render(scene, spp=8, size=(32, 32), seed=1, backend="cpu").image
+    assert np.array_equal(results[1], alone)
+    assert not np.array_equal(results[1], results[2])
