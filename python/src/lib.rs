@@ -7,6 +7,7 @@
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyList};
 use rt_gpu::film::Film;
 use rt_gpu::options::{Backend, DEFAULT_ROULETTE_DEPTH, Integrator, RenderOptions, SamplerKind};
 use rt_gpu::render::progressive::Outcome;
@@ -49,6 +50,87 @@ impl Scene {
         self.scene.material_names.clone()
     }
 
+    /// The camera, as a dict: look_from, look_at, up (3 numbers each), vfov (degrees),
+    /// aperture (lens diameter; 0: a pinhole), focus_distance (None: the look-at point).
+    #[getter]
+    fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.scene.camera;
+        let out = PyDict::new(py);
+        out.set_item("look_from", c.look_from.to_array())?;
+        out.set_item("look_at", c.look_at.to_array())?;
+        out.set_item("up", c.up.to_array())?;
+        out.set_item("vfov", c.vfov_degrees)?;
+        out.set_item("aperture", c.aperture)?;
+        out.set_item("focus_distance", c.focus_distance)?;
+        Ok(out)
+    }
+
+    /// Sets the camera from a dict of the keys `camera` gives (those left out keep their
+    /// values); checked as a scene file's camera is.
+    #[setter]
+    fn set_camera(&mut self, camera: &Bound<'_, PyDict>) -> PyResult<()> {
+        let mut c = self.scene.camera.clone();
+        for (key, value) in camera.iter() {
+            let key: String = key.extract()?;
+            let vector = |v: &Bound<'_, PyAny>| -> PyResult<glam::Vec3> {
+                Ok(glam::Vec3::from_array(v.extract::<[f32; 3]>()?))
+            };
+            match key.as_str() {
+                "look_from" => c.look_from = vector(&value)?,
+                "look_at" => c.look_at = vector(&value)?,
+                "up" => c.up = vector(&value)?,
+                "vfov" => c.vfov_degrees = value.extract()?,
+                "aperture" => c.aperture = value.extract()?,
+                "focus_distance" => c.focus_distance = value.extract()?,
+                other => {
+                    return Err(value_error(format!(
+                        "camera has no {other:?}: look_from, look_at, up, vfov, aperture, focus_distance"
+                    )));
+                }
+            }
+        }
+        c.validate().map_err(value_error)?;
+        self.scene.camera = c;
+        Ok(())
+    }
+
+    /// Material `name`'s parameters, as its scene-file table (`type` and the rest).
+    fn material<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        let index = self.material_index(name)?;
+        let table = toml::Value::try_from(&self.scene.materials[index]).map_err(value_error)?;
+        to_python(py, &table)
+    }
+
+    /// Sets parameters of material `name` as its scene-file table names them (`albedo`,
+    /// `roughness`, `ior`, `radiance`, ...; `type` too), checked as a scene file's are:
+    /// `scene.set_material("light", radiance=[30, 30, 30])`. The next render uses them.
+    #[pyo3(signature = (name, **params))]
+    fn set_material(&mut self, name: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let index = self.material_index(name)?;
+        let mut table = toml::Value::try_from(&self.scene.materials[index]).map_err(value_error)?;
+        if let (Some(params), toml::Value::Table(t)) = (params, &mut table) {
+            for (key, value) in params.iter() {
+                t.insert(key.extract()?, from_python(&value)?);
+            }
+        }
+        // Image paths in the table are the scene file's, relative to its directory.
+        let loader = match &self.file {
+            Some(file) => rt_gpu::assets::loader::Loader::for_file(file),
+            None => rt_gpu::assets::loader::Loader::working_directory(),
+        };
+        let material: rt_gpu::scene::Material =
+            loader
+                .during(|| table.try_into())
+                .map_err(|e: toml::de::Error| {
+                    value_error(format!("material \"{name}\": {}", e.message()))
+                })?;
+        material
+            .validate()
+            .map_err(|e| value_error(format!("material \"{name}\": {e}")))?;
+        self.scene.materials[index] = material;
+        Ok(())
+    }
+
     /// Notes of what the file asks for and rt-gpu does not do are printed when it loads.
     fn __repr__(&self) -> String {
         let (w, h) = self.size();
@@ -58,6 +140,78 @@ impl Scene {
             self.scene.objects.len()
         )
     }
+}
+
+impl Scene {
+    fn material_index(&self, name: &str) -> PyResult<usize> {
+        (self.scene.material_names.iter().position(|n| n == name)).ok_or_else(|| {
+            value_error(format!(
+                "no material {name:?}: the scene has {}",
+                self.scene.material_names.join(", ")
+            ))
+        })
+    }
+}
+
+/// A TOML value (a material's table) as Python data.
+fn to_python<'py>(py: Python<'py>, value: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match value {
+        toml::Value::String(s) => s.into_pyobject(py)?.into_any(),
+        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
+        toml::Value::Float(f) => f.into_pyobject(py)?.into_any(),
+        toml::Value::Boolean(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        toml::Value::Datetime(d) => d.to_string().into_pyobject(py)?.into_any(),
+        toml::Value::Array(items) => {
+            let list = PyList::empty(py);
+            for item in items {
+                list.append(to_python(py, item)?)?;
+            }
+            list.into_any()
+        }
+        toml::Value::Table(table) => {
+            let dict = PyDict::new(py);
+            for (k, v) in table {
+                dict.set_item(k, to_python(py, v)?)?;
+            }
+            dict.into_any()
+        }
+    })
+}
+
+/// Python data (numbers, strings, lists, dicts; arrays through `tolist`) as a TOML value.
+fn from_python(value: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    if let Ok(b) = value.cast::<PyBool>() {
+        return Ok(toml::Value::Boolean(b.is_true()));
+    }
+    if let Ok(i) = value.extract::<i64>() {
+        return Ok(toml::Value::Integer(i));
+    }
+    if let Ok(f) = value.extract::<f64>() {
+        return Ok(toml::Value::Float(f));
+    }
+    if let Ok(s) = value.extract::<String>() {
+        return Ok(toml::Value::String(s));
+    }
+    if let Ok(d) = value.cast::<PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, v) in d.iter() {
+            table.insert(k.extract()?, from_python(&v)?);
+        }
+        return Ok(toml::Value::Table(table));
+    }
+    if value.hasattr("tolist")? {
+        return from_python(&value.call_method0("tolist")?);
+    }
+    if let Ok(items) = value.try_iter() {
+        return Ok(toml::Value::Array(
+            items
+                .map(|item| from_python(&item?))
+                .collect::<PyResult<_>>()?,
+        ));
+    }
+    Err(value_error(format!(
+        "cannot use {value} as a scene parameter"
+    )))
 }
 
 /// A finished render: `image` is linear radiance, float32, (height, width, 3), row 0 at the top.

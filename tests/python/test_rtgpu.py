@@ -127,3 +127,31 @@ def test_two_renders_in_threads_give_each_its_own_image():
     alone = rtgpu.render(scene, spp=8, size=(32, 32), seed=1, backend="cpu").image
     assert np.array_equal(results[1], alone)
     assert not np.array_equal(results[1], results[2])
+
+
+def test_a_brighter_light_set_from_python_doubles_the_image_exactly():
+    scene = rtgpu.load("cornell")
+    light = scene.material("light")
+    assert light["type"] == "light" and light["radiance"] == [15, 15, 15]
+    before = rtgpu.render(scene, spp=4, size=(24, 24), backend="cpu").image
+    scene.set_material("light", radiance=[30, 30, 30])
+    after = rtgpu.render(scene, spp=4, size=(24, 24), backend="cpu").image
+    # Every sample is the light's radiance times a path's throughput: doubling is exact.
+    assert np.array_equal(after, 2 * before)
+    with pytest.raises(ValueError, match="albedo"):
+        scene.set_material("white", albedo=[2, 0, 0])
+    with pytest.raises(ValueError, match="no material"):
+        scene.set_material("chrome", albedo=[1, 1, 1])
+
+
+def test_the_camera_reads_and_moves():
+    scene = rtgpu.load("cornell")
+    camera = scene.camera
+    assert camera["look_at"] == [278, 278, 0] and camera["aperture"] == 0
+    wide = rtgpu.render(scene, spp=2, size=(16, 16), backend="cpu").image
+    scene.camera = {"vfov": 20}
+    assert scene.camera["vfov"] == 20 and scene.camera["look_at"] == [278, 278, 0]
+    narrow = rtgpu.render(scene, spp=2, size=(16, 16), backend="cpu").image
+    assert not np.array_equal(wide, narrow)
+    with pytest.raises(ValueError, match="vfov"):
+        scene.camera = {"vfov": 200}
