@@ -4,7 +4,7 @@
 //! film, and so the same bytes. Renders release the GIL, report progress to an optional
 //! callback and stop at Ctrl-C with `KeyboardInterrupt`.
 
-use numpy::{PyArray1, PyArray3, PyArrayMethods};
+use numpy::{PyArray1, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList};
@@ -285,6 +285,43 @@ fn load_string(toml: &str, name: &str) -> PyResult<Scene> {
     Ok(Scene { scene, file: None })
 }
 
+/// Writes `image` (linear radiance, (height, width, 3), every value finite and >= 0) as the
+/// command line writes a render: the format by the extension (.png and .ppm through their
+/// transfer curves, .exr, .pfm), atomically.
+#[pyfunction]
+fn write(py: Python<'_>, path: PathBuf, image: &Bound<'_, PyAny>) -> PyResult<()> {
+    let numpy = py.import("numpy")?;
+    let array = numpy.call_method1("ascontiguousarray", (image, "float32"))?;
+    let array = array.cast::<PyArray3<f32>>()?.readonly();
+    let shape = array.shape();
+    if shape[2] != 3 {
+        return Err(value_error(format!(
+            "an image is (height, width, 3), not {shape:?}"
+        )));
+    }
+    let (h, w) = (shape[0], shape[1]);
+    rt_gpu::film::check_image_size(w as u32, h as u32).map_err(value_error)?;
+    let values = array.as_slice()?;
+    let mut film = Film::new(w as u32, h as u32);
+    for (i, (pixel, rgb)) in film
+        .pixels
+        .iter_mut()
+        .zip(values.chunks_exact(3))
+        .enumerate()
+    {
+        let value = glam::Vec3::from_slice(rgb);
+        if !rt_gpu::film::is_valid_sample(value) {
+            return Err(value_error(format!(
+                "pixel ({}, {}) is {value}: an image's values are finite and >= 0",
+                i % w,
+                i / w
+            )));
+        }
+        pixel.add(value);
+    }
+    rt_gpu::film::output::write_image(&path, &film).map_err(|e| value_error(format!("{e:#}")))
+}
+
 /// The built-in scenes' names.
 #[pyfunction]
 fn scenes() -> Vec<&'static str> {
@@ -431,6 +468,7 @@ fn rtgpu(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load_string, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(write, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
     Ok(())
 }

@@ -155,3 +155,23 @@ def test_the_camera_reads_and_moves():
     assert not np.array_equal(wide, narrow)
     with pytest.raises(ValueError, match="vfov"):
         scene.camera = {"vfov": 200}
+
+
+def test_an_array_is_written_as_the_command_line_writes_a_render(tmp_path):
+    r = rtgpu.render(rtgpu.load("cornell"), spp=4, size=(20, 10), backend="cpu")
+    for name in ("r.png", "r.pfm"):
+        r.write(str(tmp_path / name))
+        rtgpu.write(str(tmp_path / ("a" + name)), r.image.astype(np.float64))
+        assert (tmp_path / name).read_bytes() == (tmp_path / ("a" + name)).read_bytes(), name
+    with pytest.raises(ValueError, match="finite and >= 0"):
+        rtgpu.write(str(tmp_path / "bad.png"), np.full((2, 2, 3), np.nan))
+    with pytest.raises(ValueError, match="height, width, 3"):
+        rtgpu.write(str(tmp_path / "bad.png"), np.zeros((2, 2, 4)))
+
+
+def test_progress_is_reported_up_to_the_whole_render():
+    seen = []
+    rtgpu.render(
+        rtgpu.load("cornell"), spp=4, size=(16, 16), backend="cpu", progress=seen.append
+    )
+    assert seen and seen == sorted(seen) and seen[-1] == 1.0
