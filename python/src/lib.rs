@@ -108,16 +108,25 @@ impl Scene {
     fn set_material(&mut self, name: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let index = self.material_index(name)?;
         let mut table = toml::Value::try_from(&self.scene.materials[index]).map_err(value_error)?;
-        if let (Some(params), toml::Value::Table(t)) = (params, &mut table) {
-            for (key, value) in params.iter() {
-                t.insert(key.extract()?, from_python(&value)?);
-            }
-        }
         // Image paths in the table are the scene file's, relative to its directory.
         let loader = match &self.file {
             Some(file) => rt_gpu::assets::loader::Loader::for_file(file),
             None => rt_gpu::assets::loader::Loader::working_directory(),
         };
+        // A material a mesh file made may hold what its table cannot say (glTF's alpha, a
+        // texture's sampler, an image inside the file): edited through the table, it would
+        // silently lose it.
+        let unchanged = loader.during(|| table.clone().try_into::<rt_gpu::scene::Material>());
+        if unchanged.ok().as_ref() != Some(&self.scene.materials[index]) {
+            return Err(value_error(format!(
+                "material \"{name}\" holds what a scene file's table cannot (it came from a mesh file): set_material edits materials a scene file could write"
+            )));
+        }
+        if let (Some(params), toml::Value::Table(t)) = (params, &mut table) {
+            for (key, value) in params.iter() {
+                t.insert(key.extract()?, from_python(&value)?);
+            }
+        }
         let material: rt_gpu::scene::Material =
             loader
                 .during(|| table.try_into())
@@ -218,6 +227,8 @@ fn from_python(value: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
 #[pyclass(module = "rtgpu")]
 struct Render {
     film: Film,
+    /// The files the scene read: `write` never replaces them.
+    inputs: Vec<PathBuf>,
     #[pyo3(get)]
     spp: u32,
     #[pyo3(get)]
@@ -247,7 +258,9 @@ impl Render {
     /// Writes the image as the command line does: the format by the extension (.png, .ppm,
     /// .exr film file, .pfm), atomically.
     fn write(&self, path: PathBuf) -> PyResult<()> {
-        rt_gpu::film::output::write_image(&path, &self.film)
+        let inputs: Vec<&std::path::Path> = self.inputs.iter().map(PathBuf::as_path).collect();
+        rt_gpu::film::output::PendingOutput::claim(&path, &inputs)
+            .and_then(|pending| pending.commit_image(&self.film, None))
             .map_err(|e| value_error(format!("{e:#}")))
     }
 
@@ -292,7 +305,13 @@ fn load_string(toml: &str, name: &str) -> PyResult<Scene> {
 fn write(py: Python<'_>, path: PathBuf, image: &Bound<'_, PyAny>) -> PyResult<()> {
     let numpy = py.import("numpy")?;
     let array = numpy.call_method1("ascontiguousarray", (image, "float32"))?;
-    let array = array.cast::<PyArray3<f32>>()?.readonly();
+    let Ok(array) = array.cast::<PyArray3<f32>>() else {
+        let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+        return Err(value_error(format!(
+            "an image is (height, width, 3), not {shape:?}"
+        )));
+    };
+    let array = array.readonly();
     let shape = array.shape();
     if shape[2] != 3 {
         return Err(value_error(format!(
@@ -345,13 +364,13 @@ fn devices() -> Vec<String> {
 /// "independent"); the defaults are the command line's. `progress`, if given, is called with
 /// the fraction done. Ctrl-C stops it with `KeyboardInterrupt`.
 #[pyfunction]
-#[pyo3(signature = (scene, spp = 64, size = None, seed = 0, backend = "auto", integrator = "nee",
+#[pyo3(signature = (scene, spp = None, size = None, seed = 0, backend = "auto", integrator = "nee",
     sampler = "sobol", max_depth = None, time = None, target_error = None, progress = None))]
 #[allow(clippy::too_many_arguments)]
 fn render(
     py: Python<'_>,
     scene: &Scene,
-    spp: u32,
+    spp: Option<u32>,
     size: Option<(u32, u32)>,
     seed: u32,
     backend: &str,
@@ -380,14 +399,32 @@ fn render(
             )));
         }
     };
-    if spp == 0 && time.is_none() && target_error.is_none() {
-        return Err(value_error("spp must be at least 1"));
+    // As the command line: 64 spp unless a time or an error target ends the render.
+    let spp = match (spp, time.or(target_error)) {
+        (Some(0), _) => return Err(value_error("spp must be at least 1")),
+        (Some(spp), _) => spp,
+        (None, Some(_)) => u32::MAX,
+        (None, None) => 64,
+    };
+    for (what, value) in [("time", time), ("target_error", target_error)] {
+        if let Some(x) = value
+            && !(x > 0.0 && x.is_finite())
+        {
+            return Err(value_error(format!(
+                "{what} must be a positive number, got {x}"
+            )));
+        }
+    }
+    if let Some(d) = max_depth
+        && !(1..=rt_gpu::scene::file::MAX_DEPTH_LIMIT).contains(&d)
+    {
+        return Err(value_error(format!(
+            "max_depth must be in 1..={}, got {d}",
+            rt_gpu::scene::file::MAX_DEPTH_LIMIT
+        )));
     }
     let (width, height) = size.unwrap_or(scene.size());
-    let spp = match (time, target_error) {
-        (Some(_), _) | (_, Some(_)) if spp == 0 => u32::MAX,
-        _ => spp,
-    };
+    rt_gpu::film::check_image_size(width, height).map_err(value_error)?;
     let opts = RenderOptions {
         width,
         height,
@@ -426,9 +463,14 @@ fn render(
             pass_seconds: Some(1.0),
         };
         let hooks = Hooks {
+            ready: &|| {},
             progress: &|p| {
                 if let Some(callback) = &progress {
-                    let done = p.spp / p.total_spp as f64;
+                    // Of the samples, or of the time where the samples are unlimited.
+                    let done = match (time, p.total_spp) {
+                        (Some(budget), u32::MAX) => (p.elapsed / budget).min(1.0),
+                        _ => p.spp / p.total_spp as f64,
+                    };
                     Python::attach(|py| {
                         if let Err(e) = callback.call1(py, (done,)) {
                             e.write_unraisable(py, None);
@@ -451,7 +493,11 @@ fn render(
     if interrupted.load(Ordering::SeqCst) && finished.outcome == Outcome::Stopped {
         return Err(PyKeyboardInterrupt::new_err("render stopped"));
     }
+    let inputs = (scene.file.iter().cloned())
+        .chain(scene.scene.input_paths().map(PathBuf::from))
+        .collect();
     Ok(Render {
+        inputs,
         spp: finished.done,
         backend: backend.name().to_string(),
         device: finished.rendered.device,

@@ -40,9 +40,10 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> "),
     );
-    // With a checkpoint, Ctrl-C ends the pass in flight and writes it.
-    GRACEFUL.store(plan.request.checkpoint.is_some(), Ordering::SeqCst);
     let finished = plan.request.run(&Hooks {
+        // From the first pass on, with a checkpoint, Ctrl-C ends the pass in flight and writes
+        // it (before, it ends the process).
+        ready: &|| GRACEFUL.store(plan.request.checkpoint.is_some(), Ordering::SeqCst),
         progress: &|p| show_progress(&progress, args.time, &p),
         stop: &|| STOP_SIGNAL.load(Ordering::SeqCst) != 0,
     });

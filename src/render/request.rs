@@ -58,6 +58,9 @@ pub struct Checkpoint {
 
 /// What a render reports while it runs.
 pub struct Hooks<'a> {
+    /// Once the outputs are claimed and the backend is ready (the kernel compiled), before
+    /// the first pass.
+    pub ready: &'a dyn Fn(),
     /// As the passes go.
     pub progress: &'a (dyn Fn(Progress) + Sync),
     /// Asked between passes: `true` ends the render after the pass in flight (its image and
@@ -108,6 +111,7 @@ impl Request {
             samples: std::iter::once(range.start..done).collect(),
             device: device.clone(),
         };
+        (hooks.ready)();
         let start = Instant::now();
         let mut passes = self.run_passes(&session, resume, &meta, hooks)?;
         let seconds = start.elapsed().as_secs_f64();

@@ -625,10 +625,14 @@ impl SceneDoc {
         let mut materials = SceneMaterials::new(self.materials)?;
         let mut objects = Vec::new();
         let mut object_spans = Vec::new();
+        // Every part of the mesh files read, for the parse: objects that each place one part
+        // of a file (`part = N`) then share the file read once, and its parts instance.
+        let mut read = Vec::new();
         for spanned in self.objects {
             let span = Some(spanned.span());
             // A mesh file gives one object per part (material).
-            for object in object(loader, spanned.into_inner(), &span, &mut materials)? {
+            let doc = spanned.into_inner();
+            for object in object(loader, doc, &span, &mut materials, &mut read)? {
                 object_spans.push(span.clone());
                 objects.push(object);
             }
@@ -835,8 +839,9 @@ fn object(
     o: ObjectDoc,
     span: &Option<Range<usize>>,
     materials: &mut SceneMaterials,
+    read: &mut Vec<Arc<super::mesh::Mesh>>,
 ) -> Result<Vec<Object>, Located> {
-    let parts = object_shapes(loader, &o, span)?;
+    let parts = object_shapes(loader, &o, span, read)?;
     let mut placed = Vec::new();
     for (shape, mesh) in parts {
         shape.validate().map_err(|e| (span.clone(), e))?;
@@ -863,6 +868,7 @@ fn object_shapes(
     loader: &Loader,
     o: &ObjectDoc,
     span: &Option<Range<usize>>,
+    read: &mut Vec<Arc<super::mesh::Mesh>>,
 ) -> Result<Vec<ShapePart>, Located> {
     let mut shapes = o.surfaces();
     if let Some(b) = &o.cuboid {
@@ -876,6 +882,7 @@ fn object_shapes(
     if let Some(m) = &o.mesh {
         let meshes = super::mesh::load(&loader.resolve(&m.file), &m.file, m.node.as_deref())
             .map_err(|e| (span.clone(), e))?;
+        read.extend(meshes.iter().cloned());
         let meshes = match m.part {
             None => meshes,
             Some(p) => match meshes.get(p as usize) {

@@ -13,6 +13,7 @@ use glam::{DMat3, DMat4, DVec3, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock, Weak};
+use std::time::SystemTime;
 
 /// The triangles of one material of a mesh file.
 pub struct Mesh {
@@ -277,7 +278,15 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Arc<Mes
         .lock()
         .map_err(|_| "mesh cache poisoned")?
         .get(&key)
-        .and_then(|(parts, inputs)| {
+        .and_then(|(parts, inputs, versions)| {
+            // The files its reading read (an MTL library, a glTF's buffers and images) as they
+            // were: one edited since is read again (the viewer's reload shows the edit).
+            if !versions
+                .iter()
+                .all(|v| file_version(&v.0).as_ref() == Some(v))
+            {
+                return None;
+            }
             let parts: Option<Vec<Arc<Mesh>>> = parts.iter().map(Weak::upgrade).collect();
             Some((parts?, inputs.clone()))
         });
@@ -289,9 +298,22 @@ pub fn load(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Arc<Mes
     let parts = parts?;
     let mut cache = cache.lock().map_err(|_| "mesh cache poisoned")?;
     // Meshes no scene holds any more are gone: so are their entries.
-    cache.retain(|_, (parts, _)| parts.iter().all(|p| p.strong_count() > 0));
-    cache.insert(key, (parts.iter().map(Arc::downgrade).collect(), inputs));
+    cache.retain(|_, (parts, ..)| parts.iter().all(|p| p.strong_count() > 0));
+    let versions = inputs
+        .iter()
+        .filter_map(|i| file_version(&i.path))
+        .collect();
+    cache.insert(
+        key,
+        (parts.iter().map(Arc::downgrade).collect(), inputs, versions),
+    );
     Ok(parts)
+}
+
+/// The path, size and modification time of the file at `path`, if it can be read.
+fn file_version(path: &Path) -> Option<(PathBuf, u64, std::time::SystemTime)> {
+    let meta = std::fs::metadata(path).ok()?;
+    Some((path.to_path_buf(), meta.len(), meta.modified().ok()?))
 }
 
 /// How many mesh files (or nodes of one) are held by scenes at present: what a reloaded scene
@@ -302,7 +324,7 @@ pub fn files_held() -> usize {
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
     let held = |parts: &Vec<Weak<Mesh>>| parts.iter().all(|p| p.strong_count() > 0);
-    cache.values().filter(|(parts, _)| held(parts)).count()
+    cache.values().filter(|(parts, ..)| held(parts)).count()
 }
 
 /// A file as it was when read (its path, size and modification time), and the node read.
@@ -313,8 +335,15 @@ type FileVersion = (PathBuf, u64, std::time::SystemTime, Option<String>);
 /// nothing holds are freed.
 static FILES: OnceLock<Mutex<Held>> = OnceLock::new();
 
-/// Each file's parts while held, and the files their reading read.
-type Held = HashMap<FileVersion, (Vec<Weak<Mesh>>, Vec<InputFile>)>;
+/// Each file's parts while held, the files their reading read, and those files' versions.
+type Held = HashMap<
+    FileVersion,
+    (
+        Vec<Weak<Mesh>>,
+        Vec<InputFile>,
+        Vec<(PathBuf, u64, SystemTime)>,
+    ),
+>;
 
 /// The parts of the mesh file at `path` (see [`load`]).
 fn read_parts(path: &Path, source: &str, node: Option<&str>) -> Result<Vec<Arc<Mesh>>, String> {

@@ -667,10 +667,33 @@ impl Viewer {
         if file_camera == self.file_camera {
             scene.camera = self.scene.camera.clone();
         }
-        // The old scene and its flat form go before the new ones are built.
-        self.scene = scene;
-        self.file_camera = file_camera;
-        self.rebuild()?;
+        // Built before anything is replaced: a scene that reads but cannot be shown (a texture
+        // larger than the device holds, say) leaves the window showing the one it has. The
+        // kernel is made for the new scene's features.
+        let size = self.window.inner_size();
+        let (opts, scale) = film_size(&self.ctx, &self.opts, size.width, size.height);
+        let built = FlatScene::new(&scene, opts.width, opts.height)
+            .context("invalid scene")
+            .and_then(|flat| {
+                let features = (self.gpu_features.is_some())
+                    .then(|| config.gpu.features(&flat, opts.integrator));
+                let film = LiveFilm::new(&self.ctx, features, &flat, &opts)?;
+                Ok((flat, features, film))
+            });
+        let (flat, features, film) = match built {
+            Ok(built) => built,
+            Err(e) => {
+                warn(&format!("not reloaded: {e:#}"));
+                return Ok(());
+            }
+        };
+        (self.scene, self.file_camera) = (scene, file_camera);
+        (self.flat, self.gpu_features, self.film) = (flat, features, film);
+        (self.opts, self.scale) = (opts, scale);
+        self.display
+            .set_film(&self.ctx, opts.width, opts.height, scale);
+        self.display_group = self.display.bind(&self.ctx, self.film.accumulator());
+        self.restart()?;
         let _ = writeln!(
             std::io::stderr().lock(),
             "reloaded {}: {} image files and {} mesh files held",

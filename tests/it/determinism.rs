@@ -115,6 +115,7 @@ fn a_request_renders_the_plain_render_and_writes_its_output() {
         pass_seconds: None,
     };
     let hooks = Hooks {
+        ready: &|| {},
         progress: &|_| {},
         stop: &|| false,
     };

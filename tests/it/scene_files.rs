@@ -454,3 +454,30 @@ fn reloading_an_edited_scene_frees_what_it_no_longer_reads() {
     drop(edited);
     assert!(knot.upgrade().is_none(), "and freed with the last scene");
 }
+
+/// Objects that each place one part of a mesh file share that file, read once for the parse
+/// (the other parts are held while it reads): so a part placed many times is instanced.
+#[test]
+fn objects_placing_one_part_of_a_file_share_it() {
+    let lamp = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/models/lamp.gltf");
+    let object = |x: i32| {
+        format!(
+            "[[object]]\nmesh = {{ file = \"{}\", part = 1 }}\ntranslate = [{x}, 0, 0]\n",
+            lamp.display()
+        )
+    };
+    let text = format!(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\n{}{}",
+        object(0),
+        object(3)
+    );
+    let scene = parse(&text, "parts.toml", "parts").expect("parses");
+    let [Shape::Mesh { mesh: a, .. }, Shape::Mesh { mesh: b, .. }] =
+        [&scene.objects[0].shape, &scene.objects[1].shape]
+    else {
+        panic!("two meshes");
+    };
+    assert!(std::sync::Arc::ptr_eq(a, b), "one read of the file");
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("flattens");
+    assert_eq!(flat.instances.len(), 2, "the part instanced twice");
+}

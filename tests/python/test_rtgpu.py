@@ -175,3 +175,33 @@ def test_progress_is_reported_up_to_the_whole_render():
         rtgpu.load("cornell"), spp=4, size=(16, 16), backend="cpu", progress=seen.append
     )
     assert seen and seen == sorted(seen) and seen[-1] == 1.0
+
+
+def test_the_command_lines_limits_and_defaults(tmp_path):
+    scene = rtgpu.load("cornell")
+    # A time alone is no longer 64 spp: the samples are unlimited, as with --time.
+    seen = []
+    r = rtgpu.render(scene, size=(8, 8), backend="cpu", time=1.0, progress=seen.append)
+    assert r.spp > 64 and 0 < seen[-1] <= 1
+    for bad in (dict(spp=0), dict(time=-1), dict(target_error=float("nan")), dict(max_depth=0)):
+        with pytest.raises(ValueError):
+            rtgpu.render(scene, size=(8, 8), backend="cpu", **bad)
+    with pytest.raises(ValueError, match="height, width, 3"):
+        rtgpu.write(str(tmp_path / "flat.png"), np.zeros((4, 4)))
+
+
+def test_what_a_scene_reads_is_never_written_over(tmp_path):
+    shutil.copy(ROOT / "scenes" / "textured.toml", tmp_path)
+    shutil.copytree(ROOT / "scenes" / "textures", tmp_path / "textures")
+    scene = rtgpu.load(str(tmp_path / "textured.toml"))
+    r = rtgpu.render(scene, spp=1, size=(8, 8), backend="cpu")
+    before = (tmp_path / "textures" / "tiles.png").read_bytes()
+    with pytest.raises(ValueError):
+        r.write(str(tmp_path / "textures" / "tiles.png"))
+    assert (tmp_path / "textures" / "tiles.png").read_bytes() == before
+
+
+def test_a_material_a_mesh_file_made_is_not_edited_through_a_table():
+    scene = rtgpu.load(str(ROOT / "scenes" / "blender" / "bumpy.glb"))
+    with pytest.raises(ValueError, match="mesh file"):
+        scene.set_material(scene.materials[0], roughness=0.5)
