@@ -154,6 +154,15 @@ pub fn run(config: ViewConfig) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A flat scene and its film, made for the window before they replace the shown ones.
+struct Built {
+    flat: FlatScene,
+    features: Option<Features>,
+    film: LiveFilm,
+    opts: RenderOptions,
+    scale: u32,
+}
+
 struct App {
     config: ViewConfig,
     viewer: Option<Viewer>,
@@ -670,17 +679,11 @@ impl Viewer {
         // Built before anything is replaced: a scene that reads but cannot be shown (a texture
         // larger than the device holds, say) leaves the window showing the one it has. The
         // kernel is made for the new scene's features.
-        let size = self.window.inner_size();
-        let (opts, scale) = film_size(&self.ctx, &self.opts, size.width, size.height);
-        let built = FlatScene::new(&scene, opts.width, opts.height)
-            .context("invalid scene")
-            .and_then(|flat| {
-                let features = (self.gpu_features.is_some())
-                    .then(|| config.gpu.features(&flat, opts.integrator));
-                let film = LiveFilm::new(&self.ctx, features, &flat, &opts)?;
-                Ok((flat, features, film))
-            });
-        let (flat, features, film) = match built {
+        let on_gpu = self.gpu_features.is_some();
+        let built = self.build(&scene, |flat, integrator| {
+            on_gpu.then(|| config.gpu.features(flat, integrator))
+        });
+        let built = match built {
             Ok(built) => built,
             Err(e) => {
                 warn(&format!("not reloaded: {e:#}"));
@@ -688,12 +691,7 @@ impl Viewer {
             }
         };
         (self.scene, self.file_camera) = (scene, file_camera);
-        (self.flat, self.gpu_features, self.film) = (flat, features, film);
-        (self.opts, self.scale) = (opts, scale);
-        self.display
-            .set_film(&self.ctx, opts.width, opts.height, scale);
-        self.display_group = self.display.bind(&self.ctx, self.film.accumulator());
-        self.restart()?;
+        self.show(built)?;
         let _ = writeln!(
             std::io::stderr().lock(),
             "reloaded {}: {} image files and {} mesh files held",
@@ -706,13 +704,43 @@ impl Viewer {
 
     /// A new film for the current window size and scene (flattened again).
     fn rebuild(&mut self) -> anyhow::Result<()> {
+        let features = self.gpu_features;
+        let built = self.build(&self.scene, |_, _| features)?;
+        self.show(built)
+    }
+
+    /// `scene` flattened and a film of it for the current window size, on the kernel with the
+    /// features `features` gives for the flat scene (`None`: the CPU backend).
+    fn build(
+        &self,
+        scene: &Scene,
+        features: impl FnOnce(&FlatScene, crate::options::Integrator) -> Option<Features>,
+    ) -> anyhow::Result<Built> {
         let size = self.window.inner_size();
         let (opts, scale) = film_size(&self.ctx, &self.opts, size.width, size.height);
-        self.flat =
-            FlatScene::new(&self.scene, opts.width, opts.height).context("invalid scene")?;
-        self.film = LiveFilm::new(&self.ctx, self.gpu_features, &self.flat, &opts)?;
-        self.opts = opts;
-        self.scale = scale;
+        let flat = FlatScene::new(scene, opts.width, opts.height).context("invalid scene")?;
+        let features = features(&flat, opts.integrator);
+        let film = LiveFilm::new(&self.ctx, features, &flat, &opts)?;
+        Ok(Built {
+            flat,
+            features,
+            film,
+            opts,
+            scale,
+        })
+    }
+
+    /// Shows what [`Self::build`] made, from its first sample.
+    fn show(&mut self, built: Built) -> anyhow::Result<()> {
+        let Built {
+            flat,
+            features,
+            film,
+            opts,
+            scale,
+        } = built;
+        (self.flat, self.gpu_features, self.film) = (flat, features, film);
+        (self.opts, self.scale) = (opts, scale);
         self.display
             .set_film(&self.ctx, opts.width, opts.height, scale);
         self.display_group = self.display.bind(&self.ctx, self.film.accumulator());
