@@ -66,8 +66,7 @@ fn pbr_metal(alpha: f32, base: vec3f, wo: vec3f, wi: vec3f, hit: Hit) -> vec4f {
     return vec4f(f, ggx_reflection_pdf(alpha, wo_local, mf));
 }
 
-fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
-    let p = pbr_params(m);
+fn pbr_eval_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     let w_coat = (1.0 - p.metallic) * (1.0 - p.transmission);
     let w_glass = (1.0 - p.metallic) * p.transmission;
     let w_metal = p.metallic;
@@ -88,8 +87,7 @@ fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     return f;
 }
 
-fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
-    let p = pbr_params(m);
+fn pbr_pdf_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
     let w_coat = (1.0 - p.metallic) * (1.0 - p.transmission);
     let w_glass = (1.0 - p.metallic) * p.transmission;
     let w_metal = p.metallic;
@@ -109,9 +107,72 @@ fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
     return pdf;
 }
 
-fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
-    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
+// BSDF x cos over its non-delta lobes: the clear coat's, and the mix's seen through it.
+fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     let p = pbr_params(m);
+    let mix = pbr_eval_mix(m, p, wo, wi, hit);
+//#if CLEARCOAT
+    if p.clearcoat > 0.0 {
+        return mix * clearcoat_through(p.clearcoat, wo, hit) + vec3f(clearcoat_lobe(p.clearcoat, p.clearcoat_alpha, wo, wi, hit).x);
+    }
+//#endif
+    return mix;
+}
+
+// The density of pbr_sample over its non-delta lobes.
+fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+    let p = pbr_params(m);
+    let mix = pbr_pdf_mix(m, p, wo, wi, hit);
+//#if CLEARCOAT
+    if p.clearcoat > 0.0 {
+        let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.shading));
+        return chance * clearcoat_lobe(p.clearcoat, p.clearcoat_alpha, wo, wi, hit).y + (1.0 - chance) * mix;
+    }
+//#endif
+    return mix;
+}
+
+// Under a clear coat, one number picks the coat (with its reflectance at wo) or the mix below;
+// the mix's deltas keep their weight, and any other direction is weighed by the whole BSDF over
+// the whole density.
+fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    let p = pbr_params(m);
+    var out: BsdfSample;
+//#if CLEARCOAT
+    if p.clearcoat > 0.0 {
+        let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.shading));
+        if sampler_next(sampler) < chance {
+            let u1 = sampler_next(sampler);
+            let u2 = sampler_next(sampler);
+            out = clearcoat_sample(p.clearcoat_alpha, wo, hit, u1, u2);
+        } else {
+            // A delta of the mix keeps its weight: what crosses the coat over the chance of
+            // not sampling it, 1.
+            out = pbr_sample_mix(m, p, wo, hit, sampler);
+        }
+    } else {
+        out = pbr_sample_mix(m, p, wo, hit, sampler);
+    }
+//#else
+    out = pbr_sample_mix(m, p, wo, hit, sampler);
+//#endif
+    if out.lobe == 0u || (out.lobe & LOBE_DELTA) != 0u {
+        return out;
+    }
+    let pdf = pbr_pdf(m, wo, out.wi, hit);
+    if !(pdf > 0.0) {
+        out.lobe = 0u;
+        return out;
+    }
+    out.weight = pbr_eval(m, wo, out.wi, hit) / pdf;
+    out.pdf = pdf;
+    return out;
+}
+
+// A direction from the mix below any clear coat: a delta one weighed (its component's weight
+// alone), any other for pbr_sample to weigh.
+fn pbr_sample_mix(m: Material, p: PbrParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+    var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
     let w_coat = (1.0 - p.metallic) * (1.0 - p.transmission);
     let w_glass = (1.0 - p.metallic) * p.transmission;
     let base = albedo_at(m, hit);
@@ -155,15 +216,5 @@ fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>)
         out.wi = wi;
         out.lobe = LOBE_REFLECTION | LOBE_GLOSSY;
     }
-    if out.lobe == 0u || (out.lobe & LOBE_DELTA) != 0u {
-        return out;
-    }
-    let pdf = pbr_pdf(m, wo, out.wi, hit);
-    if !(pdf > 0.0) {
-        out.lobe = 0u;
-        return out;
-    }
-    out.weight = pbr_eval(m, wo, out.wi, hit) / pdf;
-    out.pdf = pdf;
     return out;
 }

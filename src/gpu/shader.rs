@@ -47,6 +47,10 @@ const MODULES: &[(&str, &str)] = &[
         include_str!("../../shaders/materials.wgsl"),
     ),
     (
+        "clearcoat.wgsl",
+        include_str!("../../shaders/clearcoat.wgsl"),
+    ),
+    (
         "microsurface.wgsl",
         include_str!("../../shaders/microsurface.wgsl"),
     ),

@@ -340,6 +340,7 @@ macro_rules! registry {
 }
 
 pub mod bsdf;
+pub mod clearcoat;
 pub mod coat;
 pub mod coat_table;
 pub mod fresnel;

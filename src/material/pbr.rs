@@ -10,6 +10,8 @@
 //! metallic-roughness image (glTF's metallicRoughnessTexture, linear) scales metallic by its
 //! blue channel and roughness by its green one, point by point.
 //!
+//! A clear coat (KHR_materials_clearcoat, `clearcoat.rs`) may lie over the whole mix.
+//!
 //! Sampling picks a component with its weight in the mix (one number), then samples it: 2
 //! more numbers for the metal, 3 for the coat, glass's own (1 smooth, 3 rough). A non-delta
 //! direction is weighed by the whole mix over the mix's density (one-sample MIS); a delta one
@@ -17,6 +19,7 @@
 
 use crate::shared::feature::MaterialFeature;
 use std::sync::Arc;
+use super::clearcoat::{Clearcoat, CoatDirection};
 use super::coat::Coat;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
@@ -41,7 +44,8 @@ use serde::{Deserialize, Serialize};
 /// `metallic_roughness = "file.png"` (optional, linear) scales metallic by its blue channel and
 /// roughness by its green one (glTF's metallicRoughnessTexture); `emission = { radiance,
 /// strength, two_sided }` (optional, as a `light`'s; a colour or an image) glows on top of
-/// what it reflects (glTF's emissive materials).
+/// what it reflects (glTF's emissive materials); `clearcoat = { factor, roughness }`
+/// (optional) a clear coat over it all (glTF's KHR_materials_clearcoat; `material::clearcoat`).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -62,6 +66,9 @@ pub struct Pbr {
     /// KHR_materials_emissive_strength): a colour or an image, its strength and sidedness, as
     /// a `light` material's (`emission = { radiance = [1, 0.5, 0.2], strength = 4 }`).
     pub emission: Option<super::Light>,
+    /// A clear coat over the whole mix (glTF's KHR_materials_clearcoat; `material::clearcoat`);
+    /// none where its factor is 0.
+    pub clearcoat: Option<Clearcoat>,
     coat: Coat,
 }
 
@@ -83,6 +90,8 @@ struct PbrDoc {
     metallic_roughness: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     emission: Option<super::Light>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    clearcoat: Option<Clearcoat>,
 }
 
 fn one() -> f32 {
@@ -100,7 +109,8 @@ impl TryFrom<PbrDoc> for Pbr {
         Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
             .with_normal_map(d.normal_map)
             .with_metallic_roughness(metallic_roughness)
-            .with_emission(d.emission))
+            .with_emission(d.emission)
+            .with_clearcoat(d.clearcoat))
     }
 }
 
@@ -115,6 +125,7 @@ impl From<Pbr> for PbrDoc {
             normal_map: p.normal_map,
             metallic_roughness: p.metallic_roughness.map(|i| i.source.clone()),
             emission: p.emission,
+            clearcoat: p.clearcoat,
         }
     }
 }
@@ -146,6 +157,7 @@ impl Pbr {
             transmission_in_red: false,
             alpha: None,
             emission: None,
+            clearcoat: None,
             coat: Coat::new(ior, roughness, false),
         }
     }
@@ -174,6 +186,14 @@ impl Pbr {
         Pbr { emission, ..self }
     }
 
+    /// This material under `clearcoat` (none where its factor is 0).
+    pub fn with_clearcoat(self, clearcoat: Option<Clearcoat>) -> Self {
+        Pbr {
+            clearcoat: clearcoat.filter(|c| c.factor > 0.0),
+            ..self
+        }
+    }
+
     /// Its lobes at `hit`: the base colour looked up, metallic and roughness scaled by its
     /// metallic-roughness image there, as the kernel's `with_albedo_at` resolves them.
     fn at(&self, hit: &Hit) -> Lobes {
@@ -184,6 +204,7 @@ impl Pbr {
             ior: self.ior,
             roughness: self.roughness,
             coat: self.coat,
+            clearcoat: self.clearcoat,
         };
         let Some(image) = &self.metallic_roughness else {
             return lobes;
@@ -242,6 +263,7 @@ struct Lobes {
     ior: f32,
     roughness: f32,
     coat: Coat,
+    clearcoat: Option<Clearcoat>,
 }
 
 impl Lobes {
@@ -257,7 +279,54 @@ impl Lobes {
         Dielectric::rough(self.ior, self.roughness)
     }
 
+    /// Under a clear coat, one number picks the coat (with its reflectance at wo) or the
+    /// mix below; the mix's deltas keep their weight, and any other direction is weighed by
+    /// the whole BSDF over the whole density.
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+        let chosen = match self.clearcoat {
+            None => self.sample_mix(wo, hit, sampler)?,
+            Some(clearcoat) => {
+                let chance = clearcoat.reflectance(wo.dot(hit.shading));
+                if sampler.next_f32() < chance {
+                    let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+                    match clearcoat.sample(wo, hit, u1, u2)? {
+                        // The mirror's reflectance over its chance.
+                        CoatDirection::Mirror(wi) => {
+                            return Some(BsdfSample {
+                                weight: Vec3::ONE,
+                                wi,
+                                pdf: 0.0,
+                                lobe: Lobe::DELTA_REFLECTION,
+                            });
+                        }
+                        CoatDirection::Rough(wi) => BsdfSample {
+                            weight: Vec3::ZERO,
+                            wi,
+                            pdf: 0.0,
+                            lobe: Lobe::GLOSSY_REFLECTION,
+                        },
+                    }
+                } else {
+                    // A delta of the mix keeps its weight: what crosses the coat over the chance
+                    // of not sampling it, 1.
+                    self.sample_mix(wo, hit, sampler)?
+                }
+            }
+        };
+        if chosen.lobe.is_delta() {
+            return Some(chosen);
+        }
+        let pdf = self.pdf(wo, chosen.wi, hit);
+        (pdf > 0.0).then(|| BsdfSample {
+            weight: self.eval(wo, chosen.wi, hit) / pdf,
+            pdf,
+            ..chosen
+        })
+    }
+
+    /// A direction from the mix below any clear coat: a delta one weighed (its component's
+    /// weight alone), any other for [`Self::sample`] to weigh.
+    fn sample_mix(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let (w_coat, w_glass, _) = self.weights();
         let base = self.base;
         let u = sampler.next_f32();
@@ -306,18 +375,31 @@ impl Lobes {
                 lobe: Lobe::GLOSSY_REFLECTION,
             }
         };
-        if chosen.lobe.is_delta() {
-            return Some(chosen);
-        }
-        let pdf = self.pdf(wo, chosen.wi, hit);
-        (pdf > 0.0).then(|| BsdfSample {
-            weight: self.eval(wo, chosen.wi, hit) / pdf,
-            pdf,
-            ..chosen
-        })
+        Some(chosen)
     }
 
+    /// BSDF x cos over its non-delta lobes: the clear coat's, and the mix's seen through it.
     fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+        let mix = self.eval_mix(wo, wi, hit);
+        match self.clearcoat {
+            None => mix,
+            Some(c) => mix * c.through(wo, hit) + Vec3::splat(c.lobe(wo, wi, hit).0),
+        }
+    }
+
+    /// The density of [`Self::sample`] over its non-delta lobes.
+    fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+        let mix = self.pdf_mix(wo, wi, hit);
+        match self.clearcoat {
+            None => mix,
+            Some(c) => {
+                let chance = c.reflectance(wo.dot(hit.shading));
+                chance * c.lobe(wo, wi, hit).1 + (1.0 - chance) * mix
+            }
+        }
+    }
+
+    fn eval_mix(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
         let (w_coat, w_glass, w_metal) = self.weights();
         let base = self.base;
         let mut f = Vec3::ZERO;
@@ -334,7 +416,7 @@ impl Lobes {
         f
     }
 
-    fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+    fn pdf_mix(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
         let (w_coat, w_glass, w_metal) = self.weights();
         let base = self.base;
         let mut pdf = 0.0;
@@ -384,6 +466,9 @@ material_params! {
         samples_lights: u32,
         /// 1: the metallic-roughness image's red channel scales `transmission`.
         transmission_in_red: u32,
+        /// The clear coat's factor (0: none) and GGX alpha (0: smooth).
+        clearcoat: f32,
+        clearcoat_alpha: f32,
     }
 }
 
@@ -400,6 +485,7 @@ impl MaterialModel for Pbr {
         MaterialFeature::UvChecker,
         MaterialFeature::ImageTexture,
         MaterialFeature::PbrEmission,
+        MaterialFeature::Clearcoat,
     ];
     /// Emissive pbr.
     const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::PbrEmission);
@@ -417,6 +503,9 @@ impl MaterialModel for Pbr {
             }
         }
         super::fresnel::check_ior(self.ior)?;
+        if let Some(clearcoat) = &self.clearcoat {
+            clearcoat.validate()?;
+        }
         if let Some(emission) = &self.emission {
             if matches!(emission.radiance, Texture::Checker(_) | Texture::UvChecker(_)) {
                 return Err("emission must be a colour or an image".into());
@@ -435,7 +524,9 @@ impl MaterialModel for Pbr {
     }
 
     fn extra_features(&self) -> Vec<MaterialFeature> {
-        let rough = (self.roughness * self.roughness >= MIN_ALPHA).then_some(MaterialFeature::Microfacet);
+        let rough_coat = self.clearcoat.is_some_and(|c| c.alpha() > 0.0);
+        let rough = (self.roughness * self.roughness >= MIN_ALPHA || rough_coat).then_some(MaterialFeature::Microfacet);
+        let clearcoat = self.clearcoat.map(|_| MaterialFeature::Clearcoat);
         let glass = (self.weights().1 > 0.0).then_some(MaterialFeature::Dielectric);
         let image = self.metallic_roughness.as_ref().map(|_| MaterialFeature::MetallicRoughness);
         let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
@@ -446,6 +537,7 @@ impl MaterialModel for Pbr {
         rough
             .into_iter()
             .chain(glass)
+            .chain(clearcoat)
             .chain(image)
             .chain(alpha)
             .chain(self.base_color.feature())
@@ -486,7 +578,9 @@ impl MaterialModel for Pbr {
     fn samples_lights(&self) -> bool {
         let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
         let least_transmission = if self.transmission_in_red { 0.0 } else { self.transmission };
-        (1.0 - least_metallic) * (1.0 - least_transmission) > 0.0 || self.ggx().is_some()
+        (1.0 - least_metallic) * (1.0 - least_transmission) > 0.0
+            || self.ggx().is_some()
+            || self.clearcoat.is_some_and(|c| c.alpha() > 0.0)
     }
 
     fn parameter_image(&self) -> Option<&Arc<Image>> {
@@ -530,6 +624,8 @@ impl MaterialModel for Pbr {
                 roughness: self.roughness,
                 samples_lights: self.samples_lights() as u32,
                 transmission_in_red: self.transmission_in_red as u32,
+                clearcoat: self.clearcoat.map_or(0.0, |c| c.factor),
+                clearcoat_alpha: self.clearcoat.map_or(0.0, |c| c.alpha()),
             }
             .words(),
             parameter_image_size: size,

@@ -25,7 +25,12 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
     check_references(document.as_json(), source)?;
     let mut root = document.into_json();
     root.extensions_required.retain(|e| {
-        e != super::gltf_instancing::EXTENSION && e != super::gltf_quantized::EXTENSION
+        ![
+            super::gltf_instancing::EXTENSION,
+            super::gltf_quantized::EXTENSION,
+            super::gltf_extensions::CLEARCOAT,
+        ]
+        .contains(&e.as_str())
     });
     let document = gltf::Document::from_json(root)
         .map_err(|e| format!("cannot read {what}: {}", one_line(&e)))?;

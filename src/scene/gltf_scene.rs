@@ -463,8 +463,9 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads.
-const READ_EXTENSIONS: [&str; 8] = [
+const READ_EXTENSIONS: [&str; 9] = [
     "EXT_mesh_gpu_instancing",
+    super::gltf_extensions::CLEARCOAT,
     "KHR_lights_punctual",
     "KHR_mesh_quantization",
     "KHR_materials_emissive_strength",
@@ -527,6 +528,7 @@ fn unread_note(document: &gltf::Document, source: &str) -> Option<String> {
             super::gltf_pose::TIME
         )),
     }
+    unread.extend(super::gltf_extensions::unread(document));
     let extensions: Vec<&str> = document
         .extensions_used()
         .filter(|e| !READ_EXTENSIONS.contains(e))

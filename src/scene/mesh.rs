@@ -1414,6 +1414,11 @@ fn material_of(
     use crate::material::{Light, Pbr};
     let name = &super::file::quoted(m.name().unwrap_or(""));
     check_material_values(m, textures.source())?;
+    let source = textures.source().to_string();
+    let at = || match m.index() {
+        Some(i) => format!("mesh {source}: material {i} (\"{name}\")"),
+        None => format!("mesh {source}: the default material"),
+    };
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
@@ -1515,7 +1520,8 @@ fn material_of(
     .with_normal_map(normal_map)
     .with_metallic_roughness(metallic_roughness)
     .with_alpha(alpha)
-    .with_emission(emission);
+    .with_emission(emission)
+    .with_clearcoat(super::gltf_extensions::clearcoat(m, &at)?);
     out.transmission_in_red = transmission_in_red;
     Ok(Material::Pbr(out))
 }

@@ -7,6 +7,7 @@ pub mod builtin;
 pub mod file;
 pub mod flat;
 pub mod gltf_check;
+pub mod gltf_extensions;
 pub mod gltf_instancing;
 pub mod gltf_pose;
 pub mod gltf_quantized;

@@ -58,6 +58,7 @@ material_features! {
     PbrEmission = "PBR_EMISSION",
     /// A rough plastic coat's table.
     CoatTable = "COAT_TABLE",
+    Clearcoat = "CLEARCOAT",
 }
 
 impl MaterialFeature {

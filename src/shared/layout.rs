@@ -71,6 +71,14 @@ impl WgslType for [[u32; 4]; 2] {
     }
 }
 
+impl WgslType for [[u32; 4]; 3] {
+    const WGSL: &'static str = "array<vec4u, 3>";
+    fn literal(&self) -> String {
+        let [a, b, c] = self.map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]));
+        format!("array<vec4u, 3>({a}, {b}, {c})")
+    }
+}
+
 impl WgslType for [u32; 2] {
     const WGSL: &'static str = "vec2u";
     fn literal(&self) -> String {

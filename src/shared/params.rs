@@ -7,7 +7,7 @@
 //! `sample`, `eval` and `pdf` (`tests/it/bsdfs`) check what it reads.
 
 /// The 32-bit words `GpuMaterial::params` holds: enough for the largest kind's parameters.
-pub const PARAM_WORDS: usize = 8;
+pub const PARAM_WORDS: usize = 12;
 
 /// What [`material_params!`] gives a material's parameters.
 pub trait MaterialParams: bytemuck::Pod {
@@ -168,7 +168,8 @@ mod tests {
             spanning.words(),
             [
                 [1.0f32, 2.0, 3.0, 4.0].map(f32::to_bits),
-                [5.0f32.to_bits(), 0, 0, 0]
+                [5.0f32.to_bits(), 0, 0, 0],
+                [0; 4]
             ]
         );
         let wgsl = Spanning::wgsl("spanning");
@@ -178,7 +179,7 @@ mod tests {
         ] {
             assert!(wgsl.contains(expected), "{expected}\nnot in\n{wgsl}");
         }
-        assert_eq!(NoParams.words(), [[0; 4]; 2]);
+        assert_eq!(NoParams.words(), [[0; 4]; PARAM_WORDS / 4]);
         assert_eq!(NoParams::wgsl("medium"), "");
     }
 }

@@ -8,6 +8,7 @@ use common::gpu::{render_gpu, renderer};
 use common::stats::compare;
 use common::{nee_opts, object, opts, render_cpu};
 use rt_gpu::assets::texture::Texture;
+use rt_gpu::material::clearcoat::Clearcoat;
 use rt_gpu::material::conductor::METALS;
 use rt_gpu::material::{Conductor, Dielectric, Pbr, Plastic};
 use rt_gpu::scene::builtin::builtin;
@@ -16,7 +17,9 @@ use rt_gpu::scene::{Scene, Shape};
 /// The Cornell box with microfacet materials: the short box rough gold (0.3), its glass ball a
 /// smooth silver mirror, a rough copper sphere (0.7) in the air, a rough glass one (0.5) in the
 /// front corner by the green wall, a blue plastic one (0.2) on the floor at the front and a
-/// half-metallic pbr one (0.4) by the red wall:
+/// half-metallic pbr one (0.4) by the red wall, a red pbr one (0.6) under a smooth clear coat
+/// at the back left and a pbr metal (0.5) under a rough one (0.3, factor 0.7) high at the front
+/// right:
 /// smooth and rough lobes, reflected and refracted, over a diffuse base, light sampled at the
 /// rough ones only. (Glass above the short box casts a shadow there that only its caustic
 /// lights: without nee, 20 000 spp find too few of those paths, and the dim pixels fail the
@@ -56,7 +59,42 @@ fn cornell_with_microfacets() -> Scene {
             0.2,
         )),
     );
-    let short = scene.objects.len() - 2;
+    let coat = |roughness, factor| Some(Clearcoat { factor, roughness });
+    let lacquer = add(
+        "lacquer",
+        Material::Pbr(
+            Pbr::new(
+                Texture::Colour(Vec3::new(0.7, 0.1, 0.1)),
+                0.0,
+                0.6,
+                1.5,
+                0.0,
+            )
+            .with_clearcoat(coat(0.0, 1.0)),
+        ),
+    );
+    let paint = add(
+        "paint",
+        Material::Pbr(
+            Pbr::new(
+                Texture::Colour(Vec3::new(0.2, 0.4, 0.8)),
+                1.0,
+                0.5,
+                1.5,
+                0.0,
+            )
+            .with_clearcoat(coat(0.3, 0.7)),
+        ),
+    );
+    scene.objects.push(object(
+        Shape::sphere(Vec3::new(150.0, 250.0, 400.0), 50.0),
+        lacquer,
+    ));
+    scene.objects.push(object(
+        Shape::sphere(Vec3::new(460.0, 450.0, 100.0), 45.0),
+        paint,
+    ));
+    let short = scene.objects.len() - 4;
     scene.objects[short].material = gold;
     scene.objects[short + 1].material = silver;
     scene.objects.push(object(
@@ -196,6 +234,20 @@ fn microfacet_kernel_matches_cpu() {
             scene
                 .material_names
                 .push(format!("pbr-{metallic}-{transmission}-{roughness}"));
+            // Under a clear coat, smooth and rough.
+            for coat_roughness in [0.0, 0.2] {
+                let base = Texture::Colour(Vec3::new(0.8, 0.7, 0.2));
+                let m = Pbr::new(base, metallic, roughness, 1.5, transmission).with_clearcoat(
+                    Some(Clearcoat {
+                        factor: 0.8,
+                        roughness: coat_roughness,
+                    }),
+                );
+                scene.materials.push(Material::Pbr(m));
+                scene.material_names.push(format!(
+                    "coated-{metallic}-{transmission}-{roughness}-{coat_roughness}"
+                ));
+            }
         }
     }
     // Every material is used, so that the kernel holds them.

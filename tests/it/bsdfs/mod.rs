@@ -1,4 +1,4 @@
-//! Microfacet BSDFs (conductors, rough glass, plastic, glTF's pbr): `sample` draws directions with exactly the
+//! Microfacet BSDFs (conductors, rough glass, plastic, glTF's pbr and its clear coat): `sample` draws directions with exactly the
 //! density `pdf` reports (chi-square over a grid of roughness, indices and incident angles, with
 //! negative controls), `eval / pdf` is the sampled weight, `eval` is reciprocal, directional
 //! albedo stays <= 1 (the white furnace), the conductor's Fresnel term is the complex one, bad
@@ -10,6 +10,7 @@
 
 use crate::common;
 
+mod clearcoat;
 mod conductor;
 mod dielectric;
 mod histogram;
