@@ -23,18 +23,62 @@ struct Event {
     point: vec3f,       // EVENT_IN_MEDIUM: where it scatters
 }
 
+// Whether material m fills what it bounds with a medium (Material::interior).
+fn has_interior(m: Material) -> bool {
+//#if ABSORPTION
+    return m.medium_density > 0.0 || any(m.medium_absorption > vec3f(0.0));
+//#else
+    return m.medium_density > 0.0;
+//#endif
+}
+
+// The fraction of each channel crossing `distance` of the medium inside m (Medium::transmittance):
+// its extinction's and its absorption's.
+fn medium_transmittance(m: Material, distance: f32) -> vec3f {
+//#if ABSORPTION
+    let sigma = vec3f(m.medium_density) + m.medium_absorption;
+    return select(exp(-sigma * distance), vec3f(1.0), sigma == vec3f(0.0));
+//#else
+    return vec3f(transmittance(m.medium_density, distance));
+//#endif
+}
+
+//#if ABSORPTION
+// What the absorption of the medium inside m leaves of light travelling `distance`
+// (Medium::absorbed_over).
+fn absorbed_over(m: Material, distance: f32) -> vec3f {
+    return select(exp(-m.medium_absorption * distance), vec3f(1.0), m.medium_absorption == vec3f(0.0));
+}
+//#endif
+
 // Follows the ray to the end of its segment, through invisible medium boundaries (updating ray
-// and medium), sampling a free path in each medium on the way; EVENT_SURFACE leaves the hit in
-// `hit`. Random numbers: 1 per stretch travelled in a medium.
-fn next_event(ray: ptr<function, Ray>, medium: ptr<function, u32>, hit: ptr<function, Hit>, sampler: ptr<function, Sampler>) -> Event {
+// and medium), sampling a free path in each medium of some density on the way and weighing
+// `throughput` by what the media's absorption leaves of it; EVENT_SURFACE leaves the hit in
+// `hit`. Random numbers: 1 per stretch travelled in a medium of some density.
+fn next_event(ray: ptr<function, Ray>, medium: ptr<function, u32>, throughput: ptr<function, vec3f>, hit: ptr<function, Hit>, sampler: ptr<function, Sampler>) -> Event {
     for (var i = 0u; i <= MEDIUM_CROSSINGS; i++) {
         let found = intersect(*ray, hit);
         if *medium != 0u {
+//#if ABSORPTION
+            let interior = material_at(*medium - 1u);
+            let far = select(F32_MAX, (*hit).t, found);
+            if interior.medium_density > 0.0 {
+                sampler_begin(sampler);
+                let distance = free_flight(interior.medium_density, sampler_next_in_group(sampler));
+                if distance < far {
+                    *throughput *= absorbed_over(interior, distance);
+                    return Event(EVENT_IN_MEDIUM, (*ray).origin + distance * (*ray).dir);
+                }
+            }
+            *throughput *= absorbed_over(interior, far);
+//#else
+            // Without absorption every medium has a density (Medium::check).
             sampler_begin(sampler);
             let distance = free_flight(material_at(*medium - 1u).medium_density, sampler_next_in_group(sampler));
             if distance < select(F32_MAX, (*hit).t, found) {
                 return Event(EVENT_IN_MEDIUM, (*ray).origin + distance * (*ray).dir);
             }
+//#endif
         }
         if !found {
             return Event(EVENT_ESCAPED, vec3f(0.0));
@@ -85,13 +129,13 @@ fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> v
     }
     var ray = Ray(start, dir);
     var medium = medium_in;
-    var transmitted = 1.0;
+    var transmitted = vec3f(1.0);
     for (var i = 0u; i <= MEDIUM_CROSSINGS; i++) {
         var hit: Hit;
         let found = intersect(ray, &hit);
         if punctual && (!found || hit.t >= reach) {
             if medium != 0u {
-                transmitted *= transmittance(material_at(medium - 1u).medium_density, reach);
+                transmitted *= medium_transmittance(material_at(medium - 1u), reach);
             }
             return sent * transmitted;
         }
@@ -104,7 +148,7 @@ fn light_arriving(start: vec3f, s: LightSample, index: u32, medium_in: u32) -> v
             return vec3f(0.0);
         }
         if medium != 0u {
-            transmitted *= transmittance(material_at(medium - 1u).medium_density, hit.t);
+            transmitted *= medium_transmittance(material_at(medium - 1u), hit.t);
         }
         let m = material_at(hit.material);
         if !punctual && light_of(hit.primitive) == index + 1u {
@@ -169,7 +213,7 @@ fn direct_light(m: Material, hit: Hit, dir: vec3f, medium: u32, u0: f32, u1: f32
     let through = dot(s.dir, hit.normal) < 0.0;
     let origin = leave(hit, select(hit.normal, -hit.normal, through));
 //#if MEDIA
-    let le = light_arriving(origin, s, index, select(medium, entered(hit), through && m.medium_density > 0.0));
+    let le = light_arriving(origin, s, index, select(medium, entered(hit), through && has_interior(m)));
 //#else
 //#if ENVIRONMENT
     if index + 1u == params.light_count {
@@ -250,9 +294,11 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
     // passed on to a function.
     var ray = (*path).ray;
     var medium = (*path).medium;
-    let event = next_event(&ray, &medium, &hit, sampler);
+    var throughput = (*path).throughput;
+    let event = next_event(&ray, &medium, &throughput, &hit, sampler);
     (*path).ray = ray;
     (*path).medium = medium;
+    (*path).throughput = throughput;
     if event.kind == EVENT_IN_MEDIUM {
         // Nothing is emitted here; this vertex can only extend the path.
         if segment + 1u == params.max_depth {
@@ -349,7 +395,7 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
     (*path).origin = hit.point;
 //#endif
 //#if MEDIA
-    if m.medium_density > 0.0 && dot(s.wi, hit.normal) < 0.0 {
+    if has_interior(m) && dot(s.wi, hit.normal) < 0.0 {
         (*path).medium = entered(hit); // refracted through a surface filled with a medium
     }
 //#endif

@@ -57,16 +57,16 @@ READ = {
     "KHR_materials_ior",
     "KHR_materials_unlit",
     "KHR_materials_clearcoat",
+    "KHR_materials_volume",
     "EXT_mesh_gpu_instancing",
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
 }
 # Extensions a model may use that neither renderer is compared on here: the material-extensions
-# issue (sheen, specular, volume, ...) and compressed or variant files.
+# issue (sheen, specular, ...) and compressed or variant files.
 UNCOMPARED = {
     "KHR_materials_sheen",
     "KHR_materials_specular",
-    "KHR_materials_volume",
     "KHR_materials_anisotropy",
     "KHR_materials_iridescence",
     "KHR_materials_dispersion",

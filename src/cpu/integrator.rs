@@ -19,7 +19,7 @@
 use super::background::background;
 use super::intersect::{intersect, intersect_light, stopped_before};
 use super::lights;
-use super::medium::{free_flight, hg_pdf, sample_hg, transmittance};
+use super::medium::{free_flight, hg_pdf, sample_hg};
 use crate::material::Medium;
 use crate::options::{Integrator, RenderOptions};
 use crate::scene::Material;
@@ -47,10 +47,17 @@ enum Event {
 }
 
 /// Follows `ray` to the end of its segment, through invisible medium boundaries (updating
-/// `ray` and `medium`), sampling a free path in each medium on the way. Random numbers: 1 per
-/// stretch travelled in a medium.
+/// `ray` and `medium`), sampling a free path in each medium of some density on the way, and
+/// weighing `throughput` by what the media's absorption leaves of it. Random numbers: 1 per
+/// stretch travelled in a medium of some density.
 #[inline(always)]
-fn next_event(scene: &FlatScene, ray: &mut Ray, medium: &mut u32, sampler: &mut Sampler) -> Event {
+fn next_event(
+    scene: &FlatScene,
+    ray: &mut Ray,
+    medium: &mut u32,
+    throughput: &mut Vec3,
+    sampler: &mut Sampler,
+) -> Event {
     if *medium == 0 && scene.medium_crossings == 0 {
         // Nothing to step through or sample on the way: what the loop below does then, without
         // its cost.
@@ -59,11 +66,16 @@ fn next_event(scene: &FlatScene, ray: &mut Ray, medium: &mut u32, sampler: &mut 
     for _ in 0..=scene.medium_crossings {
         let hit = intersect(scene, ray);
         if let Some(interior) = scene.medium(*medium) {
-            sampler.begin();
-            let distance = free_flight(interior.density, sampler.next_f32());
-            if distance < hit.map_or(f32::MAX, |h| h.t) {
-                return Event::InMedium(ray.at(distance));
+            let far = hit.map_or(f32::MAX, |h| h.t);
+            if interior.density > 0.0 {
+                sampler.begin();
+                let distance = free_flight(interior.density, sampler.next_f32());
+                if distance < far {
+                    *throughput *= interior.absorbed_over(distance);
+                    return Event::InMedium(ray.at(distance));
+                }
             }
+            *throughput *= interior.absorbed_over(far);
         }
         let Some(hit) = hit else {
             return Event::Escaped;
@@ -101,7 +113,7 @@ pub fn radiance(
     // 1 + the index of the material whose medium the ray travels in; 0: none.
     let mut medium = 0;
     for segment in 0..opts.max_depth {
-        let hit = match next_event(scene, &mut ray, &mut medium, sampler) {
+        let hit = match next_event(scene, &mut ray, &mut medium, &mut throughput, sampler) {
             Event::Escaped => {
                 total += throughput * escaped(scene, nee, bsdf_pdf, ray.dir);
                 break;
@@ -363,14 +375,14 @@ pub fn light_arriving(
         let hit = intersect_light(scene, &ray, index as u32 + 1)?;
         return Some(scene.materials[hit.material as usize].emitted(&hit));
     }
-    let mut transmitted = 1.0;
+    let mut transmitted = Vec3::ONE;
     for _ in 0..=scene.medium_crossings {
         let hit = intersect(scene, &ray);
         if let Some(le) = punctual
             && hit.is_none_or(|h| h.t >= reach)
         {
             if let Some(interior) = scene.medium(medium) {
-                transmitted *= transmittance(interior.density, reach);
+                transmitted *= interior.transmittance(reach);
             }
             return Some(le * transmitted);
         }
@@ -379,7 +391,7 @@ pub fn light_arriving(
             return escaped().map(|le| le * transmitted);
         };
         if let Some(interior) = scene.medium(medium) {
-            transmitted *= transmittance(interior.density, hit.t);
+            transmitted *= interior.transmittance(hit.t);
         }
         if punctual.is_none() && scene.light_of(hit.primitive) == index as u32 + 1 {
             let le = scene.materials[hit.material as usize].emitted(&hit);

@@ -178,7 +178,8 @@ impl MaterialModel for Dielectric {
     type Params = DielectricParams;
     const FEATURE: MaterialFeature = MaterialFeature::Dielectric;
     /// Glass filled with a medium; rough glass.
-    const EXTRA_FEATURES: &'static [MaterialFeature] = &[MaterialFeature::Media, MaterialFeature::Microfacet];
+    const EXTRA_FEATURES: &'static [MaterialFeature] =
+        &[MaterialFeature::Media, MaterialFeature::Absorption, MaterialFeature::Microfacet];
     const SAMPLES_LIGHTS: bool = true;
     const SAMPLES_LIGHTS_PER_INSTANCE: bool = true;
 
@@ -191,10 +192,7 @@ impl MaterialModel for Dielectric {
     }
 
     fn extra_features(&self) -> Vec<MaterialFeature> {
-        let mut out = Vec::new();
-        if self.medium.is_some() {
-            out.push(MaterialFeature::Media);
-        }
+        let mut out = self.medium.as_ref().map_or_else(Vec::new, Medium::features);
         if self.samples_lights() {
             out.push(MaterialFeature::Microfacet);
         }

@@ -23,7 +23,7 @@ use super::clearcoat::{Clearcoat, CoatDirection};
 use super::coat::Coat;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
-use super::{BsdfSample, Dielectric, Lobe, MaterialModel, reflect};
+use super::{BsdfSample, Dielectric, Lobe, MaterialModel, Medium, reflect};
 use crate::material::texture;
 use crate::assets::alpha::Alpha;
 use crate::params::checked;
@@ -69,7 +69,19 @@ pub struct Pbr {
     /// A clear coat over the whole mix (glTF's KHR_materials_clearcoat; `material::clearcoat`);
     /// none where its factor is 0.
     pub clearcoat: Option<Clearcoat>,
+    /// What fills it where light enters through its glass ([`Self::volume`]); boxed, as few
+    /// materials have one and every material is as large as the largest.
+    volume: Option<Box<Volume>>,
     coat: Coat,
+}
+
+/// An absorbing medium made from glTF's attenuation colour and distance (KHR_materials_volume;
+/// `Medium::attenuating`), with them, as a scene file writes them.
+#[derive(Clone, Debug, PartialEq)]
+struct Volume {
+    medium: Medium,
+    color: Vec3,
+    distance: f32,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -92,6 +104,19 @@ struct PbrDoc {
     emission: Option<super::Light>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     clearcoat: Option<Clearcoat>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    attenuation: Option<Attenuation>,
+}
+
+/// `attenuation = { color = [0.9, 0.6, 0.3], distance = 0.05 }`: the colour white light takes
+/// after `distance` inside (glTF's attenuationColor and attenuationDistance).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct Attenuation {
+    #[serde(with = "checked::albedo")]
+    color: Vec3,
+    #[serde(with = "checked::number")]
+    distance: f32,
 }
 
 fn one() -> f32 {
@@ -106,11 +131,12 @@ impl TryFrom<PbrDoc> for Pbr {
             Some(name) => Some(crate::assets::loader::data_image(&name)?),
             None => None,
         };
-        Ok(Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
+        Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
             .with_normal_map(d.normal_map)
             .with_metallic_roughness(metallic_roughness)
             .with_emission(d.emission)
-            .with_clearcoat(d.clearcoat))
+            .with_clearcoat(d.clearcoat)
+            .with_attenuation(d.attenuation.map(|a| (a.color, a.distance)))
     }
 }
 
@@ -126,6 +152,10 @@ impl From<Pbr> for PbrDoc {
             metallic_roughness: p.metallic_roughness.map(|i| i.source.clone()),
             emission: p.emission,
             clearcoat: p.clearcoat,
+            attenuation: p.volume.map(|v| Attenuation {
+                color: v.color,
+                distance: v.distance,
+            }),
         }
     }
 }
@@ -158,6 +188,7 @@ impl Pbr {
             alpha: None,
             emission: None,
             clearcoat: None,
+            volume: None,
             coat: Coat::new(ior, roughness, false),
         }
     }
@@ -192,6 +223,39 @@ impl Pbr {
             clearcoat: clearcoat.filter(|c| c.factor > 0.0),
             ..self
         }
+    }
+
+    /// This material filled, where light enters through its glass, with a medium that
+    /// attenuates light to `color` over `distance` (`None`: a thin surface; a colour of 1 in
+    /// every channel fills it with nothing).
+    pub fn with_attenuation(self, attenuation: Option<(Vec3, f32)>) -> Result<Self, String> {
+        let Some((color, distance)) = attenuation else {
+            return Ok(Pbr {
+                volume: None,
+                ..self
+            });
+        };
+        if !(distance > 0.0 && distance.is_finite()) {
+            return Err(format!("attenuation distance must be a finite number > 0, got {distance}"));
+        }
+        if !(color.min_element() >= 0.0 && color.max_element() <= 1.0) {
+            return Err(format!("attenuation color must be in [0, 1] in each channel, got {color}"));
+        }
+        Ok(Pbr {
+            volume: Some(Box::new(Volume {
+                medium: Medium::attenuating(color, distance),
+                color,
+                distance,
+            })),
+            ..self
+        })
+    }
+
+    /// What fills it where light enters through its glass (glTF's KHR_materials_volume: an
+    /// absorbing medium); none for a thin surface, or where the colour is 1 (nothing absorbs).
+    pub fn volume(&self) -> Option<&Medium> {
+        let volume = self.volume.as_ref()?;
+        (volume.medium.absorption != Vec3::ZERO).then_some(&volume.medium)
     }
 
     /// Its lobes at `hit`: the base colour looked up, metallic and roughness scaled by its
@@ -486,6 +550,8 @@ impl MaterialModel for Pbr {
         MaterialFeature::ImageTexture,
         MaterialFeature::PbrEmission,
         MaterialFeature::Clearcoat,
+        MaterialFeature::Media,
+        MaterialFeature::Absorption,
     ];
     /// Emissive pbr.
     const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::PbrEmission);
@@ -505,6 +571,9 @@ impl MaterialModel for Pbr {
         super::fresnel::check_ior(self.ior)?;
         if let Some(clearcoat) = &self.clearcoat {
             clearcoat.validate()?;
+        }
+        if let Some(volume) = self.volume() {
+            volume.check()?;
         }
         if let Some(emission) = &self.emission {
             if matches!(emission.radiance, Texture::Checker(_) | Texture::UvChecker(_)) {
@@ -527,6 +596,7 @@ impl MaterialModel for Pbr {
         let rough_coat = self.clearcoat.is_some_and(|c| c.alpha() > 0.0);
         let rough = (self.roughness * self.roughness >= MIN_ALPHA || rough_coat).then_some(MaterialFeature::Microfacet);
         let clearcoat = self.clearcoat.map(|_| MaterialFeature::Clearcoat);
+        let volume = self.volume().map_or_else(Vec::new, Medium::features);
         let glass = (self.weights().1 > 0.0).then_some(MaterialFeature::Dielectric);
         let image = self.metallic_roughness.as_ref().map(|_| MaterialFeature::MetallicRoughness);
         let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
@@ -538,6 +608,7 @@ impl MaterialModel for Pbr {
             .into_iter()
             .chain(glass)
             .chain(clearcoat)
+            .chain(volume)
             .chain(image)
             .chain(alpha)
             .chain(self.base_color.feature())
@@ -555,6 +626,10 @@ impl MaterialModel for Pbr {
 
     fn emission(&self) -> Option<&super::Light> {
         self.emission.as_ref()
+    }
+
+    fn interior(&self) -> Option<&Medium> {
+        self.volume()
     }
 
     fn emitted(&self, hit: &Hit) -> Vec3 {
@@ -630,7 +705,7 @@ impl MaterialModel for Pbr {
             .words(),
             parameter_image_size: size,
             parameter_image_lookup: self.metallic_roughness.as_ref().map_or(0, |i| i.lookup.bits()),
-            ..GpuMaterial::with_albedo(&self.base_color)
+            ..Medium::pack(self.volume(), GpuMaterial::with_albedo(&self.base_color))
         }
     }
 }

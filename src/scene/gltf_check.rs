@@ -29,6 +29,7 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
             super::gltf_instancing::EXTENSION,
             super::gltf_quantized::EXTENSION,
             super::gltf_extensions::CLEARCOAT,
+            super::gltf_extensions::VOLUME,
         ]
         .contains(&e.as_str())
     });

@@ -6,6 +6,9 @@ use crate::material::clearcoat::Clearcoat;
 use serde_json::Value;
 
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
+/// Read through the `gltf` crate (`Material::volume`), whose validation nonetheless refuses it
+/// as required.
+pub const VOLUME: &str = "KHR_materials_volume";
 
 /// The textures of KHR_materials_clearcoat, none of which is read yet.
 const CLEARCOAT_TEXTURES: [&str; 3] = [

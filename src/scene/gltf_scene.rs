@@ -463,7 +463,7 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads.
-const READ_EXTENSIONS: [&str; 9] = [
+const READ_EXTENSIONS: [&str; 10] = [
     "EXT_mesh_gpu_instancing",
     super::gltf_extensions::CLEARCOAT,
     "KHR_lights_punctual",
@@ -472,6 +472,7 @@ const READ_EXTENSIONS: [&str; 9] = [
     "KHR_materials_ior",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
+    super::gltf_extensions::VOLUME,
     "KHR_texture_transform",
 ];
 

@@ -1,7 +1,8 @@
 //! Where a scene's media are, and the checks that keep them well defined. The path loops track
 //! the medium a ray is in by the boundaries it crosses, starting from "none" at the camera, so
 //! every medium must fill a closed object (a sphere or a box), no two media may overlap, and the
-//! camera must be outside all of them.
+//! camera must be outside all of them; but a purely absorbing medium inside a visible mesh
+//! (glTF's KHR_materials_volume) is taken as the extension defines it, closed, unchecked.
 
 use super::{Object, Scene, Shape};
 use crate::shape::{SphereParams, SurfaceParams};
@@ -148,7 +149,17 @@ pub fn check(scene: &Scene) -> Result<(), (usize, String)> {
     let mut filled: Vec<(usize, Region)> = Vec::new();
     for (i, object) in scene.objects.iter().enumerate() {
         let material = &scene.materials[object.material as usize];
-        if material.interior().is_none() {
+        let Some(interior) = material.interior() else {
+            continue;
+        };
+        // glTF's volumes: an absorbing inside of a visible surface (glass), which the
+        // extension asks be closed. A mesh is taken as closed; where it is not, the light
+        // that leaves through a hole is absorbed (finitely: nothing scatters in the open), and
+        // its camera and overlaps go unchecked.
+        if matches!(object.shape, Shape::Mesh { .. })
+            && interior.density == 0.0
+            && !material.is_invisible()
+        {
             continue;
         }
         let name = scene

@@ -1388,6 +1388,30 @@ fn check_material_values(m: &gltf::Material, source: &str) -> Result<(), String>
             at()
         ));
     }
+    if let Some(v) = m.volume() {
+        let field = |f: &str| format!("{}: its KHR_materials_volume.{f}", at());
+        let thickness = v.thickness_factor();
+        if !(thickness >= 0.0 && thickness.is_finite()) {
+            return Err(format!(
+                "{} is {thickness}; glTF requires a number >= 0",
+                field("thicknessFactor")
+            ));
+        }
+        let distance = v.attenuation_distance();
+        if !(distance > 0.0) {
+            return Err(format!(
+                "{} is {distance}; glTF requires a number > 0",
+                field("attenuationDistance")
+            ));
+        }
+        let color = v.attenuation_color();
+        if !color.iter().all(|&c| unit(c)) {
+            return Err(format!(
+                "{} is {color:?}; glTF requires values in [0, 1]",
+                field("attenuationColor")
+            ));
+        }
+    }
     let most = crate::material::fresnel::MAX_IOR;
     if let Some(ior) = m.ior()
         && !(ior <= most)
@@ -1398,6 +1422,24 @@ fn check_material_values(m: &gltf::Material, source: &str) -> Result<(), String>
         ));
     }
     Ok(())
+}
+
+/// What KHR_materials_volume fills a transmissive material with: the colour white light takes
+/// over a distance inside. None for a thin surface (thickness 0, the extension's default), one
+/// that transmits nothing, or one whose inside attenuates nothing (the default colour 1 or
+/// distance infinity). The thickness is otherwise a rasterizer's stand-in for the geometry a
+/// path tracer follows: only whether it is 0 matters here.
+fn volume_of(m: &gltf::Material) -> Option<(Vec3, f32)> {
+    let v = m.volume()?;
+    let transmits = m
+        .transmission()
+        .is_some_and(|t| t.transmission_factor() > 0.0);
+    let (color, distance) = (
+        Vec3::from_array(v.attenuation_color()),
+        v.attenuation_distance(),
+    );
+    (transmits && v.thickness_factor() > 0.0 && distance.is_finite() && color != Vec3::ONE)
+        .then_some((color, distance))
 }
 
 /// A glTF metallic-roughness material as rt-gpu's `pbr`: emitting (on top of what it reflects)
@@ -1521,7 +1563,9 @@ fn material_of(
     .with_metallic_roughness(metallic_roughness)
     .with_alpha(alpha)
     .with_emission(emission)
-    .with_clearcoat(super::gltf_extensions::clearcoat(m, &at)?);
+    .with_clearcoat(super::gltf_extensions::clearcoat(m, &at)?)
+    .with_attenuation(volume_of(m))
+    .map_err(|e| format!("{}: {e}", at()))?;
     out.transmission_in_red = transmission_in_red;
     Ok(Material::Pbr(out))
 }

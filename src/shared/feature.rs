@@ -59,6 +59,7 @@ material_features! {
     /// A rough plastic coat's table.
     CoatTable = "COAT_TABLE",
     Clearcoat = "CLEARCOAT",
+    Absorption = "ABSORPTION",
 }
 
 impl MaterialFeature {

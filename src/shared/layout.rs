@@ -375,6 +375,9 @@ gpu_struct! {
         emission_size: [f32; 2],
         emission_lookup: u32,
         emission_two_sided: u32,
+        /// The medium's absorption per channel (`material::Medium::absorption`; 0: none).
+        medium_absorption: [f32; 3],
+        _pad_absorption: f32,
     }
 }
 

@@ -376,6 +376,18 @@ fn values_outside_the_specification_are_refused_naming_the_field() {
             r#"{ "name": "M", "extensions": { "KHR_materials_clearcoat": { "clearcoatFactor": "shiny" } } }"#,
             "clearcoatFactor",
         ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_volume": { "thicknessFactor": 1, "attenuationDistance": 0 } } }"#,
+            "KHR_materials_volume.attenuationDistance is 0",
+        ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_volume": { "thicknessFactor": -1 } } }"#,
+            "KHR_materials_volume.thicknessFactor is -1",
+        ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_volume": { "attenuationColor": [1, 2, 1] } } }"#,
+            "attenuationColor",
+        ),
     ] {
         let err = load_with(material, "", "").expect_err(material);
         assert!(
@@ -1125,4 +1137,56 @@ fn a_clear_coat_is_read_and_what_is_not_is_named() {
         assert!(notes[0].contains(words), "{words:?} not in {notes:?}");
     }
     assert!(!notes[0].contains("clearcoatRoughnessTexture"), "{notes:?}");
+}
+
+/// Issue 63: KHR_materials_volume fills a transmissive material with an absorbing medium,
+/// absorption -ln(attenuationColor) / attenuationDistance, required or not; a thin surface
+/// (thickness 0, the default), an opaque one, or the default colour or distance fill it with
+/// nothing; no note either way.
+#[test]
+fn a_volume_fills_transmissive_glass_with_what_absorbs() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let extra = r#""extensionsUsed": ["KHR_materials_transmission", "KHR_materials_volume"], "extensionsRequired": ["KHR_materials_volume"],"#;
+    let volume = |transmission: f32, volume: &str| {
+        format!(
+            r#"{{ "name": "Tinted", "pbrMetallicRoughness": {{ "metallicFactor": 0, "roughnessFactor": 0 }}, "extensions": {{ "KHR_materials_transmission": {{ "transmissionFactor": {transmission} }}, "KHR_materials_volume": {volume} }} }}"#
+        )
+    };
+    let mut case = 0;
+    let mut read = |material: String| {
+        case += 1;
+        let name = format!("volume{case}.gltf");
+        let path = write_gltf(dir.path(), &name, &material, "", extra);
+        let (scene, notes) = load(&path, &name, None).expect("loads");
+        assert!(notes.is_empty(), "{notes:?}");
+        match &scene.materials[0] {
+            rt_gpu::scene::Material::Pbr(p) => p.volume().copied(),
+            other => panic!("{other:?}"),
+        }
+    };
+    let tinted = r#"{ "thicknessFactor": 0.5, "attenuationDistance": 0.25, "attenuationColor": [0.5, 1, 0.25] }"#;
+    let medium = read(volume(1.0, tinted)).expect("a volume");
+    let want = Vec3::new(0.5f32.ln(), 0.0, 0.25f32.ln()) / -0.25;
+    assert!(
+        (medium.absorption - want).abs().max_element() < 1e-5,
+        "{medium:?}"
+    );
+    assert_eq!(medium.density, 0.0);
+    for (transmission, thin) in [
+        (
+            1.0,
+            r#"{ "attenuationDistance": 0.25, "attenuationColor": [0.5, 1, 0.25] }"#,
+        ),
+        (0.0, tinted),
+        (
+            1.0,
+            r#"{ "thicknessFactor": 1, "attenuationColor": [0.5, 1, 0.25] }"#,
+        ),
+        (1.0, r#"{ "thicknessFactor": 1, "attenuationDistance": 2 }"#),
+    ] {
+        assert!(
+            read(volume(transmission, thin)).is_none(),
+            "{transmission} {thin}"
+        );
+    }
 }

@@ -105,6 +105,7 @@ fn the_loop_budget_message_names_both_limits() {
             density: 0.01,
             albedo: Vec3::ONE,
             g: 0.0,
+            absorption: Vec3::ZERO,
         }));
     scene.material_names.push("smoke".into());
     let smoke = scene.materials.len() as u32 - 1;
@@ -245,6 +246,7 @@ fn smoke_grid(count: u32) -> rt_gpu::scene::Scene {
             density: 0.02,
             albedo: Vec3::splat(0.8),
             g: 0.0,
+            absorption: Vec3::ZERO,
         }));
     scene.material_names.push("grid_smoke".into());
     for i in 0..count {

@@ -195,6 +195,7 @@ fn bad_pbr_materials_are_located_errors() {
             r#"{ type = "pbr", base_color = [0.8, 0.7, 0.2], metallic = 1.0, roughness = 0.35 }"#,
             r#"{ type = "pbr", base_color = [0.8, 0.7, 0.2] }"#,
             r#"{ type = "pbr", base_color = [0.8, 0.7, 0.2], metallic = 0, ior = 1.33, transmission = 1 }"#,
+            r#"{ type = "pbr", base_color = [1, 1, 1], metallic = 0, transmission = 1, attenuation = { color = [0.9, 0.5, 0.2], distance = 0.3 } }"#,
         ],
         &[
             (
@@ -215,6 +216,14 @@ fn bad_pbr_materials_are_located_errors() {
             ),
             (
                 r#"{ type = "pbr", base_color = [1.5, 0.5, 0.5] }"#,
+                "albedo",
+            ),
+            (
+                r#"{ type = "pbr", base_color = [1, 1, 1], transmission = 1, attenuation = { color = [0.5, 0.5, 1], distance = 0 } }"#,
+                "attenuation distance must be a finite number > 0, got 0",
+            ),
+            (
+                r#"{ type = "pbr", base_color = [1, 1, 1], transmission = 1, attenuation = { color = [0.5, 0.5, 1.5], distance = 1 } }"#,
                 "albedo",
             ),
         ],
