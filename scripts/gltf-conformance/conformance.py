@@ -58,20 +58,21 @@ READ = {
     "KHR_materials_unlit",
     "KHR_materials_clearcoat",
     "KHR_materials_volume",
+    "KHR_materials_sheen",
+    # Both renderers draw the default materials of a file with variants.
+    "KHR_materials_variants",
     "EXT_mesh_gpu_instancing",
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
 }
 # Extensions a model may use that neither renderer is compared on here: the material-extensions
-# issue (sheen, specular, ...) and compressed or variant files.
+# issue (specular, anisotropy, ...) and compressed or variant files.
 UNCOMPARED = {
-    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_anisotropy",
     "KHR_materials_iridescence",
     "KHR_materials_dispersion",
     "KHR_materials_pbrSpecularGlossiness",
-    "KHR_materials_variants",
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
     "EXT_texture_webp",

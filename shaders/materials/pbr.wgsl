@@ -108,9 +108,54 @@ fn pbr_pdf_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32
 }
 
 // BSDF x cos over its non-delta lobes: the clear coat's, and the mix's seen through it.
+// The sheen's BSDF x cos and the mix's seen through it.
+fn pbr_eval_below(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
+    let mix = pbr_eval_mix(m, p, wo, wi, hit);
+//#if SHEEN
+    if any(p.sheen_color > vec3f(0.0)) {
+        return sheen_eval(p.sheen_color, p.sheen_alpha, wo, wi, hit) + mix * sheen_through(m.sheen_table, p.sheen_color, p.sheen_alpha, wo, hit);
+    }
+//#endif
+    return mix;
+}
+
+// The density of pbr_sample_below's non-delta directions.
+fn pbr_pdf_below(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+    let mix = pbr_pdf_mix(m, p, wo, wi, hit);
+//#if SHEEN
+    if any(p.sheen_color > vec3f(0.0)) {
+        let chance = sheen_reflectance(m.sheen_table, p.sheen_color, p.sheen_alpha, dot(wo, hit.shading));
+        return chance * cosine_pdf(hit, wi) + (1.0 - chance) * mix;
+    }
+//#endif
+    return mix;
+}
+
+// A direction from below any clear coat: the sheen's (picked with its reflectance at wo;
+// cosine-distributed), else the mix's; a delta one weighed, any other for pbr_sample to weigh.
+fn pbr_sample_below(m: Material, p: PbrParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+//#if SHEEN
+    if any(p.sheen_color > vec3f(0.0)) {
+        let chance = sheen_reflectance(m.sheen_table, p.sheen_color, p.sheen_alpha, dot(wo, hit.shading));
+        if sampler_next(sampler) < chance {
+            let u1 = sampler_next(sampler);
+            let u2 = sampler_next(sampler);
+            let d = hit.shading + unit_vector(u1, u2);
+            let len2 = dot(d, d);
+            let wi = select(hit.shading, d / sqrt(len2), len2 > 1e-12);
+            return BsdfSample(vec3f(0.0), wi, 0.0, LOBE_REFLECTION | LOBE_GLOSSY);
+        }
+        // A delta of the mix keeps its weight: what shows through the sheen over the chance
+        // of not picking it, 1.
+        return pbr_sample_mix(m, p, wo, hit, sampler);
+    }
+//#endif
+    return pbr_sample_mix(m, p, wo, hit, sampler);
+}
+
 fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     let p = pbr_params(m);
-    let mix = pbr_eval_mix(m, p, wo, wi, hit);
+    let mix = pbr_eval_below(m, p, wo, wi, hit);
 //#if CLEARCOAT
     if p.clearcoat > 0.0 {
         return mix * clearcoat_through(p.clearcoat, wo, hit) + vec3f(clearcoat_lobe(p.clearcoat, p.clearcoat_alpha, wo, wi, hit).x);
@@ -122,7 +167,7 @@ fn pbr_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
 // The density of pbr_sample over its non-delta lobes.
 fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
     let p = pbr_params(m);
-    let mix = pbr_pdf_mix(m, p, wo, wi, hit);
+    let mix = pbr_pdf_below(m, p, wo, wi, hit);
 //#if CLEARCOAT
     if p.clearcoat > 0.0 {
         let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.shading));
@@ -146,15 +191,15 @@ fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>)
             let u2 = sampler_next(sampler);
             out = clearcoat_sample(p.clearcoat_alpha, wo, hit, u1, u2);
         } else {
-            // A delta of the mix keeps its weight: what crosses the coat over the chance of
-            // not sampling it, 1.
-            out = pbr_sample_mix(m, p, wo, hit, sampler);
+            // A delta below keeps its weight: what crosses the coat over the chance of not
+            // sampling it, 1.
+            out = pbr_sample_below(m, p, wo, hit, sampler);
         }
     } else {
-        out = pbr_sample_mix(m, p, wo, hit, sampler);
+        out = pbr_sample_below(m, p, wo, hit, sampler);
     }
 //#else
-    out = pbr_sample_mix(m, p, wo, hit, sampler);
+    out = pbr_sample_below(m, p, wo, hit, sampler);
 //#endif
     if out.lobe == 0u || (out.lobe & LOBE_DELTA) != 0u {
         return out;

@@ -431,6 +431,9 @@ impl SceneBuffers {
                 if let Some(image) = m.parameter_image() {
                     gpu.parameter_image = images.texels_of(image);
                 }
+                if let Some(image) = m.table_image() {
+                    gpu.sheen_table = images.texels_of(image);
+                }
                 if let Some(image) = m.alpha().and_then(|a| a.image.as_ref()) {
                     gpu.alpha_image = images.texels_of(image);
                 }

@@ -50,6 +50,7 @@ const MODULES: &[(&str, &str)] = &[
         "clearcoat.wgsl",
         include_str!("../../shaders/clearcoat.wgsl"),
     ),
+    ("sheen.wgsl", include_str!("../../shaders/sheen.wgsl")),
     (
         "microsurface.wgsl",
         include_str!("../../shaders/microsurface.wgsl"),

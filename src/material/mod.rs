@@ -80,6 +80,11 @@ pub trait MaterialModel {
     fn parameter_image(&self) -> Option<&Arc<Image>> {
         None
     }
+    /// A table the kernel reads for every instance alike (`pbr`'s sheen albedo,
+    /// `GpuMaterial::sheen_table`): the GPU's image array holds it.
+    fn table_image(&self) -> Option<&Arc<Image>> {
+        None
+    }
     /// How rays see through it, if they may (`assets::alpha`; the closest-hit search asks).
     fn alpha(&self) -> Option<&Alpha> {
         None
@@ -216,6 +221,9 @@ macro_rules! registry {
             pub fn parameter_image(&self) -> Option<&Arc<Image>> {
                 match self { $(Material::$ty(m) => m.parameter_image(),)+ }
             }
+            pub fn table_image(&self) -> Option<&Arc<Image>> {
+                match self { $(Material::$ty(m) => m.table_image(),)+ }
+            }
             #[inline]
             pub fn alpha(&self) -> Option<&Alpha> {
                 match self { $(Material::$ty(m) => m.alpha(),)+ }
@@ -224,7 +232,7 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.emission(),)+ }
             }
             /// Every image it reads: its textures', its normal map's, its parameter image, its
-            /// alpha's and its emission's (an image may come more than once).
+            /// table, its alpha's and its emission's (an image may come more than once).
             pub fn images(&self) -> Vec<Arc<Image>> {
                 let textures = self.textures().into_iter().chain(self.emission().map(|e| &e.radiance));
                 let textures = textures.filter_map(|t| match t {
@@ -233,6 +241,7 @@ macro_rules! registry {
                 });
                 let maps = (self.normal_map().map(|n| &n.image).into_iter())
                     .chain(self.parameter_image())
+                    .chain(self.table_image())
                     .chain(self.alpha().and_then(|a| a.image.as_ref()));
                 textures.chain(maps).cloned().collect()
             }
@@ -346,6 +355,7 @@ pub mod coat_table;
 pub mod fresnel;
 pub mod microfacet;
 pub mod microsurface;
+pub mod sheen;
 pub mod texture;
 
 pub use bsdf::{BsdfSample, Lobe};

@@ -20,6 +20,7 @@
 use crate::shared::feature::MaterialFeature;
 use std::sync::Arc;
 use super::clearcoat::{Clearcoat, CoatDirection};
+use super::sheen::Sheen;
 use super::coat::Coat;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
@@ -69,6 +70,9 @@ pub struct Pbr {
     /// A clear coat over the whole mix (glTF's KHR_materials_clearcoat; `material::clearcoat`);
     /// none where its factor is 0.
     pub clearcoat: Option<Clearcoat>,
+    /// Velvet's sheen over the mix, under any clear coat (glTF's KHR_materials_sheen;
+    /// `material::sheen`); none where its colour is black.
+    pub sheen: Option<Sheen>,
     /// What fills it where light enters through its glass ([`Self::volume`]); boxed, as few
     /// materials have one and every material is as large as the largest.
     volume: Option<Box<Volume>>,
@@ -106,6 +110,8 @@ struct PbrDoc {
     clearcoat: Option<Clearcoat>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     attenuation: Option<Attenuation>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sheen: Option<Sheen>,
 }
 
 /// `attenuation = { color = [0.9, 0.6, 0.3], distance = 0.05 }`: the colour white light takes
@@ -136,6 +142,7 @@ impl TryFrom<PbrDoc> for Pbr {
             .with_metallic_roughness(metallic_roughness)
             .with_emission(d.emission)
             .with_clearcoat(d.clearcoat)
+            .with_sheen(d.sheen)
             .with_attenuation(d.attenuation.map(|a| (a.color, a.distance)))
     }
 }
@@ -152,6 +159,7 @@ impl From<Pbr> for PbrDoc {
             metallic_roughness: p.metallic_roughness.map(|i| i.source.clone()),
             emission: p.emission,
             clearcoat: p.clearcoat,
+            sheen: p.sheen,
             attenuation: p.volume.map(|v| Attenuation {
                 color: v.color,
                 distance: v.distance,
@@ -188,6 +196,7 @@ impl Pbr {
             alpha: None,
             emission: None,
             clearcoat: None,
+            sheen: None,
             volume: None,
             coat: Coat::new(ior, roughness, false),
         }
@@ -221,6 +230,14 @@ impl Pbr {
     pub fn with_clearcoat(self, clearcoat: Option<Clearcoat>) -> Self {
         Pbr {
             clearcoat: clearcoat.filter(|c| c.factor > 0.0),
+            ..self
+        }
+    }
+
+    /// This material under `sheen` (none where its colour is black).
+    pub fn with_sheen(self, sheen: Option<Sheen>) -> Self {
+        Pbr {
+            sheen: sheen.filter(|s| s.color.max_element() > 0.0),
             ..self
         }
     }
@@ -269,6 +286,7 @@ impl Pbr {
             roughness: self.roughness,
             coat: self.coat,
             clearcoat: self.clearcoat,
+            sheen: self.sheen,
         };
         let Some(image) = &self.metallic_roughness else {
             return lobes;
@@ -328,6 +346,7 @@ struct Lobes {
     roughness: f32,
     coat: Coat,
     clearcoat: Option<Clearcoat>,
+    sheen: Option<Sheen>,
 }
 
 impl Lobes {
@@ -348,7 +367,7 @@ impl Lobes {
     /// the whole BSDF over the whole density.
     fn sample(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let chosen = match self.clearcoat {
-            None => self.sample_mix(wo, hit, sampler)?,
+            None => self.sample_below(wo, hit, sampler)?,
             Some(clearcoat) => {
                 let chance = clearcoat.reflectance(wo.dot(hit.shading));
                 if sampler.next_f32() < chance {
@@ -371,9 +390,9 @@ impl Lobes {
                         },
                     }
                 } else {
-                    // A delta of the mix keeps its weight: what crosses the coat over the chance
-                    // of not sampling it, 1.
-                    self.sample_mix(wo, hit, sampler)?
+                    // A delta below keeps its weight: what crosses the coat over the chance of
+                    // not sampling it, 1.
+                    self.sample_below(wo, hit, sampler)?
                 }
             }
         };
@@ -388,8 +407,55 @@ impl Lobes {
         })
     }
 
-    /// A direction from the mix below any clear coat: a delta one weighed (its component's
-    /// weight alone), any other for [`Self::sample`] to weigh.
+    /// A direction from below any clear coat: the sheen's (picked with its reflectance at
+    /// wo; cosine-distributed), else the mix's; a delta one weighed (its component's weight
+    /// alone), any other for [`Self::sample`] to weigh.
+    fn sample_below(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
+        let Some(sheen) = self.sheen else {
+            return self.sample_mix(wo, hit, sampler);
+        };
+        let chance = sheen.reflectance(wo.dot(hit.shading));
+        if sampler.next_f32() < chance {
+            let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+            // normal + a uniform unit vector is cosine-distributed about the normal.
+            let d = hit.shading + crate::shared::warp::unit_vector(u1, u2);
+            let len2 = d.length_squared();
+            let wi = if len2 > 1e-12 { d / len2.sqrt() } else { hit.shading };
+            return Some(BsdfSample {
+                weight: Vec3::ZERO,
+                wi,
+                pdf: 0.0,
+                lobe: Lobe::GLOSSY_REFLECTION,
+            });
+        }
+        // A delta of the mix keeps its weight: what shows through the sheen over the chance of
+        // not picking it, 1.
+        self.sample_mix(wo, hit, sampler)
+    }
+
+    /// The sheen's BSDF x cos and the mix's seen through it.
+    fn eval_below(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
+        let mix = self.eval_mix(wo, wi, hit);
+        match self.sheen {
+            None => mix,
+            Some(s) => s.eval(wo, wi, hit) + mix * s.through(wo, hit),
+        }
+    }
+
+    /// The density of [`Self::sample_below`]'s non-delta directions.
+    fn pdf_below(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
+        let mix = self.pdf_mix(wo, wi, hit);
+        match self.sheen {
+            None => mix,
+            Some(s) => {
+                let chance = s.reflectance(wo.dot(hit.shading));
+                chance * crate::shared::warp::cosine_pdf(hit, wi) + (1.0 - chance) * mix
+            }
+        }
+    }
+
+    /// A direction from the mix below any sheen and clear coat: a delta one weighed (its
+    /// component's weight alone), any other for [`Self::sample`] to weigh.
     fn sample_mix(&self, wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
         let (w_coat, w_glass, _) = self.weights();
         let base = self.base;
@@ -444,7 +510,7 @@ impl Lobes {
 
     /// BSDF x cos over its non-delta lobes: the clear coat's, and the mix's seen through it.
     fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
-        let mix = self.eval_mix(wo, wi, hit);
+        let mix = self.eval_below(wo, wi, hit);
         match self.clearcoat {
             None => mix,
             Some(c) => mix * c.through(wo, hit) + Vec3::splat(c.lobe(wo, wi, hit).0),
@@ -453,7 +519,7 @@ impl Lobes {
 
     /// The density of [`Self::sample`] over its non-delta lobes.
     fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
-        let mix = self.pdf_mix(wo, wi, hit);
+        let mix = self.pdf_below(wo, wi, hit);
         match self.clearcoat {
             None => mix,
             Some(c) => {
@@ -533,6 +599,9 @@ material_params! {
         /// The clear coat's factor (0: none) and GGX alpha (0: smooth).
         clearcoat: f32,
         clearcoat_alpha: f32,
+        /// The sheen's colour (black: none) and roughness (`Sheen::alpha`).
+        sheen_color: [f32; 3],
+        sheen_alpha: f32,
     }
 }
 
@@ -552,6 +621,7 @@ impl MaterialModel for Pbr {
         MaterialFeature::Clearcoat,
         MaterialFeature::Media,
         MaterialFeature::Absorption,
+        MaterialFeature::Sheen,
     ];
     /// Emissive pbr.
     const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::PbrEmission);
@@ -571,6 +641,9 @@ impl MaterialModel for Pbr {
         super::fresnel::check_ior(self.ior)?;
         if let Some(clearcoat) = &self.clearcoat {
             clearcoat.validate()?;
+        }
+        if let Some(sheen) = &self.sheen {
+            sheen.validate()?;
         }
         if let Some(volume) = self.volume() {
             volume.check()?;
@@ -596,6 +669,7 @@ impl MaterialModel for Pbr {
         let rough_coat = self.clearcoat.is_some_and(|c| c.alpha() > 0.0);
         let rough = (self.roughness * self.roughness >= MIN_ALPHA || rough_coat).then_some(MaterialFeature::Microfacet);
         let clearcoat = self.clearcoat.map(|_| MaterialFeature::Clearcoat);
+        let sheen = self.sheen.map(|_| MaterialFeature::Sheen);
         let volume = self.volume().map_or_else(Vec::new, Medium::features);
         let glass = (self.weights().1 > 0.0).then_some(MaterialFeature::Dielectric);
         let image = self.metallic_roughness.as_ref().map(|_| MaterialFeature::MetallicRoughness);
@@ -608,6 +682,7 @@ impl MaterialModel for Pbr {
             .into_iter()
             .chain(glass)
             .chain(clearcoat)
+            .chain(sheen)
             .chain(volume)
             .chain(image)
             .chain(alpha)
@@ -656,10 +731,15 @@ impl MaterialModel for Pbr {
         (1.0 - least_metallic) * (1.0 - least_transmission) > 0.0
             || self.ggx().is_some()
             || self.clearcoat.is_some_and(|c| c.alpha() > 0.0)
+            || self.sheen.is_some()
     }
 
     fn parameter_image(&self) -> Option<&Arc<Image>> {
         self.metallic_roughness.as_ref()
+    }
+
+    fn table_image(&self) -> Option<&Arc<Image>> {
+        self.sheen.map(|_| super::sheen::albedo_table())
     }
 
     fn alpha(&self) -> Option<&Alpha> {
@@ -701,6 +781,8 @@ impl MaterialModel for Pbr {
                 transmission_in_red: self.transmission_in_red as u32,
                 clearcoat: self.clearcoat.map_or(0.0, |c| c.factor),
                 clearcoat_alpha: self.clearcoat.map_or(0.0, |c| c.alpha()),
+                sheen_color: self.sheen.map_or([0.0; 3], |s| s.color.to_array()),
+                sheen_alpha: self.sheen.map_or(0.0, |s| s.alpha()),
             }
             .words(),
             parameter_image_size: size,

@@ -30,6 +30,7 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
             super::gltf_quantized::EXTENSION,
             super::gltf_extensions::CLEARCOAT,
             super::gltf_extensions::VOLUME,
+            super::gltf_extensions::SHEEN,
         ]
         .contains(&e.as_str())
     });

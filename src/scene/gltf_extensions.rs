@@ -1,11 +1,13 @@
 //! glTF's material extensions beyond the metallic-roughness core that the `gltf` crate does not
-//! parse (KHR_materials_clearcoat), read from a material's extension JSON with the
-//! specification's defaults, and what of them is not rendered (for the file's note).
+//! parse (KHR_materials_clearcoat, KHR_materials_sheen), read from a material's extension JSON
+//! with the specification's defaults, and what of them is not rendered (for the file's note).
 
 use crate::material::clearcoat::Clearcoat;
+use crate::material::sheen::Sheen;
 use serde_json::Value;
 
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
+pub const SHEEN: &str = "KHR_materials_sheen";
 /// Read through the `gltf` crate (`Material::volume`), whose validation nonetheless refuses it
 /// as required.
 pub const VOLUME: &str = "KHR_materials_volume";
@@ -17,10 +19,13 @@ const CLEARCOAT_TEXTURES: [&str; 3] = [
     "clearcoatNormalTexture",
 ];
 
-/// A number field of an extension object: its default where absent, an error naming it where
-/// it is not a number in [0, 1].
+/// The textures of KHR_materials_sheen, which are not mapped: the colour's mean stands in.
+const SHEEN_TEXTURES: [&str; 2] = ["sheenColorTexture", "sheenRoughnessTexture"];
+
+/// A number field of extension `name`'s object: its default where absent, an error naming it
+/// where it is not a number in [0, 1].
 fn unit_factor(
-    ext: &Value,
+    (name, ext): (&str, &Value),
     field: &str,
     default: f32,
     at: &dyn Fn() -> String,
@@ -30,25 +35,86 @@ fn unit_factor(
         Some(v) => match v.as_f64() {
             Some(x) if (0.0..=1.0).contains(&x) => Ok(x as f32),
             _ => Err(format!(
-                "{}: its {CLEARCOAT}.{field} is {v}; glTF requires a number in [0, 1]",
+                "{}: its {name}.{field} is {v}; glTF requires a number in [0, 1]",
                 at()
             )),
         },
     }
 }
 
+/// A colour field of extension `name`'s object (three numbers in [0, 1]): its default where
+/// absent, an error naming it otherwise.
+fn unit_colour(
+    (name, ext): (&str, &Value),
+    field: &str,
+    default: [f32; 3],
+    at: &dyn Fn() -> String,
+) -> Result<[f32; 3], String> {
+    let Some(v) = ext.get(field) else {
+        return Ok(default);
+    };
+    let numbers: Option<Vec<f64>> = v
+        .as_array()
+        .and_then(|a| a.iter().map(Value::as_f64).collect());
+    match numbers.as_deref() {
+        Some(&[r, g, b]) if [r, g, b].iter().all(|x| (0.0..=1.0).contains(x)) => {
+            Ok([r as f32, g as f32, b as f32])
+        }
+        _ => Err(format!(
+            "{}: its {name}.{field} is {v}; glTF requires three numbers in [0, 1]",
+            at()
+        )),
+    }
+}
+
+/// The object of extension `name` on `m`, if it has one; an error if it is not an object.
+fn extension<'a>(
+    m: &'a gltf::Material,
+    name: &str,
+    at: &dyn Fn() -> String,
+) -> Result<Option<&'a Value>, String> {
+    match m.extension_value(name) {
+        None => Ok(None),
+        Some(ext) if ext.is_object() => Ok(Some(ext)),
+        Some(_) => Err(format!("{}: its {name} is not an object", at())),
+    }
+}
+
+/// `m`'s sheen (KHR_materials_sheen's sheenColorFactor, default black, times the mean colour
+/// of its sheenColorTexture where it has one, which `mean_colour` gives by texture index; and
+/// sheenRoughnessFactor, default 0), `None` where it has none or its colour is black.
+pub fn sheen(
+    m: &gltf::Material,
+    mean_colour: &mut dyn FnMut(u64) -> Result<glam::Vec3, String>,
+    at: &dyn Fn() -> String,
+) -> Result<Option<Sheen>, String> {
+    let Some(ext) = extension(m, SHEEN, at)? else {
+        return Ok(None);
+    };
+    let mut color =
+        glam::Vec3::from_array(unit_colour((SHEEN, ext), "sheenColorFactor", [0.0; 3], at)?);
+    if let Some(texture) = ext.get("sheenColorTexture") {
+        let Some(index) = texture.get("index").and_then(Value::as_u64) else {
+            return Err(format!(
+                "{}: its {SHEEN}.sheenColorTexture has no texture index",
+                at()
+            ));
+        };
+        color = (color * mean_colour(index)?).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+    }
+    let roughness = unit_factor((SHEEN, ext), "sheenRoughnessFactor", 0.0, at)?;
+    Ok((color.max_element() > 0.0).then_some(Sheen { color, roughness }))
+}
+
 /// `m`'s clear coat (KHR_materials_clearcoat's clearcoatFactor and clearcoatRoughnessFactor,
 /// defaults 0), `None` where it has none or its factor is 0. `at` names the material in
 /// errors.
 pub fn clearcoat(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Clearcoat>, String> {
-    let Some(ext) = m.extension_value(CLEARCOAT) else {
+    let Some(ext) = extension(m, CLEARCOAT, at)? else {
         return Ok(None);
     };
-    if !ext.is_object() {
-        return Err(format!("{}: its {CLEARCOAT} is not an object", at()));
-    }
-    let factor = unit_factor(ext, "clearcoatFactor", 0.0, at)?;
-    let roughness = unit_factor(ext, "clearcoatRoughnessFactor", 0.0, at)?;
+    let factor = unit_factor((CLEARCOAT, ext), "clearcoatFactor", 0.0, at)?;
+    let roughness = unit_factor((CLEARCOAT, ext), "clearcoatRoughnessFactor", 0.0, at)?;
     Ok((factor > 0.0).then_some(Clearcoat { factor, roughness }))
 }
 
@@ -75,6 +141,23 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
             .count();
         if n > 0 {
             out.push(format!("{CLEARCOAT}.{texture} ({n} material{})", plural(n)));
+        }
+    }
+    let sheened: Vec<Value> = document
+        .materials()
+        .filter_map(|m| m.extension_value(SHEEN).cloned())
+        .collect();
+    let how = [": its mean colour stands in", ""];
+    for (texture, how) in SHEEN_TEXTURES.into_iter().zip(how) {
+        let n = sheened
+            .iter()
+            .filter(|ext| ext.get(texture).is_some())
+            .count();
+        if n > 0 {
+            out.push(format!(
+                "{SHEEN}.{texture} ({n} material{}{how})",
+                plural(n)
+            ));
         }
     }
     let mapped = coated.iter().filter(|(mapped, _)| *mapped).count();

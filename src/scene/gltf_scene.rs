@@ -463,9 +463,10 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads.
-const READ_EXTENSIONS: [&str; 10] = [
+const READ_EXTENSIONS: [&str; 11] = [
     "EXT_mesh_gpu_instancing",
     super::gltf_extensions::CLEARCOAT,
+    super::gltf_extensions::SHEEN,
     "KHR_lights_punctual",
     "KHR_mesh_quantization",
     "KHR_materials_emissive_strength",

@@ -204,6 +204,21 @@ impl<'a> FileTextures<'a> {
         })
     }
 
+    /// The mean colour of texture `index`'s image, decoded from sRGB (where a texture rt-gpu
+    /// does not map stands in as a uniform colour: KHR_materials_sheen's sheenColorTexture).
+    pub fn mean_colour(&mut self, index: u64) -> Result<Vec3, String> {
+        let Some(texture) = usize::try_from(index)
+            .ok()
+            .and_then(|i| self.document.textures().nth(i))
+        else {
+            return Err(format!(
+                "mesh {}: a material names texture {index}, which does not exist",
+                self.source
+            ));
+        };
+        Ok(self.image(texture.source().index(), true)?.mean())
+    }
+
     /// `texture`'s image decoded (from sRGB where `srgb`) and read as its sampler says, at UV
     /// set `set`.
     fn sampled(

@@ -1564,6 +1564,11 @@ fn material_of(
     .with_alpha(alpha)
     .with_emission(emission)
     .with_clearcoat(super::gltf_extensions::clearcoat(m, &at)?)
+    .with_sheen(super::gltf_extensions::sheen(
+        m,
+        &mut |i| textures.mean_colour(i),
+        &at,
+    )?)
     .with_attenuation(volume_of(m))
     .map_err(|e| format!("{}: {e}", at()))?;
     out.transmission_in_red = transmission_in_red;

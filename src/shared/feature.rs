@@ -60,6 +60,7 @@ material_features! {
     CoatTable = "COAT_TABLE",
     Clearcoat = "CLEARCOAT",
     Absorption = "ABSORPTION",
+    Sheen = "SHEEN",
 }
 
 impl MaterialFeature {

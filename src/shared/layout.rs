@@ -79,6 +79,15 @@ impl WgslType for [[u32; 4]; 3] {
     }
 }
 
+impl WgslType for [[u32; 4]; 4] {
+    const WGSL: &'static str = "array<vec4u, 4>";
+    fn literal(&self) -> String {
+        let [a, b, c, d] =
+            self.map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]));
+        format!("array<vec4u, 4>({a}, {b}, {c}, {d})")
+    }
+}
+
 impl WgslType for [u32; 2] {
     const WGSL: &'static str = "vec2u";
     fn literal(&self) -> String {
@@ -377,7 +386,9 @@ gpu_struct! {
         emission_two_sided: u32,
         /// The medium's absorption per channel (`material::Medium::absorption`; 0: none).
         medium_absorption: [f32; 3],
-        _pad_absorption: f32,
+        /// Where pbr's sheen albedo table starts in the images array
+        /// (`MaterialModel::table_image`; `material::sheen::albedo_table`).
+        sheen_table: u32,
     }
 }
 

@@ -7,7 +7,7 @@
 //! `sample`, `eval` and `pdf` (`tests/it/bsdfs`) check what it reads.
 
 /// The 32-bit words `GpuMaterial::params` holds: enough for the largest kind's parameters.
-pub const PARAM_WORDS: usize = 12;
+pub const PARAM_WORDS: usize = 16;
 
 /// What [`material_params!`] gives a material's parameters.
 pub trait MaterialParams: bytemuck::Pod {
@@ -169,6 +169,7 @@ mod tests {
             [
                 [1.0f32, 2.0, 3.0, 4.0].map(f32::to_bits),
                 [5.0f32.to_bits(), 0, 0, 0],
+                [0; 4],
                 [0; 4]
             ]
         );

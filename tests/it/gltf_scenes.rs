@@ -377,6 +377,14 @@ fn values_outside_the_specification_are_refused_naming_the_field() {
             "clearcoatFactor",
         ),
         (
+            r#"{ "name": "M", "extensions": { "KHR_materials_sheen": { "sheenColorFactor": [1, 2, 0] } } }"#,
+            "KHR_materials_sheen.sheenColorFactor is [1,2,0]",
+        ),
+        (
+            r#"{ "name": "M", "extensions": { "KHR_materials_sheen": { "sheenColorFactor": [1, 1, 1], "sheenRoughnessFactor": 1.5 } } }"#,
+            "KHR_materials_sheen.sheenRoughnessFactor is 1.5",
+        ),
+        (
             r#"{ "name": "M", "extensions": { "KHR_materials_volume": { "thicknessFactor": 1, "attenuationDistance": 0 } } }"#,
             "KHR_materials_volume.attenuationDistance is 0",
         ),
@@ -1189,4 +1197,63 @@ fn a_volume_fills_transmissive_glass_with_what_absorbs() {
             "{transmission} {thin}"
         );
     }
+}
+
+/// Issue 63: KHR_materials_sheen's factors are read onto the pbr material, required or not (a
+/// black colour, glTF's default, is no sheen); its colour texture is not mapped, its mean colour
+/// standing in, and the note says so.
+#[test]
+fn a_sheen_is_read_and_its_textures_named() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let extra = r#""extensionsUsed": ["KHR_materials_sheen"], "extensionsRequired": ["KHR_materials_sheen"],"#;
+    let velvet = |ext: &str| {
+        format!(
+            r#"{{ "name": "Velvet", "pbrMetallicRoughness": {{ "metallicFactor": 0 }}, "extensions": {{ "KHR_materials_sheen": {ext} }} }}"#
+        )
+    };
+    let mut case = 0;
+    let mut read = |material: String, extra: &str| {
+        case += 1;
+        let name = format!("sheen{case}.gltf");
+        let path = common::gltf::write_triangle(dir.path(), &name, true, &material, "", extra);
+        let (scene, notes) = load(&path, &name, None).expect("loads");
+        match &scene.materials[0] {
+            rt_gpu::scene::Material::Pbr(p) => (p.sheen, notes),
+            other => panic!("{other:?}"),
+        }
+    };
+    let (sheen, notes) = read(
+        velvet(r#"{ "sheenColorFactor": [1, 0.329, 0.1], "sheenRoughnessFactor": 0.8 }"#),
+        extra,
+    );
+    let sheen = sheen.expect("a sheen");
+    assert_eq!(
+        (sheen.color, sheen.roughness),
+        (Vec3::new(1.0, 0.329, 0.1), 0.8)
+    );
+    assert!(notes.is_empty(), "{notes:?}");
+    let (sheen, notes) = read(velvet(r#"{ "sheenRoughnessFactor": 0.8 }"#), extra);
+    assert!(sheen.is_none() && notes.is_empty(), "{sheen:?} {notes:?}");
+    image::RgbImage::from_pixel(1, 1, image::Rgb([200, 200, 200]))
+        .save(dir.path().join("s.png"))
+        .expect("writes");
+    let images =
+        format!(r#"{extra} "textures": [{{ "source": 0 }}], "images": [{{ "uri": "s.png" }}],"#);
+    let (sheen, notes) = read(
+        velvet(r#"{ "sheenColorFactor": [1, 1, 1], "sheenColorTexture": { "index": 0 } }"#),
+        &images,
+    );
+    // The texture's mean colour stands in for it: 200 in sRGB is 0.578 linear.
+    let sheen = sheen.expect("a sheen");
+    assert!(
+        (sheen.color - Vec3::splat(0.5776)).abs().max_element() < 1e-3,
+        "{sheen:?}"
+    );
+    assert!(
+        notes.len() == 1
+            && notes[0].contains(
+                "KHR_materials_sheen.sheenColorTexture (1 material: its mean colour stands in)"
+            ),
+        "{notes:?}"
+    );
 }

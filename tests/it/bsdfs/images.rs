@@ -10,6 +10,7 @@ use common::{nee_opts, object, opts, render_cpu};
 use rt_gpu::assets::texture::Texture;
 use rt_gpu::material::clearcoat::Clearcoat;
 use rt_gpu::material::conductor::METALS;
+use rt_gpu::material::sheen::Sheen;
 use rt_gpu::material::{Conductor, Dielectric, Pbr, Plastic};
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::{Scene, Shape};
@@ -19,7 +20,8 @@ use rt_gpu::scene::{Scene, Shape};
 /// front corner by the green wall, a blue plastic one (0.2) on the floor at the front and a
 /// half-metallic pbr one (0.4) by the red wall, a red pbr one (0.6) under a smooth clear coat
 /// at the back left and a pbr metal (0.5) under a rough one (0.3, factor 0.7) high at the front
-/// right:
+/// right, and a velvet one (a red rough pbr under a white sheen of roughness 0.5) at the front
+/// left:
 /// smooth and rough lobes, reflected and refracted, over a diffuse base, light sampled at the
 /// rough ones only. (Glass above the short box casts a shadow there that only its caustic
 /// lights: without nee, 20 000 spp find too few of those paths, and the dim pixels fail the
@@ -94,7 +96,27 @@ fn cornell_with_microfacets() -> Scene {
         Shape::sphere(Vec3::new(460.0, 450.0, 100.0), 45.0),
         paint,
     ));
-    let short = scene.objects.len() - 4;
+    let velvet = add(
+        "velvet",
+        Material::Pbr(
+            Pbr::new(
+                Texture::Colour(Vec3::new(0.6, 0.05, 0.1)),
+                0.0,
+                0.8,
+                1.5,
+                0.0,
+            )
+            .with_sheen(Some(Sheen {
+                color: Vec3::ONE,
+                roughness: 0.5,
+            })),
+        ),
+    );
+    scene.objects.push(object(
+        Shape::sphere(Vec3::new(90.0, 300.0, 120.0), 50.0),
+        velvet,
+    ));
+    let short = scene.objects.len() - 5;
     scene.objects[short].material = gold;
     scene.objects[short + 1].material = silver;
     scene.objects.push(object(
@@ -234,6 +256,27 @@ fn microfacet_kernel_matches_cpu() {
             scene
                 .material_names
                 .push(format!("pbr-{metallic}-{transmission}-{roughness}"));
+            // Under a sheen, and under a sheen and a clear coat.
+            for coat in [
+                None,
+                Some(Clearcoat {
+                    factor: 0.6,
+                    roughness: 0.1,
+                }),
+            ] {
+                let base = Texture::Colour(Vec3::new(0.8, 0.7, 0.2));
+                let m = Pbr::new(base, metallic, roughness, 1.5, transmission)
+                    .with_sheen(Some(Sheen {
+                        color: Vec3::new(1.0, 0.5, 0.3),
+                        roughness: 1.0 - roughness,
+                    }))
+                    .with_clearcoat(coat);
+                scene.materials.push(Material::Pbr(m));
+                scene.material_names.push(format!(
+                    "sheen-{metallic}-{transmission}-{roughness}-{}",
+                    coat.is_some()
+                ));
+            }
             // Under a clear coat, smooth and rough.
             for coat_roughness in [0.0, 0.2] {
                 let base = Texture::Colour(Vec3::new(0.8, 0.7, 0.2));

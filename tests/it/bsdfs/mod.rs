@@ -18,6 +18,7 @@ mod images;
 mod microsurface;
 mod pbr;
 mod plastic;
+mod sheen;
 
 use glam::Vec3;
 use rt_gpu::material::BsdfSample;
