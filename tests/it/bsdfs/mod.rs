@@ -124,6 +124,18 @@ fn assert_located_errors(good: &[&str], bad: &[(&str, &str)]) {
     }
 }
 
+/// The mean of `f` over `n` draws, and its standard error.
+fn mean(n: u32, mut f: impl FnMut(u32) -> f64) -> (f64, f64) {
+    let (mut sum, mut sum2) = (0.0, 0.0);
+    for i in 0..n {
+        let x = f(i);
+        sum += x;
+        sum2 += x * x;
+    }
+    let m = sum / n as f64;
+    (m, ((sum2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+}
+
 /// Random unit vectors above the plane z = 0, with their numbers from `i`.
 fn upper(i: u32, seed: u32) -> Vec3 {
     let mut s = Sampler::independent(i, 1, seed);

@@ -186,18 +186,6 @@ fn sheen_is_reciprocal_and_scales_the_mix_by_the_view() {
     }
 }
 
-/// The mean of `f` over `n` draws, and its standard error.
-fn mean(n: u32, mut f: impl FnMut(u32) -> f64) -> (f64, f64) {
-    let (mut sum, mut sum2) = (0.0, 0.0);
-    for i in 0..n {
-        let x = f(i);
-        sum += x;
-        sum2 += x * x;
-    }
-    let m = sum / n as f64;
-    (m, ((sum2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
-}
-
 /// The white furnace: a white sheen over each white mix reflects at most what comes in (albedo
 /// <= 1 within 5 standard errors, 200 000 samples), exactly 1 over the lossless smooth
 /// dielectric, and the sheen's own albedo, estimated by
