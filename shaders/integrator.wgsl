@@ -47,7 +47,9 @@ fn medium_transmittance(m: Material, distance: f32) -> vec3f {
 // What the absorption of the medium inside m leaves of light travelling `distance`
 // (Medium::absorbed_over).
 fn absorbed_over(m: Material, distance: f32) -> vec3f {
-    return select(exp(-m.medium_absorption * distance), vec3f(1.0), m.medium_absorption == vec3f(0.0));
+    // Out of an open mesh nothing bounds the stretch (and no infinity is computed).
+    let attenuated = select(exp(-m.medium_absorption * distance), vec3f(0.0), distance >= F32_MAX);
+    return select(attenuated, vec3f(1.0), m.medium_absorption == vec3f(0.0));
 }
 //#endif
 

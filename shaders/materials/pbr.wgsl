@@ -113,7 +113,7 @@ fn pbr_eval_below(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> 
     let mix = pbr_eval_mix(m, p, wo, wi, hit);
 //#if SHEEN
     if any(p.sheen_color > vec3f(0.0)) {
-        return sheen_eval(p.sheen_color, p.sheen_alpha, wo, wi, hit) + mix * sheen_through(m.sheen_table, p.sheen_color, p.sheen_alpha, wo, hit);
+        return sheen_eval(p.sheen_color, p.sheen_roughness, wo, wi, hit) + mix * sheen_through(m.sheen_table, p.sheen_color, p.sheen_roughness, wo, hit);
     }
 //#endif
     return mix;
@@ -124,7 +124,7 @@ fn pbr_pdf_below(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f
     let mix = pbr_pdf_mix(m, p, wo, wi, hit);
 //#if SHEEN
     if any(p.sheen_color > vec3f(0.0)) {
-        let chance = sheen_reflectance(m.sheen_table, p.sheen_color, p.sheen_alpha, dot(wo, hit.shading));
+        let chance = sheen_reflectance(m.sheen_table, p.sheen_color, p.sheen_roughness, dot(wo, hit.shading));
         return chance * cosine_pdf(hit, wi) + (1.0 - chance) * mix;
     }
 //#endif
@@ -136,7 +136,7 @@ fn pbr_pdf_below(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f
 fn pbr_sample_below(m: Material, p: PbrParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
 //#if SHEEN
     if any(p.sheen_color > vec3f(0.0)) {
-        let chance = sheen_reflectance(m.sheen_table, p.sheen_color, p.sheen_alpha, dot(wo, hit.shading));
+        let chance = sheen_reflectance(m.sheen_table, p.sheen_color, p.sheen_roughness, dot(wo, hit.shading));
         if sampler_next(sampler) < chance {
             let u1 = sampler_next(sampler);
             let u2 = sampler_next(sampler);

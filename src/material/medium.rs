@@ -102,6 +102,10 @@ impl Medium {
     #[inline]
     pub fn absorbed_over(&self, distance: f32) -> Vec3 {
         let a = self.absorption;
+        if distance >= f32::MAX {
+            // Out of an open mesh: nothing bounds the stretch (and no infinity is computed).
+            return Vec3::select(a.cmpeq(Vec3::ZERO), Vec3::ONE, Vec3::ZERO);
+        }
         Vec3::select(a.cmpeq(Vec3::ZERO), Vec3::ONE, (-a * distance).exp())
     }
 

@@ -285,8 +285,10 @@ impl Pbr {
             ior: self.ior,
             roughness: self.roughness,
             coat: self.coat,
-            clearcoat: self.clearcoat,
-            sheen: self.sheen,
+            // As the kernel tells them present (a factor or colour above 0), whatever the
+            // public fields were set to.
+            clearcoat: self.clearcoat.filter(|c| c.factor > 0.0),
+            sheen: self.sheen.filter(|s| s.color.max_element() > 0.0),
         };
         let Some(image) = &self.metallic_roughness else {
             return lobes;
@@ -310,10 +312,6 @@ impl Pbr {
         }
     }
 
-    /// The weights of the coat, the glass and the metal in the mix.
-    fn weights(&self) -> (f32, f32, f32) {
-        weights(self.metallic, self.transmission)
-    }
 
     fn ggx(&self) -> Option<Ggx> {
         ggx(&self.coat)
@@ -599,9 +597,10 @@ material_params! {
         /// The clear coat's factor (0: none) and GGX alpha (0: smooth).
         clearcoat: f32,
         clearcoat_alpha: f32,
-        /// The sheen's colour (black: none) and roughness (`Sheen::alpha`).
+        /// The sheen's colour (black: none) and roughness (`Sheen::alpha`, whose square is the
+        /// distribution's a).
         sheen_color: [f32; 3],
-        sheen_alpha: f32,
+        sheen_roughness: f32,
     }
 }
 
@@ -671,7 +670,9 @@ impl MaterialModel for Pbr {
         let clearcoat = self.clearcoat.map(|_| MaterialFeature::Clearcoat);
         let sheen = self.sheen.map(|_| MaterialFeature::Sheen);
         let volume = self.volume().map_or_else(Vec::new, Medium::features);
-        let glass = (self.weights().1 > 0.0).then_some(MaterialFeature::Dielectric);
+        // A metallic-roughness image may take metallic to 0 anywhere (as `samples_lights`).
+        let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
+        let glass = ((1.0 - least_metallic) * self.transmission > 0.0).then_some(MaterialFeature::Dielectric);
         let image = self.metallic_roughness.as_ref().map(|_| MaterialFeature::MetallicRoughness);
         let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
         let emission = self.emission.as_ref().map(|e| {
@@ -782,7 +783,7 @@ impl MaterialModel for Pbr {
                 clearcoat: self.clearcoat.map_or(0.0, |c| c.factor),
                 clearcoat_alpha: self.clearcoat.map_or(0.0, |c| c.alpha()),
                 sheen_color: self.sheen.map_or([0.0; 3], |s| s.color.to_array()),
-                sheen_alpha: self.sheen.map_or(0.0, |s| s.alpha()),
+                sheen_roughness: self.sheen.map_or(0.0, |s| s.alpha()),
             }
             .words(),
             parameter_image_size: size,

@@ -1,20 +1,22 @@
 //! glTF's sheen (KHR_materials_sheen) over `pbr`'s mix (twin: `shaders/sheen.wgsl`): the
 //! back-scattering of velvet's fibres, as the extension defines it after Estevez and Kulla
 //! ("Production Friendly Microfacet Sheen BRDF", 2017): the "Charlie" distribution
-//! `D = (2 + 1/a) sin(h)^(1/a) / (2 pi)` with `a` the sheen roughness (not squared), their
-//! fitted visibility `1 / ((1 + L(cos_o) + L(cos_i)) 4 cos_o cos_i)`, no Fresnel, times the
-//! sheen colour. Below it the mix is scaled by the extension's albedo scaling in its view-only
+//! `D = (2 + 1/a) sin(h)^(1/a) / (2 pi)` with `a` the sheen roughness squared (the extension's
+//! mapping, as the Khronos sample renderer has it), their fitted visibility
+//! `1 / ((1 + L(cos_o) + L(cos_i)) 4 cos_o cos_i)` of the same `a`, no Fresnel, times the sheen
+//! colour. Below it the mix is scaled by the extension's albedo scaling in its view-only
 //! form, `1 - m E(cos_o)` (m the colour's largest channel, E the sheen's directional albedo), as
 //! the clear coat scales what is below it (`clearcoat.rs`) and as Cycles layers its sheen: a
 //! white sheen over a lossless base reflects exactly everything. The extension's full form,
 //! `min(1 - m E(cos_o), 1 - m E(cos_i))`, is reciprocal but loses light (a white sheen over the
 //! lossless smooth dielectric reflected 0.88-0.95 of it at normal incidence, measured).
 //!
-//! E(cos, a) is tabulated once per process ([`albedo_table`]: 32 cosines x 32 roughnesses,
-//! each a quadrature in f64 over the hemisphere), bilinear between its entries on both backends
-//! (the kernel reads it from the images array: `GpuMaterial::sheen_table`). Roughness below
-//! [`MIN_ROUGHNESS`] is taken as it (the distribution's exponent 1/a runs away), as the
-//! Khronos sample viewer clamps it.
+//! E(cos, roughness) is tabulated ([`albedo_table`]: 32 cosines x 32 roughnesses, each a
+//! quadrature in f64 over the hemisphere, read from `sheen_albedo.bin`), bilinear between its
+//! entries on both backends (the kernel reads it from the images array:
+//! `GpuMaterial::sheen_table`). The visibility is clamped to 1, as the sample renderer clamps
+//! it, and roughness below [`MIN_ROUGHNESS`] is taken as it (a note names the files that ask
+//! for less).
 //!
 //! Sampling picks the sheen with chance `m E(cos_o)` and then a cosine-distributed direction
 //! (the sheen is broad; its distribution has no closed-form inverse), else the mix.
@@ -27,8 +29,10 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::sync::{Arc, OnceLock};
 
-/// The least roughness the distribution takes (the sample viewer's clamp).
-pub const MIN_ROUGHNESS: f32 = 0.07;
+/// The least roughness the distribution takes (its a = 0.0625): below it, E at grazing angles
+/// exceeds 1 (2.7 at roughness 0.07, a = 0.0049: the fitted visibility is not energy-conserving
+/// there), which albedo scaling cannot take.
+pub const MIN_ROUGHNESS: f32 = 0.25;
 /// The albedo table's cosines and roughnesses: (i / (N - 1)) over [0, 1] and over
 /// [`MIN_ROUGHNESS`, 1].
 pub const TABLE_SIZE: usize = 32;
@@ -77,7 +81,7 @@ fn lambda(cos: f64, a: f64) -> f64 {
 pub fn albedo_values(cosines: usize, azimuths: usize) -> Vec<f64> {
     let mut out = Vec::with_capacity(TABLE_SIZE * TABLE_SIZE);
     for r in 0..TABLE_SIZE {
-        let a = table_roughness(r) as f64;
+        let a = (table_roughness(r) as f64).powi(2);
         let lambdas: Vec<f64> = (0..cosines)
             .map(|i| lambda((i as f64 + 0.5) / cosines as f64, a))
             .collect();
@@ -89,7 +93,9 @@ pub fn albedo_values(cosines: usize, azimuths: usize) -> Vec<f64> {
             for (i, lambda_i) in lambdas.iter().enumerate() {
                 let cos_i = (i as f64 + 0.5) / cosines as f64;
                 let sin_i = (1.0 - cos_i * cos_i).sqrt();
-                let v = 1.0 / ((1.0 + lambda_o + lambda_i) * 4.0 * cos_o);
+                // The visibility clamped to 1, as the sample renderer clamps it; times cos_i.
+                let v =
+                    (1.0 / ((1.0 + lambda_o + lambda_i) * 4.0 * cos_o * cos_i)).min(1.0) * cos_i;
                 for j in 0..azimuths {
                     let phi = PI * (j as f64 + 0.5) / azimuths as f64;
                     let h = [sin_o + sin_i * phi.cos(), sin_i * phi.sin(), cos_o + cos_i];
@@ -158,7 +164,8 @@ impl Sheen {
         Ok(())
     }
 
-    /// The distribution's roughness: its own, at least [`MIN_ROUGHNESS`].
+    /// The roughness the distribution takes: its own, at least [`MIN_ROUGHNESS`] (its `a` is
+    /// the square).
     #[inline]
     pub fn alpha(&self) -> f32 {
         self.roughness.max(MIN_ROUGHNESS)
@@ -181,17 +188,21 @@ impl Sheen {
     /// surface), else 0.
     pub fn eval(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> Vec3 {
         let n = hit.shading;
-        let (cos_o, cos_i) = (wo.dot(n), wi.dot(n));
+        // Unit vectors' dot products round up to 1 + 1 ulp.
+        let (cos_o, cos_i) = (wo.dot(n).min(1.0), wi.dot(n).min(1.0));
         if !(cos_o > super::microfacet::MIN_COSINE && cos_i > super::microfacet::MIN_COSINE)
             || below_surface(hit, wi)
         {
             return Vec3::ZERO;
         }
         let h = (wo + wi).normalize();
-        let a = self.alpha();
+        let a = self.alpha() * self.alpha();
         let sin2 = (1.0 - h.dot(n).powi(2)).max(0.0);
         let d = (2.0 + 1.0 / a) * sin2.powf(0.5 / a) * (0.5 * std::f32::consts::FRAC_1_PI);
-        let v = 1.0 / ((1.0 + lambda32(cos_o, a) + lambda32(cos_i, a)) * 4.0 * cos_o);
+        // The visibility clamped to 1, as the sample renderer clamps it; times cos_i.
+        let v = (1.0 / ((1.0 + lambda32(cos_o, a) + lambda32(cos_i, a)) * 4.0 * cos_o * cos_i))
+            .min(1.0)
+            * cos_i;
         self.color * (d * v)
     }
 }
@@ -208,17 +219,17 @@ fn lambda32(cos: f32, a: f32) -> f32 {
     if cos < 0.5 {
         l(cos).exp()
     } else {
-        (2.0 * l(0.5) - l(1.0 - cos)).exp()
+        (2.0 * l(0.5) - l((1.0 - cos).max(0.0))).exp()
     }
 }
 
-/// E(cos, a) read off [`albedo_table`], bilinear between its entries (twin:
+/// E(cos, roughness) read off [`albedo_table`], bilinear between its entries (twin:
 /// `sheen_albedo` in `shaders/sheen.wgsl`).
-pub fn albedo(cos: f32, a: f32) -> f32 {
+pub fn albedo(cos: f32, roughness: f32) -> f32 {
     let table = albedo_table();
     let last = (TABLE_SIZE - 1) as f32;
     let x = cos.clamp(0.0, 1.0) * last;
-    let y = ((a - MIN_ROUGHNESS) / (1.0 - MIN_ROUGHNESS)).clamp(0.0, 1.0) * last;
+    let y = ((roughness - MIN_ROUGHNESS) / (1.0 - MIN_ROUGHNESS)).clamp(0.0, 1.0) * last;
     let (i, j) = (
         (x as usize).min(TABLE_SIZE - 2),
         (y as usize).min(TABLE_SIZE - 2),

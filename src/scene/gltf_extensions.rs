@@ -147,6 +147,21 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
         .materials()
         .filter_map(|m| m.extension_value(SHEEN).cloned())
         .collect();
+    let least = crate::material::sheen::MIN_ROUGHNESS as f64;
+    let smooth = (sheened.iter())
+        .filter(|ext| {
+            ext.get("sheenRoughnessFactor")
+                .and_then(Value::as_f64)
+                .unwrap_or(0.0)
+                < least
+        })
+        .count();
+    if smooth > 0 {
+        out.push(format!(
+            "{SHEEN}.sheenRoughnessFactor below {least} ({smooth} material{}: taken as {least})",
+            plural(smooth)
+        ));
+    }
     let how = [": its mean colour stands in", ""];
     for (texture, how) in SHEEN_TEXTURES.into_iter().zip(how) {
         let n = sheened

@@ -1234,13 +1234,21 @@ fn a_sheen_is_read_and_its_textures_named() {
     assert!(notes.is_empty(), "{notes:?}");
     let (sheen, notes) = read(velvet(r#"{ "sheenRoughnessFactor": 0.8 }"#), extra);
     assert!(sheen.is_none() && notes.is_empty(), "{sheen:?} {notes:?}");
+    let (_, notes) = read(velvet(r#"{ "sheenColorFactor": [1, 1, 1] }"#), extra);
+    assert!(
+        notes.len() == 1
+            && notes[0].contains("sheenRoughnessFactor below 0.25 (1 material: taken as 0.25)"),
+        "{notes:?}"
+    );
     image::RgbImage::from_pixel(1, 1, image::Rgb([200, 200, 200]))
         .save(dir.path().join("s.png"))
         .expect("writes");
     let images =
         format!(r#"{extra} "textures": [{{ "source": 0 }}], "images": [{{ "uri": "s.png" }}],"#);
     let (sheen, notes) = read(
-        velvet(r#"{ "sheenColorFactor": [1, 1, 1], "sheenColorTexture": { "index": 0 } }"#),
+        velvet(
+            r#"{ "sheenColorFactor": [1, 1, 1], "sheenRoughnessFactor": 0.5, "sheenColorTexture": { "index": 0 } }"#,
+        ),
         &images,
     );
     // The texture's mean colour stands in for it: 200 in sRGB is 0.578 linear.

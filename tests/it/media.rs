@@ -695,15 +695,15 @@ fn absorbing_volumes_render_alike_every_way() {
             common::object(
                 quad(
                     Vec3::new(-1.0, 3.0, -1.0),
-                    Vec3::new(0.0, 0.0, 2.0),
                     Vec3::new(2.0, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, 2.0),
                 ),
                 4,
             ),
         ];
         common::scene(
-            Vec3::new(0.0, 1.6, 4.0),
-            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::new(-0.5, 1.0, 2.6),
+            Vec3::new(-0.6, 0.5, 0.0),
             40.0,
             Background::Constant(Vec3::splat(0.1)),
             materials,

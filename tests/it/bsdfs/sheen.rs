@@ -275,3 +275,72 @@ fn bad_sheens_are_located_errors() {
         ],
     );
 }
+
+/// A scene whose only extra is a sheen (a velvet sphere on a floor under a lamp, no texture,
+/// no sky: the kernel's image array is there for the sheen's table alone) renders the same
+/// estimator every way (`common::renders_alike_every_way`: naive vs nee on the CPU, the GPU
+/// against the CPU, Welch z + Sidak at family-wise 0.01); negative control: the lamp 2%
+/// brighter, on the GPU (the sheen's colour 2% dimmer moves only its rims: not caught).
+#[test]
+fn a_sheen_alone_renders_alike_every_way() {
+    use rt_gpu::material::{Lambertian, Light};
+    use rt_gpu::scene::{Background, Shape};
+    let scene = |brighter: f32| {
+        let velvet = Pbr::new(
+            Texture::Colour(Vec3::new(0.3, 0.02, 0.05)),
+            0.0,
+            0.9,
+            1.5,
+            0.0,
+        )
+        .with_sheen(Some(Sheen {
+            color: Vec3::new(1.0, 0.7, 0.6),
+            roughness: 0.4,
+        }));
+        let materials = vec![
+            Material::Lambertian(Lambertian {
+                albedo: Vec3::splat(0.6).into(),
+                emission: Vec3::ZERO,
+                normal_map: None,
+            }),
+            Material::Pbr(velvet),
+            Material::Light(Light {
+                radiance: Vec3::splat(8.0 * brighter).into(),
+                strength: 1.0,
+                two_sided: false,
+                alpha: None,
+            }),
+        ];
+        let objects = vec![
+            common::object(
+                Shape::quad(
+                    Vec3::new(-3.0, 0.0, 3.0),
+                    Vec3::new(6.0, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, -6.0),
+                ),
+                0,
+            ),
+            common::object(Shape::sphere(Vec3::new(0.0, 0.8, 0.0), 0.8), 1),
+            common::object(
+                Shape::quad(
+                    Vec3::new(-0.6, 2.6, -0.6),
+                    Vec3::new(1.2, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, 1.2),
+                ),
+                2,
+            ),
+        ];
+        common::scene(
+            Vec3::new(0.0, 1.2, 3.2),
+            Vec3::new(0.0, 0.7, 0.0),
+            40.0,
+            Background::Constant(Vec3::splat(0.05)),
+            materials,
+            objects,
+        )
+    };
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene(1.0), 8, 8).expect("valid");
+    let images: usize = flat.materials.iter().map(|m| m.images().len()).sum();
+    assert_eq!(images, 1, "the sheen's table alone");
+    common::renders_alike_every_way("a sheen alone", &scene(1.0), || scene(1.02));
+}
