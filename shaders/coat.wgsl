@@ -103,10 +103,7 @@ fn coat_sample(albedo: vec3f, ior: f32, alpha: f32, k: f32, saturates: bool, tab
         let mf = ggx_sample_visible(alpha, wo_local, u1, u2);
         wi = to_world(frame, reflect_dir(-wo_local, mf));
     } else {
-        // normal + a uniform unit vector is cosine-distributed about the normal.
-        let d = hit.shading + unit_vector(u1, u2);
-        let len2 = dot(d, d);
-        wi = select(hit.shading, d / sqrt(len2), len2 > 1e-12);
+        wi = cosine_direction(hit.shading, u1, u2);
     }
     let pdf = coat_pdf(albedo, ior, alpha, table, wo, wi, hit);
     if !(pdf > 0.0) {

@@ -26,6 +26,14 @@ fn basis(n: vec3f) -> Basis {
     );
 }
 
+// A direction cosine-distributed about unit n from two uniform numbers: n plus a uniform
+// unit vector, normalised (n itself where they cancel; twin: warp::cosine_direction).
+fn cosine_direction(n: vec3f, u1: f32, u2: f32) -> vec3f {
+    let d = n + unit_vector(u1, u2);
+    let len2 = dot(d, d);
+    return select(n, d / sqrt(len2), len2 > 1e-12);
+}
+
 // Uniform on the unit disk (the lens, disk lights).
 fn unit_disk(u1: f32, u2: f32) -> vec2f {
     let r = sqrt(u1);

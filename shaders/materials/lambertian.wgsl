@@ -14,12 +14,9 @@ fn lambertian_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
 }
 
 fn lambertian_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
-    // normal + a uniform unit vector is cosine-distributed about the normal.
     let u1 = sampler_next_in_group(sampler);
     let u2 = sampler_next_in_group(sampler);
-    let d = hit.shading + unit_vector(u1, u2);
-    let len2 = dot(d, d);
-    let wi = select(hit.shading, d / sqrt(len2), len2 > 1e-12);
+    let wi = cosine_direction(hit.shading, u1, u2);
     let lobe = select(0u, LOBE_REFLECTION | LOBE_DIFFUSE, !below_surface(hit, wi));
     return BsdfSample(albedo_at(m, hit), wi, cosine_pdf(hit, wi), lobe);
 }

@@ -140,10 +140,7 @@ fn pbr_sample_below(m: Material, p: PbrParams, wo: vec3f, hit: Hit, sampler: ptr
         if sampler_next(sampler) < chance {
             let u1 = sampler_next(sampler);
             let u2 = sampler_next(sampler);
-            let d = hit.shading + unit_vector(u1, u2);
-            let len2 = dot(d, d);
-            let wi = select(hit.shading, d / sqrt(len2), len2 > 1e-12);
-            return BsdfSample(vec3f(0.0), wi, 0.0, LOBE_REFLECTION | LOBE_GLOSSY);
+            return BsdfSample(vec3f(0.0), cosine_direction(hit.shading, u1, u2), 0.0, LOBE_REFLECTION | LOBE_GLOSSY);
         }
         // A delta of the mix keeps its weight: what shows through the sheen over the chance
         // of not picking it, 1.

@@ -22,7 +22,7 @@ use super::fresnel::{fresnel, refract_cos};
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::{BsdfSample, Lobe, reflect};
 use crate::shared::ray::{Hit, below_surface};
-use crate::shared::warp::{cosine_pdf, unit_vector};
+use crate::shared::warp::{cosine_direction, cosine_pdf};
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -137,16 +137,7 @@ impl Coat {
                 let m = ggx.sample_visible(wo_local, u1, u2);
                 frame.to_world(reflect(-wo_local, m))
             }
-            (false, _) => {
-                // normal + a uniform unit vector is cosine-distributed about the normal.
-                let d = hit.shading + unit_vector(u1, u2);
-                let len2 = d.length_squared();
-                if len2 > 1e-12 {
-                    d / len2.sqrt()
-                } else {
-                    hit.shading
-                }
-            }
+            (false, _) => cosine_direction(hit.shading, u1, u2),
         };
         let pdf = self.pdf(albedo, wo, wi, hit);
         if !(pdf > 0.0) {

@@ -3,7 +3,7 @@
 
 use crate::shared::feature::MaterialFeature;
 use super::{BsdfSample, Lobe, MaterialModel};
-use crate::shared::warp::{cosine_pdf, unit_vector};
+use crate::shared::warp::{cosine_direction, cosine_pdf};
 use crate::shared::ray::{Hit, below_surface};
 use crate::material::texture;
 use crate::assets::normal_map::NormalMap;
@@ -80,14 +80,8 @@ impl MaterialModel for Lambertian {
     }
 
     fn sample(&self, _wo: Vec3, hit: &Hit, sampler: &mut Sampler) -> Option<BsdfSample> {
-        // normal + a uniform unit vector is cosine-distributed about the normal.
-        let d = hit.shading + unit_vector(sampler.next_f32(), sampler.next_f32());
-        let len2 = d.length_squared();
-        let wi = if len2 > 1e-12 {
-            d / len2.sqrt()
-        } else {
-            hit.shading
-        };
+        let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+        let wi = cosine_direction(hit.shading, u1, u2);
         (!below_surface(hit, wi)).then(|| BsdfSample {
             weight: texture::albedo(&self.albedo, hit),
             wi,

@@ -415,10 +415,7 @@ impl Lobes {
         let chance = sheen.reflectance(wo.dot(hit.shading));
         if sampler.next_f32() < chance {
             let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
-            // normal + a uniform unit vector is cosine-distributed about the normal.
-            let d = hit.shading + crate::shared::warp::unit_vector(u1, u2);
-            let len2 = d.length_squared();
-            let wi = if len2 > 1e-12 { d / len2.sqrt() } else { hit.shading };
+            let wi = crate::shared::warp::cosine_direction(hit.shading, u1, u2);
             return Some(BsdfSample {
                 weight: Vec3::ZERO,
                 wi,

@@ -14,6 +14,15 @@ pub fn unit_vector(u1: f32, u2: f32) -> Vec3 {
     Vec3::new(r * cos, r * sin, z)
 }
 
+/// A direction cosine-distributed about unit `n` from two uniform numbers: `n` plus a
+/// uniform unit vector, normalised (`n` itself where they cancel).
+#[inline]
+pub fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let d = n + unit_vector(u1, u2);
+    let len2 = d.length_squared();
+    if len2 > 1e-12 { d / len2.sqrt() } else { n }
+}
+
 /// Uniform on the unit disk, as (x, y).
 #[inline]
 pub fn unit_disk(u1: f32, u2: f32) -> (f32, f32) {
