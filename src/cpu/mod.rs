@@ -22,7 +22,7 @@ use crate::options::{Integrator, RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
 use crate::shared::sampler::Sampler;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Mutex;
 
 /// The CPU reference as a [`RenderBackend`]: rayon over all cores.
 pub struct CpuBackend {
@@ -50,10 +50,14 @@ impl RenderBackend for CpuBackend {
         opts: &RenderOptions,
         on_progress: &(dyn Fn(f64) + Sync),
     ) -> anyhow::Result<Rendered> {
-        let rows = AtomicU32::new(0);
+        // Counted and reported under one lock: rows finish on many threads, and a count taken
+        // apart from its report could reach the caller after a later one (a progress bar, or a
+        // Python callback, sees the fraction go back).
+        let rows = Mutex::new(0u32);
         let (film, rays) = render_counting_rays(scene, opts, &|| {
-            let done = rows.fetch_add(1, Ordering::Relaxed) + 1;
-            on_progress(done as f64 / opts.height as f64);
+            let mut done = rows.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            *done += 1;
+            on_progress(*done as f64 / opts.height as f64);
         });
         Ok(Rendered {
             film,

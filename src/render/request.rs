@@ -132,9 +132,7 @@ impl Request {
         if self.checkpoint.is_none() && format != Some(ImageFormat::Exr) {
             return String::new();
         }
-        let digest = file::digest(&self.scene);
-        let files = crate::assets::inputs::identity_fields(&self.scene.inputs);
-        film_file::identity(digest, &files, self.backend, &self.opts, self.unspecialised)
+        identity(&self.scene, self.backend, &self.opts, self.unspecialised)
     }
 
     /// Claims the output (and checks the checkpoint can be claimed) now, so that an
@@ -240,6 +238,19 @@ impl Request {
             )
         })
     }
+}
+
+/// The identity a film file of `scene` rendered with `opts` on `backend` carries: what a film
+/// must share with another to resume or merge with it (the viewer's saved films carry it too).
+pub fn identity(
+    scene: &Scene,
+    backend: Backend,
+    opts: &RenderOptions,
+    unspecialised: bool,
+) -> String {
+    let digest = file::digest(scene);
+    let files = crate::assets::inputs::identity_fields(&scene.inputs);
+    film_file::identity(digest, &files, backend, opts, unspecialised)
 }
 
 /// What the passes left: the render, why they ended, the checkpoints still to finish and the

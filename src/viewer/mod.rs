@@ -8,7 +8,7 @@
 pub mod controls;
 pub mod film;
 
-use crate::film::file::{self as film_file, FilmMeta};
+use crate::film::file::FilmMeta;
 use crate::film::output::{PendingOutput, Transfer};
 use crate::gpu::display::{DisplayPass, read_texture, shows_levels_exactly};
 use crate::gpu::{Features, GpuContext};
@@ -772,9 +772,8 @@ impl Viewer {
             ..self.opts
         };
         let meta = FilmMeta {
-            identity: film_file::identity(
-                crate::scene::file::digest(&self.scene),
-                &crate::assets::inputs::identity_fields(&self.scene.inputs),
+            identity: crate::render::request::identity(
+                &self.scene,
                 config.backend,
                 &opts,
                 config.gpu.everything,

@@ -129,3 +129,41 @@ fn a_request_renders_the_plain_render_and_writes_its_output() {
     assert!(written.rendered.film == finished.rendered.film);
     assert!(std::fs::metadata(&path).expect("written").len() > 24 * 20 * 12);
 }
+
+/// The CPU's progress never goes back: rows finish on many threads, and a callback that takes
+/// its time (as a Python one does, waiting for the interpreter) still sees the fractions in
+/// order, ending at 1. (A count taken apart from its report once reached a Python callback
+/// after a later one.)
+#[test]
+fn the_cpus_progress_arrives_in_order() {
+    let scene = builtin("cornell").expect("built-in");
+    let opts = common::opts(4, 400, 1, 4, 0);
+    let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 4, 400).expect("valid");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .expect("a pool");
+    for _ in 0..5 {
+        let seen = std::sync::Mutex::new(Vec::new());
+        pool.install(|| {
+            rt_gpu::render::render(
+                rt_gpu::render::Backend::Cpu,
+                &Default::default(),
+                &flat,
+                &opts,
+                &|f| {
+                    std::thread::yield_now();
+                    seen.lock().expect("not poisoned").push(f);
+                },
+            )
+        })
+        .expect("renders");
+        let seen = seen.into_inner().expect("not poisoned");
+        assert_eq!(seen.len(), 400);
+        assert!(
+            seen.windows(2).all(|w| w[0] < w[1]),
+            "out of order: {seen:?}"
+        );
+        assert_eq!(seen.last(), Some(&1.0));
+    }
+}

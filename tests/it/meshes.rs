@@ -189,36 +189,32 @@ fn write_gltf(dir: &Path) -> std::path::PathBuf {
     for i in [0u16, 1, 2, 0] {
         bin.extend(i.to_le_bytes());
     }
-    write(dir, "model.bin", &bin);
-    let json = r#"{
-  "asset": { "version": "2.0" },
-  "extensionsUsed": ["KHR_materials_emissive_strength"],
-  "buffers": [{ "uri": "model.bin", "byteLength": 44 }],
-  "bufferViews": [
-    { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
-    { "buffer": 0, "byteOffset": 36, "byteLength": 6 }
-  ],
-  "accessors": [
-    { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
-    { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
-  ],
-  "materials": [
-    { "name": "Lamp", "emissiveFactor": [1, 0.5, 0.25], "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4 } } },
-    { "name": "Gold", "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.8, 0.1, 1], "metallicFactor": 1, "roughnessFactor": 0.2 } }
-  ],
-  "meshes": [
-    { "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "material": 0 }] },
-    { "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "material": 1 }] }
-  ],
-  "nodes": [
-    { "name": "Parent", "translation": [10, 0, 0], "children": [1] },
-    { "name": "Child", "scale": [2, 2, 2], "mesh": 0 },
-    { "name": "Other", "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,5,0,1], "mesh": 1 }
-  ],
-  "scenes": [{ "nodes": [0, 2] }],
-  "scene": 0
-}"#;
-    write(dir, "model.gltf", json.as_bytes())
+    let doc = serde_json::json!({
+      "extensionsUsed": ["KHR_materials_emissive_strength"],
+      "bufferViews": [
+        { "buffer": 0, "byteOffset": 0, "byteLength": 36 },
+        { "buffer": 0, "byteOffset": 36, "byteLength": 6 }
+      ],
+      "accessors": [
+        { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
+        { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" }
+      ],
+      "materials": [
+        { "name": "Lamp", "emissiveFactor": [1, 0.5, 0.25], "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4 } } },
+        { "name": "Gold", "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.8, 0.1, 1], "metallicFactor": 1, "roughnessFactor": 0.2 } }
+      ],
+      "meshes": [
+        { "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "material": 0 }] },
+        { "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "material": 1 }] }
+      ],
+      "nodes": [
+        { "name": "Parent", "translation": [10, 0, 0], "children": [1] },
+        { "name": "Child", "scale": [2, 2, 2], "mesh": 0 },
+        { "name": "Other", "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,5,0,1], "mesh": 1 }
+      ],
+      "scenes": [{ "nodes": [0, 2] }]
+    });
+    common::gltf::write_document(dir, "model", doc, &bin)
 }
 
 #[test]
@@ -475,20 +471,16 @@ fn vertex_normals_shade_and_transform() {
     for n in [[h, 0.0, h], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]] {
         bin.extend(n.iter().flat_map(|x| x.to_le_bytes()));
     }
-    write(dir.path(), "n.bin", &bin);
-    let json = r#"{
-  "asset": { "version": "2.0" },
-  "buffers": [{ "uri": "n.bin", "byteLength": 72 }],
-  "bufferViews": [{ "buffer": 0, "byteOffset": 0, "byteLength": 36 }, { "buffer": 0, "byteOffset": 36, "byteLength": 36 }],
-  "accessors": [
-    { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
-    { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3" }
-  ],
-  "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "NORMAL": 1 } }] }],
-  "nodes": [{ "name": "Stretched", "scale": [1, 1, 4], "mesh": 0 }],
-  "scenes": [{ "nodes": [0] }]
-}"#;
-    let path = write(dir.path(), "n.gltf", json.as_bytes());
+    let doc = serde_json::json!({
+      "bufferViews": [{ "buffer": 0, "byteOffset": 0, "byteLength": 36 }, { "buffer": 0, "byteOffset": 36, "byteLength": 36 }],
+      "accessors": [
+        { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
+        { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3" }
+      ],
+      "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0, "NORMAL": 1 } }] }],
+      "nodes": [{ "name": "Stretched", "scale": [1, 1, 4], "mesh": 0 }]
+    });
+    let path = common::gltf::write_document(dir.path(), "n", doc, &bin);
     let parts = mesh::load(&path, "n.gltf", None).expect("loads");
     let n = parts[0].normals[0];
     let expected = Vec3::new(1.0, 0.0, 0.25).normalize();
@@ -561,25 +553,7 @@ fn primitive_gltf(
         "bufferViews": views,
         "accessors": accessors,
     });
-    written_gltf(dir, name, doc, &bin)
-}
-
-/// `doc` (its nodes, meshes, views and accessors) written as `name`.gltf in `dir`, its one
-/// buffer `bin` beside it, node 0 its scene.
-fn written_gltf(
-    dir: &std::path::Path,
-    name: &str,
-    mut doc: serde_json::Value,
-    bin: &[u8],
-) -> std::path::PathBuf {
-    std::fs::write(dir.join(format!("{name}.bin")), bin).expect("writes");
-    doc["asset"] = serde_json::json!({ "version": "2.0" });
-    doc["scene"] = 0.into();
-    doc["scenes"] = serde_json::json!([{ "nodes": [0] }]);
-    doc["buffers"] = serde_json::json!([{ "byteLength": bin.len(), "uri": format!("{name}.bin") }]);
-    let path = dir.join(format!("{name}.gltf"));
-    std::fs::write(&path, doc.to_string()).expect("writes");
-    path
+    common::gltf::write_document(dir, name, doc, &bin)
 }
 
 /// Issue 62: triangle strips and fans are drawn as the triangle lists they stand for (only
@@ -711,7 +685,7 @@ fn instanced_gltf(
         "bufferViews": views,
         "accessors": accessors,
     });
-    written_gltf(dir, name, doc, &bin)
+    common::gltf::write_document(dir, name, doc, &bin)
 }
 
 /// Issue 62: EXT_mesh_gpu_instancing places a node's mesh once per instance, each by its
@@ -851,7 +825,7 @@ fn quantized_gltf(dir: &std::path::Path, name: &str, used: bool) -> std::path::P
             { "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" }
         ],
     });
-    written_gltf(dir, name, doc, &bin)
+    common::gltf::write_document(dir, name, doc, &bin)
 }
 
 /// Issue 62: KHR_mesh_quantization's integer attributes read as the extension defines them

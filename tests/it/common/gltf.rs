@@ -1,5 +1,6 @@
 //! The glTF files the loader's tests write: one triangle, its buffer beside it, and whatever
-//! material, nodes and top-level members a test adds (cameras, lights, textures, images).
+//! material, nodes and top-level members a test adds (cameras, lights, textures, images); or
+//! any document a test builds, its one buffer written beside it.
 
 use std::path::{Path, PathBuf};
 
@@ -57,5 +58,21 @@ pub fn write_triangle(
     );
     let path = dir.join(name);
     std::fs::write(&path, json).expect("writes");
+    path
+}
+
+/// `doc` (its nodes, meshes, views, accessors and anything else) written as `name`.gltf in
+/// `dir`, with its asset version, its one buffer `bin` as `name`.bin beside it, and node 0 its
+/// scene unless `doc` names its scenes.
+pub fn write_document(dir: &Path, name: &str, mut doc: serde_json::Value, bin: &[u8]) -> PathBuf {
+    std::fs::write(dir.join(format!("{name}.bin")), bin).expect("writes");
+    doc["asset"] = serde_json::json!({ "version": "2.0" });
+    doc["scene"] = 0.into();
+    if doc.get("scenes").is_none() {
+        doc["scenes"] = serde_json::json!([{ "nodes": [0] }]);
+    }
+    doc["buffers"] = serde_json::json!([{ "byteLength": bin.len(), "uri": format!("{name}.bin") }]);
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, doc.to_string()).expect("writes");
     path
 }
