@@ -59,6 +59,7 @@ READ = {
     "KHR_materials_clearcoat",
     "KHR_materials_volume",
     "KHR_materials_sheen",
+    "KHR_materials_specular",
     # Both renderers draw the default materials of a file with variants.
     "KHR_materials_variants",
     "EXT_mesh_gpu_instancing",
@@ -66,9 +67,8 @@ READ = {
     "KHR_texture_basisu",
 }
 # Extensions a model may use that neither renderer is compared on here: the material-extensions
-# issue (specular, anisotropy, ...) and compressed or variant files.
+# issue (anisotropy, ...) and compressed or variant files.
 UNCOMPARED = {
-    "KHR_materials_specular",
     "KHR_materials_anisotropy",
     "KHR_materials_iridescence",
     "KHR_materials_dispersion",

@@ -19,6 +19,11 @@ fn pbr_emitted(m: Material, hit: Hit) -> vec3f {
     return m.emission;
 }
 
+// Its dielectric's Fresnel reshaping (PbrParams' specular_*; NO_SPECULAR where it has none).
+fn pbr_specular(p: PbrParams) -> vec4f {
+    return vec4f(p.specular_factor, p.specular_f0);
+}
+
 fn schlick(f0: vec3f, cos: f32) -> vec3f {
     let x = pow(1.0 - clamp(cos, 0.0, 1.0), 5.0);
     return f0 + (vec3f(1.0) - f0) * x;
@@ -73,7 +78,7 @@ fn pbr_eval_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> ve
     let base = albedo_at(m, hit);
     var f = vec3f(0.0);
     if w_coat > 0.0 {
-        f += w_coat * coat_eval(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, wo, wi, hit);
+        f += w_coat * coat_eval(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, pbr_specular(p), wo, wi, hit);
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
@@ -94,7 +99,7 @@ fn pbr_pdf_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32
     let base = albedo_at(m, hit);
     var pdf = 0.0;
     if w_coat > 0.0 {
-        pdf += w_coat * coat_pdf(base, p.ior, p.alpha, NO_COAT_TABLE, wo, wi, hit);
+        pdf += w_coat * coat_pdf(base, p.ior, p.alpha, NO_COAT_TABLE, pbr_specular(p), wo, wi, hit);
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
@@ -223,7 +228,7 @@ fn pbr_sample_mix(m: Material, p: PbrParams, wo: vec3f, hit: Hit, sampler: ptr<f
         let v = sampler_next(sampler);
         let u1 = sampler_next(sampler);
         let u2 = sampler_next(sampler);
-        out = coat_sample(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, wo, hit, v, u1, u2);
+        out = coat_sample(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, pbr_specular(p), wo, hit, v, u1, u2);
     } else if u < w_coat + w_glass {
 //#if DIELECTRIC
         out = glass_sample(pbr_glass(p), wo, hit, sampler);

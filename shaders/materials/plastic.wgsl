@@ -10,12 +10,12 @@ fn plastic_table(m: Material) -> u32 {
 
 fn plastic_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
     let p = plastic_params(m);
-    return coat_eval(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, plastic_table(m), wo, wi, hit);
+    return coat_eval(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, plastic_table(m), NO_SPECULAR, wo, wi, hit);
 }
 
 fn plastic_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
     let p = plastic_params(m);
-    return coat_pdf(albedo_at(m, hit), p.ior, p.alpha, plastic_table(m), wo, wi, hit);
+    return coat_pdf(albedo_at(m, hit), p.ior, p.alpha, plastic_table(m), NO_SPECULAR, wo, wi, hit);
 }
 
 fn plastic_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
@@ -23,5 +23,5 @@ fn plastic_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampl
     let u1 = sampler_next_in_group(sampler);
     let u2 = sampler_next(sampler);
     let p = plastic_params(m);
-    return coat_sample(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, plastic_table(m), wo, hit, u, u1, u2);
+    return coat_sample(albedo_at(m, hit), p.ior, p.alpha, p.internal_reflectance, true, plastic_table(m), NO_SPECULAR, wo, hit, u, u1, u2);
 }

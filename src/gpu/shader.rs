@@ -38,6 +38,7 @@ const MODULES: &[(&str, &str)] = &[
         include_str!("../../shaders/normal_map.wgsl"),
     ),
     ("coat.wgsl", include_str!("../../shaders/coat.wgsl")),
+    ("specular.wgsl", include_str!("../../shaders/specular.wgsl")),
     (
         "environment.wgsl",
         include_str!("../../shaders/environment.wgsl"),

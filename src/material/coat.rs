@@ -20,6 +20,7 @@
 use super::coat_table::CoatTable;
 use super::fresnel::{fresnel, refract_cos};
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
+use super::specular::SpecularFresnel;
 use super::{BsdfSample, Lobe, reflect};
 use crate::shared::ray::{Hit, below_surface};
 use crate::shared::warp::{cosine_direction, cosine_pdf};
@@ -35,6 +36,9 @@ pub struct Coat {
     pub saturates: bool,
     /// A rough coat's tabulated opacity and K (plastic's), else none: smooth Fresnel's.
     pub table: Option<&'static CoatTable>,
+    /// Fresnel reshaped by glTF's specular strength and colour (pbr's; `material::specular`),
+    /// else none: Fresnel's own.
+    pub specular: Option<SpecularFresnel>,
 }
 
 impl Coat {
@@ -47,6 +51,22 @@ impl Coat {
             internal_reflectance: 1.0 - (1.0 - fresnel_mean(ior)) / (ior * ior),
             saturates,
             table: None,
+            specular: None,
+        }
+    }
+
+    /// The smooth-Fresnel coat with its Fresnel reshaped by `specular` (none: Fresnel's own),
+    /// its K following from its mean opacity as for Fresnel (so that a smooth coat over a white
+    /// base reflects everything).
+    pub fn with_specular(self, specular: Option<SpecularFresnel>) -> Self {
+        let mean = match specular {
+            Some(s) => s.mean_opacity(self.ior),
+            None => fresnel_mean(self.ior),
+        };
+        Coat {
+            internal_reflectance: 1.0 - (1.0 - mean) / (self.ior * self.ior),
+            specular,
+            ..self
         }
     }
 
@@ -70,9 +90,20 @@ impl Coat {
     /// not cross it: its table's, else smooth Fresnel's.
     #[inline]
     fn opacity(&self, cos: f32) -> f32 {
-        match self.table {
-            Some(table) => table.opacity(cos),
-            None => coat_fresnel(cos, self.ior),
+        match (self.table, self.specular) {
+            (Some(table), _) => table.opacity(cos),
+            (None, Some(specular)) => specular.opacity(cos, self.ior),
+            (None, None) => coat_fresnel(cos, self.ior),
+        }
+    }
+
+    /// What the coat's surface (or a microfacet of it) reflects at cosine `cos`: Fresnel, or
+    /// its specular reshaping (a colour).
+    #[inline]
+    fn reflectance(&self, cos: f32) -> Vec3 {
+        match self.specular {
+            Some(specular) => specular.reflectance(cos, self.ior),
+            None => Vec3::splat(coat_fresnel(cos, self.ior)),
         }
     }
 
@@ -126,8 +157,12 @@ impl Coat {
             (true, None) => {
                 let wi = reflect(-wo, hit.shading);
                 // The smooth coat's mirror: a delta lobe, weighed by its chance alone.
+                let reflected = match self.specular {
+                    Some(specular) => specular.reflectance(wo_local.z, self.ior),
+                    None => Vec3::splat(f_o),
+                };
                 return (!below_surface(hit, wi)).then(|| BsdfSample {
-                    weight: Vec3::splat(f_o / chance),
+                    weight: reflected / chance,
                     wi,
                     pdf: 0.0,
                     lobe: Lobe::DELTA_REFLECTION,
@@ -171,9 +206,9 @@ impl Coat {
             return base;
         };
         let m = (wo_local + wi_local).normalize();
-        let coat = coat_fresnel(wo_local.dot(m), self.ior) * ggx.d(m) * ggx.g2(wo_local, wi_local)
+        let coat = self.reflectance(wo_local.dot(m)) * ggx.d(m) * ggx.g2(wo_local, wi_local)
             / (4.0 * wo_local.z);
-        base + Vec3::splat(coat)
+        base + coat
     }
 
     /// The density of [`Coat::sample`] over its non-delta lobes.

@@ -356,6 +356,7 @@ pub mod fresnel;
 pub mod microfacet;
 pub mod microsurface;
 pub mod sheen;
+pub mod specular;
 pub mod texture;
 
 pub use bsdf::{BsdfSample, Lobe};

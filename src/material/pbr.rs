@@ -21,6 +21,7 @@ use crate::shared::feature::MaterialFeature;
 use std::sync::Arc;
 use super::clearcoat::{Clearcoat, CoatDirection};
 use super::sheen::Sheen;
+use super::specular::Specular;
 use super::coat::Coat;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
 use super::plastic::default_ior;
@@ -73,6 +74,9 @@ pub struct Pbr {
     /// Velvet's sheen over the mix, under any clear coat (glTF's KHR_materials_sheen;
     /// `material::sheen`); none where its colour is black.
     pub sheen: Option<Sheen>,
+    /// glTF's specular strength and colour on the dielectric's Fresnel (KHR_materials_specular;
+    /// `material::specular`), in its coat; none where they change nothing.
+    specular: Option<Specular>,
     /// What fills it where light enters through its glass ([`Self::volume`]); boxed, as few
     /// materials have one and every material is as large as the largest.
     volume: Option<Box<Volume>>,
@@ -112,6 +116,8 @@ struct PbrDoc {
     attenuation: Option<Attenuation>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     sheen: Option<Sheen>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    specular: Option<Specular>,
 }
 
 /// `attenuation = { color = [0.9, 0.6, 0.3], distance = 0.05 }`: the colour white light takes
@@ -143,6 +149,7 @@ impl TryFrom<PbrDoc> for Pbr {
             .with_emission(d.emission)
             .with_clearcoat(d.clearcoat)
             .with_sheen(d.sheen)
+            .with_specular(d.specular)
             .with_attenuation(d.attenuation.map(|a| (a.color, a.distance)))
     }
 }
@@ -160,6 +167,7 @@ impl From<Pbr> for PbrDoc {
             emission: p.emission,
             clearcoat: p.clearcoat,
             sheen: p.sheen,
+            specular: p.specular,
             attenuation: p.volume.map(|v| Attenuation {
                 color: v.color,
                 distance: v.distance,
@@ -197,6 +205,7 @@ impl Pbr {
             emission: None,
             clearcoat: None,
             sheen: None,
+            specular: None,
             volume: None,
             coat: Coat::new(ior, roughness, false),
         }
@@ -240,6 +249,22 @@ impl Pbr {
             sheen: sheen.filter(|s| s.color.max_element() > 0.0),
             ..self
         }
+    }
+
+    /// This material with its dielectric's Fresnel reshaped by `specular` (none where it
+    /// changes nothing).
+    pub fn with_specular(self, specular: Option<Specular>) -> Self {
+        let specular = specular.filter(|s| !s.is_default());
+        Pbr {
+            coat: self.coat.with_specular(specular.map(|s| s.fresnel(self.ior))),
+            specular,
+            ..self
+        }
+    }
+
+    /// Its specular strength and colour, where they change anything.
+    pub fn specular(&self) -> Option<&Specular> {
+        self.specular.as_ref()
     }
 
     /// This material filled, where light enters through its glass, with a medium that
@@ -598,6 +623,10 @@ material_params! {
         /// distribution's a).
         sheen_color: [f32; 3],
         sheen_roughness: f32,
+        /// The specular factor (below 0: none, Fresnel's own) and coloured F0
+        /// (`SpecularFresnel`).
+        specular_factor: f32,
+        specular_f0: [f32; 3],
     }
 }
 
@@ -618,6 +647,7 @@ impl MaterialModel for Pbr {
         MaterialFeature::Media,
         MaterialFeature::Absorption,
         MaterialFeature::Sheen,
+        MaterialFeature::Specular,
     ];
     /// Emissive pbr.
     const EMITS_UNDER: Option<MaterialFeature> = Some(MaterialFeature::PbrEmission);
@@ -640,6 +670,9 @@ impl MaterialModel for Pbr {
         }
         if let Some(sheen) = &self.sheen {
             sheen.validate()?;
+        }
+        if let Some(specular) = &self.specular {
+            specular.validate()?;
         }
         if let Some(volume) = self.volume() {
             volume.check()?;
@@ -666,6 +699,7 @@ impl MaterialModel for Pbr {
         let rough = (self.roughness * self.roughness >= MIN_ALPHA || rough_coat).then_some(MaterialFeature::Microfacet);
         let clearcoat = self.clearcoat.map(|_| MaterialFeature::Clearcoat);
         let sheen = self.sheen.map(|_| MaterialFeature::Sheen);
+        let specular = self.specular.map(|_| MaterialFeature::Specular);
         let volume = self.volume().map_or_else(Vec::new, Medium::features);
         // A metallic-roughness image may take metallic to 0 anywhere (as `samples_lights`).
         let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
@@ -681,6 +715,7 @@ impl MaterialModel for Pbr {
             .chain(glass)
             .chain(clearcoat)
             .chain(sheen)
+            .chain(specular)
             .chain(volume)
             .chain(image)
             .chain(alpha)
@@ -781,6 +816,8 @@ impl MaterialModel for Pbr {
                 clearcoat_alpha: self.clearcoat.map_or(0.0, |c| c.alpha()),
                 sheen_color: self.sheen.map_or([0.0; 3], |s| s.color.to_array()),
                 sheen_roughness: self.sheen.map_or(0.0, |s| s.alpha()),
+                specular_factor: self.coat.specular.map_or(-1.0, |s| s.factor),
+                specular_f0: self.coat.specular.map_or([0.0; 3], |s| s.f0.to_array()),
             }
             .words(),
             parameter_image_size: size,

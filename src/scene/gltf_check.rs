@@ -31,6 +31,7 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<gltf::Gltf, String> {
             super::gltf_extensions::CLEARCOAT,
             super::gltf_extensions::VOLUME,
             super::gltf_extensions::SHEEN,
+            super::gltf_extensions::SPECULAR,
         ]
         .contains(&e.as_str())
     });

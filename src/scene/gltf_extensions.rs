@@ -1,13 +1,15 @@
 //! glTF's material extensions beyond the metallic-roughness core that the `gltf` crate does not
-//! parse (KHR_materials_clearcoat, KHR_materials_sheen), read from a material's extension JSON
+//! parse (KHR_materials_clearcoat, KHR_materials_sheen, KHR_materials_specular), read from a material's extension JSON
 //! with the specification's defaults, and what of them is not rendered (for the file's note).
 
 use crate::material::clearcoat::Clearcoat;
 use crate::material::sheen::Sheen;
+use crate::material::specular::Specular;
 use serde_json::Value;
 
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub const SHEEN: &str = "KHR_materials_sheen";
+pub const SPECULAR: &str = "KHR_materials_specular";
 /// Read through the `gltf` crate (`Material::volume`), whose validation nonetheless refuses it
 /// as required.
 pub const VOLUME: &str = "KHR_materials_volume";
@@ -21,6 +23,9 @@ const CLEARCOAT_TEXTURES: [&str; 3] = [
 
 /// The textures of KHR_materials_sheen, which are not mapped: the colour's mean stands in.
 const SHEEN_TEXTURES: [&str; 2] = ["sheenColorTexture", "sheenRoughnessTexture"];
+
+/// The textures of KHR_materials_specular, none of which is read yet.
+const SPECULAR_TEXTURES: [&str; 2] = ["specularTexture", "specularColorTexture"];
 
 /// A number field of extension `name`'s object: its default where absent, an error naming it
 /// where it is not a number in [0, 1].
@@ -106,6 +111,38 @@ pub fn sheen(
     Ok((color.max_element() > 0.0).then_some(Sheen { color, roughness }))
 }
 
+/// `m`'s specular strength and colour (KHR_materials_specular's specularFactor, default 1, in
+/// [0, 1]; specularColorFactor, default white, any three numbers >= 0), `None` where it has
+/// no such extension.
+pub fn specular(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Specular>, String> {
+    let Some(ext) = extension(m, SPECULAR, at)? else {
+        return Ok(None);
+    };
+    let factor = unit_factor((SPECULAR, ext), "specularFactor", 1.0, at)?;
+    let color = match ext.get("specularColorFactor") {
+        None => glam::Vec3::ONE,
+        Some(v) => {
+            let numbers: Option<Vec<f64>> = v
+                .as_array()
+                .and_then(|a| a.iter().map(Value::as_f64).collect());
+            match numbers.as_deref() {
+                Some(&[r, g, b])
+                    if [r, g, b].iter().all(|x| *x >= 0.0 && *x <= f32::MAX as f64) =>
+                {
+                    glam::Vec3::new(r as f32, g as f32, b as f32)
+                }
+                _ => {
+                    return Err(format!(
+                        "{}: its {SPECULAR}.specularColorFactor is {v}; glTF requires three numbers >= 0",
+                        at()
+                    ));
+                }
+            }
+        }
+    };
+    Ok(Some(Specular { factor, color }))
+}
+
 /// `m`'s clear coat (KHR_materials_clearcoat's clearcoatFactor and clearcoatRoughnessFactor,
 /// defaults 0), `None` where it has none or its factor is 0. `at` names the material in
 /// errors.
@@ -174,6 +211,31 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
                 plural(n)
             ));
         }
+    }
+    let speculars: Vec<(bool, Value)> = document
+        .materials()
+        .filter_map(|m| {
+            let transmits = m
+                .transmission()
+                .is_some_and(|t| t.transmission_factor() > 0.0);
+            Some((transmits, m.extension_value(SPECULAR)?.clone()))
+        })
+        .collect();
+    for texture in SPECULAR_TEXTURES {
+        let n = speculars
+            .iter()
+            .filter(|(_, ext)| ext.get(texture).is_some())
+            .count();
+        if n > 0 {
+            out.push(format!("{SPECULAR}.{texture} ({n} material{})", plural(n)));
+        }
+    }
+    let transmitting = speculars.iter().filter(|(transmits, _)| *transmits).count();
+    if transmitting > 0 {
+        out.push(format!(
+            "{SPECULAR} on transmission ({transmitting} material{}: the glass keeps its index's Fresnel)",
+            plural(transmitting)
+        ));
     }
     let mapped = coated.iter().filter(|(mapped, _)| *mapped).count();
     if mapped > 0 {

@@ -463,10 +463,11 @@ fn read_checked_extras(path: &Path, source: &str) -> Result<FileExtras, String> 
 }
 
 /// Extensions whose content rt-gpu reads.
-const READ_EXTENSIONS: [&str; 11] = [
+const READ_EXTENSIONS: [&str; 12] = [
     "EXT_mesh_gpu_instancing",
     super::gltf_extensions::CLEARCOAT,
     super::gltf_extensions::SHEEN,
+    super::gltf_extensions::SPECULAR,
     "KHR_lights_punctual",
     "KHR_mesh_quantization",
     "KHR_materials_emissive_strength",

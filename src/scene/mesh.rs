@@ -1569,6 +1569,7 @@ fn material_of(
         &mut |i| textures.mean_colour(i),
         &at,
     )?)
+    .with_specular(super::gltf_extensions::specular(m, &at)?)
     .with_attenuation(volume_of(m))
     .map_err(|e| format!("{}: {e}", at()))?;
     out.transmission_in_red = transmission_in_red;

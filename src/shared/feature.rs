@@ -61,6 +61,7 @@ material_features! {
     Clearcoat = "CLEARCOAT",
     Absorption = "ABSORPTION",
     Sheen = "SHEEN",
+    Specular = "SPECULAR",
 }
 
 impl MaterialFeature {

@@ -63,30 +63,23 @@ impl WgslType for [f32; 2] {
     }
 }
 
-impl WgslType for [[u32; 4]; 2] {
-    const WGSL: &'static str = "array<vec4u, 2>";
-    fn literal(&self) -> String {
-        let [a, b] = self.map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]));
-        format!("array<vec4u, 2>({a}, {b})")
-    }
+/// Arrays of `vec4u`: the material parameters' words, and others.
+macro_rules! vec4u_arrays {
+    ($($n:literal),+) => {$(
+        impl WgslType for [[u32; 4]; $n] {
+            const WGSL: &'static str = concat!("array<vec4u, ", $n, ">");
+            fn literal(&self) -> String {
+                let items: Vec<String> = self
+                    .iter()
+                    .map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]))
+                    .collect();
+                format!("array<vec4u, {}>({})", $n, items.join(", "))
+            }
+        }
+    )+};
 }
 
-impl WgslType for [[u32; 4]; 3] {
-    const WGSL: &'static str = "array<vec4u, 3>";
-    fn literal(&self) -> String {
-        let [a, b, c] = self.map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]));
-        format!("array<vec4u, 3>({a}, {b}, {c})")
-    }
-}
-
-impl WgslType for [[u32; 4]; 4] {
-    const WGSL: &'static str = "array<vec4u, 4>";
-    fn literal(&self) -> String {
-        let [a, b, c, d] =
-            self.map(|v| format!("vec4u({}u, {}u, {}u, {}u)", v[0], v[1], v[2], v[3]));
-        format!("array<vec4u, 4>({a}, {b}, {c}, {d})")
-    }
-}
+vec4u_arrays!(2, 3, 4, 5);
 
 impl WgslType for [u32; 2] {
     const WGSL: &'static str = "vec2u";

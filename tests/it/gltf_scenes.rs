@@ -1265,3 +1265,83 @@ fn a_sheen_is_read_and_its_textures_named() {
         "{notes:?}"
     );
 }
+
+/// Issue 63: KHR_materials_specular's factors are read onto the pbr material, required or not
+/// (the defaults, factor 1 and white, change nothing: no specular; a colour above 1 is the
+/// extension's, allowed); bad values are one-line errors naming the field; its textures, and
+/// the extension on transmission, are named in the note.
+#[test]
+fn a_specular_is_read_and_what_is_not_named() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let extra = r#""extensionsUsed": ["KHR_materials_specular", "KHR_materials_transmission"], "extensionsRequired": ["KHR_materials_specular"],"#;
+    let material = |ext: &str, more: &str| {
+        format!(
+            r#"{{ "name": "Glaze", "pbrMetallicRoughness": {{ "metallicFactor": 0 }}, "extensions": {{ "KHR_materials_specular": {ext} {more} }} }}"#
+        )
+    };
+    let mut case = 0;
+    let mut read = |material: String, extra: &str| {
+        case += 1;
+        let name = format!("specular{case}.gltf");
+        let path = common::gltf::write_triangle(dir.path(), &name, true, &material, "", extra);
+        load(&path, &name, None).map(|(scene, notes)| match &scene.materials[0] {
+            rt_gpu::scene::Material::Pbr(p) => (p.specular().copied(), notes),
+            other => panic!("{other:?}"),
+        })
+    };
+    let (specular, notes) = read(
+        material(
+            r#"{ "specularFactor": 0.3, "specularColorFactor": [1, 0.5, 25] }"#,
+            "",
+        ),
+        extra,
+    )
+    .expect("loads");
+    let specular = specular.expect("a specular");
+    assert_eq!(
+        (specular.factor, specular.color),
+        (0.3, Vec3::new(1.0, 0.5, 25.0))
+    );
+    assert!(notes.is_empty(), "{notes:?}");
+    let (specular, notes) = read(material("{}", ""), extra).expect("loads");
+    assert!(
+        specular.is_none() && notes.is_empty(),
+        "{specular:?} {notes:?}"
+    );
+    for (ext, field) in [
+        (r#"{ "specularFactor": 1.5 }"#, "specularFactor is 1.5"),
+        (
+            r#"{ "specularColorFactor": [1, -1, 1] }"#,
+            "specularColorFactor is [1,-1,1]",
+        ),
+        (
+            r#"{ "specularColorFactor": "white" }"#,
+            "specularColorFactor",
+        ),
+    ] {
+        let error = read(material(ext, ""), extra).expect_err("a bad value");
+        assert!(error.contains(field) && !error.contains('\n'), "{error}");
+    }
+    image::RgbaImage::from_pixel(1, 1, image::Rgba([200, 200, 200, 255]))
+        .save(dir.path().join("s.png"))
+        .expect("writes");
+    let images =
+        format!(r#"{extra} "textures": [{{ "source": 0 }}], "images": [{{ "uri": "s.png" }}],"#);
+    let (specular, notes) = read(
+        material(
+            r#"{ "specularFactor": 0.5, "specularTexture": { "index": 0 }, "specularColorTexture": { "index": 0 } }"#,
+            r#", "KHR_materials_transmission": { "transmissionFactor": 0.5 }"#,
+        ),
+        &images,
+    )
+    .expect("loads");
+    assert_eq!(specular.map(|s| s.factor), Some(0.5));
+    let note = notes.join(" ");
+    for named in [
+        "KHR_materials_specular.specularTexture (1 material)",
+        "KHR_materials_specular.specularColorTexture (1 material)",
+        "KHR_materials_specular on transmission (1 material: the glass keeps its index's Fresnel)",
+    ] {
+        assert!(note.contains(named), "{named} not in {notes:?}");
+    }
+}

@@ -124,29 +124,11 @@ fn clearcoat_chi_square_detects_a_two_percent_wrong_pdf() {
 /// coat.
 #[test]
 fn clearcoat_eval_over_pdf_is_the_sampled_weight() {
-    let h = hit(Vec3::Z);
     for mix in MIXES {
         for (factor, coat_roughness) in [(1.0, 0.0), (1.0, 0.05), (0.6, 0.3), (1.0, 1.0)] {
             let m = coated(RED, mix, factor, coat_roughness);
-            let mut sampled = 0;
-            for i in 0..2000 {
-                let wo = upper(i, 3);
-                let mut sampler = Sampler::independent(i, 0, 4);
-                let Some(s) = m.sample(wo, &h, &mut sampler) else {
-                    continue;
-                };
-                sampled += 1;
-                assert!(s.weight.is_finite() && s.pdf.is_finite(), "{s:?}");
-                if s.lobe.is_delta() {
-                    continue;
-                }
-                let label = format!("mix {mix:?}, coat {factor} {coat_roughness}, wo {wo}");
-                assert_eval_over_pdf_is_weight(&m, wo, &h, &s, &label);
-            }
-            assert!(
-                sampled > 1000,
-                "{mix:?} {factor} {coat_roughness}: {sampled}"
-            );
+            let label = format!("mix {mix:?}, coat {factor} {coat_roughness}");
+            assert_sampled_weights_are_eval_over_pdf(&m, &label);
         }
     }
 }

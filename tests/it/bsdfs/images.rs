@@ -11,6 +11,7 @@ use rt_gpu::assets::texture::Texture;
 use rt_gpu::material::clearcoat::Clearcoat;
 use rt_gpu::material::conductor::METALS;
 use rt_gpu::material::sheen::Sheen;
+use rt_gpu::material::specular::Specular;
 use rt_gpu::material::{Conductor, Dielectric, Pbr, Plastic};
 use rt_gpu::scene::builtin::builtin;
 use rt_gpu::scene::{Scene, Shape};
@@ -274,6 +275,27 @@ fn microfacet_kernel_matches_cpu() {
                 scene.materials.push(Material::Pbr(m));
                 scene.material_names.push(format!(
                     "sheen-{metallic}-{transmission}-{roughness}-{}",
+                    coat.is_some()
+                ));
+            }
+            // With a weaker, tinted specular (KHR_materials_specular), alone and under a coat.
+            for coat in [
+                None,
+                Some(Clearcoat {
+                    factor: 0.5,
+                    roughness: 0.2,
+                }),
+            ] {
+                let base = Texture::Colour(Vec3::new(0.8, 0.7, 0.2));
+                let m = Pbr::new(base, metallic, roughness, 1.5, transmission)
+                    .with_specular(Some(Specular {
+                        factor: 0.6,
+                        color: Vec3::new(2.0, 1.0, 0.3),
+                    }))
+                    .with_clearcoat(coat);
+                scene.materials.push(Material::Pbr(m));
+                scene.material_names.push(format!(
+                    "specular-{metallic}-{transmission}-{roughness}-{}",
                     coat.is_some()
                 ));
             }

@@ -1,4 +1,4 @@
-//! Microfacet BSDFs (conductors, rough glass, plastic, glTF's pbr and its clear coat): `sample` draws directions with exactly the
+//! Microfacet BSDFs (conductors, rough glass, plastic, glTF's pbr and its clear coat, sheen and specular): `sample` draws directions with exactly the
 //! density `pdf` reports (chi-square over a grid of roughness, indices and incident angles, with
 //! negative controls), `eval / pdf` is the sampled weight, `eval` is reciprocal, directional
 //! albedo stays <= 1 (the white furnace), the conductor's Fresnel term is the complex one, bad
@@ -19,6 +19,7 @@ mod microsurface;
 mod pbr;
 mod plastic;
 mod sheen;
+mod specular;
 
 use glam::Vec3;
 use rt_gpu::material::BsdfSample;
@@ -63,6 +64,27 @@ fn tilted(degrees: f32) -> (Vec3, Vec3) {
     let (theta, phi) = (degrees.to_radians(), 40f32.to_radians());
     let wo = (s * phi.cos() + t * phi.sin()) * theta.sin() + normal * theta.cos();
     (normal, wo.normalize())
+}
+
+/// At 2 000 random wo over a front face with normal +z, `m`'s samples are finite and, where
+/// not a delta, weigh `eval / pdf` at the sampled pdf (`assert_eval_over_pdf_is_weight`); more
+/// than 1 000 of them exist. `label` names the case.
+fn assert_sampled_weights_are_eval_over_pdf(m: &Material, label: &str) {
+    let h = hit(Vec3::Z);
+    let mut sampled = 0;
+    for i in 0..2000 {
+        let wo = upper(i, 3);
+        let mut sampler = Sampler::independent(i, 0, 4);
+        let Some(s) = m.sample(wo, &h, &mut sampler) else {
+            continue;
+        };
+        sampled += 1;
+        assert!(s.weight.is_finite() && s.pdf.is_finite(), "{label}: {s:?}");
+        if !s.lobe.is_delta() {
+            assert_eval_over_pdf_is_weight(m, wo, &h, &s, &format!("{label}, wo {wo}"));
+        }
+    }
+    assert!(sampled > 1000, "{label}: {sampled} sampled");
 }
 
 /// `pdf` at a sampled direction is the sampled pdf (within 1%: D changes by up to 2 / alpha
@@ -258,4 +280,60 @@ fn every_accepted_parameter_samples_finite_values() {
         materials.len()
     );
     assert!(invalid.is_empty(), "{invalid:#?}");
+}
+
+/// Where the sheen's and the specular's images are rendered: `spheres` (material, centre,
+/// radius) on a grey floor under a square lamp of radiance 8 x `brighter` 2.6 above it, seen
+/// from `camera` (from, at, vertical fov) under a constant `sky`. Materials and objects in that
+/// order: floor, spheres, lamp.
+fn on_a_lit_floor(
+    spheres: Vec<(Material, Vec3, f32)>,
+    brighter: f32,
+    (from, at, vfov): (Vec3, Vec3, f32),
+    sky: f32,
+) -> rt_gpu::scene::Scene {
+    use rt_gpu::material::{Lambertian, Light};
+    use rt_gpu::scene::{Background, Shape};
+    let mut materials = vec![Material::Lambertian(Lambertian {
+        albedo: Vec3::splat(0.6).into(),
+        emission: Vec3::ZERO,
+        normal_map: None,
+    })];
+    let mut objects = vec![common::object(
+        Shape::quad(
+            Vec3::new(-3.0, 0.0, 3.0),
+            Vec3::new(6.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, -6.0),
+        ),
+        0,
+    )];
+    for (material, centre, radius) in spheres {
+        materials.push(material);
+        objects.push(common::object(
+            Shape::sphere(centre, radius),
+            materials.len() as u32 - 1,
+        ));
+    }
+    materials.push(Material::Light(Light {
+        radiance: Vec3::splat(8.0 * brighter).into(),
+        strength: 1.0,
+        two_sided: false,
+        alpha: None,
+    }));
+    objects.push(common::object(
+        Shape::quad(
+            Vec3::new(-0.6, 2.6, -0.6),
+            Vec3::new(1.2, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.2),
+        ),
+        materials.len() as u32 - 1,
+    ));
+    common::scene(
+        from,
+        at,
+        vfov,
+        Background::Constant(Vec3::splat(sky)),
+        materials,
+        objects,
+    )
 }

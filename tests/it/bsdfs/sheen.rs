@@ -133,26 +133,13 @@ fn sheen_chi_square_detects_a_two_percent_wrong_pdf() {
 /// sheen.
 #[test]
 fn sheen_eval_over_pdf_is_the_sampled_weight() {
-    let h = hit(Vec3::Z);
     for mix in MIXES {
         for sheen_roughness in [0.0, 0.3, 1.0] {
             let m = sheened(RED, mix, VELVET, sheen_roughness);
-            let mut sampled = 0;
-            for i in 0..2000 {
-                let wo = upper(i, 3);
-                let mut sampler = Sampler::independent(i, 0, 4);
-                let Some(s) = m.sample(wo, &h, &mut sampler) else {
-                    continue;
-                };
-                sampled += 1;
-                assert!(s.weight.is_finite() && s.pdf.is_finite(), "{s:?}");
-                if s.lobe.is_delta() {
-                    continue;
-                }
-                let label = format!("mix {mix:?}, sheen {sheen_roughness}, wo {wo}");
-                assert_eval_over_pdf_is_weight(&m, wo, &h, &s, &label);
-            }
-            assert!(sampled > 1000, "{mix:?} {sheen_roughness}: {sampled}");
+            assert_sampled_weights_are_eval_over_pdf(
+                &m,
+                &format!("mix {mix:?}, sheen {sheen_roughness}"),
+            );
         }
     }
 }
@@ -283,8 +270,6 @@ fn bad_sheens_are_located_errors() {
 /// brighter, on the GPU (the sheen's colour 2% dimmer moves only its rims: not caught).
 #[test]
 fn a_sheen_alone_renders_alike_every_way() {
-    use rt_gpu::material::{Lambertian, Light};
-    use rt_gpu::scene::{Background, Shape};
     let scene = |brighter: f32| {
         let velvet = Pbr::new(
             Texture::Colour(Vec3::new(0.3, 0.02, 0.05)),
@@ -297,47 +282,9 @@ fn a_sheen_alone_renders_alike_every_way() {
             color: Vec3::new(1.0, 0.7, 0.6),
             roughness: 0.4,
         }));
-        let materials = vec![
-            Material::Lambertian(Lambertian {
-                albedo: Vec3::splat(0.6).into(),
-                emission: Vec3::ZERO,
-                normal_map: None,
-            }),
-            Material::Pbr(velvet),
-            Material::Light(Light {
-                radiance: Vec3::splat(8.0 * brighter).into(),
-                strength: 1.0,
-                two_sided: false,
-                alpha: None,
-            }),
-        ];
-        let objects = vec![
-            common::object(
-                Shape::quad(
-                    Vec3::new(-3.0, 0.0, 3.0),
-                    Vec3::new(6.0, 0.0, 0.0),
-                    Vec3::new(0.0, 0.0, -6.0),
-                ),
-                0,
-            ),
-            common::object(Shape::sphere(Vec3::new(0.0, 0.8, 0.0), 0.8), 1),
-            common::object(
-                Shape::quad(
-                    Vec3::new(-0.6, 2.6, -0.6),
-                    Vec3::new(1.2, 0.0, 0.0),
-                    Vec3::new(0.0, 0.0, 1.2),
-                ),
-                2,
-            ),
-        ];
-        common::scene(
-            Vec3::new(0.0, 1.2, 3.2),
-            Vec3::new(0.0, 0.7, 0.0),
-            40.0,
-            Background::Constant(Vec3::splat(0.05)),
-            materials,
-            objects,
-        )
+        let camera = (Vec3::new(0.0, 1.2, 3.2), Vec3::new(0.0, 0.7, 0.0), 40.0);
+        let sphere = (Material::Pbr(velvet), Vec3::new(0.0, 0.8, 0.0), 0.8);
+        on_a_lit_floor(vec![sphere], brighter, camera, 0.05)
     };
     let flat = rt_gpu::scene::flat::FlatScene::new(&scene(1.0), 8, 8).expect("valid");
     let images: usize = flat.materials.iter().map(|m| m.images().len()).sum();

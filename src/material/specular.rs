@@ -1,0 +1,121 @@
+//! glTF's specular strength and colour (KHR_materials_specular) on `pbr`'s dielectric coat
+//! (twin: `shaders/specular.wgsl`). The extension reshapes the dielectric's Fresnel:
+//!
+//! `Fr(cos) = f0 + (1 - f0) w(cos)`, `f0 = min(F(1) x color, 1)` per channel,
+//!
+//! the coat reflecting `factor x Fr` (a colour) and letting through to the base what
+//! `1 - factor x max(Fr)` leaves. The extension writes Schlick's `w = (1 - cos)^5`; pbr's coat
+//! already uses exact Fresnel `F` of its ior, so here `w` is exact Fresnel's own shape,
+//! `(F(cos) - F(1)) / (1 - F(1))`, which makes `Fr` exactly `F` for the default factor 1 and
+//! white colour, and keeps Schlick's ends: `f0` at normal incidence, 1 at grazing. `max(Fr)` is
+//! the coat's opacity, and its internal reflectance follows from its mean as for a plain coat
+//! (`material::coat`), so a smooth coat over a white base still reflects exactly everything in
+//! its strongest channel whatever the factor and colour (tests/it/bsdfs/specular.rs). The metal
+//! and, here, the glass of the mix keep their own Fresnel: the extension's effect on
+//! transmission is not built (a glTF file's note says so).
+
+use super::coat::{coat_fresnel, fresnel_mean};
+use crate::params::checked;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// `specular = { factor = 0.5, color = [1, 0.8, 0.8] }` on a `pbr` material: glTF's
+/// specularFactor (default 1, in [0, 1]) and specularColorFactor (default white; any
+/// non-negative colour, as the extension allows: F(1) x color is clamped to 1).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Specular {
+    #[serde(default = "one", with = "checked::number")]
+    pub factor: f32,
+    #[serde(default = "white", with = "checked::colour")]
+    pub color: Vec3,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn white() -> Vec3 {
+    Vec3::ONE
+}
+
+impl Default for Specular {
+    fn default() -> Self {
+        Specular {
+            factor: 1.0,
+            color: Vec3::ONE,
+        }
+    }
+}
+
+impl Specular {
+    /// Its parameter ranges; the message names the parameter.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(0.0..=1.0).contains(&self.factor) {
+            return Err(format!(
+                "specular factor must be in [0, 1], got {}",
+                self.factor
+            ));
+        }
+        if !(self.color.min_element() >= 0.0 && self.color.is_finite()) {
+            return Err(format!(
+                "specular color must be finite and >= 0 in each channel, got {}",
+                self.color
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether it changes anything: a factor below 1 or a colour other than white.
+    pub fn is_default(&self) -> bool {
+        *self == Specular::default()
+    }
+
+    /// Its Fresnel for a coat of index `ior`.
+    pub fn fresnel(&self, ior: f32) -> SpecularFresnel {
+        SpecularFresnel {
+            factor: self.factor,
+            f0: (coat_fresnel(1.0, ior) * self.color).min(Vec3::ONE),
+        }
+    }
+}
+
+/// The coat's reshaped Fresnel: `factor` and the coloured, clamped `f0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecularFresnel {
+    pub factor: f32,
+    pub f0: Vec3,
+}
+
+impl SpecularFresnel {
+    /// Exact Fresnel's shape between its ends: 0 at normal incidence, 1 at grazing, from `f`
+    /// (`coat_fresnel` at some cosine) and `f_normal` (at normal incidence).
+    #[inline]
+    fn shape(f: f32, f_normal: f32) -> f32 {
+        ((f - f_normal) / (1.0 - f_normal)).clamp(0.0, 1.0)
+    }
+
+    /// What the coat of index `ior` reflects at cosine `cos` (to the normal, or to a
+    /// microfacet's): `factor x Fr(cos)`.
+    #[inline]
+    pub fn reflectance(&self, cos: f32, ior: f32) -> Vec3 {
+        let w = Self::shape(coat_fresnel(cos, ior), coat_fresnel(1.0, ior));
+        self.factor * (self.f0 + (Vec3::ONE - self.f0) * w)
+    }
+
+    /// The share of light met at cosine `cos` that does not cross the coat: `factor x
+    /// max(Fr(cos))` (Fr's largest channel is the one of largest f0).
+    #[inline]
+    pub fn opacity(&self, cos: f32, ior: f32) -> f32 {
+        let w = Self::shape(coat_fresnel(cos, ior), coat_fresnel(1.0, ior));
+        let f0 = self.f0.max_element();
+        self.factor * (f0 + (1.0 - f0) * w)
+    }
+
+    /// The cosine-weighted mean of [`Self::opacity`] (linear in Fresnel, so from its mean).
+    pub fn mean_opacity(&self, ior: f32) -> f32 {
+        let w = Self::shape(fresnel_mean(ior), coat_fresnel(1.0, ior));
+        let f0 = self.f0.max_element();
+        self.factor * (f0 + (1.0 - f0) * w)
+    }
+}
