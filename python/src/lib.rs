@@ -44,6 +44,96 @@ impl Scene {
         (self.scene.defaults.width, self.scene.defaults.height)
     }
 
+    /// Sets the image size a render without `size` gets, (width, height), each at least 1.
+    #[setter]
+    fn set_size(&mut self, size: (u32, u32)) -> PyResult<()> {
+        let (width, height) = size;
+        if width == 0 || height == 0 {
+            return Err(value_error(format!(
+                "size must be at least 1x1, got {width}x{height}"
+            )));
+        }
+        rt_gpu::film::check_memory(width, height).map_err(value_error)?;
+        (self.scene.defaults.width, self.scene.defaults.height) = (width, height);
+        Ok(())
+    }
+
+    /// The number of path segments a render without `max_depth` follows.
+    #[getter]
+    fn max_depth(&self) -> u32 {
+        self.scene.defaults.max_depth
+    }
+
+    #[setter]
+    fn set_max_depth(&mut self, max_depth: u32) -> PyResult<()> {
+        if max_depth == 0 {
+            return Err(value_error("max_depth must be at least 1"));
+        }
+        self.scene.defaults.max_depth = max_depth;
+        Ok(())
+    }
+
+    /// Its punctual lights (points, spots, suns; a glTF file's lamps too), each as a scene
+    /// file's `[[light]]` table: `{"point": {"position": [...], "intensity": [...]}}`,
+    /// `{"spot": {..., "look_at": [...], "inner": degrees, "outer": degrees}}` or
+    /// `{"directional": {"direction": [...], "irradiance": [...]}}`.
+    #[getter]
+    fn lights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let out = PyList::empty(py);
+        for light in &self.scene.punctual {
+            out.append(to_python(
+                py,
+                &rt_gpu::scene::file::light_table(light).map_err(value_error)?,
+            )?)?;
+        }
+        Ok(out)
+    }
+
+    /// Replaces its punctual lights with `lights` (tables as `lights` gives them), each checked
+    /// as a scene file's is; `[]` removes them all.
+    #[setter]
+    fn set_lights(&mut self, lights: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut punctual = Vec::new();
+        for (i, light) in lights.try_iter()?.enumerate() {
+            let table = from_python(&light?)?;
+            punctual.push(
+                rt_gpu::scene::file::light_from_table(table)
+                    .map_err(|e| value_error(format!("light {i}: {e}")))?,
+            );
+        }
+        self.scene.punctual = punctual;
+        Ok(())
+    }
+
+    /// Sets parameters of light `index` (its position in `lights`) as its table names them
+    /// (`intensity`, `position`, `look_at`, `direction`, `irradiance`, `inner`, `outer`),
+    /// checked as a scene file's are: `scene.set_light(0, intensity=[100, 100, 100])`.
+    #[pyo3(signature = (index, **params))]
+    fn set_light(&mut self, index: usize, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let count = self.scene.punctual.len();
+        let Some(light) = self.scene.punctual.get(index) else {
+            return Err(value_error(format!(
+                "no light {index}: the scene has {count} punctual light{}",
+                if count == 1 { "" } else { "s" }
+            )));
+        };
+        let mut table = rt_gpu::scene::file::light_table(light).map_err(value_error)?;
+        // The one kind's table inside: {"point": {...}}.
+        if let (Some(params), Some(toml::Value::Table(kind))) = (
+            params,
+            table
+                .as_table_mut()
+                .and_then(|t| t.iter_mut().next().map(|(_, v)| v)),
+        ) {
+            for (key, value) in params.iter() {
+                kind.insert(key.extract()?, from_python(&value)?);
+            }
+        }
+        self.scene.punctual[index] = rt_gpu::scene::file::light_from_table(table)
+            .map_err(|e| value_error(format!("light {index}: {e}")))?;
+        Ok(())
+    }
+
     /// The names of its materials, in their order.
     #[getter]
     fn materials(&self) -> Vec<String> {
@@ -272,21 +362,69 @@ impl Render {
     }
 }
 
-/// Reads a scene: a scene file (.toml), a glTF file (.glb, .gltf; `camera` picks one of its
-/// cameras by name), or a built-in scene's name (`rtgpu.scenes()`).
+/// Reads a scene: a scene file (.toml), a glTF file (.glb, .gltf; `camera`, a name, picks one
+/// of its cameras), or a built-in scene's name (`rtgpu.scenes()`). Overrides set what the
+/// scene's setters set, in this order: `camera` (a dict), `size`, `max_depth`, `lights` (a
+/// list), `materials` (a dict of material name to a dict of parameters):
+/// `rtgpu.load("cornell", size=(256, 256), materials={"white": {"albedo": [0.5, 0.5, 0.5]}})`.
 #[pyfunction]
-#[pyo3(signature = (source, camera = None))]
-fn load(py: Python<'_>, source: &str, camera: Option<&str>) -> PyResult<Scene> {
+#[pyo3(signature = (source, camera = None, **overrides))]
+fn load(
+    py: Python<'_>,
+    source: &str,
+    camera: Option<&Bound<'_, PyAny>>,
+    overrides: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Scene> {
+    let picked: Option<String> = match camera {
+        Some(c) if !c.is_instance_of::<PyDict>() => Some(c.extract()?),
+        _ => None,
+    };
     let read = py
-        .detach(|| rt_gpu::scene::source::resolve(source, camera))
+        .detach(|| rt_gpu::scene::source::resolve(source, picked.as_deref()))
         .map_err(|e| value_error(format!("{e:#}")))?;
     for note in &read.notes {
         eprintln!("{note}");
     }
-    Ok(Scene {
+    let mut scene = Scene {
         scene: read.scene,
         file: read.file,
-    })
+    };
+    if let Some(view) = camera.and_then(|c| c.cast::<PyDict>().ok()) {
+        scene.set_camera(view)?;
+    }
+    let Some(overrides) = overrides else {
+        return Ok(scene);
+    };
+    const KNOWN: [&str; 4] = ["size", "max_depth", "lights", "materials"];
+    for key in overrides.keys() {
+        let key: String = key.extract()?;
+        if !KNOWN.contains(&key.as_str()) {
+            return Err(value_error(format!(
+                "load() has no override {key:?}: camera, size, max_depth, lights, materials"
+            )));
+        }
+    }
+    if let Some(size) = overrides.get_item("size")? {
+        scene.set_size(size.extract()?)?;
+    }
+    if let Some(depth) = overrides.get_item("max_depth")? {
+        scene.set_max_depth(depth.extract()?)?;
+    }
+    if let Some(lights) = overrides.get_item("lights")? {
+        scene.set_lights(&lights)?;
+    }
+    if let Some(materials) = overrides.get_item("materials")? {
+        let materials = materials
+            .cast::<PyDict>()
+            .map_err(|_| value_error("materials= is a dict of material name to parameters"))?;
+        for (name, params) in materials.iter() {
+            let params = params
+                .cast::<PyDict>()
+                .map_err(|_| value_error(format!("materials[{name}] is a dict of parameters")))?;
+            scene.set_material(&name.extract::<String>()?, Some(params))?;
+        }
+    }
+    Ok(scene)
 }
 
 /// Reads a scene from TOML text (the scene-file syntax; paths relative to the working

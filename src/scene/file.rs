@@ -394,6 +394,20 @@ impl LightDoc {
     }
 }
 
+/// A punctual light as a scene file's `[[light]]` table writes it (`point = { position,
+/// intensity }`, `spot = {...}` or `directional = {...}`).
+pub fn light_table(light: &Punctual) -> Result<toml::Value, String> {
+    toml::Value::try_from(LightDoc::from_light(light)).map_err(|e| e.to_string())
+}
+
+/// The punctual light a `[[light]]` table describes, checked as a scene file's are.
+pub fn light_from_table(table: toml::Value) -> Result<Punctual, String> {
+    let doc: LightDoc = table
+        .try_into()
+        .map_err(|e: toml::de::Error| quoted_message(e.message()))?;
+    doc.light()
+}
+
 /// A parser message on one line, with any long quoted text in it cut short.
 fn quoted_message(message: &str) -> String {
     let flat = message.trim().replace('\n', " ");

@@ -8,6 +8,7 @@ import os
 import pathlib
 import shutil
 import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -205,3 +206,91 @@ def test_a_material_a_mesh_file_made_is_not_edited_through_a_table():
     scene = rtgpu.load(str(ROOT / "scenes" / "blender" / "bumpy.glb"))
     with pytest.raises(ValueError, match="mesh file"):
         scene.set_material(scene.materials[0], roughness=0.5)
+
+
+LAMP_LIT = """
+[camera]
+look_from = [0, 0, 4]
+look_at = [0, 0, 0]
+vfov = 30
+[render]
+background = [0, 0, 0]
+[materials.grey]
+type = "lambertian"
+albedo = [0.5, 0.5, 0.5]
+[[object]]
+sphere = { center = [0, 0, 0], radius = 1 }
+material = "grey"
+[[light]]
+point = { position = [2, 2, 3], intensity = [10, 10, 10] }
+"""
+
+
+def test_punctual_lights_read_and_set_from_python():
+    scene = rtgpu.load_string(LAMP_LIT)
+    assert scene.lights == [{"point": {"position": [2, 2, 3], "intensity": [10, 10, 10]}}]
+    before = rtgpu.render(scene, spp=4, size=(16, 16), backend="cpu").image
+    assert before.max() > 0
+    scene.set_light(0, intensity=[20, 20, 20])
+    # Every sample is the lamp's intensity times a path's throughput: doubling is exact.
+    assert np.array_equal(rtgpu.render(scene, spp=4, size=(16, 16), backend="cpu").image, 2 * before)
+    # The list round-trips; an empty one leaves the sphere unlit.
+    scene.lights = [{"point": {"position": [2, 2, 3], "intensity": [10, 10, 10]}}]
+    assert np.array_equal(rtgpu.render(scene, spp=4, size=(16, 16), backend="cpu").image, before)
+    scene.lights = []
+    assert rtgpu.render(scene, spp=4, size=(16, 16), backend="cpu").image.max() == 0
+    scene.lights = [{"directional": {"direction": [0, 0, -1], "irradiance": [1, 1, 1]}}]
+    assert scene.lights[0]["directional"]["irradiance"] == [1, 1, 1]
+    with pytest.raises(ValueError, match="intensity"):
+        rtgpu.load_string(LAMP_LIT).set_light(0, intensity=[-1, 0, 0])
+    with pytest.raises(ValueError, match="no light 3"):
+        scene.set_light(3, irradiance=[2, 2, 2])
+    with pytest.raises(ValueError, match="light 0"):
+        scene.lights = [{"point": {"position": [0, 0, 0]}}]
+
+
+def test_load_takes_overrides():
+    scene = rtgpu.load(
+        "cornell",
+        size=(20, 10),
+        max_depth=3,
+        camera={"vfov": 20},
+        materials={"light": {"radiance": [30, 30, 30]}},
+    )
+    assert scene.size == (20, 10) and scene.max_depth == 3 and scene.camera["vfov"] == 20
+    assert scene.material("light")["radiance"] == [30, 30, 30]
+    assert rtgpu.render(scene, spp=1, backend="cpu").image.shape == (10, 20, 3)
+    # The same as setting each afterwards.
+    plain = rtgpu.load("cornell")
+    plain.size, plain.max_depth, plain.camera = (20, 10), 3, {"vfov": 20}
+    plain.set_material("light", radiance=[30, 30, 30])
+    assert np.array_equal(
+        rtgpu.render(plain, spp=2, backend="cpu").image,
+        rtgpu.render(scene, spp=2, backend="cpu").image,
+    )
+    with pytest.raises(ValueError, match="no override \"spp\""):
+        rtgpu.load("cornell", spp=4)
+    with pytest.raises(ValueError, match="at least 1x1"):
+        rtgpu.load("cornell", size=(0, 10))
+
+
+@pytest.mark.parametrize("example", ["roughness_sweep.py", "compare_backends.py"])
+def test_the_examples_run_as_they_are(tmp_path, example):
+    """examples/python/ as a user runs them (in a scratch directory: they write their plots
+    there); CI installs matplotlib beside the package."""
+    if example == "roughness_sweep.py":
+        pytest.importorskip("matplotlib")
+    if example == "compare_backends.py" and not has_gpu():
+        pytest.skip("no GPU adapter")
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "python" / example)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    if example == "roughness_sweep.py":
+        assert (tmp_path / "roughness_sweep.png").stat().st_size > 10_000
+    else:
+        assert "RMS difference" in run.stdout, run.stdout
