@@ -180,9 +180,15 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
             out.push(format!("{CLEARCOAT}.{texture} ({n} material{})", plural(n)));
         }
     }
+    // Only sheens that are there: glTF's default colour, black, is none.
     let sheened: Vec<Value> = document
         .materials()
         .filter_map(|m| m.extension_value(SHEEN).cloned())
+        .filter(|ext| {
+            let colour = ext.get("sheenColorFactor").and_then(Value::as_array);
+            let lit = |c: &Vec<Value>| c.iter().any(|x| x.as_f64().is_some_and(|x| x > 0.0));
+            colour.is_some_and(lit)
+        })
         .collect();
     let least = crate::material::sheen::MIN_ROUGHNESS as f64;
     let smooth = (sheened.iter())
