@@ -48,11 +48,7 @@ impl Scene {
     #[setter]
     fn set_size(&mut self, size: (u32, u32)) -> PyResult<()> {
         let (width, height) = size;
-        if width == 0 || height == 0 {
-            return Err(value_error(format!(
-                "size must be at least 1x1, got {width}x{height}"
-            )));
-        }
+        rt_gpu::film::check_image_size(width, height).map_err(value_error)?;
         rt_gpu::film::check_memory(width, height).map_err(value_error)?;
         (self.scene.defaults.width, self.scene.defaults.height) = (width, height);
         Ok(())
@@ -66,8 +62,11 @@ impl Scene {
 
     #[setter]
     fn set_max_depth(&mut self, max_depth: u32) -> PyResult<()> {
-        if max_depth == 0 {
-            return Err(value_error("max_depth must be at least 1"));
+        let most = rt_gpu::scene::file::MAX_DEPTH_LIMIT;
+        if !(1..=most).contains(&max_depth) {
+            return Err(value_error(format!(
+                "max_depth must be in 1..={most}, got {max_depth}"
+            )));
         }
         self.scene.defaults.max_depth = max_depth;
         Ok(())
@@ -107,7 +106,8 @@ impl Scene {
 
     /// Sets parameters of light `index` (its position in `lights`) as its table names them
     /// (`intensity`, `position`, `look_at`, `direction`, `irradiance`, `inner`, `outer`),
-    /// checked as a scene file's are: `scene.set_light(0, intensity=[100, 100, 100])`.
+    /// checked as a scene file's are: `scene.set_light(0, intensity=[100, 100, 100])`. A spot
+    /// given a new `position` alone turns to keep pointing at its `look_at`.
     #[pyo3(signature = (index, **params))]
     fn set_light(&mut self, index: usize, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let count = self.scene.punctual.len();

@@ -395,9 +395,25 @@ impl LightDoc {
 }
 
 /// A punctual light as a scene file's `[[light]]` table writes it (`point = { position,
-/// intensity }`, `spot = {...}` or `directional = {...}`).
+/// intensity }`, `spot = {...}` or `directional = {...}`). A spot's `look_at` lies as far along
+/// its direction as its position is from the origin (at least 1), so that reading the table
+/// back gives its direction to f32's precision wherever it stands (one unit away, a position
+/// far out would round the direction, or the look-at onto the position).
 pub fn light_table(light: &Punctual) -> Result<toml::Value, String> {
-    toml::Value::try_from(LightDoc::from_light(light)).map_err(|e| e.to_string())
+    let mut doc = LightDoc::from_light(light);
+    if let (
+        Punctual::Spot {
+            position,
+            direction,
+            ..
+        },
+        Some(spot),
+    ) = (*light, &mut doc.spot)
+    {
+        let reach = position.abs().max_element().max(1.0);
+        spot.look_at = V3::from(position + direction * reach);
+    }
+    toml::Value::try_from(doc).map_err(|e| e.to_string())
 }
 
 /// The punctual light a `[[light]]` table describes, checked as a scene file's are.

@@ -133,7 +133,7 @@ pub fn specular(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Sp
                 }
                 _ => {
                     return Err(format!(
-                        "{}: its {SPECULAR}.specularColorFactor is {v}; glTF requires three numbers >= 0",
+                        "{}: its {SPECULAR}.specularColorFactor is {v}; glTF requires three finite numbers >= 0",
                         at()
                     ));
                 }
@@ -218,13 +218,18 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
             ));
         }
     }
+    // Whether each material with the extension transmits and changes the glass's Fresnel
+    // (factors other than the defaults, or a texture), and its extension.
     let speculars: Vec<(bool, Value)> = document
         .materials()
         .filter_map(|m| {
+            let ext = m.extension_value(SPECULAR)?.clone();
+            let changes = SPECULAR_TEXTURES.iter().any(|t| ext.get(*t).is_some())
+                || specular(&m, &String::new).is_ok_and(|s| s.is_some_and(|s| !s.is_default()));
             let transmits = m
                 .transmission()
                 .is_some_and(|t| t.transmission_factor() > 0.0);
-            Some((transmits, m.extension_value(SPECULAR)?.clone()))
+            Some((transmits && changes, ext))
         })
         .collect();
     for texture in SPECULAR_TEXTURES {

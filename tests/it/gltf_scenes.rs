@@ -1309,11 +1309,15 @@ fn a_specular_is_read_and_what_is_not_named() {
         (0.3, Vec3::new(1.0, 0.5, 25.0))
     );
     assert!(notes.is_empty(), "{notes:?}");
-    let (specular, notes) = read(material("{}", ""), extra).expect("loads");
-    assert!(
-        specular.is_none() && notes.is_empty(),
-        "{specular:?} {notes:?}"
-    );
+    // The defaults change nothing, on transmission too: nothing to note.
+    let transmits = r#", "KHR_materials_transmission": { "transmissionFactor": 0.5 }"#;
+    for more in ["", transmits] {
+        let (specular, notes) = read(material("{}", more), extra).expect("loads");
+        assert!(
+            specular.is_none() && notes.is_empty(),
+            "{specular:?} {notes:?}"
+        );
+    }
     for (ext, field) in [
         (r#"{ "specularFactor": 1.5 }"#, "specularFactor is 1.5"),
         (

@@ -481,3 +481,49 @@ fn objects_placing_one_part_of_a_file_share_it() {
     let flat = rt_gpu::scene::flat::FlatScene::new(&scene, 8, 8).expect("flattens");
     assert_eq!(flat.instances.len(), 2, "the part instanced twice");
 }
+
+/// A punctual light's table (`scene::file::light_table`, what Python's `Scene.lights` gives)
+/// reads back as the same light: a spot's direction to f32's precision (within 1e-6) wherever
+/// it stands, far from the origin too (its look-at is placed as far along it as it is out).
+#[test]
+fn light_tables_read_back_as_their_lights() {
+    use glam::Vec3;
+    use rt_gpu::scene::file::{light_from_table, light_table};
+    use rt_gpu::scene::punctual::Punctual;
+    let direction = Vec3::new(0.3, -0.8, 0.52).normalize();
+    for far in [1.0f32, 1e3, 1e5, 1e7] {
+        let spot = Punctual::Spot {
+            position: Vec3::new(far, -0.5 * far, 0.25),
+            direction,
+            intensity: Vec3::new(1.0, 2.0, 3.0),
+            inner: 0.2,
+            outer: 0.5,
+        };
+        let back = light_from_table(light_table(&spot).expect("a table")).expect("reads");
+        let Punctual::Spot {
+            position,
+            direction: d,
+            intensity,
+            ..
+        } = back
+        else {
+            panic!("{back:?}");
+        };
+        assert_eq!(
+            (position, intensity),
+            (Vec3::new(far, -0.5 * far, 0.25), Vec3::new(1.0, 2.0, 3.0))
+        );
+        assert!(
+            (d - direction).length() < 1e-6,
+            "at {far}: {d} against {direction}"
+        );
+    }
+    let sun = Punctual::Directional {
+        direction,
+        irradiance: Vec3::splat(2.0),
+    };
+    let back = light_from_table(light_table(&sun).expect("a table")).expect("reads");
+    assert!(
+        matches!(back, Punctual::Directional { irradiance, .. } if irradiance == Vec3::splat(2.0))
+    );
+}

@@ -270,8 +270,12 @@ def test_load_takes_overrides():
     )
     with pytest.raises(ValueError, match="no override \"spp\""):
         rtgpu.load("cornell", spp=4)
-    with pytest.raises(ValueError, match="at least 1x1"):
+    with pytest.raises(ValueError, match="image sides must be in"):
         rtgpu.load("cornell", size=(0, 10))
+    with pytest.raises(ValueError, match="image sides must be in"):
+        rtgpu.load("cornell", size=(40000, 8))
+    with pytest.raises(ValueError, match="max_depth must be in"):
+        rtgpu.load("cornell", max_depth=10**9)
 
 
 @pytest.mark.parametrize("example", ["roughness_sweep.py", "compare_backends.py"])
