@@ -97,30 +97,12 @@ fn pbr_chi_square_detects_a_two_percent_wrong_pdf() {
 /// roughness (delta lobes: none of either).
 #[test]
 fn pbr_eval_over_pdf_is_the_sampled_weight() {
-    let h = hit(Vec3::Z);
     for (metallic, transmission) in MIXES {
         for roughness in [0.0, 0.05, 0.3, 0.7, 1.0] {
             let m = pbr(GOLDEN, metallic, roughness, transmission);
-            let mut sampled = 0;
-            for i in 0..2000 {
-                let wo = upper(i, 3);
-                let mut sampler = Sampler::independent(i, 0, 4);
-                let Some(s) = m.sample(wo, &h, &mut sampler) else {
-                    continue;
-                };
-                sampled += 1;
-                let label = format!(
-                    "metallic {metallic}, transmission {transmission}, roughness {roughness}, wo {wo}"
-                );
-                if s.lobe.is_delta() {
-                    continue;
-                }
-                assert_eval_over_pdf_is_weight(&m, wo, &h, &s, &label);
-            }
-            assert!(
-                sampled > 1000,
-                "{metallic} {transmission} {roughness}: {sampled}"
-            );
+            let label =
+                format!("metallic {metallic}, transmission {transmission}, roughness {roughness}");
+            assert_sampled_weights_are_eval_over_pdf(&m, &label);
         }
     }
 }

@@ -235,14 +235,14 @@ fn plastic_coat_crosses_as_rough_glass_does() {
             let mut checks = Vec::new();
             for angle in ANGLES {
                 let wo = wo_at(angle);
-                let seen = mean_and_error(N, |i| {
+                let seen = mean(N, |i| {
                     let mut s = Sampler::independent(i, 0, 9);
                     lobe_weight(wo, &outside, &mut s, Lobe::GLOSSY_TRANSMISSION)
                 });
                 let label = format!("transmittance at {angle} degrees");
                 checks.push((label, seen, 1.0 - table.opacity(wo.z) as f64));
             }
-            let seen = mean_and_error(N, |i| {
+            let seen = mean(N, |i| {
                 let mut s = Sampler::independent(i, 0, 10);
                 let wo = cosine_up(s.next_f32(), s.next_f32());
                 lobe_weight(wo, &inside, &mut s, Lobe::GLOSSY_REFLECTION)
@@ -355,7 +355,7 @@ fn layered_albedo(albedo: f32, ior: f32, roughness: f32, wo: Vec3, n: u32) -> (f
         medium: None,
     });
     let (outside, inside) = (hit(Vec3::Z), common::surface_hit(-Vec3::Z, false));
-    mean_and_error(n, |i| {
+    mean(n, |i| {
         let mut s = Sampler::independent(i, 1, 9);
         let Some(mut b) = glass.sample(wo, &outside, &mut s) else {
             return 0.0;
@@ -384,23 +384,11 @@ fn layered_albedo(albedo: f32, ior: f32, roughness: f32, wo: Vec3, n: u32) -> (f
 /// standard error.
 fn closed_form_albedo(albedo: f32, ior: f32, roughness: f32, wo: Vec3, n: u32) -> (f64, f64) {
     let m = plastic(Vec3::splat(albedo), ior, roughness);
-    mean_and_error(n, |i| {
+    mean(n, |i| {
         let mut s = Sampler::independent(i, 0, 8);
         m.sample(wo, &hit(Vec3::Z), &mut s)
             .map_or(0.0, |b| b.weight.x as f64)
     })
-}
-
-/// The mean of `sample(i)` over i < n and its standard error.
-fn mean_and_error(n: u32, mut sample: impl FnMut(u32) -> f64) -> (f64, f64) {
-    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-    for i in 0..n {
-        let w = sample(i);
-        sum += w;
-        sum2 += w * w;
-    }
-    let mean = sum / n as f64;
-    (mean, ((sum2 / n as f64 - mean * mean) / n as f64).sqrt())
 }
 
 /// Plastic's closed form (the light between coat and base summed as a geometric series) is the
