@@ -106,7 +106,11 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
         loop_iterations += params.sample_loop_cost;
 //#endif
         loop {
+//#if AOV_ALBEDO || AOV_NORMAL
+            var goes_on = extend_aov_path(&path, &sampler);
+//#else
             var goes_on = extend_path(&path, &sampler);
+//#endif
 //#if BVH
             goes_on = goes_on && !budget_spent;
 //#endif

@@ -9,6 +9,7 @@ pub mod assets;
 pub mod backend;
 pub mod converge;
 pub mod cpu;
+pub mod denoise;
 pub mod film;
 #[cfg(feature = "gpu")]
 pub mod gpu;

@@ -54,6 +54,16 @@ pub enum Integrator {
     /// multiple importance sampling (power heuristic).
     #[default]
     Nee,
+    /// A feature buffer for a denoiser (Mitsuba 3's `aov`, Cycles' denoising albedo): each
+    /// sample the reflectance at the first hit that is not a mirror or smooth glass (followed
+    /// through those), a light's or the background's colour where the path ends on one. No
+    /// light is transported.
+    Albedo,
+    /// A feature buffer for a denoiser: each sample the shading normal at the first hit that is
+    /// not a mirror or smooth glass, facing the ray, mapped from [-1, 1] to [0, 1] (so the film,
+    /// which keeps non-negative samples, holds it, and its image is the usual normal picture);
+    /// 0.5 where the path escapes.
+    Normal,
 }
 
 impl Integrator {
@@ -61,7 +71,14 @@ impl Integrator {
         match self {
             Integrator::Naive => "naive",
             Integrator::Nee => "nee",
+            Integrator::Albedo => "albedo",
+            Integrator::Normal => "normal",
         }
+    }
+
+    /// Whether this is a feature buffer (albedo, normal) rather than light transport.
+    pub fn is_feature(self) -> bool {
+        matches!(self, Integrator::Albedo | Integrator::Normal)
     }
 }
 

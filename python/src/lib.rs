@@ -522,9 +522,11 @@ fn render(
     let integrator = match integrator {
         "nee" => Integrator::Nee,
         "naive" => Integrator::Naive,
+        "albedo" => Integrator::Albedo,
+        "normal" => Integrator::Normal,
         other => {
             return Err(value_error(format!(
-                "integrator must be \"nee\" or \"naive\", not {other:?}"
+                "integrator must be \"nee\", \"naive\", \"albedo\" or \"normal\", not {other:?}"
             )));
         }
     };
@@ -599,6 +601,7 @@ fn render(
             unspecialised: false,
             // Ctrl-C is looked for between passes: at least once a second.
             pass_seconds: Some(1.0),
+            denoise: false,
         };
         let hooks = Hooks {
             ready: &|| {},

@@ -52,6 +52,13 @@ pub enum IntegratorArg {
     /// samples a light with a shadow ray, combined with BSDF (or phase function) sampling by
     /// multiple importance sampling (power heuristic).
     Nee,
+    /// No light: each pixel's surface colour (albedo) at the first hit that is not a mirror or
+    /// smooth glass, the feature buffer a denoiser reads (what `--denoise` renders beside the
+    /// image).
+    Albedo,
+    /// No light: each pixel's shading normal there, as the usual normal picture ((n + 1) / 2),
+    /// the denoiser's other feature buffer.
+    Normal,
 }
 
 /// Where a sample's random numbers come from (the CLI's names for [`SamplerKind`]).
@@ -78,6 +85,8 @@ impl From<IntegratorArg> for Integrator {
         match arg {
             IntegratorArg::Naive => Integrator::Naive,
             IntegratorArg::Nee => Integrator::Nee,
+            IntegratorArg::Albedo => Integrator::Albedo,
+            IntegratorArg::Normal => Integrator::Normal,
         }
     }
 }
@@ -458,6 +467,13 @@ pub struct RenderArgs {
     /// look) [default: srgb for .png, 2 for .ppm].
     #[arg(long, value_name = "srgb|G", value_parser = Transfer::parse)]
     pub gamma: Option<Transfer>,
+    /// Denoise the image with Intel Open Image Denoise, guided by albedo and normal buffers
+    /// rendered after it (up to 64 spp): a clean image from few samples. An .exr output then
+    /// holds the denoised image with the noisy one and the buffers as layers (noisy.R, albedo.R,
+    /// normal.X, ...), not a film file; --checkpoint still writes the exact film. Needs OIDN 2:
+    /// `python3 scripts/install-oidn.py` (run by .ci/setup), or OIDN_DIR.
+    #[arg(long, conflicts_with_all = ["shard", "samples"])]
+    pub denoise: bool,
 }
 
 pub fn parse_shard(s: &str) -> Result<(u32, u32), String> {

@@ -182,6 +182,7 @@ fn load(
             checkpoint,
             unspecialised: args.unspecialised,
             pass_seconds: None,
+            denoise: args.denoise,
         },
         backend_reason,
         partial,
@@ -385,6 +386,15 @@ fn print_summary(plan: &Plan, finished: &Finished) {
         film.estimated_rmse(),
         output.display()
     );
+    if let Some(d) = &finished.denoised {
+        note!(
+            "denoised: albedo and normal buffers at {} spp in {:.2} s, then {:.2} s in {}",
+            d.feature_spp,
+            d.feature_seconds,
+            d.denoise_seconds,
+            d.denoiser
+        );
+    }
     if film.invalid_samples > 0 {
         note!(
             "warning: {} samples were NaN, infinite or negative, or on lavapipe needed more loop iterations than one dispatch allows, and were counted as black",

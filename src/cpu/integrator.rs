@@ -35,7 +35,7 @@ pub fn uses_nee(scene: &FlatScene, opts: &RenderOptions) -> bool {
 }
 
 /// Where a ray's segment ends.
-enum Event {
+pub(super) enum Event {
     /// Nothing ahead.
     Escaped,
     /// A visible surface.
@@ -51,7 +51,7 @@ enum Event {
 /// weighing `throughput` by what the media's absorption leaves of it. Random numbers: 1 per
 /// stretch travelled in a medium of some density.
 #[inline(always)]
-fn next_event(
+pub(super) fn next_event(
     scene: &FlatScene,
     ray: &mut Ray,
     medium: &mut u32,
@@ -92,7 +92,7 @@ fn next_event(
 /// The medium on the far side of `hit`'s surface, for a surface filled with one: its own
 /// entering through the front face, none leaving through the back (media do not overlap).
 #[inline]
-fn entered(hit: &Hit) -> u32 {
+pub(super) fn entered(hit: &Hit) -> u32 {
     if hit.front_face { hit.material + 1 } else { 0 }
 }
 

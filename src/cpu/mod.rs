@@ -3,6 +3,7 @@
 //! image rows.
 
 pub mod accel;
+pub mod aov;
 pub mod background;
 pub mod camera;
 pub mod environment;
@@ -119,7 +120,11 @@ fn render_pixel(
     for sample in opts.first_sample..opts.first_sample + opts.spp {
         let mut sampler = Sampler::for_sample(opts.sampler, pixel, sample, opts.seed);
         let ray = camera::generate_ray(&scene.camera, opts, x, y, &mut sampler);
-        let mut radiance = integrator::radiance(scene, ray, opts, &mut sampler);
+        let mut radiance = if opts.integrator.is_feature() {
+            aov::feature(scene, ray, opts, &mut sampler)
+        } else {
+            integrator::radiance(scene, ray, opts, &mut sampler)
+        };
         if !is_valid_sample(radiance) {
             invalid += 1;
             radiance = glam::Vec3::ZERO;

@@ -14,6 +14,7 @@
 //! sum beside the overall one.
 
 pub mod file;
+pub mod float_image;
 pub mod levels;
 pub mod output;
 

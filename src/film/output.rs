@@ -361,6 +361,21 @@ impl PendingOutput {
         self.commit(&bytes)
     }
 
+    /// Writes `image` in the format the destination's extension names (an .exr with all its
+    /// layers), 8-bit formats with `transfer` [default: the format's own].
+    pub fn commit_float_image(
+        self,
+        image: &crate::film::float_image::FloatImage,
+        transfer: Option<Transfer>,
+    ) -> anyhow::Result<()> {
+        let format = ImageFormat::from_path(&self.shown)?;
+        let transfer = transfer.unwrap_or(Transfer::default_for(format));
+        let bytes = image
+            .encode(format, transfer)
+            .with_context(|| format!("cannot encode {}", self.shown.display()))?;
+        self.commit(&bytes)
+    }
+
     /// Writes a render's `film`: as a film file with `meta` when the destination is .exr (an
     /// image that rt-gpu can continue or merge), else as an image encoded with `transfer`.
     pub fn commit_render(

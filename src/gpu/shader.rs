@@ -66,6 +66,7 @@ const MODULES: &[(&str, &str)] = &[
         "integrator.wgsl",
         include_str!("../../shaders/integrator.wgsl"),
     ),
+    ("aov.wgsl", include_str!("../../shaders/aov.wgsl")),
     ("film.wgsl", include_str!("../../shaders/film.wgsl")),
     ("kernel.wgsl", include_str!("../../shaders/kernel.wgsl")),
 ];
@@ -106,6 +107,11 @@ pub struct Features {
     /// Next-event estimation: light sampling with MIS (the nee integrator, in a scene with
     /// lights and diffuse surfaces to light).
     pub nee: bool,
+    /// The albedo feature buffer in place of light transport (the albedo integrator,
+    /// `shaders/aov.wgsl`).
+    pub aov_albedo: bool,
+    /// The normal feature buffer in place of light transport (the normal integrator).
+    pub aov_normal: bool,
     /// Lights of no area (points, spots, the sun) among the lights.
     pub punctual: bool,
     /// Scene arrays in uniform buffers of `scene_capacity` elements (faster where they fit).
@@ -126,7 +132,7 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 18] = [
+const SWITCHES: [Switch; 20] = [
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
     ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
@@ -141,6 +147,8 @@ const SWITCHES: [Switch; 18] = [
     ("ENVIRONMENT", |f| &mut f.environment),
     ("DEBUG", |f| &mut f.debug),
     ("NEE", |f| &mut f.nee),
+    ("AOV_ALBEDO", |f| &mut f.aov_albedo),
+    ("AOV_NORMAL", |f| &mut f.aov_normal),
     ("PUNCTUAL", |f| &mut f.punctual),
     ("UNIFORM_SCENE", |f| &mut f.uniform_scene),
     ("UNIFORM_BVH", |f| &mut f.uniform_bvh),
@@ -234,6 +242,8 @@ impl Features {
             environment: matches!(scene.background, Background::Environment(_)),
             debug: false,
             nee: false,
+            aov_albedo: false,
+            aov_normal: false,
             punctual: scene.lights.iter().any(|l| l.shape.is_delta()),
             // BVH kernels too: lavapipe reads uniform arrays in straight-line code.
             uniform_scene: capacity * LARGEST_ELEMENT_BYTES <= MAX_UNIFORM_BYTES,
@@ -279,6 +289,8 @@ impl Features {
             || self.has_material(MaterialFeature::Media);
         Features {
             nee: integrator == Integrator::Nee && !scene.lights.is_empty() && samples_lights,
+            aov_albedo: integrator == Integrator::Albedo,
+            aov_normal: integrator == Integrator::Normal,
             ..self
         }
     }

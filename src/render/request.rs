@@ -8,8 +8,10 @@
 
 use super::checkpoint::{CheckpointWriter, pass_seconds, resume_from};
 use super::progressive::{Job, Outcome, Progress};
-use super::{Backend, GpuChoice, RenderOptions, Rendered, Session};
+use super::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, Session};
+use crate::denoise::{Denoiser, FeatureBuffers};
 use crate::film::file::{self as film_file, FilmMeta};
+use crate::film::float_image::{FloatImage, NamedLayer};
 use crate::film::output::{FileLock, ImageFormat, PendingOutput, Transfer};
 use crate::film::{Film, check_memory};
 use crate::scene::flat::FlatScene;
@@ -45,6 +47,31 @@ pub struct Request {
     /// library caller that checks for Ctrl-C); `None`: as long as the checkpoints and the
     /// budget allow. Passes continue one another exactly: the image does not depend on them.
     pub pass_seconds: Option<f64>,
+    /// Denoise the image (OIDN, `crate::denoise`): the albedo and normal feature buffers are
+    /// rendered after the image, and the output is the denoised image (an .exr output then holds
+    /// it with the noisy image and the buffers as layers, not a film file). OIDN is opened
+    /// before the render, so its absence fails first.
+    pub denoise: bool,
+}
+
+/// The most samples per pixel the feature buffers take: beyond this their noise is far below
+/// the image's (they are prefiltered too), and their time is better spent on the image
+/// (docs/benchmarks.md, issue 65).
+pub const FEATURE_SPP: u32 = 64;
+
+/// A denoised image and what it was made from.
+pub struct Denoised {
+    /// The film's mean, denoised.
+    pub image: Vec<[f32; 3]>,
+    /// The feature buffers that guided it.
+    pub features: FeatureBuffers,
+    /// Their samples per pixel.
+    pub feature_spp: u32,
+    /// Seconds spent rendering the feature buffers, and denoising.
+    pub feature_seconds: f64,
+    pub denoise_seconds: f64,
+    /// The denoiser: its version and where it was loaded from.
+    pub denoiser: String,
 }
 
 /// Where a long render's film is saved between passes.
@@ -78,6 +105,8 @@ pub struct Finished {
     pub resumed_at: u32,
     /// The end of the samples the film holds.
     pub done: u32,
+    /// With `denoise`: the denoised image.
+    pub denoised: Option<Denoised>,
 }
 
 impl Request {
@@ -102,6 +131,10 @@ impl Request {
             Some(c) if c.resume => Some(resume_from(&c.path, &identity, &range)?),
             _ => None,
         };
+        let denoiser = match self.denoise {
+            true => Some(Denoiser::new(Some(rayon::current_num_threads()))?),
+            false => None,
+        };
         let pending = self.claim_outputs()?;
         let resumed_at = resume.as_ref().map_or(range.start, |(_, done)| *done);
         let session = Session::new(self.backend, &self.gpu, &self.flat, opts.integrator)?;
@@ -116,13 +149,47 @@ impl Request {
         let mut passes = self.run_passes(&session, resume, &meta, hooks)?;
         let seconds = start.elapsed().as_secs_f64();
         let done = range.start + passes.rendered.film.pixels.first().map_or(0, |p| p.n) as u32;
-        self.write_outputs(format, pending, &mut passes, &meta(done))?;
+        let denoised = match &denoiser {
+            Some(denoiser) => Some(self.denoise(denoiser, &passes.rendered.film, done)?),
+            None => None,
+        };
+        self.write_outputs(format, pending, &mut passes, &meta(done), denoised.as_ref())?;
         Ok(Finished {
             rendered: passes.rendered,
             outcome: passes.outcome,
             seconds,
             resumed_at,
             done,
+            denoised,
+        })
+    }
+
+    /// Renders the feature buffers (the samples of the image's first, up to [`FEATURE_SPP`],
+    /// so their camera rays are the image's) and denoises the film's mean with them.
+    fn denoise(&self, denoiser: &Denoiser, film: &Film, done: u32) -> anyhow::Result<Denoised> {
+        let start = Instant::now();
+        let feature_spp = (done - self.opts.first_sample).clamp(1, FEATURE_SPP);
+        let buffer = |integrator: Integrator| {
+            let opts = RenderOptions {
+                spp: feature_spp,
+                integrator,
+                ..self.opts
+            };
+            super::render(self.backend, &self.gpu, &self.flat, &opts, &|_| {})
+                .map(|rendered| rendered.film)
+        };
+        let features =
+            FeatureBuffers::from_films(&buffer(Integrator::Albedo)?, &buffer(Integrator::Normal)?);
+        let feature_seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let image = denoiser.denoise(film.width, film.height, &film.mean_rgb(), Some(&features))?;
+        Ok(Denoised {
+            image,
+            features,
+            feature_spp,
+            feature_seconds,
+            denoise_seconds: start.elapsed().as_secs_f64(),
+            denoiser: denoiser.describe(),
         })
     }
 
@@ -209,11 +276,12 @@ impl Request {
         pending: Option<PendingOutput>,
         passes: &mut Passes,
         meta: &FilmMeta,
+        denoised: Option<&Denoised>,
     ) -> anyhow::Result<()> {
         let film = &passes.rendered.film;
         // The last checkpoint and an .exr output hold the same film file: encoded once (a
-        // 512x512 film takes about 0.3 s), written twice.
-        let output_is_film = format == Some(ImageFormat::Exr);
+        // 512x512 film takes about 0.3 s), written twice. A denoised .exr is no film file.
+        let output_is_film = format == Some(ImageFormat::Exr) && denoised.is_none();
         let encoded = if passes.checkpoints.writes() || output_is_film {
             Some(film_file::encode(film, Some(meta))?)
         } else {
@@ -226,8 +294,11 @@ impl Request {
         let Some(pending) = pending else {
             return checkpointed;
         };
-        match &encoded {
-            Some(bytes) if output_is_film => pending.commit(bytes)?,
+        match (&encoded, denoised) {
+            (Some(bytes), _) if output_is_film => pending.commit(bytes)?,
+            (_, Some(denoised)) => {
+                pending.commit_float_image(&denoised_image(film, denoised), self.gamma)?
+            }
             _ => pending.commit_image(film, self.gamma)?,
         }
         checkpointed.with_context(|| {
@@ -237,6 +308,26 @@ impl Request {
                 output.display()
             )
         })
+    }
+}
+
+/// A denoised image as written: the denoised image, and beside it (in an EXR) the noisy one and
+/// the feature buffers, named as Cycles names its passes' channels.
+pub fn denoised_image(film: &Film, denoised: &Denoised) -> FloatImage {
+    let layer = |name, channels, pixels: &[[f32; 3]]| NamedLayer {
+        name,
+        channels,
+        pixels: pixels.to_vec(),
+    };
+    FloatImage {
+        width: film.width,
+        height: film.height,
+        rgb: denoised.image.clone(),
+        layers: vec![
+            layer("noisy", ["R", "G", "B"], &film.mean_rgb()),
+            layer("albedo", ["R", "G", "B"], &denoised.features.albedo),
+            layer("normal", ["X", "Y", "Z"], &denoised.features.normal),
+        ],
     }
 }
 

@@ -113,6 +113,7 @@ fn a_request_renders_the_plain_render_and_writes_its_output() {
         checkpoint: None,
         unspecialised: false,
         pass_seconds: None,
+        denoise: false,
     };
     let hooks = Hooks {
         ready: &|| {},

@@ -9,6 +9,7 @@ mod blender_scenes;
 mod bsdfs;
 mod cli;
 mod converge;
+mod denoise;
 mod determinism;
 mod display;
 mod environment;
