@@ -313,10 +313,13 @@ fn from_python(value: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     )))
 }
 
-/// A finished render: `image` is linear radiance, float32, (height, width, 3), row 0 at the top.
+/// A finished render: `image` is linear radiance, float32, (height, width, 3), row 0 at the top
+/// (denoised where the render was asked to denoise; `noisy` is then the film's own mean, and
+/// `albedo` and `normal` the feature buffers that guided the denoiser).
 #[pyclass(module = "rtgpu")]
 struct Render {
     film: Film,
+    denoised: Option<rt_gpu::render::request::Denoised>,
     /// The files the scene read: `write` never replaces them.
     inputs: Vec<PathBuf>,
     #[pyo3(get)]
@@ -331,12 +334,37 @@ struct Render {
 
 #[pymethods]
 impl Render {
-    /// The mean radiance of each pixel (float32, (height, width, 3)).
+    /// Each pixel's radiance (float32, (height, width, 3)): the film's mean, denoised where
+    /// the render was asked to denoise.
     #[getter]
     fn image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let (w, h) = (self.film.width as usize, self.film.height as usize);
-        let flat: Vec<f32> = self.film.mean_rgb().into_iter().flatten().collect();
-        PyArray1::from_vec(py, flat).reshape([h, w, 3])
+        match &self.denoised {
+            Some(d) => self.array(py, &d.image),
+            None => self.array(py, &self.film.mean_rgb()),
+        }
+    }
+
+    /// The film's mean radiance, not denoised (float32, (height, width, 3)).
+    #[getter]
+    fn noisy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        self.array(py, &self.film.mean_rgb())
+    }
+
+    /// With `denoise=True`: the albedo feature buffer (in [0, 1]), else None.
+    #[getter]
+    fn albedo<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
+        (self.denoised.as_ref())
+            .map(|d| self.array(py, &d.features.albedo))
+            .transpose()
+    }
+
+    /// With `denoise=True`: the normal feature buffer (mean shading normals, in [-1, 1]),
+    /// else None.
+    #[getter]
+    fn normal<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
+        (self.denoised.as_ref())
+            .map(|d| self.array(py, &d.features.normal))
+            .transpose()
     }
 
     /// The film's own estimate of the image's RMSE (from its samples' variance).
@@ -346,19 +374,49 @@ impl Render {
     }
 
     /// Writes the image as the command line does: the format by the extension (.png, .ppm,
-    /// .exr film file, .pfm), atomically.
+    /// .exr film file, .pfm), atomically; a denoised render as `--denoise` writes it (an .exr
+    /// with the noisy image and the feature buffers as layers).
     fn write(&self, path: PathBuf) -> PyResult<()> {
         let inputs: Vec<&std::path::Path> = self.inputs.iter().map(PathBuf::as_path).collect();
         rt_gpu::film::output::PendingOutput::claim(&path, &inputs)
-            .and_then(|pending| pending.commit_image(&self.film, None))
+            .and_then(|pending| match &self.denoised {
+                Some(d) => pending.commit_float_image(
+                    &rt_gpu::render::request::denoised_image(&self.film, d),
+                    None,
+                ),
+                None => pending.commit_image(&self.film, None),
+            })
             .map_err(|e| value_error(format!("{e:#}")))
     }
 
     fn __repr__(&self) -> String {
         format!(
-            "<rtgpu.Render {}x{}, {} spp on {} [{}], {:.2} s>",
-            self.film.width, self.film.height, self.spp, self.backend, self.device, self.seconds
+            "<rtgpu.Render {}x{}, {} spp on {} [{}], {:.2} s{}>",
+            self.film.width,
+            self.film.height,
+            self.spp,
+            self.backend,
+            self.device,
+            self.seconds,
+            if self.denoised.is_some() {
+                ", denoised"
+            } else {
+                ""
+            }
         )
+    }
+}
+
+impl Render {
+    /// `pixels` as a (height, width, 3) float32 array.
+    fn array<'py>(
+        &self,
+        py: Python<'py>,
+        pixels: &[[f32; 3]],
+    ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let (w, h) = (self.film.width as usize, self.film.height as usize);
+        let flat: Vec<f32> = pixels.iter().flatten().copied().collect();
+        PyArray1::from_vec(py, flat).reshape([h, w, 3])
     }
 }
 
@@ -500,10 +558,12 @@ fn devices() -> Vec<String> {
 /// `target_error`), at `size` (width, height; default the scene's), on `backend` ("auto",
 /// "cpu" or "gpu"), with `integrator` ("nee" or "naive") and `sampler` ("sobol" or
 /// "independent"); the defaults are the command line's. `progress`, if given, is called with
-/// the fraction done. Ctrl-C stops it with `KeyboardInterrupt`.
+/// the fraction done. Ctrl-C stops it with `KeyboardInterrupt`. `denoise=True` denoises the
+/// image as `--denoise` does (Open Image Denoise; the albedo and normal buffers come back too).
 #[pyfunction]
 #[pyo3(signature = (scene, spp = None, size = None, seed = 0, backend = "auto", integrator = "nee",
-    sampler = "sobol", max_depth = None, time = None, target_error = None, progress = None))]
+    sampler = "sobol", max_depth = None, time = None, target_error = None, progress = None,
+    denoise = false))]
 #[allow(clippy::too_many_arguments)]
 fn render(
     py: Python<'_>,
@@ -518,6 +578,7 @@ fn render(
     time: Option<f64>,
     target_error: Option<f64>,
     progress: Option<Py<PyAny>>,
+    denoise: bool,
 ) -> PyResult<Render> {
     let integrator = match integrator {
         "nee" => Integrator::Nee,
@@ -601,7 +662,7 @@ fn render(
             unspecialised: false,
             // Ctrl-C is looked for between passes: at least once a second.
             pass_seconds: Some(1.0),
-            denoise: false,
+            denoise,
         };
         let hooks = Hooks {
             ready: &|| {},
@@ -644,6 +705,7 @@ fn render(
         device: finished.rendered.device,
         seconds: finished.seconds,
         film: finished.rendered.film,
+        denoised: finished.denoised,
     })
 }
 

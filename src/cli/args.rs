@@ -218,6 +218,11 @@ pub struct ConvergeArgs {
     /// Output directory.
     #[arg(short, long, value_name = "DIR", default_value = "converge")]
     pub output: PathBuf,
+    /// Also denoise every render (Open Image Denoise, as `--denoise` does): a series
+    /// `<series>-denoised` beside each, its time including the feature buffers' and the
+    /// denoiser's, and a summary of what denoising gains.
+    #[arg(long)]
+    pub denoise: bool,
 }
 
 #[derive(Args)]

@@ -79,6 +79,7 @@ pub fn converge(args: &ConvergeArgs) -> anyhow::Result<()> {
             adapter: args.adapter.clone(),
             everything: false,
         },
+        denoise: args.denoise,
     };
     let report = rt_gpu::converge::run_with(&options, &ConvergeBars::default())?;
     let target = report.target_rmse(args.target_rmse);

@@ -4,8 +4,10 @@
 #[cfg(feature = "plot")]
 pub mod plot;
 
+use crate::denoise::{Denoiser, FeatureBuffers};
 use crate::film::output::{read_pfm, write_atomically, write_image};
 use crate::options::SamplerKind;
+use crate::render::request::FEATURE_SPP;
 use crate::render::{Backend, GpuChoice, Integrator, RenderOptions, Session};
 use crate::scene::flat::FlatScene;
 use anyhow::{Context, bail};
@@ -20,22 +22,31 @@ pub struct Errors {
     /// mean of (x - ref)^2 / (ref^2 + 0.01)
     pub relmse: f64,
     pub mae: f64,
+    /// The image's mean over the reference's, less 1: a bias in the mean (a denoiser's, say).
+    pub mean_bias: f64,
 }
 
 pub fn errors(image: &[[f32; 3]], reference: &[[f32; 3]]) -> Errors {
     assert_eq!(image.len(), reference.len());
-    let (mut se, mut rel, mut abs) = (0.0, 0.0, 0.0);
+    let (mut se, mut rel, mut abs, mut sum, mut reference_sum) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for (x, r) in image.iter().flatten().zip(reference.iter().flatten()) {
         let d = *x as f64 - *r as f64;
         se += d * d;
         rel += d * d / ((*r as f64) * (*r as f64) + 0.01);
         abs += d.abs();
+        sum += *x as f64;
+        reference_sum += *r as f64;
     }
     let n = (image.len() * 3).max(1) as f64;
     Errors {
         rmse: (se / n).sqrt(),
         relmse: rel / n,
         mae: abs / n,
+        mean_bias: if reference_sum > 0.0 {
+            sum / reference_sum - 1.0
+        } else {
+            0.0
+        },
     }
 }
 
@@ -155,12 +166,69 @@ pub struct ConvergeOptions {
     pub reference_spp: Option<u32>,
     pub out_dir: PathBuf,
     pub gpu: GpuChoice,
+    /// Also denoise every render (a series `<series>-denoised` beside each): its time includes
+    /// the feature buffers' and the denoiser's.
+    pub denoise: bool,
 }
 
 pub struct Report {
     pub reference: Reference,
     pub rungs: Vec<Rung>,
     pub fits: Vec<(String, Option<Fit>)>,
+    /// With `denoise`: the denoiser (its version and where it was found).
+    pub denoiser: Option<String>,
+}
+
+/// What denoising a ladder's renders needs: the denoiser, and per backend sessions of the
+/// albedo and normal integrators.
+struct Denoising {
+    denoiser: Denoiser,
+    features: Vec<(Backend, Session, Session)>,
+}
+
+impl Denoising {
+    fn new(o: &ConvergeOptions) -> anyhow::Result<Option<Denoising>> {
+        if !o.denoise {
+            return Ok(None);
+        }
+        let denoiser = Denoiser::new(Some(rayon::current_num_threads()))?;
+        let mut features = Vec::new();
+        for &backend in &o.backends {
+            let session = |integrator| Session::new(backend, &o.gpu, &o.scene, integrator);
+            features.push((
+                backend,
+                session(Integrator::Albedo)?,
+                session(Integrator::Normal)?,
+            ));
+        }
+        Ok(Some(Denoising { denoiser, features }))
+    }
+
+    /// `film` (rendered on `backend` with `opts`) denoised, guided by feature buffers of the
+    /// same samples (up to [`FEATURE_SPP`]), as `--denoise` makes them.
+    fn denoise(
+        &self,
+        o: &ConvergeOptions,
+        backend: Backend,
+        opts: &RenderOptions,
+        film: &crate::film::Film,
+    ) -> anyhow::Result<Vec<[f32; 3]>> {
+        let (_, albedo, normal) = (self.features.iter())
+            .find(|(b, _, _)| *b == backend)
+            .context("no feature sessions for this backend")?;
+        let buffer = |session: &Session| {
+            let opts = RenderOptions {
+                spp: opts.spp.min(FEATURE_SPP),
+                integrator: session.integrator(),
+                ..*opts
+            };
+            session.render(&o.scene, &opts, &|_| {}).map(|r| r.film)
+        };
+        let features = FeatureBuffers::from_films(&buffer(albedo)?, &buffer(normal)?);
+        Ok(self
+            .denoiser
+            .denoise(o.width, o.height, &film.mean_rgb(), Some(&features))?)
+    }
 }
 
 fn options(
@@ -353,6 +421,12 @@ pub fn run_with(o: &ConvergeOptions, progress: &dyn Progress) -> anyhow::Result<
         }
     }
     for (i, integrator) in o.integrators.iter().enumerate() {
+        if integrator.is_feature() {
+            bail!(
+                "--integrators compares light transport (nee, naive), not the {} buffer",
+                integrator.name()
+            );
+        }
         if o.integrators[..i].contains(integrator) {
             bail!("--integrators lists {} twice", integrator.name());
         }
@@ -362,6 +436,7 @@ pub fn run_with(o: &ConvergeOptions, progress: &dyn Progress) -> anyhow::Result<
             bail!("--samplers lists {} twice", sampler.name());
         }
     }
+    let denoising = Denoising::new(o)?;
     std::fs::create_dir_all(&o.out_dir)
         .with_context(|| format!("cannot create {}", o.out_dir.display()))?;
     let mut sessions = Vec::new();
@@ -419,6 +494,21 @@ pub fn run_with(o: &ConvergeOptions, progress: &dyn Progress) -> anyhow::Result<
                 errors: errors(&film.mean_rgb(), &reference.rgb),
                 estimated_rmse: film.estimated_rmse(),
             });
+            let mut seconds = seconds;
+            if let Some(d) = &denoising {
+                let start = Instant::now();
+                let image = d.denoise(o, *backend, &opts, film)?;
+                seconds += start.elapsed().as_secs_f64();
+                rungs.push(Rung {
+                    series: format!("{series}-denoised"),
+                    spp,
+                    seconds,
+                    gpu_seconds: None,
+                    samples_per_second: o.width as f64 * o.height as f64 * spp as f64 / seconds,
+                    errors: errors(&image, &reference.rgb),
+                    estimated_rmse: f64::NAN,
+                });
+            }
             spent += seconds;
             last = seconds;
             spp *= 2;
@@ -436,6 +526,7 @@ pub fn run_with(o: &ConvergeOptions, progress: &dyn Progress) -> anyhow::Result<
         reference,
         rungs,
         fits,
+        denoiser: denoising.map(|d| d.denoiser.describe()),
     })
 }
 
@@ -517,11 +608,12 @@ impl Report {
     }
 
     pub fn csv(&self) -> String {
-        let mut out =
-            String::from("series,spp,seconds,gpu_seconds,rmse,relmse,mae,estimated_rmse\n");
+        let mut out = String::from(
+            "series,spp,seconds,gpu_seconds,rmse,relmse,mae,mean_bias,estimated_rmse\n",
+        );
         for r in &self.rungs {
             out.push_str(&format!(
-                "{},{},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+                "{},{},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e},{}\n",
                 r.series,
                 r.spp,
                 r.seconds,
@@ -529,7 +621,12 @@ impl Report {
                 r.errors.rmse,
                 r.errors.relmse,
                 r.errors.mae,
-                r.estimated_rmse
+                r.errors.mean_bias,
+                if r.estimated_rmse.is_nan() {
+                    String::new()
+                } else {
+                    format!("{:.6e}", r.estimated_rmse)
+                }
             ));
         }
         out
@@ -559,6 +656,7 @@ impl Report {
         self.write_rungs(&mut out);
         self.write_fits(&mut out);
         self.write_nee_speedups(&mut out);
+        self.write_denoising(&mut out);
         if let Some(target) = target {
             self.write_times_to(target, &mut out);
         }
@@ -582,7 +680,7 @@ impl Report {
         for r in &self.rungs {
             let near_floor = floor.is_some_and(|f| r.errors.rmse <= 2.0 * f);
             out.push_str(&format!(
-                "{:<22} {:>8} {:>9.3} {:>9} {:>10.3} {:>10.4e}{} {:>11.4e} {:>11.4e} {:>12.4e}\n",
+                "{:<22} {:>8} {:>9.3} {:>9} {:>10.3} {:>10.4e}{} {:>11.4e} {:>11.4e} {:>12}\n",
                 r.series,
                 r.spp,
                 r.seconds,
@@ -594,7 +692,11 @@ impl Report {
                 if near_floor { "*" } else { " " },
                 r.errors.relmse,
                 r.errors.mae,
-                r.estimated_rmse
+                if r.estimated_rmse.is_nan() {
+                    "-".to_string()
+                } else {
+                    format!("{:.4e}", r.estimated_rmse)
+                }
             ));
         }
     }
@@ -658,6 +760,52 @@ impl Report {
                 Some(r) => out.push_str(&format!(": nee is {r:.2}x faster\n")),
                 None => out.push('\n'),
             }
+        }
+    }
+
+    /// Per denoised series: its 16-spp errors, the spp at which the noisy series first reaches
+    /// each, the noisy 256-spp errors, and the denoised image's bias in the mean.
+    fn write_denoising(&self, out: &mut String) {
+        let Some(denoiser) = &self.denoiser else {
+            return;
+        };
+        out.push_str(&format!("denoised by {denoiser}:\n"));
+        for (series, _) in &self.fits {
+            let rungs = |name: &str| -> Vec<&Rung> {
+                self.rungs.iter().filter(|r| r.series == name).collect()
+            };
+            let (noisy, denoised) = (rungs(series), rungs(&format!("{series}-denoised")));
+            let Some(at_16) = denoised.iter().find(|r| r.spp == 16) else {
+                out.push_str(&format!(
+                    "  {series:<22} no 16-spp render within the budget\n"
+                ));
+                continue;
+            };
+            let reached = |error: fn(&Errors) -> f64| {
+                noisy
+                    .iter()
+                    .find(|r| error(&r.errors) <= error(&at_16.errors))
+                    .map_or("beyond the ladder".to_string(), |r| {
+                        format!("at {} spp", r.spp)
+                    })
+            };
+            let noisy_256 = noisy.iter().find(|r| r.spp == 256).map_or(
+                "no noisy 256-spp render".to_string(),
+                |r| {
+                    format!(
+                        "noisy 256 spp: RMSE {:.4e}, relMSE {:.4e}",
+                        r.errors.rmse, r.errors.relmse
+                    )
+                },
+            );
+            out.push_str(&format!(
+                "  {series:<22} denoised 16 spp: RMSE {:.4e} (noisy reaches it {}), relMSE {:.4e} (noisy reaches it {}), mean {:+.2}%; {noisy_256}\n",
+                at_16.errors.rmse,
+                reached(|e| e.rmse),
+                at_16.errors.relmse,
+                reached(|e| e.relmse),
+                100.0 * at_16.errors.mean_bias,
+            ));
         }
     }
 

@@ -3,10 +3,20 @@
 //! and Mitsuba 3's multi-layer EXR outputs hold their passes. Written in any output format: an
 //! EXR holds every layer (`noisy.R`, `albedo.R`, `normal.X`, ...), the others the main image.
 
-use super::output::{ImageFormat, Transfer};
-use anyhow::Context;
+use super::Film;
+use super::output::{ImageFormat, Transfer, encode_image};
 use exr::prelude::*;
-use std::io::{BufWriter, Write};
+
+/// `pixels` (`width` x `height`) as a film of one sample each, a value below zero or not finite
+/// (a denoiser's ringing, say) as 0, as films hold them.
+pub fn film_of(width: u32, height: u32, pixels: &[[f32; 3]]) -> Film {
+    let mut film = Film::new(width, height);
+    for (stats, value) in film.pixels.iter_mut().zip(pixels) {
+        let kept = value.map(|c| if c.is_finite() && c > 0.0 { c } else { 0.0 });
+        stats.add(glam::Vec3::from(kept));
+    }
+    film
+}
 
 /// A layer beside the main image: its name and channel names, and its pixels.
 #[derive(Clone, Debug)]
@@ -27,39 +37,18 @@ pub struct FloatImage {
 }
 
 impl FloatImage {
-    /// The image encoded in `format`; 8-bit formats use `transfer`.
+    /// The image encoded in `format`; 8-bit formats use `transfer`. All but an EXR are the
+    /// main image written as a film of one sample a pixel is ([`film_of`]): the same bytes a
+    /// window shows of it.
     pub fn encode(&self, format: ImageFormat, transfer: Transfer) -> anyhow::Result<Vec<u8>> {
-        let (w, h) = (self.width, self.height);
-        let mut out = std::io::Cursor::new(Vec::new());
-        let bytes = |p: &[f32; 3]| p.map(|c| transfer.encode(c));
         match format {
-            ImageFormat::Png => {
-                let levels: Vec<u8> = self.rgb.iter().flat_map(bytes).collect();
-                let img = image::RgbImage::from_raw(w, h, levels).context("image buffer size")?;
-                img.write_to(&mut out, image::ImageFormat::Png)?;
-            }
-            ImageFormat::Ppm => {
-                let mut text = BufWriter::new(&mut out);
-                writeln!(text, "P3\n{w} {h}\n255")?;
-                for p in &self.rgb {
-                    let [r, g, b] = bytes(p);
-                    writeln!(text, "{r} {g} {b}")?;
-                }
-                text.flush()?;
-            }
-            ImageFormat::Pfm => {
-                let mut data = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
-                // PFM stores rows bottom to top; -1.0 marks little-endian.
-                for row in self.rgb.chunks(w as usize).rev() {
-                    for c in row.iter().flatten() {
-                        data.extend_from_slice(&c.to_le_bytes());
-                    }
-                }
-                out.write_all(&data)?;
-            }
-            ImageFormat::Exr => return self.encode_exr(),
+            ImageFormat::Exr => self.encode_exr(),
+            _ => encode_image(
+                format,
+                &film_of(self.width, self.height, &self.rgb),
+                transfer,
+            ),
         }
-        Ok(out.into_inner())
     }
 
     fn encode_exr(&self) -> anyhow::Result<Vec<u8>> {

@@ -25,6 +25,8 @@ pub enum Input {
     Restart,
     /// Read the scene again, as its files are now (F5).
     Reload,
+    /// Show the film denoised, or the live film again (N).
+    Denoise,
     /// Quit (Esc).
     Quit,
 }
@@ -74,7 +76,12 @@ pub fn moved(camera: &Camera, input: Input, height: u32) -> Option<Camera> {
                 * (distance * FLY_PER_STEP);
             (from + step, at + step)
         }
-        Input::Save | Input::PrintCamera | Input::Restart | Input::Reload | Input::Quit => {
+        Input::Save
+        | Input::PrintCamera
+        | Input::Restart
+        | Input::Reload
+        | Input::Denoise
+        | Input::Quit => {
             return None;
         }
     };

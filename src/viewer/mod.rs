@@ -6,6 +6,7 @@
 //! as batch renders: a film saved here is the one `rt-gpu SCENE` writes for that camera.
 
 pub mod controls;
+pub mod denoised;
 pub mod film;
 
 use crate::film::file::FilmMeta;
@@ -19,6 +20,7 @@ use crate::scene::flat::FlatScene;
 use crate::shared::layout::ACCUM_BYTES_PER_PIXEL;
 use anyhow::{Context, anyhow, bail};
 use controls::{Input, camera_table, moved};
+use denoised::Denoised;
 use film::LiveFilm;
 use std::collections::VecDeque;
 use std::io::Write;
@@ -42,7 +44,7 @@ pub enum Step {
 
 impl Step {
     /// `orbit:DX,DY`, `pan:DX,DY`, `dolly:STEPS`, `fly:F,R,U`, `save`, `camera`, `restart`,
-    /// `reload`, `quit` or `spp:N`.
+    /// `reload`, `denoise`, `quit` or `spp:N`.
     pub fn parse(text: &str) -> Result<Self, String> {
         let (verb, rest) = text.split_once(':').unwrap_or((text, ""));
         let numbers = || -> Result<Vec<f32>, String> {
@@ -73,6 +75,7 @@ impl Step {
             "camera" => Input::PrintCamera,
             "restart" => Input::Restart,
             "reload" => Input::Reload,
+            "denoise" => Input::Denoise,
             "quit" => Input::Quit,
             "spp" => {
                 return rest
@@ -83,7 +86,7 @@ impl Step {
             }
             _ => {
                 return Err(format!(
-                    "unknown step '{verb}': expected orbit, pan, dolly, fly, save, camera, restart, reload, quit or spp"
+                    "unknown step '{verb}': expected orbit, pan, dolly, fly, save, camera, restart, reload, denoise, quit or spp"
                 ));
             }
         }))
@@ -239,6 +242,9 @@ struct Viewer {
     scale: u32,
     gpu_features: Option<Features>,
     film: LiveFilm,
+    /// Open Image Denoise, opened at the first N; the denoised display.
+    denoiser: Option<Arc<crate::denoise::Denoiser>>,
+    denoised: Denoised,
     /// When this view's film started, and samples since then.
     view_start: Instant,
     status_at: Instant,
@@ -362,6 +368,8 @@ impl Viewer {
             scale,
             gpu_features,
             film,
+            denoiser: None,
+            denoised: Denoised::Off,
             view_start: now,
             status_at: now,
             error_estimate: None,
@@ -393,7 +401,9 @@ impl Viewer {
         let time_left = config
             .stop_seconds
             .is_none_or(|t| self.view_start.elapsed().as_secs_f64() < t);
-        !self.script.is_empty() || (self.film.spp() < self.target_spp(config) && time_left)
+        !self.script.is_empty()
+            || (self.film.spp() < self.target_spp(config) && time_left)
+            || matches!(self.denoised, Denoised::Pending { .. })
     }
 
     /// One frame: the script's next steps, samples for about a frame's time, the display pass.
@@ -419,8 +429,11 @@ impl Viewer {
             self.render_seconds += start.elapsed().as_secs_f64();
             self.samples += added as u64 * self.opts.width as u64 * self.opts.height as u64;
         }
-        let finished =
-            self.script.is_empty() && config.exit_after_spp.is_some_and(|n| self.film.spp() >= n);
+        (self.denoised).poll(&self.ctx, &self.display, self.opts.width, self.opts.height)?;
+        // A denoise under way is waited for: a test's screenshot shows what it asked for.
+        let finished = self.script.is_empty()
+            && config.exit_after_spp.is_some_and(|n| self.film.spp() >= n)
+            && !matches!(self.denoised, Denoised::Pending { .. });
         if finished || !self.busy(config) {
             // What is shown then is exactly the film of spp() samples.
             self.film.complete()?;
@@ -477,7 +490,7 @@ impl Viewer {
             ..Default::default()
         });
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        self.display.draw(&mut encoder, &view, &self.display_group);
+        self.display.draw(&mut encoder, &view, self.shown_group());
         self.ctx.queue.submit([encoder.finish()]);
         if let Some(path) = screenshot {
             let texture = if self
@@ -519,9 +532,41 @@ impl Viewer {
         });
         let view = texture.create_view(&Default::default());
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        self.display.draw(&mut encoder, &view, &self.display_group);
+        self.display.draw(&mut encoder, &view, self.shown_group());
         self.ctx.queue.submit([encoder.finish()]);
         Ok(texture)
+    }
+
+    /// The display pass's bindings to what is shown: the denoised film, else the live one.
+    fn shown_group(&self) -> &wgpu::BindGroup {
+        match &self.denoised {
+            Denoised::Shown { group, .. } => group,
+            _ => &self.display_group,
+        }
+    }
+
+    /// N: the film as it stands denoised (shown when ready), or the live film again. Without
+    /// OIDN, a warning saying how to install it; the window goes on.
+    fn toggle_denoised(&mut self) -> anyhow::Result<()> {
+        if !matches!(self.denoised, Denoised::Off) {
+            self.denoised = Denoised::Off;
+            return self.update_status(true);
+        }
+        let denoiser = match &self.denoiser {
+            Some(d) => d.clone(),
+            None => match crate::denoise::Denoiser::new(None) {
+                Ok(d) => self.denoiser.insert(Arc::new(d)).clone(),
+                Err(e) => {
+                    warn(&format!("not denoised: {e}"));
+                    return Ok(());
+                }
+            },
+        };
+        self.film.complete()?;
+        let film = self.film.film()?;
+        self.denoised = Denoised::start(denoiser, self.scene.clone(), self.opts, film);
+        self.window.request_redraw();
+        self.update_status(true)
     }
 
     /// The window title: spp, speed, the estimated error, and what renders.
@@ -552,10 +597,11 @@ impl Viewer {
             "cpu"
         };
         self.window.set_title(&format!(
-            "rt-gpu view {}: {spp} spp, {:.2} Msamples/s{error}, {backend}: {}",
+            "rt-gpu view {}: {spp} spp, {:.2} Msamples/s{error}, {backend}: {}{}",
             self.scene.name,
             rate * 1e-6,
-            self.film.device()
+            self.film.device(),
+            self.denoised.status()
         ));
         Ok(())
     }
@@ -628,6 +674,7 @@ impl Viewer {
             }
             Input::Restart => self.restart(),
             Input::Reload => self.reload(config),
+            Input::Denoise => self.toggle_denoised(),
             Input::Quit => {
                 event_loop.exit();
                 Ok(())
@@ -651,6 +698,7 @@ impl Viewer {
     }
 
     fn restart(&mut self) -> anyhow::Result<()> {
+        self.denoised = Denoised::Off;
         self.film.restart(&self.flat)?;
         self.view_start = Instant::now();
         self.error_estimate = None;
@@ -830,7 +878,7 @@ fn film_size(
 }
 
 /// A key press as an input: WASD/QE fly, Ctrl+S saves (S alone is the backward step), C
-/// prints the camera, R restarts, Esc quits.
+/// prints the camera, R restarts, N toggles the denoised display, Esc quits.
 fn key_input(key: &Key, modifiers: ModifiersState) -> Option<Input> {
     use glam::Vec3;
     match key {
@@ -845,6 +893,7 @@ fn key_input(key: &Key, modifiers: ModifiersState) -> Option<Input> {
             "q" => Some(Input::Fly(-Vec3::Z)),
             "c" => Some(Input::PrintCamera),
             "r" => Some(Input::Restart),
+            "n" => Some(Input::Denoise),
             _ => None,
         },
         Key::Named(NamedKey::F5) => Some(Input::Reload),

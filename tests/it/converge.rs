@@ -116,6 +116,7 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
         reference_spp: Some(32_768),
         out_dir: dir.path().to_path_buf(),
         gpu: GpuChoice::default(),
+        denoise: false,
     };
     let report = run(&options).expect("runs");
     assert!(report.fits[0].1.is_some(), "no fit\n{}", report.table(None));
@@ -166,7 +167,11 @@ fn ladder_on_a_lambertian_scene_falls_as_inverse_square_root_of_samples() {
     );
 
     let csv = report.csv();
-    assert!(csv.starts_with("series,spp,seconds,gpu_seconds,rmse,relmse,mae,estimated_rmse\n"));
+    assert!(
+        csv.starts_with(
+            "series,spp,seconds,gpu_seconds,rmse,relmse,mae,mean_bias,estimated_rmse\n"
+        )
+    );
     assert_eq!(csv.lines().count(), report.rungs.len() + 1);
     let stem = dir.path().join("converge");
     rt_gpu::converge::plot::write_plot(&report, "test", &stem).expect("plots");

@@ -307,3 +307,54 @@ fn a_missing_or_broken_denoiser_is_one_line() {
         assert!(!dir.path().join("out.png").exists());
     }
 }
+
+/// `converge --denoise` puts a denoised series beside each, whose 16-spp render is closer to
+/// the reference than the noisy one by relative MSE, and says what denoising gained; the feature
+/// buffers are no series of their own (`--integrators albedo` is refused).
+#[test]
+fn converge_puts_a_denoised_series_beside_each() {
+    use rt_gpu::converge::{ConvergeOptions, run};
+    let Some(_) = denoiser() else { return };
+    let scene = builtin("cornell").expect("built-in");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let options = ConvergeOptions {
+        scene: FlatScene::new(&scene, 64, 64).expect("valid"),
+        scene_name: "cornell".into(),
+        scene_digest: 1,
+        width: 64,
+        height: 64,
+        max_depth: 10,
+        backends: vec![Backend::Cpu],
+        integrators: vec![Integrator::Nee],
+        samplers: vec![rt_gpu::options::SamplerKind::Sobol],
+        roulette_depth: 5,
+        budget: 2.0,
+        reference: None,
+        reference_spp: Some(1024),
+        out_dir: dir.path().to_path_buf(),
+        gpu: GpuChoice::default(),
+        denoise: true,
+    };
+    let report = run(&options).expect("runs");
+    let at_16 = |series: &str| {
+        (report.rungs.iter())
+            .find(|r| r.series == series && r.spp == 16)
+            .unwrap_or_else(|| panic!("no 16-spp {series}\n{}", report.table(None)))
+            .errors
+    };
+    let (noisy, denoised) = (at_16("cpu-nee-sobol"), at_16("cpu-nee-sobol-denoised"));
+    assert!(denoised.relmse < noisy.relmse, "{noisy:?} {denoised:?}");
+    let table = report.table(None);
+    assert!(
+        table.contains("denoised by Open Image Denoise 2."),
+        "{table}"
+    );
+    assert!(table.contains("denoised 16 spp: RMSE"), "{table}");
+    let refused = run(&ConvergeOptions {
+        integrators: vec![Integrator::Albedo],
+        denoise: false,
+        ..options
+    });
+    let message = refused.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(message.contains("not the albedo buffer"), "{message}");
+}

@@ -461,3 +461,38 @@ fn a_size_beyond_the_gpus_surfaces_is_one_line() {
     assert_eq!(text.trim_end().lines().count(), 1, "{text}");
     assert!(text.contains("use a smaller --size"), "{text}");
 }
+
+/// N shows the film denoised: the window's image after `denoise` at 8 spp (the script waits for
+/// the denoiser) is the PNG `--denoise --spp 8` writes, byte for byte (on the CPU backend, whose
+/// feature buffers the viewer's denoiser renders too). Skipped without Open Image Denoise
+/// unless RT_GPU_REQUIRE_OIDN=1.
+#[test]
+fn the_denoised_window_is_the_batch_denoised_render() {
+    let Some(x) = x_server() else { return };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let common = ["cornell", "--size", SIZE, "--backend", "cpu", "--seed", "3"];
+    let out = rt_gpu(
+        &[&common[..], &["--spp", "8", "--denoise", "-o", "batch.png"]].concat(),
+        dir.path(),
+    );
+    if !out.status.success() && std::env::var_os("RT_GPU_REQUIRE_OIDN").is_none_or(|v| v != "1") {
+        eprintln!("skipped: {}", stderr(&out));
+        return;
+    }
+    ok(&out, "the batch render");
+    let out = view(
+        &x,
+        &[
+            &common[..],
+            &["--step", "spp:8", "--step", "denoise"],
+            &["--exit-after-spp", "8", "--screenshot", "window.png"],
+        ]
+        .concat(),
+        dir.path(),
+    );
+    ok(&out, "the viewer");
+    assert!(
+        bytes(&dir.path().join("window.png")) == bytes(&dir.path().join("batch.png")),
+        "the denoised window differs from the batch render's denoised PNG"
+    );
+}

@@ -64,6 +64,41 @@ def test_the_same_bytes_as_the_command_line(tmp_path, backend):
     assert np.array_equal(r.image, pfm.reshape(48, 64, 3)[::-1])
 
 
+def has_oidn(tmp_path):
+    """Whether the command line finds Open Image Denoise (required where RT_GPU_REQUIRE_OIDN=1)."""
+    out = subprocess.run([cli(), "cornell", "--spp", "1", "--size", "4x4", "--backend", "cpu",
+                          "--denoise", "-o", "probe.pfm"], cwd=tmp_path, capture_output=True)
+    if out.returncode == 0:
+        return True
+    if os.environ.get("RT_GPU_REQUIRE_OIDN") == "1":
+        pytest.fail(f"RT_GPU_REQUIRE_OIDN=1, and: {out.stderr.decode()}")
+    return False
+
+
+def test_a_denoised_render_is_the_command_lines_with_its_buffers(tmp_path):
+    if not has_oidn(tmp_path):
+        pytest.skip("no Open Image Denoise (scripts/install-oidn.py)")
+    args = ["cornell", "--spp", "16", "--seed", "3", "--backend", "cpu", "--size", "64x48"]
+    subprocess.run([cli(), *args, "--denoise", "-o", "cli.pfm"], cwd=tmp_path, check=True,
+                   capture_output=True)
+    r = rtgpu.render(rtgpu.load("cornell"), spp=16, seed=3, backend="cpu", size=(64, 48),
+                     denoise=True)
+    r.write(str(tmp_path / "py.pfm"))
+    assert (tmp_path / "py.pfm").read_bytes() == (tmp_path / "cli.pfm").read_bytes()
+    assert "denoised" in repr(r)
+    plain = rtgpu.render(rtgpu.load("cornell"), spp=16, seed=3, backend="cpu", size=(64, 48))
+    assert np.array_equal(r.noisy, plain.image) and not np.array_equal(r.image, plain.image)
+    assert plain.albedo is None and plain.normal is None
+    assert r.albedo.shape == r.normal.shape == (48, 64, 3)
+    assert r.albedo.min() >= 0 and r.albedo.max() <= 1
+    assert r.normal.min() >= -1 and r.normal.max() <= 1
+    # Closer than the noisy image to a 512-spp render (relative MSE, as converge reports it).
+    reference = rtgpu.render(rtgpu.load("cornell"), spp=512, seed=9, backend="cpu",
+                             size=(64, 48)).image
+    rel_mse = lambda img: np.mean((img - reference) ** 2 / (reference**2 + 0.01))
+    assert rel_mse(r.image) < 0.5 * rel_mse(r.noisy)
+
+
 def test_a_scene_from_text_renders_what_its_parameters_say():
     def scene(albedo):
         return rtgpu.load_string(

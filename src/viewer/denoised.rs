@@ -1,0 +1,116 @@
+//! The viewer's denoised display (key N): the film as it stands, denoised off the render loop
+//! (on a thread: the feature buffers rendered by the CPU backend from the film's first samples,
+//! then Open Image Denoise), shown when ready in place of the live film, through the same
+//! display pass (the denoised image uploaded as a film of one sample a pixel). The render goes
+//! on underneath; N again, or anything that restarts the film, shows the live film.
+
+use crate::denoise::{Denoiser, FeatureBuffers};
+use crate::film::Film;
+use crate::film::float_image::film_of;
+use crate::gpu::GpuContext;
+use crate::gpu::display::{DisplayPass, accumulator_words};
+use crate::options::{Integrator, RenderOptions};
+use crate::render::request::FEATURE_SPP;
+use crate::scene::Scene;
+use crate::scene::flat::FlatScene;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use wgpu::util::DeviceExt;
+
+/// What the window shows of denoising.
+pub enum Denoised {
+    Off,
+    /// Being denoised (of a film of `spp` samples).
+    Pending {
+        spp: u32,
+        result: Receiver<anyhow::Result<Vec<[f32; 3]>>>,
+    },
+    /// Shown: the display pass's bindings to the denoised image.
+    Shown {
+        spp: u32,
+        group: wgpu::BindGroup,
+        // Held while the group binds it.
+        _buffer: wgpu::Buffer,
+    },
+}
+
+impl Denoised {
+    /// Starts denoising `film` (of `scene` rendered with `opts`, `film.spp` samples) on a
+    /// thread.
+    pub fn start(
+        denoiser: Arc<Denoiser>,
+        scene: Scene,
+        opts: RenderOptions,
+        film: Film,
+    ) -> Denoised {
+        let spp = film.pixels.first().map_or(0, |p| p.n as u32);
+        let (send, result) = channel();
+        std::thread::spawn(move || {
+            let denoised = (|| {
+                let flat = FlatScene::new(&scene, opts.width, opts.height)?;
+                let buffer = |integrator| {
+                    let opts = RenderOptions {
+                        spp: spp.clamp(1, FEATURE_SPP),
+                        first_sample: 0,
+                        integrator,
+                        ..opts
+                    };
+                    crate::cpu::render(&flat, &opts, &|| {})
+                };
+                let features = FeatureBuffers::from_films(
+                    &buffer(Integrator::Albedo),
+                    &buffer(Integrator::Normal),
+                );
+                Ok(denoiser.denoise(film.width, film.height, &film.mean_rgb(), Some(&features))?)
+            })();
+            // The window may have moved on: nobody listening is fine.
+            let _ = send.send(denoised);
+        });
+        Denoised::Pending { spp, result }
+    }
+
+    /// A finished denoise made ready to show through `display`; an error ends it.
+    pub fn poll(
+        &mut self,
+        ctx: &GpuContext,
+        display: &DisplayPass,
+        width: u32,
+        height: u32,
+    ) -> anyhow::Result<()> {
+        let Denoised::Pending { spp, result } = self else {
+            return Ok(());
+        };
+        let image = match result.try_recv() {
+            Ok(image) => image,
+            Err(TryRecvError::Empty) => return Ok(()),
+            Err(TryRecvError::Disconnected) => Err(anyhow::anyhow!("the denoising thread ended")),
+        };
+        let spp = *spp;
+        *self = Denoised::Off;
+        // As the batch render writes it: the window shows a denoised PNG's bytes.
+        let film = film_of(width, height, &image?);
+        let buffer = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("denoised film"),
+                contents: bytemuck::cast_slice(&accumulator_words(&film)),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        let group = display.bind(ctx, &buffer);
+        *self = Denoised::Shown {
+            spp,
+            group,
+            _buffer: buffer,
+        };
+        Ok(())
+    }
+
+    /// The title's words on it.
+    pub fn status(&self) -> String {
+        match self {
+            Denoised::Off => String::new(),
+            Denoised::Pending { spp, .. } => format!(", denoising {spp} spp..."),
+            Denoised::Shown { spp, .. } => format!(", denoised at {spp} spp (N: live)"),
+        }
+    }
+}
