@@ -16,6 +16,7 @@ Usage: python3 scripts/install-oidn.py [--dest DIR] [--wheel FILE.whl]
 import argparse
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
 import sys
@@ -64,6 +65,7 @@ def sha256(path: Path) -> str:
 def pip_download(into: Path) -> Path:
     """The pinned wheel, downloaded by pip (this Python's, else a throwaway environment's)."""
     args = ["download", "--quiet", "--no-deps", "--only-binary=:all:", "--dest", str(into),
+            "--platform", "manylinux2014_x86_64",
             f"pyoidn=={VERSION}.0"]
     pip = [sys.executable, "-m", "pip"]
     if subprocess.run(pip + ["--version"], capture_output=True).returncode != 0:
@@ -71,7 +73,10 @@ def pip_download(into: Path) -> Path:
         venv.create(env, with_pip=True)
         pip = [str(env / "bin" / "python"), "-m", "pip"]
     subprocess.run(pip + args, check=True)
-    return into / WHEEL
+    wheel = into / WHEEL
+    if not wheel.exists():
+        raise RuntimeError(f"pip downloaded no {WHEEL}")
+    return wheel
 
 
 def install(wheel: Path, dest: Path) -> None:
@@ -100,9 +105,14 @@ def install(wheel: Path, dest: Path) -> None:
             (staging / "LICENSE-Apache-2.0").write_text(
                 "Apache License, Version 2.0: https://www.apache.org/licenses/LICENSE-2.0.txt\n")
         (staging / "NOTICE").write_text(NOTICE.format(sha=SHA256))
+        # Swapped in by renames: an rt-gpu loading it meanwhile sees the old copy or the new.
+        old = None
         if dest.exists():
-            shutil.rmtree(dest)
+            old = Path(tempfile.mkdtemp(prefix=".oidn-old-", dir=dest.parent))
+            dest.rename(old / "oidn")
         staging.rename(dest)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
     finally:
         if staging.exists():
             shutil.rmtree(staging)
@@ -114,7 +124,7 @@ def main() -> None:
                         help="where to unpack (default: %(default)s)")
     parser.add_argument("--wheel", type=Path, help="a downloaded copy of " + WHEEL)
     args = parser.parse_args()
-    if sys.platform != "linux":
+    if sys.platform != "linux" or platform.machine() not in ("x86_64", "AMD64"):
         sys.exit("install-oidn: this wheel is Linux x86-64's; elsewhere install OIDN 2 from "
                  "https://github.com/RenderKit/oidn/releases and set OIDN_DIR")
     dest = args.dest
@@ -122,10 +132,13 @@ def main() -> None:
     if all(path.exists() for path in wanted):
         print(f"install-oidn: OIDN {VERSION} is already in {dest}")
         return
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory() as scratch:
-        wheel = args.wheel or pip_download(Path(scratch))
-        install(wheel, dest)
+    try:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory() as scratch:
+            wheel = args.wheel or pip_download(Path(scratch))
+            install(wheel, dest)
+    except (OSError, RuntimeError, subprocess.CalledProcessError, zipfile.BadZipFile, KeyError) as e:
+        sys.exit(f"install-oidn: {e}")
     print(f"install-oidn: OIDN {VERSION} (CPU device) installed in {dest}")
 
 

@@ -556,7 +556,8 @@ fn devices() -> Vec<String> {
 
 /// Renders `scene`: `spp` samples per pixel (or until `time` seconds or the relative error
 /// `target_error`), at `size` (width, height; default the scene's), on `backend` ("auto",
-/// "cpu" or "gpu"), with `integrator` ("nee" or "naive") and `sampler` ("sobol" or
+/// "cpu" or "gpu"), with `integrator` ("nee", "naive", or the feature buffers "albedo" and
+/// "normal") and `sampler` ("sobol" or
 /// "independent"); the defaults are the command line's. `progress`, if given, is called with
 /// the fraction done. Ctrl-C stops it with `KeyboardInterrupt`. `denoise=True` denoises the
 /// image as `--denoise` does (Open Image Denoise; the albedo and normal buffers come back too).

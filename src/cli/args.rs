@@ -267,7 +267,7 @@ pub struct ViewArgs {
     #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// Test aid: a scripted input (orbit:DX,DY, pan:DX,DY, dolly:N, fly:F,R,U, save, camera,
-    /// restart, reload, quit) or a wait (spp:N), run in order; repeatable.
+    /// restart, reload, denoise, quit) or a wait (spp:N), run in order; repeatable.
     #[arg(long = "step", value_name = "STEP", hide = true, value_parser = rt_gpu::viewer::Step::parse)]
     pub steps: Vec<rt_gpu::viewer::Step>,
     /// Test aid: exit once the script has run and the film holds N samples per pixel.

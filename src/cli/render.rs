@@ -72,6 +72,9 @@ pub fn run_render(args: &RenderArgs) -> anyhow::Result<()> {
     }
     if finished.outcome == Outcome::Stopped {
         let signal = STOP_SIGNAL.load(Ordering::SeqCst);
+        if plan.request.denoise {
+            note!("stopped before denoising: the image written is the noisy one");
+        }
         if let Some(c) = &plan.request.checkpoint {
             note!(
                 "stopped at sample {done}: continue with the same command and --resume {}",

@@ -60,7 +60,7 @@ pub struct Functions {
 /// OIDN's library, open, and its functions.
 pub struct Oidn {
     pub functions: Functions,
-    /// Where it was found (for `rt-gpu devices` and errors).
+    /// Where it was found (the bare name: the system's library path), for the summary line.
     pub path: PathBuf,
     // Last: dropped after nothing can call into it.
     _library: Library,
@@ -123,7 +123,9 @@ impl Oidn {
             // SAFETY: loading runs the library's initialisers; OIDN's are its own (and TBB's).
             let library = match unsafe { Library::new(&candidate) } {
                 Ok(library) => library,
-                Err(_) if bare => continue,
+                // None on the system's path; one there that does not load (a dependency
+                // missing, another architecture) is an error.
+                Err(e) if bare && absent(&e.to_string()) => continue,
                 Err(e) => {
                     return Err(OidnError::Broken {
                         path: candidate.display().to_string(),
@@ -174,6 +176,11 @@ impl Oidn {
             _library: library,
         })
     }
+}
+
+/// Whether the loader's message says OIDN's library itself is not there (not a dependency).
+fn absent(message: &str) -> bool {
+    message.contains(&format!("{LIBRARY}: cannot open shared object file"))
 }
 
 /// A loader's message on one line.

@@ -48,15 +48,15 @@ pub struct Request {
     /// budget allow. Passes continue one another exactly: the image does not depend on them.
     pub pass_seconds: Option<f64>,
     /// Denoise the image (OIDN, `crate::denoise`): the albedo and normal feature buffers are
-    /// rendered after the image, and the output is the denoised image (an .exr output then holds
-    /// it with the noisy image and the buffers as layers, not a film file). OIDN is opened
-    /// before the render, so its absence fails first.
+    /// rendered after the image (outside `budget`), and the output is the denoised image (an
+    /// .exr output then holds it with the noisy image and the buffers as layers, not a film
+    /// file). OIDN is opened before the render, so its absence fails first. A stopped render
+    /// is not denoised.
     pub denoise: bool,
 }
 
 /// The most samples per pixel the feature buffers take: beyond this their noise is far below
-/// the image's (they are prefiltered too), and their time is better spent on the image
-/// (docs/benchmarks.md, issue 65).
+/// the image's, and their time is better spent on the image.
 pub const FEATURE_SPP: u32 = 64;
 
 /// A denoised image and what it was made from.
@@ -149,11 +149,32 @@ impl Request {
         let mut passes = self.run_passes(&session, resume, &meta, hooks)?;
         let seconds = start.elapsed().as_secs_f64();
         let done = range.start + passes.rendered.film.pixels.first().map_or(0, |p| p.n) as u32;
+        // Not after a stop (a signal, Ctrl-C: the checkpoint and the image so far are written
+        // at once, undenoised), nor of no samples.
+        let stopped = passes.outcome == Outcome::Stopped || (hooks.stop)();
         let denoised = match &denoiser {
-            Some(denoiser) => Some(self.denoise(denoiser, &passes.rendered.film, done)?),
-            None => None,
+            Some(denoiser) if !stopped && done > range.start => {
+                Some(self.denoise(denoiser, &passes.rendered.film, done))
+            }
+            _ => None,
         };
+        let (denoised, failure) = match denoised {
+            Some(Ok(d)) => (Some(d), None),
+            Some(Err(e)) => (None, Some(e)),
+            None => (None, None),
+        };
+        // Where denoising failed the output is left as it was; the checkpoint is still written.
+        let pending = if failure.is_some() { None } else { pending };
         self.write_outputs(format, pending, &mut passes, &meta(done), denoised.as_ref())?;
+        if let Some(e) = failure {
+            return Err(match &self.checkpoint {
+                Some(c) => e.context(format!(
+                    "not denoised (the checkpoint {} was written)",
+                    c.path.display()
+                )),
+                None => e.context("not denoised"),
+            });
+        }
         Ok(Finished {
             rendered: passes.rendered,
             outcome: passes.outcome,

@@ -1,8 +1,10 @@
 //! The viewer's denoised display (key N): the film as it stands, denoised off the render loop
 //! (on a thread: the feature buffers rendered by the CPU backend from the film's first samples,
 //! then Open Image Denoise), shown when ready in place of the live film, through the same
-//! display pass (the denoised image uploaded as a film of one sample a pixel). The render goes
-//! on underneath; N again, or anything that restarts the film, shows the live film.
+//! display pass (the denoised image uploaded as a film of one sample a pixel): on the CPU
+//! backend exactly the image `--denoise` writes; on the kernel, its film with the CPU's buffers
+//! (the window's device is the render loop's). The render goes on underneath; N again, or
+//! anything that restarts the film, shows the live film (a denoise under way finishes unseen).
 
 use crate::denoise::{Denoiser, FeatureBuffers};
 use crate::film::Film;
@@ -69,7 +71,8 @@ impl Denoised {
         Denoised::Pending { spp, result }
     }
 
-    /// A finished denoise made ready to show through `display`; an error ends it.
+    /// A finished denoise made ready to show through `display`; an error ends it (the live film
+    /// is shown again).
     pub fn poll(
         &mut self,
         ctx: &GpuContext,

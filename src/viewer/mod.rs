@@ -429,7 +429,12 @@ impl Viewer {
             self.render_seconds += start.elapsed().as_secs_f64();
             self.samples += added as u64 * self.opts.width as u64 * self.opts.height as u64;
         }
-        (self.denoised).poll(&self.ctx, &self.display, self.opts.width, self.opts.height)?;
+        let polled =
+            (self.denoised).poll(&self.ctx, &self.display, self.opts.width, self.opts.height);
+        if let Err(e) = polled {
+            // The live film stays shown: the window goes on.
+            warn(&format!("not denoised: {e:#}"));
+        }
         // A denoise under way is waited for: a test's screenshot shows what it asked for.
         let finished = self.script.is_empty()
             && config.exit_after_spp.is_some_and(|n| self.film.spp() >= n)
