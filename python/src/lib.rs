@@ -380,10 +380,10 @@ impl Render {
         let inputs: Vec<&std::path::Path> = self.inputs.iter().map(PathBuf::as_path).collect();
         rt_gpu::film::output::PendingOutput::claim(&path, &inputs)
             .and_then(|pending| match &self.denoised {
-                Some(d) => pending.commit_float_image(
-                    &rt_gpu::render::request::denoised_image(&self.film, d),
-                    None,
-                ),
+                Some(d) => {
+                    let image = rt_gpu::render::request::denoised_image(&self.film, d);
+                    pending.commit_encoded(None, |format, transfer| image.encode(format, transfer))
+                }
                 None => pending.commit_image(&self.film, None),
             })
             .map_err(|e| value_error(format!("{e:#}")))

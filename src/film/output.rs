@@ -354,24 +354,22 @@ impl PendingOutput {
     /// Writes `film`'s mean image in the format the destination's extension names, 8-bit
     /// formats with `transfer` [default: the format's own].
     pub fn commit_image(self, film: &Film, transfer: Option<Transfer>) -> anyhow::Result<()> {
-        let format = ImageFormat::from_path(&self.shown)?;
-        let transfer = transfer.unwrap_or(Transfer::default_for(format));
-        let bytes = encode_image(format, film, transfer)
-            .with_context(|| format!("cannot encode {}", self.shown.display()))?;
-        self.commit(&bytes)
+        self.commit_encoded(transfer, |format, transfer| {
+            encode_image(format, film, transfer)
+        })
     }
 
-    /// Writes `image` in the format the destination's extension names (an .exr with all its
-    /// layers), 8-bit formats with `transfer` [default: the format's own].
-    pub fn commit_float_image(
+    /// Writes what `encode` makes of the image in the format the destination's extension names,
+    /// 8-bit formats with `transfer` [default: the format's own] (a float image's
+    /// `film::float_image::FloatImage::encode`, say).
+    pub fn commit_encoded(
         self,
-        image: &crate::film::float_image::FloatImage,
         transfer: Option<Transfer>,
+        encode: impl FnOnce(ImageFormat, Transfer) -> anyhow::Result<Vec<u8>>,
     ) -> anyhow::Result<()> {
         let format = ImageFormat::from_path(&self.shown)?;
         let transfer = transfer.unwrap_or(Transfer::default_for(format));
-        let bytes = image
-            .encode(format, transfer)
+        let bytes = encode(format, transfer)
             .with_context(|| format!("cannot encode {}", self.shown.display()))?;
         self.commit(&bytes)
     }

@@ -318,7 +318,10 @@ impl Request {
         match (&encoded, denoised) {
             (Some(bytes), _) if output_is_film => pending.commit(bytes)?,
             (_, Some(denoised)) => {
-                pending.commit_float_image(&denoised_image(film, denoised), self.gamma)?
+                let image = denoised_image(film, denoised);
+                pending.commit_encoded(self.gamma, |format, transfer| {
+                    image.encode(format, transfer)
+                })?
             }
             _ => pending.commit_image(film, self.gamma)?,
         }
