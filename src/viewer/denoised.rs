@@ -4,7 +4,8 @@
 //! display pass (the denoised image uploaded as a film of one sample a pixel): on the CPU
 //! backend exactly the image `--denoise` writes; on the kernel, its film with the CPU's buffers
 //! (the window's device is the render loop's). The render goes on underneath; N again, or
-//! anything that restarts the film, shows the live film (a denoise under way finishes unseen).
+//! anything that restarts the film, shows the live film (a denoise under way stops after its
+//! current step).
 
 use crate::denoise::{Denoiser, FeatureBuffers};
 use crate::film::Film;
@@ -22,10 +23,12 @@ use wgpu::util::DeviceExt;
 /// What the window shows of denoising.
 pub enum Denoised {
     Off,
-    /// Being denoised (of a film of `spp` samples).
+    /// Being denoised (of a film of `spp` samples). Dropping it (N again, a restart) tells the
+    /// thread, which stops after the step under way.
     Pending {
         spp: u32,
         result: Receiver<anyhow::Result<Vec<[f32; 3]>>>,
+        _wanted: Arc<()>,
     },
     /// Shown: the display pass's bindings to the denoised image.
     Shown {
@@ -47,28 +50,41 @@ impl Denoised {
     ) -> Denoised {
         let spp = film.pixels.first().map_or(0, |p| p.n as u32);
         let (send, result) = channel();
+        let wanted = Arc::new(());
+        let still_wanted = Arc::downgrade(&wanted);
         std::thread::spawn(move || {
             let denoised = (|| {
+                let abandoned = || anyhow::anyhow!("abandoned");
                 let flat = FlatScene::new(&scene, opts.width, opts.height)?;
                 let buffer = |integrator| {
+                    if still_wanted.strong_count() == 0 {
+                        return Err(abandoned());
+                    }
                     let opts = RenderOptions {
                         spp: spp.clamp(1, FEATURE_SPP),
                         first_sample: 0,
                         integrator,
                         ..opts
                     };
-                    crate::cpu::render(&flat, &opts, &|| {})
+                    Ok(crate::cpu::render(&flat, &opts, &|| {}))
                 };
                 let features = FeatureBuffers::from_films(
-                    &buffer(Integrator::Albedo),
-                    &buffer(Integrator::Normal),
+                    &buffer(Integrator::Albedo)?,
+                    &buffer(Integrator::Normal)?,
                 );
+                if still_wanted.strong_count() == 0 {
+                    return Err(abandoned());
+                }
                 Ok(denoiser.denoise(film.width, film.height, &film.mean_rgb(), Some(&features))?)
             })();
             // The window may have moved on: nobody listening is fine.
             let _ = send.send(denoised);
         });
-        Denoised::Pending { spp, result }
+        Denoised::Pending {
+            spp,
+            result,
+            _wanted: wanted,
+        }
     }
 
     /// A finished denoise made ready to show through `display`; an error ends it (the live film
@@ -80,7 +96,7 @@ impl Denoised {
         width: u32,
         height: u32,
     ) -> anyhow::Result<()> {
-        let Denoised::Pending { spp, result } = self else {
+        let Denoised::Pending { spp, result, .. } = self else {
             return Ok(());
         };
         let image = match result.try_recv() {

@@ -557,6 +557,9 @@ impl Viewer {
             self.denoised = Denoised::Off;
             return self.update_status(true);
         }
+        if self.film.spp() == 0 {
+            return Ok(()); // nothing to denoise yet
+        }
         let denoiser = match &self.denoiser {
             Some(d) => d.clone(),
             None => match crate::denoise::Denoiser::new(None) {
