@@ -4,10 +4,9 @@
 #[cfg(feature = "plot")]
 pub mod plot;
 
-use crate::denoise::{Denoiser, FeatureBuffers};
+use crate::denoise::{Denoiser, render_feature_buffers};
 use crate::film::output::{read_pfm, write_atomically, write_image};
 use crate::options::SamplerKind;
-use crate::render::request::FEATURE_SPP;
 use crate::render::{Backend, GpuChoice, Integrator, RenderOptions, Session};
 use crate::scene::flat::FlatScene;
 use anyhow::{Context, bail};
@@ -205,7 +204,7 @@ impl Denoising {
     }
 
     /// `film` (rendered on `backend` with `opts`) denoised, guided by feature buffers of the
-    /// same samples (up to [`FEATURE_SPP`]), as `--denoise` makes them.
+    /// same samples, as `--denoise` makes them.
     fn denoise(
         &self,
         o: &ConvergeOptions,
@@ -216,15 +215,13 @@ impl Denoising {
         let (_, albedo, normal) = (self.features.iter())
             .find(|(b, _, _)| *b == backend)
             .context("no feature sessions for this backend")?;
-        let buffer = |session: &Session| {
-            let opts = RenderOptions {
-                spp: opts.spp.min(FEATURE_SPP),
-                integrator: session.integrator(),
-                ..*opts
+        let (features, _) = render_feature_buffers(opts, opts.spp, |opts| {
+            let session = match opts.integrator {
+                Integrator::Albedo => albedo,
+                _ => normal,
             };
-            session.render(&o.scene, &opts, &|_| {}).map(|r| r.film)
-        };
-        let features = FeatureBuffers::from_films(&buffer(albedo)?, &buffer(normal)?);
+            session.render(&o.scene, opts, &|_| {}).map(|r| r.film)
+        })?;
         Ok(self
             .denoiser
             .denoise(o.width, o.height, &film.mean_rgb(), Some(&features))?)

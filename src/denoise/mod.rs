@@ -4,13 +4,13 @@
 //! An output transform: films and film files stay exact and undenoised.
 //!
 //! The feature buffers go to the filter as they are (OIDN's default, `cleanAux` off, which
-//! expects some noise in them), not prefiltered: on the Cornell box at 4-64 spp the prefiltered
-//! buffers gave a 10-30% larger relative MSE and took 4-7x as long (three filters, two of them
-//! OIDN's large models): docs/benchmarks.md.
+//! expects some noise in them), not prefiltered: prefiltering measured worse and slower
+//! (docs/benchmarks.md, issue 65).
 
 pub mod library;
 
 use crate::film::Film;
+use crate::options::{Integrator, RenderOptions};
 use library::{DEVICE_TYPE_CPU, Device, ERROR_NONE, FORMAT_FLOAT3, Filter, Oidn, OidnError};
 use std::ffi::{CStr, c_char, c_void};
 
@@ -37,6 +37,32 @@ impl FeatureBuffers {
                 .collect(),
         }
     }
+}
+
+/// The most samples per pixel the feature buffers take: beyond this their noise is far below
+/// the image's, and their time is better spent on the image.
+pub const FEATURE_SPP: u32 = 64;
+
+/// The feature buffers of an image of `spp` samples rendered with `opts` (from
+/// `opts.first_sample`): the first of the same samples, at most [`FEATURE_SPP`], so that their
+/// camera rays are the image's, each film made by `render` (given the albedo, then the normal
+/// integrator's options). Returns them and their samples per pixel.
+pub fn render_feature_buffers(
+    opts: &RenderOptions,
+    spp: u32,
+    mut render: impl FnMut(&RenderOptions) -> anyhow::Result<Film>,
+) -> anyhow::Result<(FeatureBuffers, u32)> {
+    let feature_spp = spp.clamp(1, FEATURE_SPP);
+    let mut buffer = |integrator| {
+        render(&RenderOptions {
+            spp: feature_spp,
+            integrator,
+            ..*opts
+        })
+    };
+    let albedo = buffer(Integrator::Albedo)?;
+    let normal = buffer(Integrator::Normal)?;
+    Ok((FeatureBuffers::from_films(&albedo, &normal), feature_spp))
 }
 
 /// A normal film's mean, (n + 1) / 2 averaged, as the mean normal.

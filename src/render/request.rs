@@ -8,8 +8,8 @@
 
 use super::checkpoint::{CheckpointWriter, pass_seconds, resume_from};
 use super::progressive::{Job, Outcome, Progress};
-use super::{Backend, GpuChoice, Integrator, RenderOptions, Rendered, Session};
-use crate::denoise::{Denoiser, FeatureBuffers};
+use super::{Backend, GpuChoice, RenderOptions, Rendered, Session};
+use crate::denoise::{Denoiser, FeatureBuffers, render_feature_buffers};
 use crate::film::file::{self as film_file, FilmMeta};
 use crate::film::float_image::{FloatImage, NamedLayer};
 use crate::film::output::{FileLock, ImageFormat, PendingOutput, Transfer};
@@ -54,10 +54,6 @@ pub struct Request {
     /// is not denoised.
     pub denoise: bool,
 }
-
-/// The most samples per pixel the feature buffers take: beyond this their noise is far below
-/// the image's, and their time is better spent on the image.
-pub const FEATURE_SPP: u32 = 64;
 
 /// A denoised image and what it was made from.
 pub struct Denoised {
@@ -185,22 +181,15 @@ impl Request {
         })
     }
 
-    /// Renders the feature buffers (the samples of the image's first, up to [`FEATURE_SPP`],
-    /// so their camera rays are the image's) and denoises the film's mean with them.
+    /// Renders the feature buffers (`denoise::render_feature_buffers`) on the image's backend
+    /// and denoises the film's mean with them.
     fn denoise(&self, denoiser: &Denoiser, film: &Film, done: u32) -> anyhow::Result<Denoised> {
         let start = Instant::now();
-        let feature_spp = (done - self.opts.first_sample).clamp(1, FEATURE_SPP);
-        let buffer = |integrator: Integrator| {
-            let opts = RenderOptions {
-                spp: feature_spp,
-                integrator,
-                ..self.opts
-            };
-            super::render(self.backend, &self.gpu, &self.flat, &opts, &|_| {})
+        let spp = done - self.opts.first_sample;
+        let (features, feature_spp) = render_feature_buffers(&self.opts, spp, |opts| {
+            super::render(self.backend, &self.gpu, &self.flat, opts, &|_| {})
                 .map(|rendered| rendered.film)
-        };
-        let features =
-            FeatureBuffers::from_films(&buffer(Integrator::Albedo)?, &buffer(Integrator::Normal)?);
+        })?;
         let feature_seconds = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let image = denoiser.denoise(film.width, film.height, &film.mean_rgb(), Some(&features))?;

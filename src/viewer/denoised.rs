@@ -7,13 +7,12 @@
 //! anything that restarts the film, shows the live film (a denoise under way stops after its
 //! current step).
 
-use crate::denoise::{Denoiser, FeatureBuffers};
+use crate::denoise::{Denoiser, render_feature_buffers};
 use crate::film::Film;
 use crate::film::float_image::film_of;
 use crate::gpu::GpuContext;
 use crate::gpu::display::{DisplayPass, accumulator_words};
-use crate::options::{Integrator, RenderOptions};
-use crate::render::request::FEATURE_SPP;
+use crate::options::RenderOptions;
 use crate::scene::Scene;
 use crate::scene::flat::FlatScene;
 use std::sync::Arc;
@@ -56,22 +55,17 @@ impl Denoised {
             let denoised = (|| {
                 let abandoned = || anyhow::anyhow!("abandoned");
                 let flat = FlatScene::new(&scene, opts.width, opts.height)?;
-                let buffer = |integrator| {
+                // The film's samples start at 0.
+                let image_opts = RenderOptions {
+                    first_sample: 0,
+                    ..opts
+                };
+                let (features, _) = render_feature_buffers(&image_opts, spp, |opts| {
                     if still_wanted.strong_count() == 0 {
                         return Err(abandoned());
                     }
-                    let opts = RenderOptions {
-                        spp: spp.clamp(1, FEATURE_SPP),
-                        first_sample: 0,
-                        integrator,
-                        ..opts
-                    };
-                    Ok(crate::cpu::render(&flat, &opts, &|| {}))
-                };
-                let features = FeatureBuffers::from_films(
-                    &buffer(Integrator::Albedo)?,
-                    &buffer(Integrator::Normal)?,
-                );
+                    Ok(crate::cpu::render(&flat, opts, &|| {}))
+                })?;
                 if still_wanted.strong_count() == 0 {
                     return Err(abandoned());
                 }
