@@ -340,7 +340,8 @@ fn sample_bsdf(@builtin(global_invocation_id) gid: vec3u) {
 //#endif
 
 // Closest hits of arbitrary rays, for robustness tests: each slot holds a ray on input (point:
-// origin, dir: direction) and its hit on output (dir is kept).
+// origin, dir: direction) and its hit on output (dir is kept; in BVH kernels `scattered` holds
+// the traversal's loop count).
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
     if !in_tile(gid, dispatch.tile_size) {
@@ -348,6 +349,15 @@ fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
     }
     let slot = gid.y * dispatch.tile_size.x + gid.x;
     var hit: Hit;
-    bounces[slot] = trace_debug(Ray(bounces[slot].point, bounces[slot].dir), &hit);
+//#if BVH
+    loop_iterations = 0u;
+//#endif
+    var out = trace_debug(Ray(bounces[slot].point, bounces[slot].dir), &hit);
+//#if BVH
+    // The traversal's loop count, which the CPU's model of it (src/cpu/traversal_stats.rs)
+    // must match ray for ray.
+    out.scattered = loop_iterations;
+//#endif
+    bounces[slot] = out;
 }
 //#endif

@@ -34,6 +34,9 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         sampler: args.sampler.into(),
         roulette_depth: args.roulette_depth,
     };
+    if args.stats {
+        return traversal_stats(&flat, &opts);
+    }
     let samples = width as f64 * height as f64 * args.spp as f64;
     say!(
         "{}: {width}x{height}, {} spp, max depth {}, {} integrator, {} sampler, roulette depth {}",
@@ -165,6 +168,79 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
             bvh.nodes.len(),
             bvh.depth,
             geometry as f64 / 1e6
+        )?;
+    }
+    Ok(())
+}
+
+/// `bench --stats`: the traversal counts per ray, kernel and CPU side by side.
+fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let Some(stats) = rt_gpu::cpu::traversal_stats::traversal_stats(flat, opts) else {
+        say!("  no BVH: the scene's few shapes are tested in turn on both backends")?;
+        return Ok(());
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    say!(
+        "  traversal per ray, one camera ray through each of {}x{} pixels and a diffuse bounce from each hit ({seconds:.1} s):",
+        opts.width,
+        opts.height
+    )?;
+    say!(
+        "  {:<8} {:<32} {:>8} {:>11} {:>8} {:>11} {:>10} {:>14} {:>11}",
+        "rays",
+        "traversal",
+        "nodes",
+        "node bytes",
+        "leaves",
+        "primitives",
+        "instances",
+        "stack mean/max",
+        "iterations"
+    )?;
+    let width = rt_gpu::accel::wide::WIDTH;
+    let wide_node = std::mem::size_of::<rt_gpu::accel::wide::WideNode>();
+    let kernel_label = format!(
+        "kernel, binary ({} B nodes)",
+        rt_gpu::cpu::traversal_stats::KERNEL_NODE_BYTES
+    );
+    let wide_label = format!("cpu, {width}-wide ({wide_node} B nodes)");
+    let mut disagreements = 0;
+    for (kind, s) in [("camera", &stats.camera), ("bounce", &stats.bounce)] {
+        for (label, c) in [(&kernel_label, &s.kernel), (&wide_label, &s.wide)] {
+            // Only the kernel's loop counts iterations (lavapipe's budget).
+            let iterations = if c.iterations > 0 {
+                format!("{:.1}", c.per_ray(c.iterations))
+            } else {
+                String::new()
+            };
+            let stack = format!("{:.1}/{}", c.per_ray(c.stack_depth_sum), c.stack_depth_max);
+            say!(
+                "  {kind:<8} {label:<32} {:>8.1} {:>11.0} {:>8.2} {:>11.2} {:>10.2} {stack:>14} {iterations:>11}",
+                c.per_ray(c.nodes),
+                c.per_ray(c.node_bytes),
+                c.per_ray(c.leaves),
+                c.per_ray(c.primitives),
+                c.per_ray(c.instances),
+            )?;
+        }
+        say!(
+            "  {kind:<8} cpu / kernel: nodes {:.2}x, node bytes {:.2}x, primitives {:.2}x ({} rays)",
+            s.wide.nodes as f64 / s.kernel.nodes.max(1) as f64,
+            s.wide.node_bytes as f64 / s.kernel.node_bytes.max(1) as f64,
+            s.wide.primitives as f64 / s.kernel.primitives.max(1) as f64,
+            s.kernel.rays
+        )?;
+        disagreements += s.disagreements;
+    }
+    if disagreements > 0 {
+        say!(
+            "  {disagreements} rays' closest hits differ from the renderer's{}",
+            if flat.see_through {
+                " (the counts take alpha-tested surfaces as opaque)"
+            } else {
+                ""
+            }
         )?;
     }
     Ok(())

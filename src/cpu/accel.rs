@@ -7,7 +7,7 @@
 
 use super::lanes::{Lanes, equal_bits};
 use super::triangle_blocks::ShearedRay;
-use crate::accel::wide::{EMPTY, LEAF, TRIANGLES, WIDTH, WideBvh, WideNode};
+use crate::accel::wide::{EMPTY, LEAF, TRIANGLES, TriangleBlock, WIDTH, WideBvh, WideNode};
 use crate::accel::{BOX_FAR_WIDENING, Bvh, MAX_DEPTH, inverse_direction};
 use crate::shared::ray::Ray;
 use std::mem::MaybeUninit;
@@ -66,6 +66,17 @@ pub trait Leaves {
     fn finished(&self) -> bool {
         false
     }
+    /// Counting hooks (`traversal_stats`; nothing when rendering): a wide node read, a triangle
+    /// block tested, a leaf's primitive list entered, a child pushed onto the stack, which is
+    /// then `height` entries high.
+    #[inline]
+    fn read_node(&mut self) {}
+    #[inline]
+    fn read_block(&mut self, _block: &TriangleBlock) {}
+    #[inline]
+    fn enter_list(&mut self) {}
+    #[inline]
+    fn pushed(&mut self, _height: usize) {}
 }
 
 /// Up to and including `closest`: the `t_max` a closest-hit search tests primitives with, so
@@ -106,6 +117,7 @@ pub fn traverse_wide(
         if reference & LEAF != 0 {
             if reference & TRIANGLES != 0 {
                 let block = &wide.blocks[(reference & !(LEAF | TRIANGLES)) as usize];
+                leaves.read_block(block);
                 let hits = sheared.hits(block, reach(*closest));
                 let mut lanes = hits.hit;
                 while lanes != 0 {
@@ -116,6 +128,7 @@ pub fn traverse_wide(
                 }
             } else {
                 let leaf = &bvh.nodes[(reference & !LEAF) as usize];
+                leaves.enter_list();
                 let first = leaf.offset as usize;
                 for &p in &bvh.primitives[first..first + leaf.count as usize] {
                     leaves.primitive(p, closest);
@@ -126,6 +139,7 @@ pub fn traverse_wide(
             }
         } else {
             let node = &wide.nodes[reference as usize];
+            leaves.read_node();
             let (entries, met) = boxes.entries(node, *closest);
             // The children met, nearest first (at most `WIDTH`: insertion sort).
             let mut order = [(0u32, 0f32); WIDTH];
@@ -145,6 +159,7 @@ pub fn traverse_wide(
             if count > 0 {
                 for &pending in order[1..count].iter().rev() {
                     stack.push(pending);
+                    leaves.pushed(stack.top);
                 }
                 reference = order[0].0;
                 continue;

@@ -15,6 +15,7 @@ pub mod lanes;
 pub mod lights;
 pub mod medium;
 pub mod ray_count;
+pub mod traversal_stats;
 pub mod triangle_blocks;
 
 use crate::backend::{RenderBackend, Rendered};

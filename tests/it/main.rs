@@ -36,4 +36,5 @@ mod scene_files;
 mod slurm;
 mod stability;
 mod textures;
+mod traversal;
 mod viewer;

@@ -1,0 +1,395 @@
+//! What a ray's BVH traversal reads, counted per ray, for `rt-gpu bench --stats`: the proxy for
+//! a GPU's traversal cost where no GPU is at hand (issue 67). Two traversals are counted over
+//! the same rays:
+//!
+//! - the kernel's ([`kernel_traverse`]): a model of the binary walk of `shaders/accel.wgsl`, step
+//!   for step (two children's boxes per interior node read, the nearer entered, the other pushed
+//!   with its entry distance; a top-level leaf's instances pushed and entered when popped);
+//! - the CPU's: [`traverse_wide`] itself, its reads counted through the [`Leaves`] hooks.
+//!
+//! The rays are a render's two kinds: camera rays through every pixel (coherent) and rays
+//! bounced off their hits in a cosine-distributed direction (incoherent, as a path tracer's
+//! are after the first hit). Each ray's closest hit from both traversals is checked against
+//! [`intersect`]'s, so the counts are of traversals that find what a render finds.
+
+use super::accel::{Leaves, reach, traverse_wide};
+use super::intersect::{hit_triangle, intersect};
+use crate::accel::wide::{EMPTY, TriangleBlock, WideNode};
+use crate::accel::{BOX_FAR_WIDENING, Bvh, box_entry, inverse_direction};
+use crate::options::{RenderOptions, SamplerKind};
+use crate::scene::flat::FlatScene;
+use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
+use crate::shared::ray::{Ray, spawn};
+use crate::shared::sampler::Sampler;
+use crate::shared::warp::cosine_direction;
+use rayon::prelude::*;
+
+/// Bytes of one node of the kernel's binary hierarchy (`GpuBvhNode`: both children's boxes and
+/// references), read on entering an interior node.
+pub const KERNEL_NODE_BYTES: u64 = 64;
+
+/// One traversal's reads, summed over rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Counts {
+    pub rays: u64,
+    /// The kernel's: its traversal loop's count (`loop_iterations` in shaders/accel.wgsl, at a
+    /// weight of 1), the unit of lavapipe's loop budget: an iteration per interior node
+    /// entered, a leaf's primitives and one more, a pass of the popping loop.
+    pub iterations: u64,
+    /// Interior nodes read (the kernel's: binary; the CPU's: wide).
+    pub nodes: u64,
+    /// Bytes of those nodes.
+    pub node_bytes: u64,
+    /// Leaves whose primitives were tested (the CPU's triangle blocks among them).
+    pub leaves: u64,
+    /// Primitives tested (a triangle block's lanes in use each count).
+    pub primitives: u64,
+    /// Instances entered (the ray moved into a mesh's coordinates).
+    pub instances: u64,
+    /// Stack entries pushed.
+    pub pushes: u64,
+    /// The sum over rays of the deepest the stack got, and the deepest of all.
+    pub stack_depth_sum: u64,
+    pub stack_depth_max: u64,
+}
+
+impl Counts {
+    fn add(mut self, o: Counts) -> Counts {
+        self.rays += o.rays;
+        self.iterations += o.iterations;
+        self.nodes += o.nodes;
+        self.node_bytes += o.node_bytes;
+        self.leaves += o.leaves;
+        self.primitives += o.primitives;
+        self.instances += o.instances;
+        self.pushes += o.pushes;
+        self.stack_depth_sum += o.stack_depth_sum;
+        self.stack_depth_max = self.stack_depth_max.max(o.stack_depth_max);
+        self
+    }
+
+    /// A per-ray mean of a count.
+    pub fn per_ray(&self, count: u64) -> f64 {
+        count as f64 / self.rays.max(1) as f64
+    }
+
+    /// One ray's deepest stack, counted in.
+    fn end_ray(&mut self, deepest: u64) {
+        self.rays += 1;
+        self.stack_depth_sum += deepest;
+        self.stack_depth_max = self.stack_depth_max.max(deepest);
+    }
+}
+
+/// Both traversals' counts over one kind of ray.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RayKindStats {
+    pub kernel: Counts,
+    pub wide: Counts,
+    /// Rays whose closest hit a traversal found at another distance than `intersect` did (0
+    /// unless the model has drifted from the kernel, or a scene's alpha-tested surfaces, which
+    /// the count does not model, let a ray through).
+    pub disagreements: u64,
+}
+
+impl RayKindStats {
+    fn add(self, o: RayKindStats) -> RayKindStats {
+        RayKindStats {
+            kernel: self.kernel.add(o.kernel),
+            wide: self.wide.add(o.wide),
+            disagreements: self.disagreements + o.disagreements,
+        }
+    }
+}
+
+/// The counts of a scene's camera rays and their bounces.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TraversalStats {
+    pub camera: RayKindStats,
+    pub bounce: RayKindStats,
+}
+
+/// The rays counted: one camera ray through every pixel of an `opts.width` x `opts.height`
+/// image, and a bounce in a cosine-distributed direction from each one's hit. The same scene
+/// and size give the same rays.
+pub fn stats_rays(scene: &FlatScene, opts: &RenderOptions) -> [Vec<Ray>; 2] {
+    let width = opts.width;
+    let rows: Vec<(Vec<Ray>, Vec<Ray>)> = (0..opts.height)
+        .into_par_iter()
+        .map(|y| {
+            let (mut cameras, mut bounces) = (Vec::new(), Vec::new());
+            for x in 0..width {
+                let pixel = y * width + x;
+                let mut sampler = Sampler::for_sample(SamplerKind::Independent, pixel, 0, 1);
+                let camera = super::camera::generate_ray(&scene.camera, opts, x, y, &mut sampler);
+                cameras.push(camera);
+                if let Some(hit) = intersect(scene, &camera) {
+                    let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
+                    bounces.push(spawn(&hit, cosine_direction(hit.normal, u1, u2)));
+                }
+            }
+            (cameras, bounces)
+        })
+        .collect();
+    let (cameras, bounces) = rows.into_iter().unzip::<_, _, Vec<_>, Vec<_>>();
+    [cameras.concat(), bounces.concat()]
+}
+
+/// Both traversals' counts over [`stats_rays`]; `None` when the scene has no BVH.
+pub fn traversal_stats(scene: &FlatScene, opts: &RenderOptions) -> Option<TraversalStats> {
+    if scene.bvh.nodes.is_empty() {
+        return None;
+    }
+    let [cameras, bounces] = stats_rays(scene, opts);
+    let count = |rays: &[Ray]| {
+        rays.par_iter()
+            .map(|ray| count_ray(scene, ray))
+            .reduce(RayKindStats::default, RayKindStats::add)
+    };
+    Some(TraversalStats {
+        camera: count(&cameras),
+        bounce: count(&bounces),
+    })
+}
+
+/// One ray through both traversals, checked against `intersect`.
+pub fn count_ray(scene: &FlatScene, ray: &Ray) -> RayKindStats {
+    let expected = intersect(scene, ray).map_or(f32::INFINITY, |hit| hit.t);
+    let mut out = RayKindStats::default();
+    let mut closest = f32::INFINITY;
+    kernel_traverse(scene, ray, &mut closest, &mut out.kernel);
+    let kernel_agrees = closest == expected;
+    let mut closest = f32::INFINITY;
+    let mut counting = Counting {
+        scene,
+        ray,
+        counts: &mut out.wide,
+        deepest: 0,
+        in_instance: false,
+    };
+    let wide = &scene.wide_bvh;
+    traverse_wide(
+        wide,
+        &scene.bvh,
+        wide.root,
+        ray,
+        &mut closest,
+        &mut counting,
+    );
+    let deepest = counting.deepest;
+    out.wide.end_ray(deepest);
+    out.disagreements = (!kernel_agrees || closest != expected) as u64;
+    out
+}
+
+/// Where the ray meets primitive `packed` (a top-level one: a shape or a placed triangle)
+/// before `t_max`. Alpha-tested surfaces count as opaque.
+fn hit_primitive(scene: &FlatScene, packed: u32, ray: &Ray, t_max: f32) -> Option<f32> {
+    match PrimitiveRef::unpacked(packed) {
+        PrimitiveRef::Shape { kind, index } => {
+            scene.shapes.hit(kind, index, ray, t_max).map(|h| h.0)
+        }
+        PrimitiveRef::Triangle(i) => {
+            hit_triangle(&scene.triangles[i as usize], ray, 0.0, t_max).map(|h| h.0)
+        }
+        PrimitiveRef::Instance(_) => unreachable!("instances are entered, not hit"),
+    }
+}
+
+/// An instanced mesh's triangle `packed` (as its leaves hold it) along the ray in the mesh's
+/// coordinates.
+fn hit_mesh_triangle(scene: &FlatScene, packed: u32, local: &Ray, t_max: f32) -> Option<f32> {
+    let triangle = packed & ((1 << PRIMITIVE_INDEX_BITS) - 1);
+    hit_triangle(&scene.triangles[triangle as usize], local, 0.0, t_max).map(|h| h.0)
+}
+
+/// A stack entry of the kernel's walk: a node reference and the distance at which the ray
+/// enters its box, or an instance to enter.
+#[derive(Clone, Copy)]
+enum Entry {
+    Node(u32, f32),
+    Instance(u32),
+}
+
+/// The kernel's traversal (`traverse` in shaders/accel.wgsl), counting what it reads: the
+/// closest hit's distance in `closest`. An interior node's read tests both children's boxes;
+/// the ray enters the nearer child met and pushes the other with its entry distance; a leaf
+/// (entered, never read: its reference holds its range) tests its primitives and pushes its
+/// instances; popping skips entries whose boxes now lie beyond the closest hit, and an
+/// instance's entry moves the ray into its mesh and descends from the mesh's root until the
+/// stack is back at the height it had then.
+pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts: &mut Counts) {
+    let bvh: &Bvh = &scene.bvh;
+    let mut ray = *world;
+    let mut inverse = inverse_direction(ray.dir);
+    let mut stack: Vec<Entry> = Vec::with_capacity(64);
+    let mut deepest = 0;
+    // The stack's height when the ray entered the instance it is in.
+    let mut instance: Option<usize> = None;
+    let mut entering = 0u32;
+    loop {
+        counts.iterations += 1;
+        let mut node = &bvh.nodes[entering as usize];
+        let mut pop = false;
+        if !node.is_leaf() {
+            counts.nodes += 1;
+            counts.node_bytes += KERNEL_NODE_BYTES;
+            let (first, second) = (entering + 1, node.offset);
+            let entry = |child: u32| {
+                let c = &bvh.nodes[child as usize];
+                box_entry(c.min, c.max, ray.origin, inverse, *closest)
+            };
+            match (entry(first), entry(second)) {
+                (Some(t_first), Some(t_second)) => {
+                    let second_nearer = t_second < t_first;
+                    stack.push(if second_nearer {
+                        Entry::Node(first, t_first)
+                    } else {
+                        Entry::Node(second, t_second)
+                    });
+                    counts.pushes += 1;
+                    deepest = deepest.max(stack.len() as u64);
+                    entering = if second_nearer { second } else { first };
+                }
+                (Some(_), None) => entering = first,
+                (None, Some(_)) => entering = second,
+                (None, None) => pop = true,
+            }
+            node = &bvh.nodes[entering as usize];
+        }
+        if !pop && node.is_leaf() {
+            counts.leaves += 1;
+            counts.iterations += node.count as u64 + 1;
+            let first = node.offset as usize;
+            for &packed in &bvh.primitives[first..first + node.count as usize] {
+                counts.primitives += 1;
+                if instance.is_some() {
+                    if let Some(t) = hit_mesh_triangle(scene, packed, &ray, reach(*closest)) {
+                        *closest = closest.min(t);
+                    }
+                    continue;
+                }
+                if let PrimitiveRef::Instance(i) = PrimitiveRef::unpacked(packed) {
+                    stack.push(Entry::Instance(i));
+                    counts.pushes += 1;
+                    deepest = deepest.max(stack.len() as u64);
+                    continue;
+                }
+                if let Some(t) = hit_primitive(scene, packed, &ray, reach(*closest)) {
+                    *closest = closest.min(t);
+                }
+            }
+            pop = true;
+        }
+        if pop {
+            loop {
+                counts.iterations += 1;
+                if let Some(floor) = instance
+                    && stack.len() == floor
+                {
+                    instance = None;
+                    ray = *world;
+                    inverse = inverse_direction(ray.dir);
+                }
+                let Some(top) = stack.pop() else {
+                    counts.end_ray(deepest);
+                    return;
+                };
+                match top {
+                    Entry::Node(reference, t_entry) => {
+                        if t_entry <= *closest * BOX_FAR_WIDENING {
+                            entering = reference;
+                            break;
+                        }
+                    }
+                    Entry::Instance(i) => {
+                        counts.instances += 1;
+                        let inst = &scene.instances[i as usize];
+                        instance = Some(stack.len());
+                        ray = Ray {
+                            origin: inst.point_to_local(world.origin),
+                            dir: inst.vector_to_local(world.dir),
+                        };
+                        inverse = inverse_direction(ray.dir);
+                        entering = inst.root;
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The CPU's wide traversal's leaves, counting: the closest hit's distance only, an instance
+/// descended into through the same traversal (on a stack of its own: the deepest stack is
+/// either level's).
+struct Counting<'a> {
+    scene: &'a FlatScene,
+    ray: &'a Ray,
+    counts: &'a mut Counts,
+    deepest: u64,
+    /// Whether `ray` is in an instance's mesh, whose leaves hold its triangles.
+    in_instance: bool,
+}
+
+impl Leaves for Counting<'_> {
+    fn primitive(&mut self, packed: u32, closest: &mut f32) {
+        self.counts.primitives += 1;
+        let scene = self.scene;
+        if self.in_instance {
+            if let Some(t) = hit_mesh_triangle(scene, packed, self.ray, reach(*closest)) {
+                *closest = closest.min(t);
+            }
+            return;
+        }
+        if let PrimitiveRef::Instance(i) = PrimitiveRef::unpacked(packed) {
+            self.counts.instances += 1;
+            let inst = &scene.instances[i as usize];
+            let local = Ray {
+                origin: inst.point_to_local(self.ray.origin),
+                dir: inst.vector_to_local(self.ray.dir),
+            };
+            let mut inside = Counting {
+                scene,
+                ray: &local,
+                counts: self.counts,
+                deepest: 0,
+                in_instance: true,
+            };
+            let wide = &scene.wide_bvh;
+            let root = wide.instance_roots[i as usize];
+            traverse_wide(wide, &scene.bvh, root, &local, closest, &mut inside);
+            self.deepest = self.deepest.max(inside.deepest);
+            return;
+        }
+        if let Some(t) = hit_primitive(scene, packed, self.ray, reach(*closest)) {
+            *closest = closest.min(t);
+        }
+    }
+
+    fn triangle(&mut self, _: u32, hit: (f32, f32, f32), closest: &mut f32) {
+        if hit.0 < reach(*closest) {
+            *closest = closest.min(hit.0);
+        }
+    }
+
+    fn read_node(&mut self) {
+        self.counts.nodes += 1;
+        self.counts.node_bytes += std::mem::size_of::<WideNode>() as u64;
+    }
+
+    fn read_block(&mut self, block: &TriangleBlock) {
+        self.counts.leaves += 1;
+        self.counts.primitives += block.triangles.iter().filter(|&&t| t != EMPTY).count() as u64;
+        self.counts.node_bytes += std::mem::size_of::<TriangleBlock>() as u64;
+    }
+
+    fn enter_list(&mut self) {
+        self.counts.leaves += 1;
+    }
+
+    fn pushed(&mut self, height: usize) {
+        self.counts.pushes += 1;
+        self.deepest = self.deepest.max(height as u64);
+    }
+}

@@ -1,0 +1,92 @@
+//! The CPU's model of the kernel's BVH traversal (`rt_gpu::cpu::traversal_stats`), whose counts
+//! `rt-gpu bench --stats` reports as the GPU's traversal cost where no GPU is at hand: it must
+//! be the kernel's walk step for step. Checked ray for ray against the kernel's own loop count
+//! (exact, on camera rays and diffuse bounces of scenes with meshes, shapes and instances), and
+//! against the renderer's closest hits.
+#![cfg_attr(not(feature = "gpu"), allow(unused))]
+
+use crate::common;
+
+use rt_gpu::cpu::traversal_stats::{
+    Counts, count_ray, kernel_traverse, stats_rays, traversal_stats,
+};
+use rt_gpu::render::RenderOptions;
+use rt_gpu::scene::Scene;
+use rt_gpu::scene::builtin::builtin;
+use rt_gpu::scene::flat::FlatScene;
+
+fn scenes() -> Vec<(&'static str, Scene)> {
+    let file = |path: &str| rt_gpu::scene::file::load(std::path::Path::new(path)).expect("loads");
+    vec![
+        ("showcase", builtin("showcase").expect("built in")),
+        ("scenes/meshes.toml", file("scenes/meshes.toml")),
+        ("scenes/knots.toml", file("scenes/knots.toml")),
+    ]
+}
+
+/// Both traversals find every ray's closest hit where the renderer does, and the CPU's wide
+/// walk reads fewer nodes than the kernel's binary one; the knots are entered as instances.
+#[test]
+fn both_counted_traversals_find_the_renderers_hits() {
+    for (name, scene) in scenes() {
+        let flat = FlatScene::new(&scene, 40, 30).expect("valid scene");
+        let opts = RenderOptions::new(40, 30, 1, 1);
+        let stats = traversal_stats(&flat, &opts).expect("a BVH");
+        for (kind, s) in [("camera", stats.camera), ("bounce", stats.bounce)] {
+            eprintln!("{name} {kind}: {s:?}");
+            assert_eq!(s.disagreements, 0, "{name} {kind}: closest hits differ");
+            assert!(s.kernel.rays > 0 && s.kernel.rays == s.wide.rays);
+            assert!(
+                0 < s.wide.nodes && s.wide.nodes < s.kernel.nodes,
+                "{name} {kind}: wide {} nodes, binary {}",
+                s.wide.nodes,
+                s.kernel.nodes
+            );
+            let instanced = name.contains("knots");
+            assert_eq!(s.kernel.instances > 0, instanced, "{name} {kind}");
+        }
+    }
+}
+
+/// The kernel's `trace_rays` returns its traversal loop's count per ray: the model's must be
+/// the same for every ray (any step the model takes that the kernel does not, or the reverse,
+/// changes it), and so must whether the ray hits anything.
+#[cfg(feature = "gpu")]
+#[test]
+fn the_model_counts_the_kernels_loop_ray_for_ray() {
+    let Some(gpu) = common::gpu::renderer() else {
+        return;
+    };
+    for (name, scene) in scenes() {
+        let flat = FlatScene::new(&scene, 48, 36).expect("valid scene");
+        let opts = RenderOptions::new(48, 36, 1, 1);
+        for (kind, rays) in ["camera", "bounce"].iter().zip(stats_rays(&flat, &opts)) {
+            let pairs: Vec<_> = rays.iter().map(|r| (r.origin, r.dir)).collect();
+            let kernel = gpu.trace_rays(&flat, &pairs).expect("trace kernel runs");
+            let mut differing = 0;
+            for (ray, k) in rays.iter().zip(&kernel) {
+                let mut counts = Counts::default();
+                let mut closest = f32::INFINITY;
+                kernel_traverse(&flat, ray, &mut closest, &mut counts);
+                if counts.iterations != k.scattered as u64 || closest.is_finite() != (k.hit == 1) {
+                    if differing < 5 {
+                        eprintln!(
+                            "{name} {kind}: {ray:?}: model {} iterations, hit {}; kernel {}, hit {}",
+                            counts.iterations,
+                            closest.is_finite(),
+                            k.scattered,
+                            k.hit
+                        );
+                    }
+                    differing += 1;
+                }
+                assert_eq!(count_ray(&flat, ray).disagreements, 0);
+            }
+            eprintln!("{name} {kind}: {} rays, {differing} differ", rays.len());
+            assert_eq!(
+                differing, 0,
+                "{name} {kind}: the model is not the kernel's walk"
+            );
+        }
+    }
+}
