@@ -15,7 +15,7 @@ fn texel_at(t: texture_2d<u32>, i: u32) -> vec4u {
 
 // Every image the scene reads (a texel per vec4f), and the environment's CDFs (ImageArray in
 // src/gpu/layout.rs).
-//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS || ALPHA || COAT_TABLE || SHEEN
+//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS || ALPHA || COAT_TABLE || SHEEN || LAYER_IMAGES
 @group(0) @binding(BINDING_IMAGE_TEXELS) var image_texels: texture_2d<u32>;
 
 fn image_value(i: u32) -> vec4f {

@@ -352,7 +352,7 @@ fn extend_path(path: ptr<function, Path>, sampler: ptr<function, Sampler>) -> bo
         return false;
     }
 //#endif
-//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS || LAYER_IMAGES
     let m = with_albedo_at(material_at(hit.material), hit);
 //#else
     let m = material_at(hit.material);

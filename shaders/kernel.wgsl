@@ -230,7 +230,7 @@ fn first_bounce(@builtin(global_invocation_id) gid: vec3u) {
     var out = trace_debug(ray, &hit);
     out.dir = vec3f(0.0);
     if out.hit == 1u {
-//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS || LAYER_IMAGES
         let m = with_albedo_at(material_at(hit.material), hit);
 //#else
         let m = material_at(hit.material);

@@ -17,7 +17,7 @@ fn sphere_uv(n: vec3f) -> vec2f {
 }
 //#endif
 
-//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS || ALPHA
+//#if IMAGE_TEXTURE || ENVIRONMENT || NORMAL_MAPS || METALLIC_ROUGHNESS || ALPHA || LAYER_IMAGES
 // Texel (x, y) of the image of `width` columns whose texels start at `start` among the images.
 fn texel(start: u32, width: u32, x: u32, y: u32) -> vec3f {
     return image_value(start + y * width + x).xyz;
@@ -118,11 +118,12 @@ fn texture_at(m: Material, hit: Hit) -> vec3f {
 //#endif
 }
 
-//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS
+//#if CHECKER || UV_CHECKER || IMAGE_TEXTURE || METALLIC_ROUGHNESS || LAYER_IMAGES
 // m with its albedo looked up at hit once, for the several uses a path vertex makes of it (light
 // sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe. And
 // with pbr's metallic and alpha scaled by its metallic-roughness image there (pbr_with_texel;
-// a rough plastic's parameter image is its coat table, read by cosine).
+// a rough plastic's parameter image is its coat table, read by cosine), and its clear coat and
+// sheen by its layer images (pbr_with_layers).
 fn with_albedo_at(m: Material, hit: Hit) -> Material {
     var out = m;
     out.albedo = texture_at(m, hit);
@@ -134,6 +135,15 @@ fn with_albedo_at(m: Material, hit: Hit) -> Material {
         let texel = image_at(m.parameter_image, m.parameter_image_size, m.parameter_image_lookup, uv);
         out = pbr_with_texel(out, texel);
         out.parameter_image_size = vec2f(0.0);
+    }
+//#endif
+//#endif
+//#if LAYER_IMAGES
+//#if PBR
+    if m.kind == MAT_PBR && (m.layer_image_size.x > 0.0 || m.sheen_image_size.x > 0.0) {
+        out = pbr_with_layers(out, hit);
+        out.layer_image_size = vec2f(0.0);
+        out.sheen_image_size = vec2f(0.0);
     }
 //#endif
 //#endif

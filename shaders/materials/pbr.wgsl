@@ -37,12 +37,37 @@ fn pbr_glass(p: PbrParams) -> DielectricParams {
 }
 //#endif
 
-//#if METALLIC_ROUGHNESS
+//#if METALLIC_ROUGHNESS || LAYER_IMAGES
 // The GGX alpha of roughness: roughness^2, or 0 (smooth) below MIN_ALPHA (Coat::alpha_of).
 fn roughness_alpha(roughness: f32) -> f32 {
     let alpha = roughness * roughness;
     return select(0.0, alpha, alpha >= MIN_ALPHA);
 }
+//#endif
+
+//#if LAYER_IMAGES
+// Its clear coat and sheen scaled by texels of its layer images (Pbr::layers_at): the layers'
+// red channel scales the coat's factor, green its roughness, blue the sheen's roughness; the
+// sheen image its colour. A factor or colour taken to 0 is no coat or sheen there.
+fn pbr_with_layers(m: Material, hit: Hit) -> Material {
+    var p = pbr_params(m);
+    if m.layer_image_size.x > 0.0 {
+        let texel = image_at(m.layer_image, m.layer_image_size, m.layer_image_lookup, uv_at(m.layer_image_lookup, hit));
+        p.clearcoat = p.clearcoat * texel.x;
+        p.clearcoat_alpha = roughness_alpha(p.clearcoat_roughness * texel.y);
+//#if SHEEN
+        p.sheen_roughness = max(p.sheen_roughness_factor * texel.z, SHEEN_MIN_ROUGHNESS);
+//#endif
+    }
+    if m.sheen_image_size.x > 0.0 {
+        let texel = image_at(m.sheen_image, m.sheen_image_size, m.sheen_image_lookup, uv_at(m.sheen_image_lookup, hit));
+        p.sheen_color = p.sheen_color * texel;
+    }
+    return pbr_with_params(m, p);
+}
+//#endif
+
+//#if METALLIC_ROUGHNESS
 
 // Its metallic and alpha scaled by a texel of its metallic-roughness image (Pbr::at).
 fn pbr_with_texel(m: Material, texel: vec3f) -> Material {

@@ -434,6 +434,13 @@ impl SceneBuffers {
                 if let Some(image) = m.table_image() {
                     gpu.sheen_table = images.texels_of(image);
                 }
+                let [layers, sheen] = m.layer_images();
+                if let Some(image) = layers {
+                    gpu.layer_image = images.texels_of(image);
+                }
+                if let Some(image) = sheen {
+                    gpu.sheen_image = images.texels_of(image);
+                }
                 if let Some(image) = m.alpha().and_then(|a| a.image.as_ref()) {
                     gpu.alpha_image = images.texels_of(image);
                 }

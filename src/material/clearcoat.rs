@@ -16,7 +16,8 @@
 //! single scattering (tests/it/bsdfs/clearcoat.rs). Not reciprocal, as the extension's model
 //! is not; a path tracer evaluates it with `wo` toward the eye, both backends alike.
 //! The coat shades with the base's shading normal (its normal map where it has one); glTF's
-//! clearcoatNormalTexture, and the coat's textures, are not read yet.
+//! clearcoatNormalTexture is not read yet; the coat's factor and roughness textures scale it point by
+//! point (`Pbr::layers`).
 //!
 //! Sampling picks the coat with chance `c F(cos_o)`, else the base (one number), so that a
 //! smooth coat's mirror weighs exactly 1 and the base's deltas their own weight.

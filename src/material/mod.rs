@@ -80,6 +80,11 @@ pub trait MaterialModel {
     fn parameter_image(&self) -> Option<&Arc<Image>> {
         None
     }
+    /// `pbr`'s layers' image and sheen colour image (`GpuMaterial::layer_image`,
+    /// `GpuMaterial::sheen_image`), where it has them: the GPU's image array holds them.
+    fn layer_images(&self) -> [Option<&Arc<Image>>; 2] {
+        [None, None]
+    }
     /// A table the kernel reads for every instance alike (`pbr`'s sheen albedo,
     /// `GpuMaterial::sheen_table`): the GPU's image array holds it.
     fn table_image(&self) -> Option<&Arc<Image>> {
@@ -224,6 +229,9 @@ macro_rules! registry {
             pub fn table_image(&self) -> Option<&Arc<Image>> {
                 match self { $(Material::$ty(m) => m.table_image(),)+ }
             }
+            pub fn layer_images(&self) -> [Option<&Arc<Image>>; 2] {
+                match self { $(Material::$ty(m) => m.layer_images(),)+ }
+            }
             #[inline]
             pub fn alpha(&self) -> Option<&Alpha> {
                 match self { $(Material::$ty(m) => m.alpha(),)+ }
@@ -232,7 +240,8 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.emission(),)+ }
             }
             /// Every image it reads: its textures', its normal map's, its parameter image, its
-            /// table, its alpha's and its emission's (an image may come more than once).
+            /// table, its layer images, its alpha's and its emission's (an image may come more
+            /// than once).
             pub fn images(&self) -> Vec<Arc<Image>> {
                 let textures = self.textures().into_iter().chain(self.emission().map(|e| &e.radiance));
                 let textures = textures.filter_map(|t| match t {
@@ -242,6 +251,7 @@ macro_rules! registry {
                 let maps = (self.normal_map().map(|n| &n.image).into_iter())
                     .chain(self.parameter_image())
                     .chain(self.table_image())
+                    .chain(self.layer_images().into_iter().flatten())
                     .chain(self.alpha().and_then(|a| a.image.as_ref()));
                 textures.chain(maps).cloned().collect()
             }

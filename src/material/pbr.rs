@@ -47,7 +47,11 @@ use serde::{Deserialize, Serialize};
 /// roughness by its green one (glTF's metallicRoughnessTexture); `emission = { radiance,
 /// strength, two_sided }` (optional, as a `light`'s; a colour or an image) glows on top of
 /// what it reflects (glTF's emissive materials); `clearcoat = { factor, roughness }`
-/// (optional) a clear coat over it all (glTF's KHR_materials_clearcoat; `material::clearcoat`).
+/// (optional) a clear coat over it all (glTF's KHR_materials_clearcoat; `material::clearcoat`);
+/// `layers = "file.png"` (optional, linear) scales the clear coat's factor by its red channel,
+/// its roughness by green and the sheen's roughness by blue, and `sheen_image = "file.png"`
+/// (optional, a colour image) the sheen's colour, point by point (glTF's clearcoatTexture,
+/// clearcoatRoughnessTexture, sheenRoughnessTexture and sheenColorTexture).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -57,8 +61,7 @@ pub struct Pbr {
     pub ior: f32,
     pub transmission: f32,
     pub normal_map: Option<NormalMap>,
-    pub metallic_roughness: Option<Arc<Image>>,
-    /// Whether `metallic_roughness`'s red channel scales `transmission` too (glTF's
+    /// Whether the metallic-roughness image's red channel scales `transmission` too (glTF's
     /// transmissionTexture, merged into that image where a file is read:
     /// `FileTextures::transmission`; not in scene files yet).
     pub transmission_in_red: bool,
@@ -81,6 +84,22 @@ pub struct Pbr {
     /// materials have one and every material is as large as the largest.
     volume: Option<Box<Volume>>,
     coat: Coat,
+    /// Its images of parameters; boxed, as `volume`.
+    images: Option<Box<ParameterImages>>,
+}
+
+/// A pbr material's images of parameters, each scaling some of them point by point.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParameterImages {
+    /// Its metallic-roughness image (linear): blue scales metallic, green roughness (glTF's
+    /// metallicRoughnessTexture), red the transmission where `Pbr::transmission_in_red`.
+    pub metallic_roughness: Option<Arc<Image>>,
+    /// The layers' textures in one image (linear): red scales the clear coat's factor (glTF's
+    /// clearcoatTexture), green its roughness (clearcoatRoughnessTexture), blue the sheen's
+    /// roughness (sheenRoughnessTexture's alpha); 1 where a file has no such texture.
+    pub layers: Option<Arc<Image>>,
+    /// The sheen colour's texture (glTF's sheenColorTexture), which scales its colour.
+    pub sheen: Option<Arc<Image>>,
 }
 
 /// An absorbing medium made from glTF's attenuation colour and distance (KHR_materials_volume;
@@ -118,6 +137,10 @@ struct PbrDoc {
     sheen: Option<Sheen>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     specular: Option<Specular>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    layers: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sheen_image: Option<String>,
 }
 
 /// `attenuation = { color = [0.9, 0.6, 0.3], distance = 0.05 }`: the colour white light takes
@@ -143,6 +166,14 @@ impl TryFrom<PbrDoc> for Pbr {
             Some(name) => Some(crate::assets::loader::data_image(&name)?),
             None => None,
         };
+        let layers = match d.layers {
+            Some(name) => Some(crate::assets::loader::data_image(&name)?),
+            None => None,
+        };
+        let sheen_image = match d.sheen_image {
+            Some(name) => Some(crate::assets::loader::image(&name)?),
+            None => None,
+        };
         Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
             .with_normal_map(d.normal_map)
             .with_metallic_roughness(metallic_roughness)
@@ -150,12 +181,16 @@ impl TryFrom<PbrDoc> for Pbr {
             .with_clearcoat(d.clearcoat)
             .with_sheen(d.sheen)
             .with_specular(d.specular)
+            .with_layer_images(layers, sheen_image)
             .with_attenuation(d.attenuation.map(|a| (a.color, a.distance)))
     }
 }
 
 impl From<Pbr> for PbrDoc {
     fn from(p: Pbr) -> Self {
+        let metallic_roughness = p.metallic_roughness().map(|i| i.source.clone());
+        let layers = p.layers().map(|i| i.source.clone());
+        let sheen_image = p.sheen_image().map(|i| i.source.clone());
         PbrDoc {
             base_color: p.base_color,
             metallic: p.metallic,
@@ -163,11 +198,13 @@ impl From<Pbr> for PbrDoc {
             ior: p.ior,
             transmission: p.transmission,
             normal_map: p.normal_map,
-            metallic_roughness: p.metallic_roughness.map(|i| i.source.clone()),
+            metallic_roughness,
             emission: p.emission,
             clearcoat: p.clearcoat,
             sheen: p.sheen,
             specular: p.specular,
+            layers,
+            sheen_image,
             attenuation: p.volume.map(|v| Attenuation {
                 color: v.color,
                 distance: v.distance,
@@ -199,7 +236,6 @@ impl Pbr {
             ior,
             transmission,
             normal_map: None,
-            metallic_roughness: None,
             transmission_in_red: false,
             alpha: None,
             emission: None,
@@ -208,7 +244,43 @@ impl Pbr {
             specular: None,
             volume: None,
             coat: Coat::new(ior, roughness, false),
+            images: None,
         }
+    }
+
+    /// This material with its clear coat and sheen scaled point by point by `layers` (see
+    /// [`Pbr::layers`]) and its sheen's colour by `sheen_image`.
+    pub fn with_layer_images(self, layers: Option<Arc<Image>>, sheen: Option<Arc<Image>>) -> Self {
+        let images = ParameterImages {
+            layers,
+            sheen,
+            ..self.images.as_deref().cloned().unwrap_or_default()
+        };
+        self.with_images(images)
+    }
+
+    /// This material with `images` (none where it has none of them).
+    fn with_images(self, images: ParameterImages) -> Self {
+        let any = images.metallic_roughness.is_some() || images.layers.is_some() || images.sheen.is_some();
+        Pbr {
+            images: any.then(|| Box::new(images)),
+            ..self
+        }
+    }
+
+    /// Its metallic-roughness image (see [`ParameterImages::metallic_roughness`]).
+    pub fn metallic_roughness(&self) -> Option<&Arc<Image>> {
+        self.images.as_ref()?.metallic_roughness.as_ref()
+    }
+
+    /// Its layers' image (see [`ParameterImages::layers`]).
+    pub fn layers(&self) -> Option<&Arc<Image>> {
+        self.images.as_ref()?.layers.as_ref()
+    }
+
+    /// Its sheen colour's image (see [`ParameterImages::sheen`]).
+    pub fn sheen_image(&self) -> Option<&Arc<Image>> {
+        self.images.as_ref()?.sheen.as_ref()
     }
 
     /// This material with `normal_map`.
@@ -219,10 +291,11 @@ impl Pbr {
     /// This material with its metallic and roughness scaled by `image`'s blue and green
     /// channels.
     pub fn with_metallic_roughness(self, image: Option<Arc<Image>>) -> Self {
-        Pbr {
+        let images = ParameterImages {
             metallic_roughness: image,
-            ..self
-        }
+            ..self.images.as_deref().cloned().unwrap_or_default()
+        };
+        self.with_images(images)
     }
 
     /// This material, seen through as `alpha` says.
@@ -315,7 +388,8 @@ impl Pbr {
             clearcoat: self.clearcoat.filter(|c| c.factor > 0.0),
             sheen: self.sheen.filter(|s| s.color.max_element() > 0.0),
         };
-        let Some(image) = &self.metallic_roughness else {
+        let lobes = self.layers_at(lobes, hit);
+        let Some(image) = self.metallic_roughness() else {
             return lobes;
         };
         let uv = texture::uv_at(image.lookup, hit);
@@ -341,6 +415,41 @@ impl Pbr {
     fn ggx(&self) -> Option<Ggx> {
         ggx(&self.coat)
     }
+
+    /// `lobes` with the clear coat and sheen its layer images give at `hit` (as the kernel's
+    /// `pbr_with_layers`): a coat or sheen a texel takes to 0 is none there.
+    fn layers_at(&self, mut lobes: Lobes, hit: &Hit) -> Lobes {
+        let texel_of = |image: &Image| {
+            crate::assets::image_lookup::image_at(image, texture::uv_at(image.lookup, hit))
+        };
+        if let Some(image) = self.layers() {
+            let texel = texel_of(image);
+            lobes.clearcoat = lobes.clearcoat.and_then(|c| {
+                let factor = c.factor * texel.x;
+                (factor > 0.0).then_some(Clearcoat {
+                    factor,
+                    roughness: c.roughness * texel.y,
+                })
+            });
+            lobes.sheen = lobes.sheen.map(|s| Sheen {
+                roughness: s.roughness * texel.z,
+                ..s
+            });
+        }
+        if let Some(image) = self.sheen_image() {
+            let texel = texel_of(image);
+            lobes.sheen = lobes.sheen.and_then(|s| {
+                let color = s.color * texel;
+                (color.max_element() > 0.0).then_some(Sheen { color, ..s })
+            });
+        }
+        lobes
+    }
+}
+
+/// An image's width and height as the kernel's material holds them (0: none).
+fn image_size(image: Option<&Image>) -> [f32; 2] {
+    image.map_or([0.0; 2], |i| [i.width as f32, i.height as f32])
 }
 
 /// The weights of the coat, the glass and the metal in the mix.
@@ -627,6 +736,10 @@ material_params! {
         /// (`SpecularFresnel`).
         specular_factor: f32,
         specular_f0: [f32; 3],
+        /// The clear coat's and the sheen's roughness as given, which the layers' image
+        /// scales (`pbr_with_layers`).
+        clearcoat_roughness: f32,
+        sheen_roughness_factor: f32,
     }
 }
 
@@ -638,6 +751,7 @@ impl MaterialModel for Pbr {
         MaterialFeature::Microfacet,
         MaterialFeature::Dielectric,
         MaterialFeature::MetallicRoughness,
+        MaterialFeature::LayerImages,
         MaterialFeature::Alpha,
         MaterialFeature::Checker,
         MaterialFeature::UvChecker,
@@ -683,13 +797,20 @@ impl MaterialModel for Pbr {
             }
             emission.validate()?;
         }
-        if let Some(image) = &self.metallic_roughness
-            && image.max_value() > 1.0
-        {
-            return Err(format!(
-                "metallic-roughness image {} has values up to {}: its values lie in [0, 1]",
-                image.source, image.max_value()
-            ));
+        for (what, image) in [
+            ("metallic-roughness", self.metallic_roughness()),
+            ("layers", self.layers()),
+            ("sheen", self.sheen_image()),
+        ] {
+            if let Some(image) = image
+                && image.max_value() > 1.0
+            {
+                return Err(format!(
+                    "{what} image {} has values up to {}: its values lie in [0, 1]",
+                    image.source,
+                    image.max_value()
+                ));
+            }
         }
         self.base_color.validate_albedo()
     }
@@ -702,9 +823,12 @@ impl MaterialModel for Pbr {
         let specular = self.specular.map(|_| MaterialFeature::Specular);
         let volume = self.volume().map_or_else(Vec::new, Medium::features);
         // A metallic-roughness image may take metallic to 0 anywhere (as `samples_lights`).
-        let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
+        let least_metallic = if self.metallic_roughness().is_some() { 0.0 } else { self.metallic };
         let glass = ((1.0 - least_metallic) * self.transmission > 0.0).then_some(MaterialFeature::Dielectric);
-        let image = self.metallic_roughness.as_ref().map(|_| MaterialFeature::MetallicRoughness);
+        let image = self.metallic_roughness().map(|_| MaterialFeature::MetallicRoughness);
+        let layer_images = (self.layers().is_some() && (self.clearcoat.is_some() || self.sheen.is_some())
+            || self.sheen_image().is_some() && self.sheen.is_some())
+            .then_some(MaterialFeature::LayerImages);
         let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
         let emission = self.emission.as_ref().map(|e| {
             let image = matches!(e.radiance, Texture::Image(_)).then_some(MaterialFeature::ImageTexture);
@@ -718,6 +842,7 @@ impl MaterialModel for Pbr {
             .chain(specular)
             .chain(volume)
             .chain(image)
+            .chain(layer_images)
             .chain(alpha)
             .chain(self.base_color.feature())
             .chain(emission.into_iter().flatten())
@@ -759,7 +884,7 @@ impl MaterialModel for Pbr {
     /// A lobe that is not a delta: the coat's base, or any rough one, at some point (a
     /// metallic-roughness image may take metallic to 0 anywhere).
     fn samples_lights(&self) -> bool {
-        let least_metallic = if self.metallic_roughness.is_some() { 0.0 } else { self.metallic };
+        let least_metallic = if self.metallic_roughness().is_some() { 0.0 } else { self.metallic };
         let least_transmission = if self.transmission_in_red { 0.0 } else { self.transmission };
         (1.0 - least_metallic) * (1.0 - least_transmission) > 0.0
             || self.ggx().is_some()
@@ -768,11 +893,15 @@ impl MaterialModel for Pbr {
     }
 
     fn parameter_image(&self) -> Option<&Arc<Image>> {
-        self.metallic_roughness.as_ref()
+        self.metallic_roughness()
     }
 
     fn table_image(&self) -> Option<&Arc<Image>> {
         self.sheen.map(|_| super::sheen::albedo_table())
+    }
+
+    fn layer_images(&self) -> [Option<&Arc<Image>>; 2] {
+        [self.layers(), self.sheen_image()]
     }
 
     fn alpha(&self) -> Option<&Alpha> {
@@ -799,8 +928,7 @@ impl MaterialModel for Pbr {
     /// [`PbrParams`].
     fn gpu(&self) -> GpuMaterial {
         let size = self
-            .metallic_roughness
-            .as_ref()
+            .metallic_roughness()
             .map_or([0.0; 2], |i| [i.width as f32, i.height as f32]);
         GpuMaterial {
             params: PbrParams {
@@ -814,14 +942,20 @@ impl MaterialModel for Pbr {
                 transmission_in_red: self.transmission_in_red as u32,
                 clearcoat: self.clearcoat.map_or(0.0, |c| c.factor),
                 clearcoat_alpha: self.clearcoat.map_or(0.0, |c| c.alpha()),
+                clearcoat_roughness: self.clearcoat.map_or(0.0, |c| c.roughness),
                 sheen_color: self.sheen.map_or([0.0; 3], |s| s.color.to_array()),
                 sheen_roughness: self.sheen.map_or(0.0, |s| s.alpha()),
+                sheen_roughness_factor: self.sheen.map_or(0.0, |s| s.roughness),
                 specular_factor: self.coat.specular.map_or(-1.0, |s| s.factor),
                 specular_f0: self.coat.specular.map_or([0.0; 3], |s| s.f0.to_array()),
             }
             .words(),
             parameter_image_size: size,
-            parameter_image_lookup: self.metallic_roughness.as_ref().map_or(0, |i| i.lookup.bits()),
+            parameter_image_lookup: self.metallic_roughness().map_or(0, |i| i.lookup.bits()),
+            layer_image_size: image_size(self.layers().map(|i| &**i)),
+            layer_image_lookup: self.layers().map_or(0, |i| i.lookup.bits()),
+            sheen_image_size: image_size(self.sheen_image().map(|i| &**i)),
+            sheen_image_lookup: self.sheen_image().map_or(0, |i| i.lookup.bits()),
             ..Medium::pack(self.volume(), GpuMaterial::with_albedo(&self.base_color))
         }
     }

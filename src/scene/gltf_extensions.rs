@@ -1,8 +1,12 @@
 //! glTF's material extensions beyond the metallic-roughness core that the `gltf` crate does not
-//! parse (KHR_materials_clearcoat, KHR_materials_sheen, KHR_materials_specular), read from a material's extension JSON
-//! with the specification's defaults, and what of them is not rendered (for the file's note).
+//! parse (KHR_materials_clearcoat, KHR_materials_sheen, KHR_materials_specular), read from a
+//! material's extension JSON with the specification's defaults, their textures (the clear
+//! coat's factor and roughness, the sheen's colour and roughness), and what of them is not
+//! rendered (for the file's note).
 
+use super::gltf_textures::FileTextures;
 use crate::material::clearcoat::Clearcoat;
+use crate::material::pbr::ParameterImages;
 use crate::material::sheen::Sheen;
 use crate::material::specular::Specular;
 use serde_json::Value;
@@ -14,15 +18,14 @@ pub const SPECULAR: &str = "KHR_materials_specular";
 /// as required.
 pub const VOLUME: &str = "KHR_materials_volume";
 
-/// The textures of KHR_materials_clearcoat, none of which is read yet.
-const CLEARCOAT_TEXTURES: [&str; 3] = [
-    "clearcoatTexture",
-    "clearcoatRoughnessTexture",
-    "clearcoatNormalTexture",
+/// The textures of the extensions above that rt-gpu maps point by point (`layer_images`), by
+/// extension and property name.
+pub const MAPPED_TEXTURES: [(&str, &str); 4] = [
+    (CLEARCOAT, "clearcoatTexture"),
+    (CLEARCOAT, "clearcoatRoughnessTexture"),
+    (SHEEN, "sheenColorTexture"),
+    (SHEEN, "sheenRoughnessTexture"),
 ];
-
-/// The textures of KHR_materials_sheen, which are not mapped: the colour's mean stands in.
-const SHEEN_TEXTURES: [&str; 2] = ["sheenColorTexture", "sheenRoughnessTexture"];
 
 /// The textures of KHR_materials_specular, none of which is read yet.
 const SPECULAR_TEXTURES: [&str; 2] = ["specularTexture", "specularColorTexture"];
@@ -85,30 +88,44 @@ fn extension<'a>(
     }
 }
 
-/// `m`'s sheen (KHR_materials_sheen's sheenColorFactor, default black, times the mean colour
-/// of its sheenColorTexture where it has one, which `mean_colour` gives by texture index; and
-/// sheenRoughnessFactor, default 0), `None` where it has none or its colour is black.
-pub fn sheen(
-    m: &gltf::Material,
-    mean_colour: &mut dyn FnMut(u64) -> Result<glam::Vec3, String>,
-    at: &dyn Fn() -> String,
-) -> Result<Option<Sheen>, String> {
+/// `m`'s sheen (KHR_materials_sheen's sheenColorFactor, default black, and
+/// sheenRoughnessFactor, default 0; their textures scale them point by point: `layer_images`),
+/// `None` where it has none or its colour is black.
+pub fn sheen(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Sheen>, String> {
     let Some(ext) = extension(m, SHEEN, at)? else {
         return Ok(None);
     };
-    let mut color =
+    let color =
         glam::Vec3::from_array(unit_colour((SHEEN, ext), "sheenColorFactor", [0.0; 3], at)?);
-    if let Some(texture) = ext.get("sheenColorTexture") {
-        let Some(index) = texture.get("index").and_then(Value::as_u64) else {
-            return Err(format!(
-                "{}: its {SHEEN}.sheenColorTexture has no texture index",
-                at()
-            ));
-        };
-        color = (color * mean_colour(index)?).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
-    }
     let roughness = unit_factor((SHEEN, ext), "sheenRoughnessFactor", 0.0, at)?;
     Ok((color.max_element() > 0.0).then_some(Sheen { color, roughness }))
+}
+
+/// `m`'s layer images (`Pbr::with_layer_images`): its clearcoatTexture (red channel),
+/// clearcoatRoughnessTexture (green) and sheenRoughnessTexture (alpha) in one image, and its
+/// sheenColorTexture (sRGB); `name` names the material in errors.
+pub fn layer_images(
+    m: &gltf::Material,
+    textures: &mut FileTextures,
+    name: &str,
+) -> Result<ParameterImages, String> {
+    let mut texture = |extension: &str, slot: &str, srgb: bool, alpha: bool| match m
+        .extension_value(extension)
+        .and_then(|ext| ext.get(slot))
+    {
+        Some(info) => textures.extension_texture(info, srgb, alpha, name, slot),
+        None => Ok(None),
+    };
+    let coat = texture(CLEARCOAT, "clearcoatTexture", false, false)?;
+    let coat_roughness = texture(CLEARCOAT, "clearcoatRoughnessTexture", false, false)?;
+    let sheen_roughness = texture(SHEEN, "sheenRoughnessTexture", false, true)?;
+    let sheen_colour = texture(SHEEN, "sheenColorTexture", true, false)?;
+    let layers = textures.layers([coat, coat_roughness, sheen_roughness], name)?;
+    Ok(ParameterImages {
+        metallic_roughness: None,
+        layers,
+        sheen: sheen_colour,
+    })
 }
 
 /// `m`'s specular strength and colour (KHR_materials_specular's specularFactor, default 1, in
@@ -156,7 +173,8 @@ pub fn clearcoat(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<C
 }
 
 /// What the file's materials ask of the extensions above that rt-gpu does not render, for its
-/// note: the clear coat's textures, and a coat over a normal-mapped base (glTF draws such a
+/// note: the clear coat's normal texture, sheens smoother than rt-gpu's least roughness, the
+/// specular textures and the specular on transmission, and a coat over a normal-mapped base (glTF draws such a
 /// coat unmapped; here it follows the base's normal map).
 pub fn unread(document: &gltf::Document) -> Vec<String> {
     let coated: Vec<(bool, Value)> = document
@@ -171,14 +189,15 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
         })
         .collect();
     let mut out = Vec::new();
-    for texture in CLEARCOAT_TEXTURES {
-        let n = coated
-            .iter()
-            .filter(|(_, ext)| ext.get(texture).is_some())
-            .count();
-        if n > 0 {
-            out.push(format!("{CLEARCOAT}.{texture} ({n} material{})", plural(n)));
-        }
+    let n = coated
+        .iter()
+        .filter(|(_, ext)| ext.get("clearcoatNormalTexture").is_some())
+        .count();
+    if n > 0 {
+        out.push(format!(
+            "{CLEARCOAT}.clearcoatNormalTexture ({n} material{})",
+            plural(n)
+        ));
     }
     // Only sheens that are there: glTF's default colour, black, is none.
     let sheened: Vec<Value> = document
@@ -204,19 +223,6 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
             "{SHEEN}.sheenRoughnessFactor below {least} ({smooth} material{}: taken as {least})",
             plural(smooth)
         ));
-    }
-    let how = [": its mean colour stands in", ""];
-    for (texture, how) in SHEEN_TEXTURES.into_iter().zip(how) {
-        let n = sheened
-            .iter()
-            .filter(|ext| ext.get(texture).is_some())
-            .count();
-        if n > 0 {
-            out.push(format!(
-                "{SHEEN}.{texture} ({n} material{}{how})",
-                plural(n)
-            ));
-        }
     }
     // Whether each material with the extension transmits and changes the glass's Fresnel
     // (factors other than the defaults, or a texture), and its extension.

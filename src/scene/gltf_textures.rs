@@ -114,9 +114,102 @@ impl<'a> FileTextures<'a> {
         info: &gltf::texture::Info,
         material: &str,
     ) -> Result<Option<Arc<Image>>, String> {
-        let texture = info.texture();
-        let index = texture.source().index();
         let set = self.uv_set(set_of(info), material, "baseColorTexture")?;
+        self.alpha_of(&info.texture(), set)
+    }
+
+    /// A texture of a material extension the `gltf` crate does not parse, from its JSON
+    /// texture info (`slot`: its property name, for messages): its image decoded (from sRGB
+    /// where `srgb`) and read as its sampler says; with `alpha`, the image's alpha channel
+    /// instead (`None` where it has none: an alpha of 1 everywhere).
+    pub fn extension_texture(
+        &mut self,
+        info: &serde_json::Value,
+        srgb: bool,
+        alpha: bool,
+        material: &str,
+        slot: &str,
+    ) -> Result<Option<Arc<Image>>, String> {
+        let source = self.source;
+        let Some(index) = info.get("index").and_then(serde_json::Value::as_u64) else {
+            return Err(format!(
+                "mesh {source}: material \"{material}\"'s {slot} has no texture index"
+            ));
+        };
+        let Some(texture) = usize::try_from(index)
+            .ok()
+            .and_then(|i| self.document.textures().nth(i))
+        else {
+            return Err(format!(
+                "mesh {source}: material \"{material}\"'s {slot} names texture {index}, which does not exist"
+            ));
+        };
+        let set = self.uv_set(json_set_of(info), material, slot)?;
+        if alpha {
+            return self.alpha_of(&texture, set);
+        }
+        self.sampled(&texture, srgb, set).map(Some)
+    }
+
+    /// The layers' image of `material` (`Pbr::layers`) from the textures that scale its clear
+    /// coat's factor (red channel), its roughness (green) and its sheen's roughness (an alpha
+    /// channel), where it has any: one image at the size of the first, the others resampled
+    /// to it at its texels' centres, 1 where a texture is absent. They must read one UV set
+    /// (and so share its transform: `uv_sets`), and are read with the first's sampler.
+    pub fn layers(
+        &mut self,
+        [coat, coat_roughness, sheen_roughness]: [Option<Arc<Image>>; 3],
+        material: &str,
+    ) -> Result<Option<Arc<Image>>, String> {
+        let sources = [(coat, 0), (coat_roughness, 1), (sheen_roughness, 0)];
+        let Some(base) = sources.iter().find_map(|(image, _)| image.clone()) else {
+            return Ok(None);
+        };
+        if sources.iter().any(|(image, _)| {
+            image
+                .as_ref()
+                .is_some_and(|i| i.lookup.uv_set != base.lookup.uv_set)
+        }) {
+            return Err(format!(
+                "mesh {}: material \"{material}\"'s clear coat and sheen textures read different UV sets; rt-gpu reads them together from one",
+                self.source
+            ));
+        }
+        let (w, h) = (base.width, base.height);
+        let mut texels = Vec::with_capacity(3 * (w * h) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                for (image, channel) in &sources {
+                    let value = match image {
+                        None => 1.0,
+                        Some(i) if (i.width, i.height) == (w, h) => i.texel(x, y)[*channel],
+                        Some(i) => {
+                            let uv = glam::Vec2::new(
+                                (x as f32 + 0.5) / w as f32,
+                                1.0 - (y as f32 + 0.5) / h as f32,
+                            );
+                            crate::assets::image_lookup::image_at(i, uv)[*channel]
+                        }
+                    };
+                    texels.push(value);
+                }
+            }
+        }
+        let name = format!("{} (clear coat and sheen layers)", base.source);
+        let merged = Image::from_linear(&name, w, h, texels)
+            .map_err(|e| format!("mesh {}: {e}", self.source))?
+            .with_lookup(base.lookup);
+        Ok(Some(merged.shared()))
+    }
+
+    /// The alpha channel of `texture`'s image (linear) read at UV set `set` as its sampler
+    /// says; `None` where the image has none.
+    fn alpha_of(
+        &mut self,
+        texture: &gltf::Texture,
+        set: UvSet,
+    ) -> Result<Option<Arc<Image>>, String> {
+        let index = texture.source().index();
         let lookup = lookup_of(&texture.sampler(), set);
         if let Some(image) = self.alphas.get(&(index, lookup)) {
             return Ok(image.clone());
@@ -202,21 +295,6 @@ impl<'a> FileTextures<'a> {
                 self.source
             )
         })
-    }
-
-    /// The mean colour of texture `index`'s image, decoded from sRGB (where a texture rt-gpu
-    /// does not map stands in as a uniform colour: KHR_materials_sheen's sheenColorTexture).
-    pub fn mean_colour(&mut self, index: u64) -> Result<Vec3, String> {
-        let Some(texture) = usize::try_from(index)
-            .ok()
-            .and_then(|i| self.document.textures().nth(i))
-        else {
-            return Err(format!(
-                "mesh {}: a material names texture {index}, which does not exist",
-                self.source
-            ));
-        };
-        Ok(self.image(texture.source().index(), true)?.mean())
     }
 
     /// `texture`'s image decoded (from sRGB where `srgb`) and read as its sampler says, at UV
@@ -449,6 +527,17 @@ pub fn uv_sets(material: &gltf::Material, source: &str) -> Result<[Option<UvSetU
             Some((slot, transform, set_of(&info)))
         })
         .collect();
+    for (extension, slot) in super::gltf_extensions::MAPPED_TEXTURES {
+        if let Some(info) = material
+            .extension_value(extension)
+            .and_then(|ext| ext.get(slot))
+        {
+            let transform = info
+                .get("extensions")
+                .and_then(|e| e.get("KHR_texture_transform"));
+            found.push((slot, transform_of_json(transform), json_set_of(info)));
+        }
+    }
     if let Some(normal) = material.normal_texture() {
         let value = normal.extension_value("KHR_texture_transform");
         found.push((
@@ -511,6 +600,16 @@ fn transform_of_json(value: Option<&gltf::json::Value>) -> UvTransform {
             .unwrap_or(0.0) as f32,
         scale: pair("scale", [1.0; 2]),
     }
+}
+
+/// [`set_of`] of a texture info given as JSON (a material extension's).
+fn json_set_of(info: &serde_json::Value) -> u32 {
+    let transform = info
+        .get("extensions")
+        .and_then(|e| e.get("KHR_texture_transform"));
+    tex_coord_of_json(transform)
+        .or_else(|| tex_coord_of_json(Some(info)))
+        .unwrap_or(0)
 }
 
 fn tex_coord_of_json(value: Option<&gltf::json::Value>) -> Option<u32> {

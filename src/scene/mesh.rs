@@ -1547,6 +1547,7 @@ fn material_of(
         ),
         None => (metallic_roughness, false),
     };
+    let layer_images = super::gltf_extensions::layer_images(m, textures, name)?;
     let mut out = Pbr::new(
         base,
         unit(pbr.metallic_factor()),
@@ -1564,12 +1565,9 @@ fn material_of(
     .with_alpha(alpha)
     .with_emission(emission)
     .with_clearcoat(super::gltf_extensions::clearcoat(m, &at)?)
-    .with_sheen(super::gltf_extensions::sheen(
-        m,
-        &mut |i| textures.mean_colour(i),
-        &at,
-    )?)
+    .with_sheen(super::gltf_extensions::sheen(m, &at)?)
     .with_specular(super::gltf_extensions::specular(m, &at)?)
+    .with_layer_images(layer_images.layers, layer_images.sheen)
     .with_attenuation(volume_of(m))
     .map_err(|e| format!("{}: {e}", at()))?;
     out.transmission_in_red = transmission_in_red;

@@ -54,6 +54,8 @@ material_features! {
     Alpha = "ALPHA",
     /// pbr's metallic-roughness image.
     MetallicRoughness = "METALLIC_ROUGHNESS",
+    /// pbr's layer images (its clear coat's and sheen's textures).
+    LayerImages = "LAYER_IMAGES",
     /// pbr's emission on top of what it reflects.
     PbrEmission = "PBR_EMISSION",
     /// A rough plastic coat's table.
@@ -83,6 +85,7 @@ impl MaterialFeature {
             MaterialFeature::UvChecker
                 | MaterialFeature::ImageTexture
                 | MaterialFeature::MetallicRoughness
+                | MaterialFeature::LayerImages
         )
     }
 }

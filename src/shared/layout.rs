@@ -382,6 +382,17 @@ gpu_struct! {
         /// Where pbr's sheen albedo table starts in the images array
         /// (`MaterialModel::table_image`; `material::sheen::albedo_table`).
         sheen_table: u32,
+        /// pbr's layers' image (`Pbr::layers`: red scales the clear coat's factor, green its
+        /// roughness, blue the sheen's roughness): its width and height (0: none), where its
+        /// texels start and how it is read.
+        layer_image_size: [f32; 2],
+        layer_image: u32,
+        layer_image_lookup: u32,
+        /// pbr's sheen colour image (`Pbr::sheen_image`, which scales the sheen's colour): the
+        /// same.
+        sheen_image_size: [f32; 2],
+        sheen_image: u32,
+        sheen_image_lookup: u32,
     }
 }
 

@@ -867,8 +867,8 @@ fn blenders_metallic_roughness_and_samplers_arrive_as_the_script_set_them() {
         };
         assert_quadrants(colours, name);
         let metal_rough = pbr
-            .metallic_roughness
-            .clone()
+            .metallic_roughness()
+            .cloned()
             .expect("a metallic-roughness image");
         assert_texels(&metal_rough, &WORN_TEXELS, 0.005, name);
         assert_eq!(
@@ -947,7 +947,7 @@ fn blenders_worn_file_matches_on_both_backends() {
     let mut rougher = scene.clone();
     for m in &mut rougher.materials {
         if let Material::Pbr(pbr) = m {
-            let metal_rough = pbr.metallic_roughness.clone();
+            let metal_rough = pbr.metallic_roughness().cloned();
             *pbr = rt_gpu::material::Pbr::new(
                 pbr.base_color.clone(),
                 pbr.metallic,

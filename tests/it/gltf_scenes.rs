@@ -1084,9 +1084,9 @@ fn every_feature_of_issue_62_renders_alike_every_way() {
 }
 
 /// Issue 63: KHR_materials_clearcoat's factors are read onto the pbr material, required or not (a factor of 0,
-/// glTF's default, is no coat), with no note for the extension; its textures, which are not read
-/// yet, are named in the file's note, and so is a coat over a normal-mapped base (here the coat
-/// follows the base's map).
+/// glTF's default, is no coat), with no note for the extension; its factor texture is read into
+/// the layers' image; its normal texture, which is not read yet, is named in the file's note,
+/// and so is a coat over a normal-mapped base (here the coat follows the base's map).
 #[test]
 fn a_clear_coat_is_read_and_what_is_not_is_named() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -1133,18 +1133,50 @@ fn a_clear_coat_is_read_and_what_is_not_is_named() {
     let path =
         common::gltf::write_triangle(dir.path(), "textured.gltf", true, &textured, "", &extra);
     let (scene, notes) = load(&path, "textured.gltf", None).expect("loads");
+    let rt_gpu::scene::Material::Pbr(p) = &scene.materials[0] else {
+        panic!("{:?}", scene.materials[0]);
+    };
+    assert!(p.clearcoat.is_some());
+    // The coat's factor texture is read: its red channel (128 of 255, linear) in the layers'
+    // red, their green and blue 1 (no roughness textures).
+    let layers = p.layers().expect("a layers image");
+    let texel = layers.texel(0, 0);
     assert!(
-        matches!(&scene.materials[0], rt_gpu::scene::Material::Pbr(p) if p.clearcoat.is_some())
+        (texel - Vec3::new(128.0 / 255.0, 1.0, 1.0))
+            .abs()
+            .max_element()
+            < 1e-6,
+        "{texel}"
     );
     assert_eq!(notes.len(), 1, "{notes:?}");
     for words in [
-        "KHR_materials_clearcoat.clearcoatTexture (1 material)",
         "KHR_materials_clearcoat.clearcoatNormalTexture (1 material)",
         "a clear coat without its base's normal map",
     ] {
         assert!(notes[0].contains(words), "{words:?} not in {notes:?}");
     }
-    assert!(!notes[0].contains("clearcoatRoughnessTexture"), "{notes:?}");
+    assert!(!notes[0].contains("clearcoatTexture "), "{notes:?}");
+    // A texture that does not exist, one on a UV set rt-gpu does not read, and one on a set
+    // the mesh lacks are one-line errors naming it.
+    for (ext, words) in [
+        (
+            r#"{ "clearcoatFactor": 1, "clearcoatTexture": { "index": 7 } }"#,
+            "clearcoatTexture names texture 7, which does not exist",
+        ),
+        (
+            r#"{ "clearcoatFactor": 1, "clearcoatRoughnessTexture": { "index": 0, "texCoord": 2 } }"#,
+            "clearcoatRoughnessTexture reads TEXCOORD_2",
+        ),
+        (
+            r#"{ "clearcoatFactor": 1, "clearcoatTexture": { "index": 0 }, "clearcoatRoughnessTexture": { "index": 0, "texCoord": 1 } }"#,
+            "has no TEXCOORD_1, which its material \"Paint\"'s clearcoatRoughnessTexture reads",
+        ),
+    ] {
+        let path =
+            common::gltf::write_triangle(dir.path(), "bad.gltf", true, &coat(ext, ""), "", &extra);
+        let err = load(&path, "bad.gltf", None).expect_err(ext);
+        assert!(err.contains(words) && !err.contains('\n'), "{ext}: {err}");
+    }
 }
 
 /// Issue 63: KHR_materials_volume fills a transmissive material with an absorbing medium,
@@ -1200,10 +1232,10 @@ fn a_volume_fills_transmissive_glass_with_what_absorbs() {
 }
 
 /// Issue 63: KHR_materials_sheen's factors are read onto the pbr material, required or not (a
-/// black colour, glTF's default, is no sheen); its colour texture is not mapped, its mean colour
-/// standing in, and the note says so.
+/// black colour, glTF's default, is no sheen); its colour texture becomes the sheen image and
+/// its roughness texture's alpha channel the layers' blue, with no note.
 #[test]
-fn a_sheen_is_read_and_its_textures_named() {
+fn a_sheen_and_its_textures_are_read() {
     let dir = tempfile::tempdir().expect("temp dir");
     let extra = r#""extensionsUsed": ["KHR_materials_sheen"], "extensionsRequired": ["KHR_materials_sheen"],"#;
     let velvet = |ext: &str| {
@@ -1246,30 +1278,43 @@ fn a_sheen_is_read_and_its_textures_named() {
             && notes[0].contains("sheenRoughnessFactor below 0.25 (1 material: taken as 0.25)"),
         "{notes:?}"
     );
-    image::RgbImage::from_pixel(1, 1, image::Rgb([200, 200, 200]))
+    // A colour texture whose alpha channel is the roughness's, as SheenCloth's: RGB 200
+    // (sRGB: 0.578 linear) and alpha 64 (linear: 0.251).
+    image::RgbaImage::from_pixel(1, 1, image::Rgba([200, 200, 200, 64]))
         .save(dir.path().join("s.png"))
         .expect("writes");
     let images =
         format!(r#"{extra} "textures": [{{ "source": 0 }}], "images": [{{ "uri": "s.png" }}],"#);
-    let (sheen, notes) = read(
-        velvet(
-            r#"{ "sheenColorFactor": [1, 1, 1], "sheenRoughnessFactor": 0.5, "sheenColorTexture": { "index": 0 } }"#,
-        ),
+    let textured = r#"{ "sheenColorFactor": [1, 1, 1], "sheenRoughnessFactor": 0.5, "sheenColorTexture": { "index": 0 }, "sheenRoughnessTexture": { "index": 0 } }"#;
+    let path = common::gltf::write_triangle(
+        dir.path(),
+        "textured.gltf",
+        true,
+        &velvet(textured),
+        "",
         &images,
     );
-    // The texture's mean colour stands in for it: 200 in sRGB is 0.578 linear.
-    let sheen = sheen.expect("a sheen");
+    let (scene, notes) = load(&path, "textured.gltf", None).expect("loads");
+    let rt_gpu::scene::Material::Pbr(p) = &scene.materials[0] else {
+        panic!("{:?}", scene.materials[0]);
+    };
+    // The factors as given; the textures scale them point by point.
+    let sheen = p.sheen.expect("a sheen");
+    assert_eq!((sheen.color, sheen.roughness), (Vec3::ONE, 0.5));
+    let colour = p.sheen_image().expect("a sheen image").texel(0, 0);
     assert!(
-        (sheen.color - Vec3::splat(0.5776)).abs().max_element() < 1e-3,
-        "{sheen:?}"
+        (colour - Vec3::splat(0.5776)).abs().max_element() < 1e-3,
+        "{colour}"
     );
+    let layers = p.layers().expect("a layers image").texel(0, 0);
     assert!(
-        notes.len() == 1
-            && notes[0].contains(
-                "KHR_materials_sheen.sheenColorTexture (1 material: its mean colour stands in)"
-            ),
-        "{notes:?}"
+        (layers - Vec3::new(1.0, 1.0, 64.0 / 255.0))
+            .abs()
+            .max_element()
+            < 1e-6,
+        "{layers}"
     );
+    assert!(notes.is_empty(), "{notes:?}");
 }
 
 /// Issue 63: KHR_materials_specular's factors are read onto the pbr material, required or not

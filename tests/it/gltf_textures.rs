@@ -444,8 +444,8 @@ fn a_metallic_roughness_texture_scales_the_factors_at_each_hit() {
         panic!("pbr")
     };
     let image = pbr
-        .metallic_roughness
-        .clone()
+        .metallic_roughness()
+        .cloned()
         .expect("a metallic-roughness image");
     assert_eq!(
         image.texel(0, 0),
