@@ -14,6 +14,8 @@ pub struct Rendered {
     pub gpu_seconds: Option<f64>,
     /// The longest single GPU dispatch (device time if known, else wall time).
     pub longest_dispatch_seconds: Option<f64>,
+    /// The GPU's host share of the film, wall time (`gpu::Timings::host_seconds`).
+    pub host_seconds: Option<f64>,
     /// What rendered it: "cpu (N threads)" or the adapter's name.
     pub device: String,
 }

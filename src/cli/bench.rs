@@ -84,8 +84,20 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
                     .longest_dispatch_seconds
                     .map(|d| format!(", longest dispatch {:.0} ms", d * 1e3))
                     .unwrap_or_default();
+                // The film's host share: reading the accumulators back and converting them.
+                let host = rendered
+                    .host_seconds
+                    .map(|h| {
+                        let pixels = width as f64 * height as f64;
+                        format!(
+                            ", host {:.0} ms ({:.3} us a pixel)",
+                            h * 1e3,
+                            h * 1e6 / pixels
+                        )
+                    })
+                    .unwrap_or_default();
                 say!(
-                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{}{gpu_time}{longest}; setup {setup:.2} s (device, kernel, warm-up)",
+                    "  {label:<30} {:<28} {seconds:8.2} s {rate:8.3} Msamples/s{}{gpu_time}{longest}{host}; setup {setup:.2} s (device, kernel, warm-up)",
                     rendered.device,
                     mrays(rate)
                 )?;

@@ -66,6 +66,7 @@ impl RenderBackend for CpuBackend {
             rays: Some(rays),
             gpu_seconds: None,
             longest_dispatch_seconds: None,
+            host_seconds: None,
             device: self.device(),
         })
     }

@@ -98,6 +98,7 @@ impl RenderBackend for GpuBackend {
             rays: None,
             gpu_seconds: timings.gpu_seconds,
             longest_dispatch_seconds: Some(timings.longest_dispatch_seconds),
+            host_seconds: Some(timings.host_seconds),
             device: self.device(),
         })
     }

@@ -204,6 +204,19 @@ impl GpuContext {
         size: u64,
         what: &str,
     ) -> Result<Vec<u8>, GpuError> {
+        self.with_mapped(staging, size, what, <[u8]>::to_vec)
+    }
+
+    /// Maps the first `size` bytes of `staging` (a MAP_READ buffer whose copy has been
+    /// submitted) once the GPU is done, hands them to `f` where they lie, and unmaps them: a
+    /// reader that only converts them need not copy them out first.
+    pub fn with_mapped<R>(
+        &self,
+        staging: &wgpu::Buffer,
+        size: u64,
+        what: &str,
+        f: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, GpuError> {
         let slice = staging.slice(..size);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -215,11 +228,11 @@ impl GpuContext {
         rx.recv()
             .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
             .map_err(|e| cannot_read(&e))?;
-        let bytes = slice
-            .get_mapped_range()
-            .map_err(|e| cannot_read(&e))?
-            .to_vec();
+        let out = {
+            let range = slice.get_mapped_range().map_err(|e| cannot_read(&e))?;
+            f(&range)
+        };
         staging.unmap();
-        Ok(bytes)
+        Ok(out)
     }
 }

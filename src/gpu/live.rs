@@ -120,34 +120,26 @@ impl LiveRender {
     }
 
     /// Brings every pixel to `spp()` samples: a dispatch can leave a pixel short (see
-    /// `TileRenderer::finish_short_pixels`), and the next one continues it.
+    /// `TileRenderer::finish_into`), and the next one continues it.
     pub fn complete(&mut self) -> Result<(), GpuError> {
         if self.spp == 0 {
             return Ok(()); // nothing to complete, nor to read back (the viewer asks every frame)
         }
-        self.complete_and_read().map(|_| ())
-    }
-
-    /// `complete`, and the accumulator as read at the end.
-    fn complete_and_read(&mut self) -> Result<Vec<u8>, GpuError> {
         self.tile.opts.spp = self.spp;
-        let (_, accumulators) = self.tile.finish_short_pixels(
-            0,
-            self.tile.opts.height,
-            self.max_slice,
-            &mut Timings::default(),
-        )?;
-        Ok(accumulators)
+        self.tile
+            .finish_counts(self.tile.opts.height, self.max_slice)
     }
 
-    /// The film of samples `0..spp()`, read back (after `complete`).
+    /// The film of samples `0..spp()`, every pixel brought to them (see `complete`).
     pub fn film(&mut self) -> Result<Film, GpuError> {
         let opts = self.tile.opts;
         let mut film = Film::new(opts.width, opts.height);
         film.stratified = opts.sampler == SamplerKind::Sobol;
         if self.spp > 0 {
-            let accumulators = self.complete_and_read()?;
-            self.tile.read_into(&mut film, 0, &accumulators)?;
+            self.tile.opts.spp = self.spp;
+            let rows = self.tile.opts.height;
+            self.tile
+                .finish_into(&mut film, 0, rows, self.max_slice, &mut Timings::default())?;
         }
         Ok(film)
     }

@@ -125,6 +125,10 @@ pub struct Timings {
     pub dispatches: u32,
     /// The longest single dispatch, GPU time if known, else wall time.
     pub longest_dispatch_seconds: f64,
+    /// Wall time of the host's share of the film: reading each tile's accumulator back (the
+    /// copy to a mappable buffer, its mapping, the copy out), checking its sample counts and
+    /// turning its exact sums into the film.
+    pub host_seconds: f64,
 }
 
 /// What a scene binds: its arrays as buffers (uniform or storage, as the kernel's features
@@ -641,10 +645,8 @@ impl GpuRenderer {
             let rows = sizer.next_tile_rows(height - y0);
             tiles.clear(rows);
             gpu_seconds += tiles.sample(y0, rows, &mut sizer, &mut timings, on_progress)?;
-            let (finishing, accumulators) =
-                tiles.finish_short_pixels(y0, rows, sizer.max_slice(), &mut timings)?;
-            gpu_seconds += finishing;
-            tiles.read_into(&mut film, y0, &accumulators)?;
+            gpu_seconds +=
+                tiles.finish_into(&mut film, y0, rows, sizer.max_slice(), &mut timings)?;
             y0 += rows;
         }
         // Some backends (OpenGL) accept timestamp queries and return zeros.

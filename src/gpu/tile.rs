@@ -30,6 +30,9 @@ pub(super) struct TileRenderer {
     params_buffer: wgpu::Buffer,
     dispatch_buffer: wgpu::Buffer,
     pub(super) accum: wgpu::Buffer,
+    /// Where the accumulator is copied to be read (as large as it): made once, not at every
+    /// read (a mappable buffer of the whole image's sums each time).
+    staging: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pub(super) timer: Option<DispatchTimer>,
     trace: bool,
@@ -66,6 +69,11 @@ impl TileRenderer {
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
         );
+        let staging = renderer.buffer(
+            "accumulator read-back",
+            accum_size,
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
         let bind_group = renderer.bind_group(
             kernel,
             [&params_buffer, &dispatch_buffer],
@@ -81,6 +89,7 @@ impl TileRenderer {
             params_buffer,
             dispatch_buffer,
             accum,
+            staging,
             bind_group,
             timer: renderer
                 .ctx
@@ -163,30 +172,57 @@ impl TileRenderer {
         Ok(gpu_seconds)
     }
 
-    /// A dispatch can leave a pixel short of its samples: a BVH kernel's when its traversals
-    /// near the loop budget, any kernel's after a sample that fits none of its summing windows
-    /// (shaders/film.wgsl). Each dispatch gives every pixel at least one sample; this dispatches
-    /// again, at most `max_slice` samples a pixel each time, until every pixel of the tile has
-    /// them all. Returns their GPU seconds and the tile's accumulator as read last, for
-    /// `read_into` (one read of the tile when no pixel was short).
-    pub(super) fn finish_short_pixels(
+    /// Reads the tile's pixels into `film` from row `y0`. A dispatch can leave a pixel short of
+    /// its samples: a BVH kernel's when its traversals near the loop budget, any kernel's after
+    /// a sample that fits none of its summing windows (shaders/film.wgsl). Each dispatch gives
+    /// every pixel at least one sample; this dispatches again, at most `max_slice` samples a
+    /// pixel each time, until every pixel of the tile has them all, reading the tile each time
+    /// (its sample counts are read as its sums are converted: one pass over it). Returns the
+    /// GPU seconds of those dispatches; `timings.host_seconds` gains the reads'.
+    pub(super) fn finish_into(
+        &self,
+        film: &mut Film,
+        y0: u32,
+        rows: u32,
+        max_slice: u32,
+        timings: &mut Timings,
+    ) -> Result<f64, GpuError> {
+        self.finish(y0, rows, max_slice, timings, |bytes| {
+            self.read_into(film, y0, bytes)
+        })
+    }
+
+    /// [`Self::finish_into`] without a film: only the tile's sample counts are read.
+    pub(super) fn finish_counts(&self, rows: u32, max_slice: u32) -> Result<(), GpuError> {
+        let spp = self.opts.spp;
+        let short = |bytes: &[u8]| {
+            let words: &[u32] = bytemuck::cast_slice(bytes);
+            let counts = words.par_chunks_exact(ACCUM_WORDS as usize);
+            counts.filter(|px| px[ACCUM_COUNT as usize] != spp).count() as u64
+        };
+        self.finish(0, rows, max_slice, &mut Timings::default(), short)
+            .map(|_| ())
+    }
+
+    /// Reads the tile with `read` (which returns how many pixels are short) and dispatches
+    /// again until none is; see [`Self::finish_into`].
+    fn finish(
         &self,
         y0: u32,
         rows: u32,
         max_slice: u32,
         timings: &mut Timings,
-    ) -> Result<(f64, Vec<u8>), GpuError> {
+        mut read: impl FnMut(&[u8]) -> u64,
+    ) -> Result<f64, GpuError> {
         let spp = self.opts.spp;
         let mut gpu_seconds = 0.0;
-        for _ in 0..spp {
-            let bytes = self.read_tile(rows)?;
-            let words: &[u32] = bytemuck::cast_slice(&bytes);
-            let short = words
-                .chunks_exact(ACCUM_WORDS as usize)
-                .filter(|px| px[ACCUM_COUNT as usize] < spp)
-                .count();
-            if short == 0 {
-                return Ok((gpu_seconds, bytes));
+        let mut short = 0;
+        for attempt in 0..=spp {
+            let start = Instant::now();
+            short = self.with_tile(rows, &mut read)?;
+            timings.host_seconds += start.elapsed().as_secs_f64();
+            if short == 0 || attempt == spp {
+                break;
             }
             if self.trace {
                 let _ = writeln!(
@@ -200,8 +236,12 @@ impl TileRenderer {
             timings.dispatches += 1;
             timings.longest_dispatch_seconds = timings.longest_dispatch_seconds.max(seconds);
         }
-        // Still short after spp dispatches: `read_into` says so.
-        Ok((gpu_seconds, self.read_tile(rows)?))
+        if short > 0 {
+            return Err(GpuError::Runtime(format!(
+                "the device ended the kernel early: {short} pixels got fewer than {spp} samples"
+            )));
+        }
+        Ok(gpu_seconds)
     }
 
     /// One dispatch over the tile's `rows` rows from `y0`, until each pixel holds
@@ -261,14 +301,22 @@ impl TileRenderer {
         rows as u64 * self.opts.width as u64 * ACCUM_BYTES_PER_PIXEL
     }
 
-    /// The accumulator of the tile's `rows` rows, as bytes.
-    pub(super) fn read_tile(&self, rows: u32) -> Result<Vec<u8>, GpuError> {
-        self.renderer.read_back(&self.accum, self.tile_bytes(rows))
+    /// Copies the accumulator of the tile's `rows` rows to the staging buffer and hands it to
+    /// `f` as bytes where it is mapped.
+    fn with_tile<R>(&self, rows: u32, f: impl FnOnce(&[u8]) -> R) -> Result<R, GpuError> {
+        let ctx = &self.renderer.ctx;
+        let size = self.tile_bytes(rows);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.accum, 0, &self.staging, 0, size);
+        ctx.queue.submit([encoder.finish()]);
+        ctx.with_mapped(&self.staging, size, "GPU memory", f)
     }
 
-    /// Puts the tile's pixels, `bytes` as `read_tile` gave them, into `film` from row `y0`, on
-    /// all cores (a million pixels' exact sums are a fraction of a second on one).
-    pub(super) fn read_into(&self, film: &mut Film, y0: u32, bytes: &[u8]) -> Result<(), GpuError> {
+    /// Puts the tile's pixels, `bytes` as `with_tile` gives them, into `film` from row `y0`,
+    /// on all cores (a million pixels' exact sums are a fraction of a second on one). Returns
+    /// how many pixels are short of `opts.spp` samples; their statistics are then partial, and
+    /// the film's count of invalid samples is left as it was.
+    fn read_into(&self, film: &mut Film, y0: u32, bytes: &[u8]) -> u64 {
         let opts = &self.opts;
         let words: &[u32] = bytemuck::cast_slice(bytes);
         // The kernel keeps the odd samples' sum only for stratified renders.
@@ -279,23 +327,19 @@ impl TileRenderer {
         };
         let first = y0 as usize * opts.width as usize;
         let pixels = &mut film.pixels[first..first + words.len() / ACCUM_WORDS as usize];
-        let invalid = pixels
+        let (short, invalid) = pixels
             .par_iter_mut()
             .zip(words.par_chunks_exact(ACCUM_WORDS as usize))
             .map(|(pixel, px)| {
-                let taken = px[ACCUM_COUNT as usize];
-                if taken != opts.spp {
-                    return Err(GpuError::Runtime(format!(
-                        "the device ended the kernel early: a pixel got {taken} of {} samples",
-                        opts.spp
-                    )));
-                }
                 *pixel = pixel_stats(px, opts.spp, odd_n);
-                Ok(px[ACCUM_INVALID as usize] as u64)
+                let short = (px[ACCUM_COUNT as usize] != opts.spp) as u64;
+                (short, px[ACCUM_INVALID as usize] as u64)
             })
-            .try_reduce(|| 0, |a, b| Ok(a + b))?;
-        film.invalid_samples += invalid;
-        Ok(())
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        if short == 0 {
+            film.invalid_samples += invalid;
+        }
+        short
     }
 }
 
@@ -374,11 +418,48 @@ impl DispatchTimer {
 fn m2_scale(exponent: u32) -> f64 {
     match exponent {
         0 => 1.0,
-        e => 2f64.powi(e.clamp(1, 253) as i32 - 127),
+        // 2^(e - 127), built from its exponent bits (the same value powi gives, without the
+        // multiplications: this runs three times a pixel on every read-back).
+        e => f64::from_bits(((e.clamp(1, 253) as i64 - 127 + 1023) as u64) << 52),
     }
 }
 
 /// Per channel, an exact sum from its words (word-major: all channels' w0, then w1...).
 fn fixed_sums(words: &[u32]) -> [ExactSum; 3] {
-    std::array::from_fn(|c| ExactSum::from_words((0..SUM_WORDS).map(|w| words[3 * w + c])))
+    // As an array, so that the words are gathered without a bounds check each.
+    let Some(words) = words.first_chunk::<{ 3 * SUM_WORDS }>() else {
+        return [ExactSum::ZERO; 3];
+    };
+    std::array::from_fn(|c| ExactSum::from_word_array(&std::array::from_fn(|w| words[3 * w + c])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scale built from exponent bits is powi's, for every exponent the kernel may write.
+    #[test]
+    fn m2_scales_are_powers_of_two() {
+        for e in 0..=255u32 {
+            let expected = if e == 0 {
+                1.0
+            } else {
+                2f64.powi(e.clamp(1, 253) as i32 - 127)
+            };
+            assert_eq!(m2_scale(e).to_bits(), expected.to_bits(), "{e}");
+        }
+    }
+
+    /// The sums gathered from an array are those `ExactSum::from_words` reads.
+    #[test]
+    fn fixed_sums_read_the_words_channel_by_channel() {
+        let words: Vec<u32> = (0..3 * SUM_WORDS as u32)
+            .map(|i| i.wrapping_mul(0x9e37_79b9).rotate_left(i))
+            .collect();
+        let sums = fixed_sums(&words);
+        for (c, sum) in sums.iter().enumerate() {
+            let expected = ExactSum::from_words((0..SUM_WORDS).map(|w| words[3 * w + c]));
+            assert_eq!(*sum, expected, "channel {c}");
+        }
+    }
 }

@@ -107,6 +107,7 @@ impl Job<'_> {
         let (mut gpu_seconds, mut longest_dispatch_seconds): (Option<f64>, Option<f64>) =
             (None, None);
         let mut rays: Option<u64> = None;
+        let mut host_seconds: Option<f64> = None;
         let mut seconds_per_spp: Option<f64> = None;
         let outcome = loop {
             // Checked before each pass, so that a resumed film that meets it renders no more.
@@ -176,6 +177,7 @@ impl Job<'_> {
             }
             gpu_seconds = sum_of_known(gpu_seconds, rendered.gpu_seconds);
             rays = sum_of_known(rays, rendered.rays);
+            host_seconds = sum_of_known(host_seconds, rendered.host_seconds);
             longest_dispatch_seconds =
                 match (longest_dispatch_seconds, rendered.longest_dispatch_seconds) {
                     (Some(a), Some(b)) => Some(a.max(b)),
@@ -190,6 +192,7 @@ impl Job<'_> {
             rays,
             gpu_seconds,
             longest_dispatch_seconds,
+            host_seconds,
             device: self.session.device(),
         };
         Ok((rendered, outcome))

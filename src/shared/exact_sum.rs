@@ -102,6 +102,15 @@ impl ExactSum {
         (self.limbs[i / 2] >> (32 * (i % 2))) as u32
     }
 
+    /// A sum from its ten 32-bit words, least significant first: `from_words` of an array,
+    /// which the GPU's read-back does for every pixel's six sums.
+    #[inline]
+    pub fn from_word_array(words: &[u32; SUM_WORDS]) -> ExactSum {
+        ExactSum {
+            limbs: std::array::from_fn(|k| words[2 * k] as u64 | (words[2 * k + 1] as u64) << 32),
+        }
+    }
+
     /// A sum from its 32-bit words, least significant first (missing words are zero).
     pub fn from_words(words: impl IntoIterator<Item = u32>) -> ExactSum {
         let mut out = ExactSum::ZERO;
