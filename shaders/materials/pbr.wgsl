@@ -3,7 +3,8 @@
 // whose transmission it tints (dielectric.wgsl's functions) and a GGX metal with Schlick's
 // Fresnel from F0 = base colour. Its base colour is GpuMaterial's albedo (albedo_at); its
 // parameters: PbrParams, whose metallic and alpha its metallic-roughness image scales per hit
-// (pbr_with_texel, called by with_albedo_at in texture.wgsl).
+// (pbr_with_texel), and its clear coat and sheen its layer images (pbr_with_layers), both
+// called by with_albedo_at in texture.wgsl.
 
 // Light emitted on top of what it reflects (Pbr::emitted; GpuMaterial::emission*): its
 // colour, times its image where it has one; from its front face unless two-sided.

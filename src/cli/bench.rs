@@ -185,16 +185,34 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
     Ok(())
 }
 
-/// `bench --stats`: the traversal counts per ray, kernel and CPU side by side.
+/// `bench --stats`: the traversal counts per ray, kernel and CPU side by side, for the backends
+/// that walk the scene's BVH.
 fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()> {
+    use rt_gpu::cpu::traversal_stats::{KERNEL_NODE_BYTES, cpu_traverses};
+    // The kernel of a scene of a few shapes holds them as constants and tests them all.
+    #[cfg(feature = "gpu")]
+    let kernel_traverses = rt_gpu::gpu::Features::of(flat).bvh;
+    #[cfg(not(feature = "gpu"))]
+    let kernel_traverses = !flat.bvh.nodes.is_empty();
+    let cpu_traverses = cpu_traverses(flat);
+    if !kernel_traverses {
+        say!(
+            "  kernel: no traversal (the scene's primitives are constants in its kernel, all tested)"
+        )?;
+    }
+    if !cpu_traverses {
+        say!("  cpu: no traversal (the scene's few shapes are tested in turn)")?;
+    }
+    if !(kernel_traverses || cpu_traverses) {
+        return Ok(());
+    }
     let start = Instant::now();
     let Some(stats) = rt_gpu::cpu::traversal_stats::traversal_stats(flat, opts) else {
-        say!("  no BVH: the scene's few shapes are tested in turn on both backends")?;
         return Ok(());
     };
     let seconds = start.elapsed().as_secs_f64();
     say!(
-        "  traversal per ray, one camera ray through each of {}x{} pixels and a diffuse bounce from each hit ({seconds:.1} s):",
+        "  traversal per ray, one camera ray through each of {}x{} pixels and a diffuse bounce from each hit ({seconds:.1} s; node bytes: interior nodes only):",
         opts.width,
         opts.height
     )?;
@@ -212,14 +230,15 @@ fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()>
     )?;
     let width = rt_gpu::accel::wide::WIDTH;
     let wide_node = std::mem::size_of::<rt_gpu::accel::wide::WideNode>();
-    let kernel_label = format!(
-        "kernel, binary ({} B nodes)",
-        rt_gpu::cpu::traversal_stats::KERNEL_NODE_BYTES
-    );
+    let kernel_label = format!("kernel, binary ({KERNEL_NODE_BYTES} B nodes)");
     let wide_label = format!("cpu, {width}-wide ({wide_node} B nodes)");
     let mut disagreements = 0;
     for (kind, s) in [("camera", &stats.camera), ("bounce", &stats.bounce)] {
-        for (label, c) in [(&kernel_label, &s.kernel), (&wide_label, &s.wide)] {
+        let rows = [
+            (kernel_traverses, &kernel_label, &s.kernel),
+            (cpu_traverses, &wide_label, &s.wide),
+        ];
+        for (_, label, c) in rows.iter().filter(|(walks, _, _)| *walks) {
             // Only the kernel's loop counts iterations (lavapipe's budget).
             let iterations = if c.iterations > 0 {
                 format!("{:.1}", c.per_ray(c.iterations))
@@ -236,13 +255,15 @@ fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()>
                 c.per_ray(c.instances),
             )?;
         }
-        say!(
-            "  {kind:<8} cpu / kernel: nodes {:.2}x, node bytes {:.2}x, primitives {:.2}x ({} rays)",
-            s.wide.nodes as f64 / s.kernel.nodes.max(1) as f64,
-            s.wide.node_bytes as f64 / s.kernel.node_bytes.max(1) as f64,
-            s.wide.primitives as f64 / s.kernel.primitives.max(1) as f64,
-            s.kernel.rays
-        )?;
+        if kernel_traverses && cpu_traverses {
+            say!(
+                "  {kind:<8} cpu / kernel: nodes {:.2}x, node bytes {:.2}x, primitives {:.2}x ({} rays)",
+                s.wide.nodes as f64 / s.kernel.nodes.max(1) as f64,
+                s.wide.node_bytes as f64 / s.kernel.node_bytes.max(1) as f64,
+                s.wide.primitives as f64 / s.kernel.primitives.max(1) as f64,
+                s.kernel.rays
+            )?;
+        }
         disagreements += s.disagreements;
     }
     if disagreements > 0 {

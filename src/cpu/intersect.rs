@@ -493,6 +493,11 @@ fn through_bvh<const FIRST: bool>(
     found.map(|found| (closest, found))
 }
 
+/// Whether `scene`'s rays go through its BVH (not [`tested_in_turn`]).
+pub fn traverses_bvh(scene: &FlatScene) -> bool {
+    !tested_in_turn(scene)
+}
+
 /// Whether `scene`'s rays test its few shapes in turn rather than through its BVH.
 #[inline]
 fn tested_in_turn(scene: &FlatScene) -> bool {

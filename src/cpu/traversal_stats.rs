@@ -26,7 +26,12 @@ use rayon::prelude::*;
 
 /// Bytes of one node of the kernel's binary hierarchy (`GpuBvhNode`: both children's boxes and
 /// references), read on entering an interior node.
-pub const KERNEL_NODE_BYTES: u64 = 64;
+pub const KERNEL_NODE_BYTES: u64 = std::mem::size_of::<crate::shared::layout::GpuBvhNode>() as u64;
+
+/// Whether the CPU backend walks `scene`'s BVH (a scene of a few shapes is tested in turn).
+pub fn cpu_traverses(scene: &FlatScene) -> bool {
+    !scene.bvh.nodes.is_empty() && super::intersect::traverses_bvh(scene)
+}
 
 /// One traversal's reads, summed over rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -38,9 +43,11 @@ pub struct Counts {
     pub iterations: u64,
     /// Interior nodes read (the kernel's: binary; the CPU's: wide).
     pub nodes: u64,
-    /// Bytes of those nodes.
+    /// Bytes of those nodes (interior nodes only, on both sides: what leaves read is the
+    /// primitives', counted in `primitives`).
     pub node_bytes: u64,
-    /// Leaves whose primitives were tested (the CPU's triangle blocks among them).
+    /// Leaves whose primitives were tested (the CPU's triangle blocks among them: one block,
+    /// its corners beside each other, for a subtree of few triangles).
     pub leaves: u64,
     /// Primitives tested (a triangle block's lanes in use each count).
     pub primitives: u64,
@@ -381,7 +388,6 @@ impl Leaves for Counting<'_> {
     fn read_block(&mut self, block: &TriangleBlock) {
         self.counts.leaves += 1;
         self.counts.primitives += block.triangles.iter().filter(|&&t| t != EMPTY).count() as u64;
-        self.counts.node_bytes += std::mem::size_of::<TriangleBlock>() as u64;
     }
 
     fn enter_list(&mut self) {

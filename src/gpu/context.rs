@@ -222,17 +222,20 @@ impl GpuContext {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        self.wait()?;
         let cannot_read =
             |e: &dyn std::fmt::Display| GpuError::Runtime(format!("cannot read {what}: {e}"));
-        rx.recv()
-            .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
-            .map_err(|e| cannot_read(&e))?;
-        let out = {
+        let read = || {
+            self.wait()?;
+            rx.recv()
+                .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
+                .map_err(|e| cannot_read(&e))?;
             let range = slice.get_mapped_range().map_err(|e| cannot_read(&e))?;
-            f(&range)
+            Ok(f(&range))
         };
+        let out = read();
+        // On every path, a failed one too: a staging buffer kept for later reads must not stay
+        // mapped (or pending).
         staging.unmap();
-        Ok(out)
+        out
     }
 }

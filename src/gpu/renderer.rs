@@ -126,8 +126,8 @@ pub struct Timings {
     /// The longest single dispatch, GPU time if known, else wall time.
     pub longest_dispatch_seconds: f64,
     /// Wall time of the host's share of the film: reading each tile's accumulator back (the
-    /// copy to a mappable buffer, its mapping, the copy out), checking its sample counts and
-    /// turning its exact sums into the film.
+    /// copy to a mappable buffer and its mapping), checking its sample counts and turning its
+    /// exact sums into the film where they are mapped.
     pub host_seconds: f64,
 }
 

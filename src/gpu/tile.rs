@@ -238,7 +238,8 @@ impl TileRenderer {
         }
         if short > 0 {
             return Err(GpuError::Runtime(format!(
-                "the device ended the kernel early: {short} pixels got fewer than {spp} samples"
+                "the device ended the kernel early: {short} pixel{} of the tile at row {y0} did not get their {spp} samples",
+                if short == 1 { "" } else { "s" }
             )));
         }
         Ok(gpu_seconds)

@@ -374,7 +374,8 @@ impl Pbr {
     }
 
     /// Its lobes at `hit`: the base colour looked up, metallic and roughness scaled by its
-    /// metallic-roughness image there, as the kernel's `with_albedo_at` resolves them.
+    /// metallic-roughness image there, its clear coat and sheen by its layer images, as the
+    /// kernel's `with_albedo_at` resolves them.
     fn at(&self, hit: &Hit) -> Lobes {
         let lobes = Lobes {
             base: texture::albedo(&self.base_color, hit),
@@ -708,8 +709,9 @@ impl Lobes {
 }
 
 material_params! {
-    /// Beside the base colour (`GpuMaterial::with_albedo`) and the metallic-roughness image
-    /// (`GpuMaterial::metallic_roughness_*`, which the kernel applies per hit: `pbr_with_texel`).
+    /// Beside the base colour (`GpuMaterial::with_albedo`), the metallic-roughness image
+    /// (`GpuMaterial::parameter_image*`, which the kernel applies per hit: `pbr_with_texel`)
+    /// and the layer images (`GpuMaterial::layer_image*`, `sheen_image*`: `pbr_with_layers`).
     pub struct PbrParams {
         metallic: f32,
         transmission: f32,

@@ -18,14 +18,31 @@ pub const SPECULAR: &str = "KHR_materials_specular";
 /// as required.
 pub const VOLUME: &str = "KHR_materials_volume";
 
-/// The textures of the extensions above that rt-gpu maps point by point (`layer_images`), by
-/// extension and property name.
-pub const MAPPED_TEXTURES: [(&str, &str); 4] = [
-    (CLEARCOAT, "clearcoatTexture"),
-    (CLEARCOAT, "clearcoatRoughnessTexture"),
-    (SHEEN, "sheenColorTexture"),
-    (SHEEN, "sheenRoughnessTexture"),
-];
+/// The textures of `m`'s clear coat and sheen that can change how it looks, by property name
+/// with their JSON texture info: the coat's where its factor is above 0, the sheen's where its
+/// colour is not black (a texture scales its factor, and scales 0 to 0). rt-gpu maps these
+/// point by point (`layer_images`); the others are not read, nor checked.
+pub fn live_textures<'a>(m: &'a gltf::Material<'a>) -> Vec<(&'static str, &'a Value)> {
+    let mut out = Vec::new();
+    if let Some(ext) = m.extension_value(CLEARCOAT) {
+        let factor = ext.get("clearcoatFactor").and_then(Value::as_f64);
+        if factor.is_some_and(|f| f > 0.0) {
+            for slot in ["clearcoatTexture", "clearcoatRoughnessTexture"] {
+                out.extend(ext.get(slot).map(|info| (slot, info)));
+            }
+        }
+    }
+    if let Some(ext) = m.extension_value(SHEEN) {
+        let colour = ext.get("sheenColorFactor").and_then(Value::as_array);
+        let lit = colour.is_some_and(|c| c.iter().any(|x| x.as_f64().is_some_and(|x| x > 0.0)));
+        if lit {
+            for slot in ["sheenColorTexture", "sheenRoughnessTexture"] {
+                out.extend(ext.get(slot).map(|info| (slot, info)));
+            }
+        }
+    }
+    out
+}
 
 /// The textures of KHR_materials_specular, none of which is read yet.
 const SPECULAR_TEXTURES: [&str; 2] = ["specularTexture", "specularColorTexture"];
@@ -101,25 +118,25 @@ pub fn sheen(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Sheen
     Ok((color.max_element() > 0.0).then_some(Sheen { color, roughness }))
 }
 
-/// `m`'s layer images (`Pbr::with_layer_images`): its clearcoatTexture (red channel),
-/// clearcoatRoughnessTexture (green) and sheenRoughnessTexture (alpha) in one image, and its
-/// sheenColorTexture (sRGB); `name` names the material in errors.
+/// `m`'s layer images (`Pbr::with_layer_images`) from its [`live_textures`]: its
+/// clearcoatTexture (red channel), clearcoatRoughnessTexture (green) and sheenRoughnessTexture
+/// (alpha) in one image, and its sheenColorTexture (sRGB); `name` names the material in
+/// errors.
 pub fn layer_images(
     m: &gltf::Material,
     textures: &mut FileTextures,
     name: &str,
 ) -> Result<ParameterImages, String> {
-    let mut texture = |extension: &str, slot: &str, srgb: bool, alpha: bool| match m
-        .extension_value(extension)
-        .and_then(|ext| ext.get(slot))
-    {
-        Some(info) => textures.extension_texture(info, srgb, alpha, name, slot),
-        None => Ok(None),
-    };
-    let coat = texture(CLEARCOAT, "clearcoatTexture", false, false)?;
-    let coat_roughness = texture(CLEARCOAT, "clearcoatRoughnessTexture", false, false)?;
-    let sheen_roughness = texture(SHEEN, "sheenRoughnessTexture", false, true)?;
-    let sheen_colour = texture(SHEEN, "sheenColorTexture", true, false)?;
+    let live = live_textures(m);
+    let mut texture =
+        |slot: &str, srgb: bool, alpha: bool| match live.iter().find(|(s, _)| *s == slot) {
+            Some((_, info)) => textures.extension_texture(info, srgb, alpha, name, slot),
+            None => Ok(None),
+        };
+    let coat = texture("clearcoatTexture", false, false)?;
+    let coat_roughness = texture("clearcoatRoughnessTexture", false, false)?;
+    let sheen_roughness = texture("sheenRoughnessTexture", false, true)?;
+    let sheen_colour = texture("sheenColorTexture", true, false)?;
     let layers = textures.layers([coat, coat_roughness, sheen_roughness], name)?;
     Ok(ParameterImages {
         metallic_roughness: None,

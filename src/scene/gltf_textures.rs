@@ -153,16 +153,20 @@ impl<'a> FileTextures<'a> {
 
     /// The layers' image of `material` (`Pbr::layers`) from the textures that scale its clear
     /// coat's factor (red channel), its roughness (green) and its sheen's roughness (an alpha
-    /// channel), where it has any: one image at the size of the first, the others resampled
+    /// channel), where it has any: one image at the size of the largest, the others resampled
     /// to it at its texels' centres, 1 where a texture is absent. They must read one UV set
-    /// (and so share its transform: `uv_sets`), and are read with the first's sampler.
+    /// (and so share its transform: `uv_sets`), and are read with the largest's sampler.
     pub fn layers(
         &mut self,
         [coat, coat_roughness, sheen_roughness]: [Option<Arc<Image>>; 3],
         material: &str,
     ) -> Result<Option<Arc<Image>>, String> {
         let sources = [(coat, 0), (coat_roughness, 1), (sheen_roughness, 0)];
-        let Some(base) = sources.iter().find_map(|(image, _)| image.clone()) else {
+        // The largest sets the size (and the sampler): a small texture beside a large one
+        // would otherwise lose the large one's detail.
+        let Some(base) = (sources.iter().filter_map(|(image, _)| image.clone()))
+            .max_by_key(|i| i.width as u64 * i.height as u64)
+        else {
             return Ok(None);
         };
         if sources.iter().any(|(image, _)| {
@@ -527,16 +531,11 @@ pub fn uv_sets(material: &gltf::Material, source: &str) -> Result<[Option<UvSetU
             Some((slot, transform, set_of(&info)))
         })
         .collect();
-    for (extension, slot) in super::gltf_extensions::MAPPED_TEXTURES {
-        if let Some(info) = material
-            .extension_value(extension)
-            .and_then(|ext| ext.get(slot))
-        {
-            let transform = info
-                .get("extensions")
-                .and_then(|e| e.get("KHR_texture_transform"));
-            found.push((slot, transform_of_json(transform), json_set_of(info)));
-        }
+    for (slot, info) in super::gltf_extensions::live_textures(material) {
+        let transform = info
+            .get("extensions")
+            .and_then(|e| e.get("KHR_texture_transform"));
+        found.push((slot, transform_of_json(transform), json_set_of(info)));
     }
     if let Some(normal) = material.normal_texture() {
         let value = normal.extension_value("KHR_texture_transform");

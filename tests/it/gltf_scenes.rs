@@ -1177,6 +1177,16 @@ fn a_clear_coat_is_read_and_what_is_not_is_named() {
         let err = load(&path, "bad.gltf", None).expect_err(ext);
         assert!(err.contains(words) && !err.contains('\n'), "{ext}: {err}");
     }
+    // A texture of no coat (factor 0) changes nothing, and is neither read nor checked.
+    let unused = coat(
+        r#"{ "clearcoatFactor": 0, "clearcoatTexture": { "index": 7 } }"#,
+        "",
+    );
+    let path = common::gltf::write_triangle(dir.path(), "unused.gltf", true, &unused, "", &extra);
+    let (scene, _) = load(&path, "unused.gltf", None).expect("loads");
+    assert!(
+        matches!(&scene.materials[0], rt_gpu::scene::Material::Pbr(p) if p.clearcoat.is_none() && p.layers().is_none())
+    );
 }
 
 /// Issue 63: KHR_materials_volume fills a transmissive material with an absorbing medium,

@@ -50,7 +50,8 @@ fn both_counted_traversals_find_the_renderers_hits() {
 
 /// The kernel's `trace_rays` returns its traversal loop's count per ray: the model's must be
 /// the same for every ray (any step the model takes that the kernel does not, or the reverse,
-/// changes it), and so must whether the ray hits anything.
+/// changes it), and so must whether the ray hits anything; on a hardware GPU, 0.1% of rays may
+/// differ.
 #[cfg(feature = "gpu")]
 #[test]
 fn the_model_counts_the_kernels_loop_ray_for_ray() {
@@ -83,9 +84,14 @@ fn the_model_counts_the_kernels_loop_ray_for_ray() {
                 assert_eq!(count_ray(&flat, ray).disagreements, 0);
             }
             eprintln!("{name} {kind}: {} rays, {differing} differ", rays.len());
-            assert_eq!(
-                differing, 0,
-                "{name} {kind}: the model is not the kernel's walk"
+            // Exact on lavapipe (the CI's), whose arithmetic is the CPU's; a hardware GPU's
+            // fused multiply-adds may move a triangle's hit by an ulp, and with it a pruning
+            // decision, on a few rays.
+            let lavapipe = gpu.ctx.info.name.contains("llvmpipe");
+            let allowed = if lavapipe { 0 } else { rays.len() / 1000 };
+            assert!(
+                differing <= allowed,
+                "{name} {kind}: the model is not the kernel's walk ({differing} rays differ)"
             );
         }
     }
