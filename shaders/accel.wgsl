@@ -6,7 +6,8 @@
 // and a leaf's primitives are known from its reference.
 //
 // Lavapipe silently breaks every loop of an invocation once its SIMD group has run 65 535 loop
-// iterations in all, and a traversal's length depends on the ray. So the kernel counts: the
+// iterations in all, and a traversal's length depends on the ray. So a kernel for a software
+// adapter (LOOP_BUDGET, set by the renderer: a hardware GPU's kernel carries none of this) counts: the
 // host's bound on every other loop of a sample is added at the sample's start, and each
 // traversal iteration (and pass of its popping loop, and primitive of a leaf) counts
 // `traversal_weight` (lavapipe's SIMD lanes: a group runs each
@@ -16,8 +17,10 @@
 // that sample to the next dispatch (see kernel.wgsl and GpuParams in src/shared/layout.rs).
 
 //#if BVH
+//#if LOOP_BUDGET
 var<private> loop_iterations: u32;
 var<private> budget_spent: bool;
+//#endif
 
 // Where the ray enters the box if it meets it within [0, t_max], else -1 (see box_entry in
 // src/accel/mod.rs).
@@ -107,11 +110,13 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
 //#endif
 //#endif
     loop {
+//#if LOOP_BUDGET
         if loop_iterations >= params.loop_budget {
             budget_spent = true;
             break;
         }
         loop_iterations += params.traversal_weight;
+//#endif
         // An interior node first: when it sends the ray into a leaf, the leaf is tested in
         // the same iteration (lavapipe runs both halves every iteration anyway).
         var pop = false;
@@ -133,7 +138,9 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
         if !pop && (entering & BVH_LEAF) != 0u {
             let first = entering & (BVH_LEAF_OFFSET_LIMIT - 1u);
             let count = (entering & ~BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT;
+//#if LOOP_BUDGET
             loop_iterations += params.traversal_weight * (count + 1u);
+//#endif
             for (var i = first; i < first + count; i++) {
                 let packed = bvh_primitive(i);
 //#if TRIANGLES
@@ -159,8 +166,10 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
             // far cheaper per iteration than the traversal's.
             var finished = false;
             loop {
+//#if LOOP_BUDGET
                 // Every pass counts: lavapipe's limit counts this loop's every end.
                 loop_iterations += params.traversal_weight;
+//#endif
 //#if TRIANGLES
 //#if INSTANCES
                 if instance != NO_INSTANCE && top == floor {

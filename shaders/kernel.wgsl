@@ -101,9 +101,11 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
         var sampler = sampler_with_seeds(seeds, pixel, index, d.seed);
         var path = start_path(generate_ray(x, y, &sampler));
 //#if BVH
+//#if LOOP_BUDGET
         // Every loop of a sample other than BVH traversals is bounded by the host; traversals
         // count their own iterations (accel.wgsl).
         loop_iterations += params.sample_loop_cost;
+//#endif
 //#endif
         loop {
 //#if AOV_ALBEDO || AOV_NORMAL
@@ -112,13 +114,16 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
             var goes_on = extend_path(&path, &sampler);
 //#endif
 //#if BVH
+//#if LOOP_BUDGET
             goes_on = goes_on && !budget_spent;
+//#endif
 //#endif
             if goes_on {
                 continue;
             }
             var l = path.total;
 //#if BVH
+//#if LOOP_BUDGET
             if budget_spent {
                 if !fresh {
                     // Left to the next dispatch, which starts with a whole budget.
@@ -128,6 +133,7 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
                 // (black, and counted) rather than retried forever.
                 l = vec3f(-1.0);
             }
+//#endif
 //#endif
             fresh = false;
             if !valid_sample(l) {
@@ -173,7 +179,9 @@ fn render(@builtin(global_invocation_id) gid: vec3u) {
             sampler = sampler_with_seeds(seeds, pixel, index, d.seed);
             path = start_path(generate_ray(x, y, &sampler));
 //#if BVH
+//#if LOOP_BUDGET
             loop_iterations += params.sample_loop_cost;
+//#endif
 //#endif
         }
     }
@@ -350,13 +358,17 @@ fn trace_rays(@builtin(global_invocation_id) gid: vec3u) {
     let slot = gid.y * dispatch.tile_size.x + gid.x;
     var hit: Hit;
 //#if BVH
+//#if LOOP_BUDGET
     loop_iterations = 0u;
+//#endif
 //#endif
     var out = trace_debug(Ray(bounces[slot].point, bounces[slot].dir), &hit);
 //#if BVH
+//#if LOOP_BUDGET
     // The traversal's loop count, which the CPU's model of it (src/cpu/traversal_stats.rs)
-    // must match ray for ray.
+    // must match ray for ray (debug kernels count, whatever the device).
     out.scattered = loop_iterations;
+//#endif
 //#endif
     bounces[slot] = out;
 }

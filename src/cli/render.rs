@@ -318,7 +318,14 @@ fn checkpoint_path(args: &RenderArgs, output: &Path) -> anyhow::Result<Option<Ch
 /// --print-shader: the kernel this render would run, on stdout.
 fn print_shader(plan: &Plan) -> anyhow::Result<()> {
     let Request { flat, opts, .. } = &plan.request;
-    let features = (plan.request.gpu.features(flat, opts.integrator)).for_render(flat, opts);
+    let mut features = (plan.request.gpu.features(flat, opts.integrator)).for_render(flat, opts);
+    // A BVH kernel counts its loops on a software adapter (lavapipe's budget): the adapter the
+    // render would open decides; without one, a hardware GPU's kernel is shown.
+    if features.bvh {
+        let adapter = plan.request.gpu.adapter.as_deref();
+        features.loop_budget = rt_gpu::gpu::GpuContext::new(adapter)
+            .is_ok_and(|ctx| rt_gpu::gpu::GpuRenderer::new(ctx).loop_budget);
+    }
     let source = rt_gpu::gpu::shader::compose(&features, flat).map_err(anyhow::Error::msg)?;
     std::io::stdout().lock().write_all(source.as_bytes())?;
     Ok(())

@@ -160,11 +160,26 @@ enum NodeBinding {
 #[derive(Clone)]
 pub struct GpuRenderer {
     pub ctx: GpuContext,
+    /// Whether its BVH kernels count their loops against lavapipe's budget
+    /// (`Features::loop_budget`): on software adapters. Public so that tests can build the
+    /// hardware GPU's kernel on lavapipe.
+    pub loop_budget: bool,
 }
 
 impl GpuRenderer {
     pub fn new(ctx: GpuContext) -> Self {
-        GpuRenderer { ctx }
+        let loop_budget =
+            ctx.info.device_type == wgpu::DeviceType::Cpu || ctx.info.name.contains("llvmpipe");
+        GpuRenderer { ctx, loop_budget }
+    }
+
+    /// `features` as this device's kernels have them: the loop budget where its adapter needs
+    /// it, and in debug kernels (whose `trace_rays` reports the traversal's count).
+    fn for_device(&self, features: Features) -> Features {
+        Features {
+            loop_budget: features.bvh && (self.loop_budget || features.debug),
+            ..features
+        }
     }
 
     /// Builds, validates and compiles the kernel for `features` and `scene`, without wgpu's
@@ -176,6 +191,7 @@ impl GpuRenderer {
         features: Features,
         entry_point: &str,
     ) -> Result<Kernel, GpuError> {
+        let features = self.for_device(features);
         let source = compose(&features, scene).map_err(GpuError::Shader)?;
         // SAFETY: `source` is composed (`shader::compose`) for the scene whose buffers
         // `scene_buffers` binds, with its `Features::of`; every dynamic index is then in range:
@@ -226,6 +242,7 @@ impl GpuRenderer {
         features: Features,
         entry_point: &str,
     ) -> Result<Kernel, GpuError> {
+        let features = self.for_device(features);
         let source = compose(&features, scene).map_err(GpuError::Shader)?;
         self.checked_kernel_from_source(features, source, entry_point)
     }
@@ -698,7 +715,7 @@ impl GpuRenderer {
         let is_llvmpipe = self.ctx.info.name.contains("llvmpipe");
         // BVH kernels count their loops against a budget on lavapipe (see shaders/accel.wgsl):
         // half the limit, each traversal iteration counted once per SIMD lane.
-        let budget = if is_llvmpipe && kernel.features.bvh {
+        let budget = if kernel.features.loop_budget {
             Some((LOOP_ITERATION_BUDGET / 2, simd_lanes(&self.ctx.info.name)))
         } else {
             None

@@ -92,6 +92,12 @@ pub struct Features {
     pub instances: bool,
     /// Primitives found through the scene's BVH (off only where `inline_scene` is on).
     pub bvh: bool,
+    /// BVH traversals count their loop iterations against a budget and end a sample that
+    /// would pass it (see shaders/accel.wgsl): lavapipe silently breaks an invocation's loops
+    /// after 65 535 iterations in all. Set by the renderer for software adapters (and debug
+    /// kernels, whose `trace_rays` reports the count); a hardware GPU's kernel carries none of
+    /// it.
+    pub loop_budget: bool,
     /// The material features on, as [`MaterialFeature::bit`]s: each material
     /// kind the scene uses, and the extra features its instances need.
     pub materials: u32,
@@ -132,7 +138,7 @@ pub struct Features {
 type Switch = (&'static str, fn(&mut Features) -> &mut bool);
 
 /// Every boolean switch of [`Features`], once: the one list `flags` and `set` read.
-const SWITCHES: [Switch; 20] = [
+const SWITCHES: [Switch; 21] = [
     ("TRIANGLES", |f| &mut f.triangles),
     ("SHADING_NORMALS", |f| &mut f.shading_normals),
     ("TRIANGLE_UVS", |f| &mut f.triangle_uvs),
@@ -141,6 +147,7 @@ const SWITCHES: [Switch; 20] = [
     ("VERTEX_COLORS", |f| &mut f.vertex_colors),
     ("INSTANCES", |f| &mut f.instances),
     ("BVH", |f| &mut f.bvh),
+    ("LOOP_BUDGET", |f| &mut f.loop_budget),
     ("LENS", |f| &mut f.lens),
     ("SOBOL", |f| &mut f.sobol),
     ("SKY", |f| &mut f.sky),
@@ -235,6 +242,7 @@ impl Features {
             vertex_colors: !scene.triangle_colors.is_empty(),
             instances: !scene.instances.is_empty(),
             bvh,
+            loop_budget: false,
             materials,
             lens: scene.camera.lens_radius > 0.0,
             sobol: false,

@@ -205,6 +205,46 @@ fn traversals_past_the_loop_budget_continue_in_the_next_dispatch() {
     }
 }
 
+#[cfg(feature = "gpu")]
+/// The kernel a hardware GPU gets (`GpuRenderer::loop_budget` off: no loop counting, which
+/// only lavapipe needs) holds none of the budget's code and renders a BVH scene as the CPU
+/// does (Welch z + Sidak), here on lavapipe, with scenes small enough for its limit: meshes,
+/// shapes and instances. The software adapter's kernel keeps the count.
+#[test]
+fn the_hardware_kernel_carries_no_loop_budget_and_renders_alike() {
+    let Some(mut gpu) = renderer() else { return };
+    let load = |path: &str| rt_gpu::scene::file::load(std::path::Path::new(path)).expect("loads");
+    let scenes = [
+        ("showcase", builtin("showcase").expect("built in")),
+        ("knots", load("scenes/knots.toml")),
+    ];
+    let opts = |seed| nee_opts(16, 12, 256, 5, seed);
+    for (name, scene) in scenes {
+        let flat = FlatScene::new(&scene, 16, 12).expect("valid");
+        let features = Features::of(&flat).for_render(&flat, &opts(1));
+        let software = gpu.loop_budget;
+        let counting = gpu.kernel(&flat, features, "render").expect("compiles");
+        assert_eq!(
+            counting.source.contains("loop_iterations"),
+            software,
+            "{name}"
+        );
+        gpu.loop_budget = false;
+        let hardware = gpu.kernel(&flat, features, "render").expect("compiles");
+        assert!(
+            !hardware.source.contains("loop_iterations") && !hardware.features.loop_budget,
+            "{name}: the hardware kernel counts its loops"
+        );
+        let cpu = render_cpu(&scene, &opts(1));
+        let film = render_gpu(&gpu, &scene, &opts(2), &Tuning::default());
+        gpu.loop_budget = software;
+        assert_eq!(film.invalid_samples, 0, "{name}");
+        let verdict = compare(&cpu, &film);
+        eprintln!("{name}, the hardware kernel vs the cpu: {verdict:?}");
+        assert!(verdict.passed(), "{name}: {verdict:?}");
+    }
+}
+
 /// `up` is a direction: its length does not matter (1e20 once overflowed to a zero frame, so
 /// every pixel traced one ray), and extreme focus distances and apertures are refused.
 #[test]
