@@ -7,7 +7,8 @@
 //
 // Lavapipe silently breaks every loop of an invocation once its SIMD group has run 65 535 loop
 // iterations in all, and a traversal's length depends on the ray. So a kernel for a software
-// adapter (LOOP_BUDGET, set by the renderer: a hardware GPU's kernel carries none of this) counts: the
+// adapter, and a debug kernel (LOOP_BUDGET, set by the renderer: a hardware GPU's render kernel
+// carries none of this) counts: the
 // host's bound on every other loop of a sample is added at the sample's start, and each
 // traversal iteration (and pass of its popping loop, and primitive of a leaf) counts
 // `traversal_weight` (lavapipe's SIMD lanes: a group runs each

@@ -323,8 +323,9 @@ fn print_shader(plan: &Plan) -> anyhow::Result<()> {
     // render would open decides; without one, a hardware GPU's kernel is shown.
     if features.bvh {
         let adapter = plan.request.gpu.adapter.as_deref();
-        features.loop_budget = rt_gpu::gpu::GpuContext::new(adapter)
-            .is_ok_and(|ctx| rt_gpu::gpu::GpuRenderer::new(ctx).loop_budget);
+        if let Ok(ctx) = rt_gpu::gpu::GpuContext::new(adapter) {
+            features = rt_gpu::gpu::GpuRenderer::new(ctx).for_device(features);
+        }
     }
     let source = rt_gpu::gpu::shader::compose(&features, flat).map_err(anyhow::Error::msg)?;
     std::io::stdout().lock().write_all(source.as_bytes())?;

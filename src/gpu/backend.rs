@@ -47,10 +47,11 @@ impl GpuBackend {
 
     /// The kernel for `sampler`, compiled the first time it is asked for.
     fn kernel(&self, scene: &FlatScene, sampler: SamplerKind) -> anyhow::Result<Arc<Kernel>> {
-        let features = Features {
+        // As the device builds it (a software adapter's counts its loops): what the cache holds.
+        let features = self.renderer.for_device(Features {
             sobol: sampler == SamplerKind::Sobol,
             ..self.features
-        };
+        });
         let mut kernels = self.kernels.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(k) = kernels.iter().find(|k| k.features == features) {
             return Ok(k.clone());
@@ -62,6 +63,11 @@ impl GpuBackend {
 }
 
 impl GpuBackend {
+    /// How many kernels it has compiled: one per sampler asked for, however many renders.
+    pub fn compiled_kernels(&self) -> usize {
+        self.kernels.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
     /// A render of `scene` with `opts` that stays on the device (see [`LiveRender`]).
     pub fn live(&self, scene: &FlatScene, opts: &RenderOptions) -> anyhow::Result<LiveRender> {
         let kernel = self.kernel(scene, opts.sampler)?;

@@ -224,18 +224,26 @@ impl GpuContext {
         });
         let cannot_read =
             |e: &dyn std::fmt::Display| GpuError::Runtime(format!("cannot read {what}: {e}"));
+        // Whether the buffer is mapped, or its mapping still pending, when reading ends: then it
+        // is unmapped (a staging buffer kept for later reads must not stay so); a mapping that
+        // failed left it unmapped, and unmapping it again would be an error of its own.
+        let mut to_unmap = true;
         let read = || {
             self.wait()?;
-            rx.recv()
-                .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?
-                .map_err(|e| cannot_read(&e))?;
+            let mapped = rx
+                .recv()
+                .map_err(|_| GpuError::Runtime("buffer mapping was dropped".into()))?;
+            if let Err(e) = mapped {
+                to_unmap = false;
+                return Err(cannot_read(&e));
+            }
             let range = slice.get_mapped_range().map_err(|e| cannot_read(&e))?;
             Ok(f(&range))
         };
         let out = read();
-        // On every path, a failed one too: a staging buffer kept for later reads must not stay
-        // mapped (or pending).
-        staging.unmap();
+        if to_unmap {
+            staging.unmap();
+        }
         out
     }
 }

@@ -174,8 +174,9 @@ impl GpuRenderer {
     }
 
     /// `features` as this device's kernels have them: the loop budget where its adapter needs
-    /// it, and in debug kernels (whose `trace_rays` reports the traversal's count).
-    fn for_device(&self, features: Features) -> Features {
+    /// it, and in debug kernels (whose `trace_rays` reports the traversal's count). A kernel's
+    /// `features` are these: compare with them, not with what was asked for.
+    pub fn for_device(&self, features: Features) -> Features {
         Features {
             loop_budget: features.bvh && (self.loop_budget || features.debug),
             ..features
@@ -730,7 +731,7 @@ impl GpuRenderer {
             Some(slice) => slice,
             // Traversals count their own iterations: one sample per dispatch at the least.
             None if kernel.features.bvh && budget.is_none_or(|(b, _)| sample_loop_cost < b) => 1,
-            None if is_llvmpipe => {
+            None if budget.is_some() || is_llvmpipe => {
                 return Err(GpuError::TooLarge(format!(
                     "this scene needs up to {} loop iterations per sample, more than the {LOOP_ITERATION_BUDGET} rt-gpu allows one invocation on lavapipe (which silently ends it at 65535): use fewer primitives or a lower --max-depth, or --backend cpu",
                     cost.per_sample

@@ -153,20 +153,18 @@ impl<'a> FileTextures<'a> {
 
     /// The layers' image of `material` (`Pbr::layers`) from the textures that scale its clear
     /// coat's factor (red channel), its roughness (green) and its sheen's roughness (an alpha
-    /// channel), where it has any: one image at the size of the largest, the others resampled
-    /// to it at its texels' centres, 1 where a texture is absent. They must read one UV set
-    /// (and so share its transform: `uv_sets`), and are read with the largest's sampler.
+    /// channel), where it has any: one image as wide and as tall as the widest and tallest, each
+    /// resampled to it at its texels' centres where its size differs, 1 where a texture is
+    /// absent. They must read one UV set (and so share its transform: `uv_sets`), and are read
+    /// with the first's sampler.
     pub fn layers(
         &mut self,
         [coat, coat_roughness, sheen_roughness]: [Option<Arc<Image>>; 3],
         material: &str,
     ) -> Result<Option<Arc<Image>>, String> {
         let sources = [(coat, 0), (coat_roughness, 1), (sheen_roughness, 0)];
-        // The largest sets the size (and the sampler): a small texture beside a large one
-        // would otherwise lose the large one's detail.
-        let Some(base) = (sources.iter().filter_map(|(image, _)| image.clone()))
-            .max_by_key(|i| i.width as u64 * i.height as u64)
-        else {
+        let present = || sources.iter().filter_map(|(image, _)| image.as_ref());
+        let Some(base) = present().next().cloned() else {
             return Ok(None);
         };
         if sources.iter().any(|(image, _)| {
@@ -179,7 +177,10 @@ impl<'a> FileTextures<'a> {
                 self.source
             ));
         }
-        let (w, h) = (base.width, base.height);
+        // Each side the largest's: a small texture beside a large one would otherwise lose the
+        // large one's detail.
+        let w = present().map(|i| i.width).max().unwrap_or(base.width);
+        let h = present().map(|i| i.height).max().unwrap_or(base.height);
         let mut texels = Vec::with_capacity(3 * (w * h) as usize);
         for y in 0..h {
             for x in 0..w {

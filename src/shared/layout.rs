@@ -440,7 +440,8 @@ gpu_struct! {
         environment_width: u32,
         environment_height: u32,
         environment_strength: f32,
-        /// The loop budget of BVH kernels (see shaders/accel.wgsl): a bound on the loop
+        /// The loop budget of LOOP_BUDGET kernels (BVH kernels on software adapters; see
+        /// shaders/accel.wgsl): a bound on the loop
         /// iterations of one sample other than traversals; what each traversal iteration
         /// counts for (the SIMD lanes that wait for each other on lavapipe); and the count at
         /// which an invocation stops taking samples.

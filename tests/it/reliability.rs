@@ -245,6 +245,34 @@ fn the_hardware_kernel_carries_no_loop_budget_and_renders_alike() {
     }
 }
 
+#[cfg(feature = "gpu")]
+/// A GPU backend compiles its kernel once per sampler, whatever the device adds to its
+/// features (the loop budget of a software adapter's BVH kernels, which its cache once failed
+/// to find, so that every render compiled it again): three renders of a BVH scene with the
+/// default sampler, one kernel (four with that cache).
+#[test]
+fn a_gpu_backend_compiles_its_kernel_once() {
+    use rt_gpu::backend::RenderBackend;
+    if renderer().is_none() {
+        return;
+    }
+    let scene = builtin("showcase").expect("built in");
+    let opts = nee_opts(8, 6, 2, 4, 1);
+    let flat = FlatScene::new(&scene, 8, 6).expect("valid");
+    let features = Features::of(&flat).with_integrator(&flat, opts.integrator);
+    let backend = rt_gpu::gpu::GpuBackend::new(None, &flat, features, opts.integrator)
+        .expect("a GPU backend");
+    for seed in 1..=3 {
+        let opts = rt_gpu::render::RenderOptions {
+            seed,
+            sampler: rt_gpu::options::SamplerKind::Sobol,
+            ..opts
+        };
+        backend.render(&flat, &opts, &|_| {}).expect("renders");
+    }
+    assert_eq!(backend.compiled_kernels(), 1);
+}
+
 /// `up` is a direction: its length does not matter (1e20 once overflowed to a zero frame, so
 /// every pixel traced one ray), and extreme focus distances and apertures are refused.
 #[test]
