@@ -234,7 +234,7 @@ struct InInstance<'a, const FIRST: bool> {
 }
 
 /// `ray` in the coordinates of `instance`'s mesh, its direction not renormalised.
-fn local_ray(instance: &Instance, ray: &Ray) -> Ray {
+pub(crate) fn local_ray(instance: &Instance, ray: &Ray) -> Ray {
     Ray {
         origin: instance.point_to_local(ray.origin),
         dir: instance.vector_to_local(ray.dir),

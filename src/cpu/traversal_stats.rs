@@ -13,7 +13,7 @@
 //! [`intersect`]'s, so the counts are of traversals that find what a render finds.
 
 use super::accel::{Leaves, reach, traverse_wide};
-use super::intersect::{hit_triangle, intersect};
+use super::intersect::{hit_triangle, intersect, local_ray};
 use crate::accel::wide::{EMPTY, TriangleBlock, WideNode};
 use crate::accel::{BOX_FAR_WIDENING, Bvh, box_entry, inverse_direction};
 use crate::options::{RenderOptions, SamplerKind};
@@ -313,10 +313,7 @@ pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts
                         counts.instances += 1;
                         let inst = &scene.instances[i as usize];
                         instance = Some(stack.len());
-                        ray = Ray {
-                            origin: inst.point_to_local(world.origin),
-                            dir: inst.vector_to_local(world.dir),
-                        };
+                        ray = local_ray(inst, world);
                         inverse = inverse_direction(ray.dir);
                         entering = inst.root;
                         break;
@@ -352,10 +349,7 @@ impl Leaves for Counting<'_> {
         if let PrimitiveRef::Instance(i) = PrimitiveRef::unpacked(packed) {
             self.counts.instances += 1;
             let inst = &scene.instances[i as usize];
-            let local = Ray {
-                origin: inst.point_to_local(self.ray.origin),
-                dir: inst.vector_to_local(self.ray.dir),
-            };
+            let local = local_ray(inst, self.ray);
             let mut inside = Counting {
                 scene,
                 ray: &local,

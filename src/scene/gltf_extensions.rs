@@ -24,24 +24,30 @@ pub const VOLUME: &str = "KHR_materials_volume";
 /// point by point (`layer_images`); the others are not read, nor checked.
 pub fn live_textures<'a>(m: &'a gltf::Material<'a>) -> Vec<(&'static str, &'a Value)> {
     let mut out = Vec::new();
-    if let Some(ext) = m.extension_value(CLEARCOAT) {
-        let factor = ext.get("clearcoatFactor").and_then(Value::as_f64);
-        if factor.is_some_and(|f| f > 0.0) {
-            for slot in ["clearcoatTexture", "clearcoatRoughnessTexture"] {
-                out.extend(ext.get(slot).map(|info| (slot, info)));
-            }
+    if let Some(ext) = m.extension_value(CLEARCOAT).filter(|ext| coats(ext)) {
+        for slot in ["clearcoatTexture", "clearcoatRoughnessTexture"] {
+            out.extend(ext.get(slot).map(|info| (slot, info)));
         }
     }
-    if let Some(ext) = m.extension_value(SHEEN) {
-        let colour = ext.get("sheenColorFactor").and_then(Value::as_array);
-        let lit = colour.is_some_and(|c| c.iter().any(|x| x.as_f64().is_some_and(|x| x > 0.0)));
-        if lit {
-            for slot in ["sheenColorTexture", "sheenRoughnessTexture"] {
-                out.extend(ext.get(slot).map(|info| (slot, info)));
-            }
+    if let Some(ext) = m.extension_value(SHEEN).filter(|ext| sheens(ext)) {
+        for slot in ["sheenColorTexture", "sheenRoughnessTexture"] {
+            out.extend(ext.get(slot).map(|info| (slot, info)));
         }
     }
     out
+}
+
+/// Whether a KHR_materials_clearcoat object lays a coat: its factor (default 0) above 0.
+fn coats(ext: &Value) -> bool {
+    ext.get("clearcoatFactor")
+        .and_then(Value::as_f64)
+        .is_some_and(|f| f > 0.0)
+}
+
+/// Whether a KHR_materials_sheen object lays a sheen: its colour (default black) not black.
+fn sheens(ext: &Value) -> bool {
+    let colour = ext.get("sheenColorFactor").and_then(Value::as_array);
+    colour.is_some_and(|c| c.iter().any(|x| x.as_f64().is_some_and(|x| x > 0.0)))
 }
 
 /// The textures of KHR_materials_specular, none of which is read yet.
@@ -197,12 +203,8 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
     let coated: Vec<(bool, Value)> = document
         .materials()
         .filter_map(|m| {
-            let ext = m.extension_value(CLEARCOAT)?;
-            let factor = ext
-                .get("clearcoatFactor")
-                .and_then(Value::as_f64)
-                .unwrap_or(0.0);
-            (factor > 0.0).then(|| (m.normal_texture().is_some(), ext.clone()))
+            let ext = m.extension_value(CLEARCOAT).filter(|ext| coats(ext))?;
+            Some((m.normal_texture().is_some(), ext.clone()))
         })
         .collect();
     let mut out = Vec::new();
@@ -220,11 +222,7 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
     let sheened: Vec<Value> = document
         .materials()
         .filter_map(|m| m.extension_value(SHEEN).cloned())
-        .filter(|ext| {
-            let colour = ext.get("sheenColorFactor").and_then(Value::as_array);
-            let lit = |c: &Vec<Value>| c.iter().any(|x| x.as_f64().is_some_and(|x| x > 0.0));
-            colour.is_some_and(lit)
-        })
+        .filter(sheens)
         .collect();
     let least = crate::material::sheen::MIN_ROUGHNESS as f64;
     let smooth = (sheened.iter())
