@@ -123,7 +123,7 @@ fn texture_at(m: Material, hit: Hit) -> vec3f {
 // sample, BSDF sample, emission): each lookup in an image costs four gathers on lavapipe. And
 // with pbr's metallic and alpha scaled by its metallic-roughness image there (pbr_with_texel;
 // a rough plastic's parameter image is its coat table, read by cosine), and its clear coat and
-// sheen by its layer images (pbr_with_layers).
+// sheen by its layer images, its specular by its specular images (pbr_with_layers).
 fn with_albedo_at(m: Material, hit: Hit) -> Material {
     var out = m;
     out.albedo = texture_at(m, hit);
@@ -140,10 +140,14 @@ fn with_albedo_at(m: Material, hit: Hit) -> Material {
 //#endif
 //#if LAYER_IMAGES
 //#if PBR
-    if m.kind == MAT_PBR && (m.layer_image_size.x > 0.0 || m.sheen_image_size.x > 0.0) {
+    let layers = m.layer_image_size.x > 0.0 || m.sheen_image_size.x > 0.0;
+    let specular = m.specular_image_size.x > 0.0 || m.specular_color_image_size.x > 0.0;
+    if m.kind == MAT_PBR && (layers || specular) {
         out = pbr_with_layers(out, hit);
         out.layer_image_size = vec2f(0.0);
         out.sheen_image_size = vec2f(0.0);
+        out.specular_image_size = vec2f(0.0);
+        out.specular_color_image_size = vec2f(0.0);
     }
 //#endif
 //#endif

@@ -3,8 +3,8 @@
 // whose transmission it tints (dielectric.wgsl's functions) and a GGX metal with Schlick's
 // Fresnel from F0 = base colour. Its base colour is GpuMaterial's albedo (albedo_at); its
 // parameters: PbrParams, whose metallic and alpha its metallic-roughness image scales per hit
-// (pbr_with_texel), and its clear coat and sheen its layer images (pbr_with_layers), both
-// called by with_albedo_at in texture.wgsl.
+// (pbr_with_texel), and its clear coat, sheen and specular its layer and specular images
+// (pbr_with_layers), both called by with_albedo_at in texture.wgsl.
 
 // Light emitted on top of what it reflects (Pbr::emitted; GpuMaterial::emission*): its
 // colour, times its image where it has one; from its front face unless two-sided.
@@ -20,9 +20,10 @@ fn pbr_emitted(m: Material, hit: Hit) -> vec3f {
     return m.emission;
 }
 
-// Its dielectric's Fresnel reshaping (PbrParams' specular_*; NO_SPECULAR where it has none).
+// Its dielectric's Fresnel reshaping (PbrParams' specular_*, f0 the tint clamped to 1;
+// NO_SPECULAR where it has none).
 fn pbr_specular(p: PbrParams) -> vec4f {
-    return vec4f(p.specular_factor, p.specular_f0);
+    return vec4f(p.specular_factor, min(p.specular_tint, vec3f(1.0)));
 }
 
 fn schlick(f0: vec3f, cos: f32) -> vec3f {
@@ -47,9 +48,11 @@ fn roughness_alpha(roughness: f32) -> f32 {
 //#endif
 
 //#if LAYER_IMAGES
-// Its clear coat and sheen scaled by texels of its layer images (Pbr::layers_at): the layers'
-// red channel scales the coat's factor, green its roughness, blue the sheen's roughness; the
-// sheen image its colour. A factor or colour taken to 0 is no coat or sheen there.
+// Its clear coat, sheen and specular scaled by texels of its layer and specular images
+// (Pbr::layers_at): the layers' red channel scales the coat's factor, green its roughness, blue
+// the sheen's roughness; the sheen image its colour; the specular image's red channel the
+// specular factor, the specular colour image its colour's tint (and so the coat's K). A
+// factor or colour taken to 0 is no coat or sheen there.
 fn pbr_with_layers(m: Material, hit: Hit) -> Material {
     var p = pbr_params(m);
     if m.layer_image_size.x > 0.0 {
@@ -64,8 +67,32 @@ fn pbr_with_layers(m: Material, hit: Hit) -> Material {
         let texel = image_at(m.sheen_image, m.sheen_image_size, m.sheen_image_lookup, uv_at(m.sheen_image_lookup, hit));
         p.sheen_color = p.sheen_color * texel;
     }
+//#if SPECULAR
+    let specular_images = m.specular_image_size.x > 0.0 || m.specular_color_image_size.x > 0.0;
+    if specular_images && p.specular_factor >= 0.0 {
+        if m.specular_image_size.x > 0.0 {
+            let texel = image_at(m.specular_image, m.specular_image_size, m.specular_image_lookup, uv_at(m.specular_image_lookup, hit));
+            p.specular_factor = p.specular_factor * texel.x;
+        }
+        if m.specular_color_image_size.x > 0.0 {
+            let texel = image_at(m.specular_color_image, m.specular_color_image_size, m.specular_color_image_lookup, uv_at(m.specular_color_image_lookup, hit));
+            p.specular_tint = p.specular_tint * texel;
+        }
+        p.internal_reflectance = pbr_internal_reflectance(p);
+    }
+//#endif
     return pbr_with_params(m, p);
 }
+
+//#if SPECULAR
+// The coat's K from its specular's mean opacity (SpecularFresnel::mean_opacity and
+// Coat::with_specular): factor x (f0 + (1 - f0) x the shape's mean), f0 the largest channel's.
+fn pbr_internal_reflectance(p: PbrParams) -> f32 {
+    let f0 = min(max(max(p.specular_tint.x, p.specular_tint.y), p.specular_tint.z), 1.0);
+    let mean = p.specular_factor * (f0 + (1.0 - f0) * p.specular_shape_mean);
+    return 1.0 - (1.0 - mean) / (p.ior * p.ior);
+}
+//#endif
 //#endif
 
 //#if METALLIC_ROUGHNESS
@@ -74,14 +101,14 @@ fn pbr_with_layers(m: Material, hit: Hit) -> Material {
 fn pbr_with_texel(m: Material, texel: vec3f) -> Material {
     var p = pbr_params(m);
     p.metallic = p.metallic * texel.z;
-    p.transmission = select(p.transmission, p.transmission * texel.x, p.transmission_in_red != 0u);
+    p.transmission = select(p.transmission, p.transmission * texel.x, (p.flags & PBR_TRANSMISSION_IN_RED) != 0u);
     p.alpha = roughness_alpha(p.roughness * texel.y);
     return pbr_with_params(m, p);
 }
 //#endif
 
 fn pbr_samples_lights(m: Material) -> bool {
-    return pbr_params(m).samples_lights != 0u;
+    return (pbr_params(m).flags & PBR_SAMPLES_LIGHTS) != 0u;
 }
 
 // The metal's BSDF x cos (xyz) and pdf (w) at (wo, wi), rough only.

@@ -88,7 +88,12 @@ impl Image {
 
     /// The largest value of any channel, times `factor` (albedo images must stay within 1).
     pub fn max_value(&self) -> f32 {
-        (self.channel_max * self.factor).max_element()
+        self.max_channel().max_element()
+    }
+
+    /// The largest value of each channel, times `factor`.
+    pub fn max_channel(&self) -> glam::Vec3 {
+        self.channel_max * self.factor
     }
 
     /// The mean texel, times `factor` (what light picking weighs an image-textured emitter by).

@@ -115,6 +115,14 @@ fn wgsl_constants() -> String {
             crate::material::dielectric::INDEX_MATCHED.literal(),
         ),
         ("ALPHA_MASK", crate::assets::alpha::ALPHA_MASK.literal()),
+        (
+            "PBR_SAMPLES_LIGHTS",
+            crate::material::pbr::PBR_SAMPLES_LIGHTS.literal(),
+        ),
+        (
+            "PBR_TRANSMISSION_IN_RED",
+            crate::material::pbr::PBR_TRANSMISSION_IN_RED.literal(),
+        ),
         ("ALPHA_BLEND", crate::assets::alpha::ALPHA_BLEND.literal()),
         ("KIND_ENVIRONMENT", KIND_ENVIRONMENT.literal()),
         ("KIND_POINT", KIND_POINT.literal()),
@@ -434,12 +442,18 @@ impl SceneBuffers {
                 if let Some(image) = m.table_image() {
                     gpu.sheen_table = images.texels_of(image);
                 }
-                let [layers, sheen] = m.layer_images();
+                let [layers, sheen, specular, specular_color] = m.layer_images();
                 if let Some(image) = layers {
                     gpu.layer_image = images.texels_of(image);
                 }
                 if let Some(image) = sheen {
                     gpu.sheen_image = images.texels_of(image);
+                }
+                if let Some(image) = specular {
+                    gpu.specular_image = images.texels_of(image);
+                }
+                if let Some(image) = specular_color {
+                    gpu.specular_color_image = images.texels_of(image);
                 }
                 if let Some(image) = m.alpha().and_then(|a| a.image.as_ref()) {
                     gpu.alpha_image = images.texels_of(image);

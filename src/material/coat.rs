@@ -60,7 +60,7 @@ impl Coat {
     /// base reflects everything).
     pub fn with_specular(self, specular: Option<SpecularFresnel>) -> Self {
         let mean = match specular {
-            Some(s) => s.mean_opacity(self.ior),
+            Some(s) => s.mean_opacity(),
             None => fresnel_mean(self.ior),
         };
         Coat {

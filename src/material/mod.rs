@@ -80,10 +80,11 @@ pub trait MaterialModel {
     fn parameter_image(&self) -> Option<&Arc<Image>> {
         None
     }
-    /// `pbr`'s layers' image and sheen colour image (`GpuMaterial::layer_image`,
-    /// `GpuMaterial::sheen_image`), where it has them: the GPU's image array holds them.
-    fn layer_images(&self) -> [Option<&Arc<Image>>; 2] {
-        [None, None]
+    /// `pbr`'s layers' image, sheen colour image, specular strength and colour images
+    /// (`GpuMaterial::layer_image`, `sheen_image`, `specular_image`, `specular_color_image`),
+    /// where it has them: the GPU's image array holds them.
+    fn layer_images(&self) -> [Option<&Arc<Image>>; 4] {
+        [None; 4]
     }
     /// A table the kernel reads for every instance alike (`pbr`'s sheen albedo,
     /// `GpuMaterial::sheen_table`): the GPU's image array holds it.
@@ -229,7 +230,7 @@ macro_rules! registry {
             pub fn table_image(&self) -> Option<&Arc<Image>> {
                 match self { $(Material::$ty(m) => m.table_image(),)+ }
             }
-            pub fn layer_images(&self) -> [Option<&Arc<Image>>; 2] {
+            pub fn layer_images(&self) -> [Option<&Arc<Image>>; 4] {
                 match self { $(Material::$ty(m) => m.layer_images(),)+ }
             }
             #[inline]

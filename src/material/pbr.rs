@@ -51,7 +51,11 @@ use serde::{Deserialize, Serialize};
 /// `layers = "file.png"` (optional, linear) scales the clear coat's factor by its red channel,
 /// its roughness by green and the sheen's roughness by blue, and `sheen_image = "file.png"`
 /// (optional, a colour image) the sheen's colour, point by point (glTF's clearcoatTexture,
-/// clearcoatRoughnessTexture, sheenRoughnessTexture and sheenColorTexture).
+/// clearcoatRoughnessTexture, sheenRoughnessTexture and sheenColorTexture);
+/// `specular = { factor, color }` (optional) reshapes its dielectric's Fresnel (glTF's
+/// KHR_materials_specular; `material::specular`), and `specular_image = "file.png"` (optional,
+/// linear: its red channel) and `specular_color_image = "file.png"` (optional, a colour image)
+/// scale its factor and colour point by point (specularTexture, specularColorTexture).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -100,6 +104,32 @@ pub struct ParameterImages {
     pub layers: Option<Arc<Image>>,
     /// The sheen colour's texture (glTF's sheenColorTexture), which scales its colour.
     pub sheen: Option<Arc<Image>>,
+    /// The specular strength's image (linear): red scales the specular factor (glTF's
+    /// specularTexture, whose alpha channel a file's loader puts there).
+    pub specular: Option<Arc<Image>>,
+    /// The specular colour's texture (glTF's specularColorTexture), which scales its colour.
+    pub specular_color: Option<Arc<Image>>,
+}
+
+impl ParameterImages {
+    /// Whether it holds any image.
+    fn any(&self) -> bool {
+        let ParameterImages {
+            metallic_roughness,
+            layers,
+            sheen,
+            specular,
+            specular_color,
+        } = self;
+        [metallic_roughness, layers, sheen, specular, specular_color]
+            .iter()
+            .any(|i| i.is_some())
+    }
+
+    /// Whether it holds a specular image.
+    fn specular_any(&self) -> bool {
+        self.specular.is_some() || self.specular_color.is_some()
+    }
 }
 
 /// An absorbing medium made from glTF's attenuation colour and distance (KHR_materials_volume;
@@ -141,6 +171,10 @@ struct PbrDoc {
     layers: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     sheen_image: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    specular_image: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    specular_color_image: Option<String>,
 }
 
 /// `attenuation = { color = [0.9, 0.6, 0.3], distance = 0.05 }`: the colour white light takes
@@ -174,6 +208,14 @@ impl TryFrom<PbrDoc> for Pbr {
             Some(name) => Some(crate::assets::loader::image(&name)?),
             None => None,
         };
+        let specular_image = match d.specular_image {
+            Some(name) => Some(crate::assets::loader::data_image(&name)?),
+            None => None,
+        };
+        let specular_color_image = match d.specular_color_image {
+            Some(name) => Some(crate::assets::loader::image(&name)?),
+            None => None,
+        };
         Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
             .with_normal_map(d.normal_map)
             .with_metallic_roughness(metallic_roughness)
@@ -182,6 +224,7 @@ impl TryFrom<PbrDoc> for Pbr {
             .with_sheen(d.sheen)
             .with_specular(d.specular)
             .with_layer_images(layers, sheen_image)
+            .with_specular_images(specular_image, specular_color_image)
             .with_attenuation(d.attenuation.map(|a| (a.color, a.distance)))
     }
 }
@@ -191,6 +234,8 @@ impl From<Pbr> for PbrDoc {
         let metallic_roughness = p.metallic_roughness().map(|i| i.source.clone());
         let layers = p.layers().map(|i| i.source.clone());
         let sheen_image = p.sheen_image().map(|i| i.source.clone());
+        let specular_image = p.specular_image().map(|i| i.source.clone());
+        let specular_color_image = p.specular_color_image().map(|i| i.source.clone());
         PbrDoc {
             base_color: p.base_color,
             metallic: p.metallic,
@@ -205,6 +250,8 @@ impl From<Pbr> for PbrDoc {
             specular: p.specular,
             layers,
             sheen_image,
+            specular_image,
+            specular_color_image,
             attenuation: p.volume.map(|v| Attenuation {
                 color: v.color,
                 distance: v.distance,
@@ -259,13 +306,35 @@ impl Pbr {
         self.with_images(images)
     }
 
+    /// This material with its specular factor scaled point by point by `factor`'s red channel
+    /// and its specular colour by `color` (glTF's specularTexture and specularColorTexture): a
+    /// specular, the default where it had none, is kept wherever it has either.
+    pub fn with_specular_images(self, factor: Option<Arc<Image>>, color: Option<Arc<Image>>) -> Self {
+        let images = ParameterImages {
+            specular: factor,
+            specular_color: color,
+            ..self.images.as_deref().cloned().unwrap_or_default()
+        };
+        let specular = self.specular;
+        self.with_images(images).with_specular(specular)
+    }
+
     /// This material with `images` (none where it has none of them).
     fn with_images(self, images: ParameterImages) -> Self {
-        let any = images.metallic_roughness.is_some() || images.layers.is_some() || images.sheen.is_some();
         Pbr {
-            images: any.then(|| Box::new(images)),
+            images: images.any().then(|| Box::new(images)),
             ..self
         }
+    }
+
+    /// Its specular strength's image (see [`ParameterImages::specular`]).
+    pub fn specular_image(&self) -> Option<&Arc<Image>> {
+        self.images.as_ref()?.specular.as_ref()
+    }
+
+    /// Its specular colour's image (see [`ParameterImages::specular_color`]).
+    pub fn specular_color_image(&self) -> Option<&Arc<Image>> {
+        self.images.as_ref()?.specular_color.as_ref()
     }
 
     /// Its metallic-roughness image (see [`ParameterImages::metallic_roughness`]).
@@ -325,9 +394,13 @@ impl Pbr {
     }
 
     /// This material with its dielectric's Fresnel reshaped by `specular` (none where it
-    /// changes nothing).
+    /// changes nothing: the default, unless specular images scale it).
     pub fn with_specular(self, specular: Option<Specular>) -> Self {
-        let specular = specular.filter(|s| !s.is_default());
+        let imaged = self.images.as_ref().is_some_and(|i| i.specular_any());
+        let specular = match specular {
+            None if imaged => Some(Specular::default()),
+            s => s.filter(|s| imaged || !s.is_default()),
+        };
         Pbr {
             coat: self.coat.with_specular(specular.map(|s| s.fresnel(self.ior))),
             specular,
@@ -374,8 +447,8 @@ impl Pbr {
     }
 
     /// Its lobes at `hit`: the base colour looked up, metallic and roughness scaled by its
-    /// metallic-roughness image there, its clear coat and sheen by its layer images, as the
-    /// kernel's `with_albedo_at` resolves them.
+    /// metallic-roughness image there, its clear coat, sheen and specular by its layer and
+    /// specular images, as the kernel's `with_albedo_at` resolves them.
     fn at(&self, hit: &Hit) -> Lobes {
         let lobes = Lobes {
             base: texture::albedo(&self.base_color, hit),
@@ -406,7 +479,7 @@ impl Pbr {
             roughness,
             coat: Coat {
                 alpha: Coat::alpha_of(roughness),
-                ..self.coat
+                ..lobes.coat
             },
             ..lobes
         }
@@ -417,8 +490,9 @@ impl Pbr {
         ggx(&self.coat)
     }
 
-    /// `lobes` with the clear coat and sheen its layer images give at `hit` (as the kernel's
-    /// `pbr_with_layers`): a coat or sheen a texel takes to 0 is none there.
+    /// `lobes` with the clear coat, sheen and specular its layer and specular images give at
+    /// `hit` (as the kernel's `pbr_with_layers`): a coat or sheen a texel takes to 0 is none
+    /// there; the specular's changes the coat's K with its mean opacity.
     fn layers_at(&self, mut lobes: Lobes, hit: &Hit) -> Lobes {
         let texel_of = |image: &Image| {
             crate::assets::image_lookup::image_at(image, texture::uv_at(image.lookup, hit))
@@ -444,9 +518,21 @@ impl Pbr {
                 (color.max_element() > 0.0).then_some(Sheen { color, ..s })
             });
         }
+        if let Some(specular) = lobes.coat.specular
+            && (self.specular_image().is_some() || self.specular_color_image().is_some())
+        {
+            let factor = self.specular_image().map_or(1.0, |i| texel_of(i).x);
+            let color = self.specular_color_image().map_or(Vec3::ONE, |i| texel_of(i));
+            lobes.coat = lobes.coat.with_specular(Some(specular.scaled(factor, color)));
+        }
         lobes
     }
 }
+
+/// `PbrParams::flags`: next-event estimation samples lights here.
+pub const PBR_SAMPLES_LIGHTS: u32 = 1;
+/// `PbrParams::flags`: the metallic-roughness image's red channel scales the transmission.
+pub const PBR_TRANSMISSION_IN_RED: u32 = 2;
 
 /// An image's width and height as the kernel's material holds them (0: none).
 fn image_size(image: Option<&Image>) -> [f32; 2] {
@@ -711,7 +797,8 @@ impl Lobes {
 material_params! {
     /// Beside the base colour (`GpuMaterial::with_albedo`), the metallic-roughness image
     /// (`GpuMaterial::parameter_image*`, which the kernel applies per hit: `pbr_with_texel`)
-    /// and the layer images (`GpuMaterial::layer_image*`, `sheen_image*`: `pbr_with_layers`).
+    /// and the layer and specular images (`GpuMaterial::layer_image*`, `sheen_image*`,
+    /// `specular_image*`, `specular_color_image*`: `pbr_with_layers`).
     pub struct PbrParams {
         metallic: f32,
         transmission: f32,
@@ -723,10 +810,13 @@ material_params! {
         /// Roughness before the metallic-roughness image scales it (`alpha` is what it is
         /// without one).
         roughness: f32,
-        /// 1: next-event estimation samples lights here.
-        samples_lights: u32,
-        /// 1: the metallic-roughness image's red channel scales `transmission`.
-        transmission_in_red: u32,
+        /// Bits: `PBR_SAMPLES_LIGHTS` (next-event estimation samples lights here) and
+        /// `PBR_TRANSMISSION_IN_RED` (the metallic-roughness image's red channel scales
+        /// `transmission`).
+        flags: u32,
+        /// The mean of the specular's Fresnel shape (`SpecularFresnel::shape_mean`), from
+        /// which the coat's K follows where the specular images change it per hit.
+        specular_shape_mean: f32,
         /// The clear coat's factor (0: none) and GGX alpha (0: smooth).
         clearcoat: f32,
         clearcoat_alpha: f32,
@@ -734,10 +824,10 @@ material_params! {
         /// distribution's a).
         sheen_color: [f32; 3],
         sheen_roughness: f32,
-        /// The specular factor (below 0: none, Fresnel's own) and coloured F0
-        /// (`SpecularFresnel`).
+        /// The specular factor (below 0: none, Fresnel's own) and its colour's tint of F0,
+        /// unclamped (`SpecularFresnel`).
         specular_factor: f32,
-        specular_f0: [f32; 3],
+        specular_tint: [f32; 3],
         /// The clear coat's and the sheen's roughness as given, which the layers' image
         /// scales (`pbr_with_layers`).
         clearcoat_roughness: f32,
@@ -799,6 +889,16 @@ impl MaterialModel for Pbr {
             }
             emission.validate()?;
         }
+        // Only the specular image's red channel is read.
+        if let Some(image) = self.specular_image()
+            && image.max_channel().x > 1.0
+        {
+            return Err(format!(
+                "specular image {} has values up to {} in its red channel: they lie in [0, 1]",
+                image.source,
+                image.max_channel().x
+            ));
+        }
         for (what, image) in [
             ("metallic-roughness", self.metallic_roughness()),
             ("layers", self.layers()),
@@ -828,8 +928,10 @@ impl MaterialModel for Pbr {
         let least_metallic = if self.metallic_roughness().is_some() { 0.0 } else { self.metallic };
         let glass = ((1.0 - least_metallic) * self.transmission > 0.0).then_some(MaterialFeature::Dielectric);
         let image = self.metallic_roughness().map(|_| MaterialFeature::MetallicRoughness);
+        let specular_images = self.images.as_ref().is_some_and(|i| i.specular_any());
         let layer_images = (self.layers().is_some() && (self.clearcoat.is_some() || self.sheen.is_some())
-            || self.sheen_image().is_some() && self.sheen.is_some())
+            || self.sheen_image().is_some() && self.sheen.is_some()
+            || specular_images && self.specular.is_some())
             .then_some(MaterialFeature::LayerImages);
         let alpha = self.alpha.as_ref().map(|_| MaterialFeature::Alpha);
         let emission = self.emission.as_ref().map(|e| {
@@ -902,8 +1004,8 @@ impl MaterialModel for Pbr {
         self.sheen.map(|_| super::sheen::albedo_table())
     }
 
-    fn layer_images(&self) -> [Option<&Arc<Image>>; 2] {
-        [self.layers(), self.sheen_image()]
+    fn layer_images(&self) -> [Option<&Arc<Image>>; 4] {
+        [self.layers(), self.sheen_image(), self.specular_image(), self.specular_color_image()]
     }
 
     fn alpha(&self) -> Option<&Alpha> {
@@ -940,8 +1042,9 @@ impl MaterialModel for Pbr {
                 alpha: self.coat.alpha,
                 internal_reflectance: self.coat.internal_reflectance,
                 roughness: self.roughness,
-                samples_lights: self.samples_lights() as u32,
-                transmission_in_red: self.transmission_in_red as u32,
+                flags: if self.samples_lights() { PBR_SAMPLES_LIGHTS } else { 0 }
+                    | if self.transmission_in_red { PBR_TRANSMISSION_IN_RED } else { 0 },
+                specular_shape_mean: self.coat.specular.map_or(0.0, |s| s.shape_mean),
                 clearcoat: self.clearcoat.map_or(0.0, |c| c.factor),
                 clearcoat_alpha: self.clearcoat.map_or(0.0, |c| c.alpha()),
                 clearcoat_roughness: self.clearcoat.map_or(0.0, |c| c.roughness),
@@ -949,7 +1052,7 @@ impl MaterialModel for Pbr {
                 sheen_roughness: self.sheen.map_or(0.0, |s| s.alpha()),
                 sheen_roughness_factor: self.sheen.map_or(0.0, |s| s.roughness),
                 specular_factor: self.coat.specular.map_or(-1.0, |s| s.factor),
-                specular_f0: self.coat.specular.map_or([0.0; 3], |s| s.f0.to_array()),
+                specular_tint: self.coat.specular.map_or([0.0; 3], |s| s.tint.to_array()),
             }
             .words(),
             parameter_image_size: size,
@@ -958,6 +1061,10 @@ impl MaterialModel for Pbr {
             layer_image_lookup: self.layers().map_or(0, |i| i.lookup.bits()),
             sheen_image_size: image_size(self.sheen_image().map(|i| &**i)),
             sheen_image_lookup: self.sheen_image().map_or(0, |i| i.lookup.bits()),
+            specular_image_size: image_size(self.specular_image().map(|i| &**i)),
+            specular_image_lookup: self.specular_image().map_or(0, |i| i.lookup.bits()),
+            specular_color_image_size: image_size(self.specular_color_image().map(|i| &**i)),
+            specular_color_image_lookup: self.specular_color_image().map_or(0, |i| i.lookup.bits()),
             ..Medium::pack(self.volume(), GpuMaterial::with_albedo(&self.base_color))
         }
     }

@@ -76,16 +76,22 @@ impl Specular {
     pub fn fresnel(&self, ior: f32) -> SpecularFresnel {
         SpecularFresnel {
             factor: self.factor,
-            f0: (coat_fresnel(1.0, ior) * self.color).min(Vec3::ONE),
+            tint: coat_fresnel(1.0, ior) * self.color,
+            shape_mean: SpecularFresnel::shape_mean(ior),
         }
     }
 }
 
-/// The coat's reshaped Fresnel: `factor` and the coloured, clamped `f0`.
+/// The coat's reshaped Fresnel: `factor`, the colour's `tint` of head-on Fresnel (`F(1) x
+/// color`, whose clamp to 1 is `f0`), and the mean of Fresnel's shape for its index, from
+/// which its mean opacity follows for any factor and colour (so that images of them can
+/// change both point by point: `Pbr::layers_at`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpecularFresnel {
     pub factor: f32,
-    pub f0: Vec3,
+    pub tint: Vec3,
+    /// The cosine-weighted mean of [`Self::shape`] over incidence, for the coat's index.
+    pub shape_mean: f32,
 }
 
 impl SpecularFresnel {
@@ -97,12 +103,29 @@ impl SpecularFresnel {
         ((f - f_normal) / (1.0 - f_normal)).clamp(0.0, 1.0)
     }
 
+    /// The coloured head-on reflectance: `tint` clamped to 1 in each channel.
+    #[inline]
+    pub fn f0(&self) -> Vec3 {
+        self.tint.min(Vec3::ONE)
+    }
+
+    /// This Fresnel with its factor scaled by `factor` and its colour by `color` (texels of
+    /// the specular images; twin: `pbr_with_layers`).
+    pub fn scaled(self, factor: f32, color: Vec3) -> Self {
+        SpecularFresnel {
+            factor: self.factor * factor,
+            tint: self.tint * color,
+            ..self
+        }
+    }
+
     /// What the coat of index `ior` reflects at cosine `cos` (to the normal, or to a
     /// microfacet's): `factor x Fr(cos)`.
     #[inline]
     pub fn reflectance(&self, cos: f32, ior: f32) -> Vec3 {
         let w = Self::shape(coat_fresnel(cos, ior), coat_fresnel(1.0, ior));
-        self.factor * (self.f0 + (Vec3::ONE - self.f0) * w)
+        let f0 = self.f0();
+        self.factor * (f0 + (Vec3::ONE - f0) * w)
     }
 
     /// The share of light met at cosine `cos` that does not cross the coat: `factor x
@@ -110,17 +133,27 @@ impl SpecularFresnel {
     #[inline]
     pub fn opacity(&self, cos: f32, ior: f32) -> f32 {
         let w = Self::shape(coat_fresnel(cos, ior), coat_fresnel(1.0, ior));
-        let f0 = self.f0.max_element();
+        let f0 = self.f0().max_element();
         self.factor * (f0 + (1.0 - f0) * w)
     }
 
-    /// The cosine-weighted hemispherical mean of [`Self::opacity`], 2 int_0^1 O(mu) mu dmu, by
+    /// The cosine-weighted hemispherical mean of [`Self::opacity`], 2 int_0^1 O(mu) mu dmu:
+    /// the opacity is linear in the shape, so it is `factor x (f0 + (1 - f0) x shape_mean)`
+    /// with f0 the largest channel's (twin: `pbr_internal_reflectance`).
+    #[inline]
+    pub fn mean_opacity(&self) -> f32 {
+        let f0 = self.f0().max_element();
+        self.factor * (f0 + (1.0 - f0) * self.shape_mean)
+    }
+
+    /// The cosine-weighted mean of the shape at index `ior`, 2 int_0^1 w(mu) mu dmu, by
     /// Simpson's rule in f64 over 1 000 panels, as `coat::fresnel_mean`. Not from Fresnel's
     /// mean: at large indices Fresnel dips below its head-on value before it rises to 1 (at
     /// index 10, 0.61 at cosine 0.4 against 0.67 head-on), where the shape is clamped to 0.
-    pub fn mean_opacity(&self, ior: f32) -> f32 {
+    pub fn shape_mean(ior: f32) -> f32 {
         const PANELS: usize = 1000;
-        let f = |mu: f64| self.opacity(mu as f32, ior) as f64 * mu;
+        let f_normal = coat_fresnel(1.0, ior);
+        let f = |mu: f64| Self::shape(coat_fresnel(mu as f32, ior), f_normal) as f64 * mu;
         let h = 1.0 / PANELS as f64;
         let mut sum = f(0.0) + f(1.0);
         for i in 1..PANELS {

@@ -1,8 +1,8 @@
 //! glTF's material extensions beyond the metallic-roughness core that the `gltf` crate does not
 //! parse (KHR_materials_clearcoat, KHR_materials_sheen, KHR_materials_specular), read from a
 //! material's extension JSON with the specification's defaults, their textures (the clear
-//! coat's factor and roughness, the sheen's colour and roughness), and what of them is not
-//! rendered (for the file's note).
+//! coat's factor and roughness, the sheen's colour and roughness, the specular's factor and
+//! colour), and what of them is not rendered (for the file's note).
 
 use super::gltf_textures::FileTextures;
 use crate::material::clearcoat::Clearcoat;
@@ -18,10 +18,11 @@ pub const SPECULAR: &str = "KHR_materials_specular";
 /// as required.
 pub const VOLUME: &str = "KHR_materials_volume";
 
-/// The textures of `m`'s clear coat and sheen that can change how it looks, by property name
-/// with their JSON texture info: the coat's where its factor is above 0, the sheen's where its
-/// colour is not black (a texture scales its factor, and scales 0 to 0). rt-gpu maps these
-/// point by point (`layer_images`); the others are not read, nor checked.
+/// The textures of `m`'s clear coat, sheen and specular that can change how it looks, by
+/// property name with their JSON texture info: the coat's where its factor is above 0, the
+/// sheen's where its colour is not black, the specular's where its factor is above 0 (a
+/// texture scales its factor, and scales 0 to 0). rt-gpu maps these point by point
+/// (`layer_images`); the others are not read, nor checked.
 pub fn live_textures<'a>(m: &'a gltf::Material<'a>) -> Vec<(&'static str, &'a Value)> {
     let mut out = Vec::new();
     if let Some(ext) = m.extension_value(CLEARCOAT).filter(|ext| coats(ext)) {
@@ -34,7 +35,21 @@ pub fn live_textures<'a>(m: &'a gltf::Material<'a>) -> Vec<(&'static str, &'a Va
             out.extend(ext.get(slot).map(|info| (slot, info)));
         }
     }
+    if let Some(ext) = m.extension_value(SPECULAR).filter(|ext| reflects(ext)) {
+        for slot in SPECULAR_TEXTURES {
+            out.extend(ext.get(slot).map(|info| (slot, info)));
+        }
+    }
     out
+}
+
+/// Whether a KHR_materials_specular object lets its textures show: its factor (default 1)
+/// above 0 (its colour texture scales a colour that black would leave black, and white is
+/// the default colour, so only the factor is asked).
+fn reflects(ext: &Value) -> bool {
+    ext.get("specularFactor")
+        .map_or(Some(1.0), Value::as_f64)
+        .is_some_and(|f| f > 0.0)
 }
 
 /// Whether a KHR_materials_clearcoat object lays a coat: its factor (default 0) above 0.
@@ -50,7 +65,7 @@ fn sheens(ext: &Value) -> bool {
     colour.is_some_and(|c| c.iter().any(|x| x.as_f64().is_some_and(|x| x > 0.0)))
 }
 
-/// The textures of KHR_materials_specular, none of which is read yet.
+/// The textures of KHR_materials_specular: the factor's (its alpha channel) and the colour's.
 const SPECULAR_TEXTURES: [&str; 2] = ["specularTexture", "specularColorTexture"];
 
 /// A number field of extension `name`'s object: its default where absent, an error naming it
@@ -124,10 +139,11 @@ pub fn sheen(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Sheen
     Ok((color.max_element() > 0.0).then_some(Sheen { color, roughness }))
 }
 
-/// `m`'s layer images (`Pbr::with_layer_images`) from its [`live_textures`]: its
-/// clearcoatTexture (red channel), clearcoatRoughnessTexture (green) and sheenRoughnessTexture
-/// (alpha) in one image, and its sheenColorTexture (sRGB); `name` names the material in
-/// errors.
+/// `m`'s layer images (`Pbr::with_layer_images`, `Pbr::with_specular_images`) from its
+/// [`live_textures`]: its clearcoatTexture (red channel), clearcoatRoughnessTexture (green) and
+/// sheenRoughnessTexture (alpha) in one image, its sheenColorTexture (sRGB), its
+/// specularTexture's alpha channel and its specularColorTexture (sRGB); `name` names the
+/// material in errors.
 pub fn layer_images(
     m: &gltf::Material,
     textures: &mut FileTextures,
@@ -143,11 +159,15 @@ pub fn layer_images(
     let coat_roughness = texture("clearcoatRoughnessTexture", false, false)?;
     let sheen_roughness = texture("sheenRoughnessTexture", false, true)?;
     let sheen_colour = texture("sheenColorTexture", true, false)?;
+    let specular = texture("specularTexture", false, true)?;
+    let specular_color = texture("specularColorTexture", true, false)?;
     let layers = textures.layers([coat, coat_roughness, sheen_roughness], name)?;
     Ok(ParameterImages {
         metallic_roughness: None,
         layers,
         sheen: sheen_colour,
+        specular,
+        specular_color,
     })
 }
 
@@ -197,8 +217,8 @@ pub fn clearcoat(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<C
 
 /// What the file's materials ask of the extensions above that rt-gpu does not render, for its
 /// note: the clear coat's normal texture, sheens smoother than rt-gpu's least roughness, the
-/// specular textures and the specular on transmission, and a coat over a normal-mapped base (glTF draws such a
-/// coat unmapped; here it follows the base's normal map).
+/// specular on transmission, and a coat over a normal-mapped base (glTF draws such a coat
+/// unmapped; here it follows the base's normal map).
 pub fn unread(document: &gltf::Document) -> Vec<String> {
     let coated: Vec<(bool, Value)> = document
         .materials()
@@ -239,30 +259,22 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
             plural(smooth)
         ));
     }
-    // Whether each material with the extension transmits and changes the glass's Fresnel
-    // (factors other than the defaults, or a texture), and its extension.
-    let speculars: Vec<(bool, Value)> = document
+    // The materials with the extension that transmit and would change the glass's Fresnel
+    // (factors other than the defaults, or a texture).
+    let transmitting = document
         .materials()
-        .filter_map(|m| {
-            let ext = m.extension_value(SPECULAR)?.clone();
+        .filter(|m| {
+            let Some(ext) = m.extension_value(SPECULAR) else {
+                return false;
+            };
             let changes = SPECULAR_TEXTURES.iter().any(|t| ext.get(*t).is_some())
-                || specular(&m, &String::new).is_ok_and(|s| s.is_some_and(|s| !s.is_default()));
+                || specular(m, &String::new).is_ok_and(|s| s.is_some_and(|s| !s.is_default()));
             let transmits = m
                 .transmission()
                 .is_some_and(|t| t.transmission_factor() > 0.0);
-            Some((transmits && changes, ext))
+            transmits && changes
         })
-        .collect();
-    for texture in SPECULAR_TEXTURES {
-        let n = speculars
-            .iter()
-            .filter(|(_, ext)| ext.get(texture).is_some())
-            .count();
-        if n > 0 {
-            out.push(format!("{SPECULAR}.{texture} ({n} material{})", plural(n)));
-        }
-    }
-    let transmitting = speculars.iter().filter(|(transmits, _)| *transmits).count();
+        .count();
     if transmitting > 0 {
         out.push(format!(
             "{SPECULAR} on transmission ({transmitting} material{}: the glass keeps its index's Fresnel)",

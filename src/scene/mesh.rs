@@ -1568,6 +1568,7 @@ fn material_of(
     .with_sheen(super::gltf_extensions::sheen(m, &at)?)
     .with_specular(super::gltf_extensions::specular(m, &at)?)
     .with_layer_images(layer_images.layers, layer_images.sheen)
+    .with_specular_images(layer_images.specular, layer_images.specular_color)
     .with_attenuation(volume_of(m))
     .map_err(|e| format!("{}: {e}", at()))?;
     out.transmission_in_red = transmission_in_red;

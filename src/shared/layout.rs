@@ -393,6 +393,14 @@ gpu_struct! {
         sheen_image_size: [f32; 2],
         sheen_image: u32,
         sheen_image_lookup: u32,
+        /// pbr's specular strength image (`Pbr::specular_image`: red scales the specular
+        /// factor) and specular colour image (`Pbr::specular_color_image`): the same.
+        specular_image_size: [f32; 2],
+        specular_image: u32,
+        specular_image_lookup: u32,
+        specular_color_image_size: [f32; 2],
+        specular_color_image: u32,
+        specular_color_image_lookup: u32,
     }
 }
 

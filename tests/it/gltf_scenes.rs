@@ -1329,8 +1329,9 @@ fn a_sheen_and_its_textures_are_read() {
 
 /// Issue 63: KHR_materials_specular's factors are read onto the pbr material, required or not
 /// (the defaults, factor 1 and white, change nothing: no specular; a colour above 1 is the
-/// extension's, allowed); bad values are one-line errors naming the field; its textures, and
-/// the extension on transmission, are named in the note.
+/// extension's, allowed); bad values are one-line errors naming the field; its textures are
+/// read where its factor lets them show (the factor's from an alpha channel, the colour's
+/// from sRGB); the extension on transmission is named in the note.
 #[test]
 fn a_specular_is_read_and_what_is_not_named() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -1387,26 +1388,87 @@ fn a_specular_is_read_and_what_is_not_named() {
         let error = read(material(ext, ""), extra).expect_err("a bad value");
         assert!(error.contains(field) && !error.contains('\n'), "{error}");
     }
-    image::RgbaImage::from_pixel(1, 1, image::Rgba([200, 200, 200, 255]))
+    // A colour texture whose alpha channel is the factor's: RGB 200 (sRGB: 0.578 linear) and
+    // alpha 64 (linear: 0.251).
+    image::RgbaImage::from_pixel(1, 1, image::Rgba([200, 200, 200, 64]))
         .save(dir.path().join("s.png"))
         .expect("writes");
     let images =
         format!(r#"{extra} "textures": [{{ "source": 0 }}], "images": [{{ "uri": "s.png" }}],"#);
-    let (specular, notes) = read(
-        material(
-            r#"{ "specularFactor": 0.5, "specularTexture": { "index": 0 }, "specularColorTexture": { "index": 0 } }"#,
+    let textured = r#"{ "specularFactor": 0.5, "specularTexture": { "index": 0 }, "specularColorTexture": { "index": 0 } }"#;
+    let name = "textured.gltf";
+    let path = common::gltf::write_triangle(
+        dir.path(),
+        name,
+        true,
+        &material(
+            textured,
             r#", "KHR_materials_transmission": { "transmissionFactor": 0.5 }"#,
+        ),
+        "",
+        &images,
+    );
+    let (scene, notes) = load(&path, name, None).expect("loads");
+    let rt_gpu::scene::Material::Pbr(p) = &scene.materials[0] else {
+        panic!("{:?}", scene.materials[0]);
+    };
+    // The factors as given; the textures scale them point by point.
+    assert_eq!(p.specular().map(|s| s.factor), Some(0.5));
+    let factor = p.specular_image().expect("a specular image").texel(0, 0);
+    assert!((factor.x - 64.0 / 255.0).abs() < 1e-6, "{factor}");
+    let colour = p
+        .specular_color_image()
+        .expect("a colour image")
+        .texel(0, 0);
+    assert!(
+        (colour - Vec3::splat(0.5776)).abs().max_element() < 1e-3,
+        "{colour}"
+    );
+    assert!(
+        notes.len() == 1
+            && notes[0].contains(
+                "not rendered: KHR_materials_specular on transmission (1 material: the glass keeps its index's Fresnel)"
+            ),
+        "{notes:?}"
+    );
+    // Textures alone keep the default factors' specular, which they scale.
+    let path = common::gltf::write_triangle(
+        dir.path(),
+        "alone.gltf",
+        true,
+        &material(r#"{ "specularTexture": { "index": 0 } }"#, ""),
+        "",
+        &images,
+    );
+    let (scene, notes) = load(&path, "alone.gltf", None).expect("loads");
+    let rt_gpu::scene::Material::Pbr(p) = &scene.materials[0] else {
+        panic!("{:?}", scene.materials[0]);
+    };
+    assert_eq!(
+        p.specular().map(|s| (s.factor, s.color)),
+        Some((1.0, Vec3::ONE))
+    );
+    assert!(
+        p.specular_image().is_some() && notes.is_empty(),
+        "{notes:?}"
+    );
+    // A factor of 0 lets no texture show: they are not read (a missing one is no error).
+    let (specular, _) = read(
+        material(
+            r#"{ "specularFactor": 0, "specularTexture": { "index": 7 } }"#,
+            "",
         ),
         &images,
     )
     .expect("loads");
-    assert_eq!(specular.map(|s| s.factor), Some(0.5));
-    let note = notes.join(" ");
-    for named in [
-        "KHR_materials_specular.specularTexture (1 material)",
-        "KHR_materials_specular.specularColorTexture (1 material)",
-        "KHR_materials_specular on transmission (1 material: the glass keeps its index's Fresnel)",
-    ] {
-        assert!(note.contains(named), "{named} not in {notes:?}");
-    }
+    assert_eq!(specular.map(|s| s.factor), Some(0.0));
+    let error = read(
+        material(r#"{ "specularColorTexture": { "index": 7 } }"#, ""),
+        &images,
+    )
+    .expect_err("a missing texture");
+    assert!(
+        error.contains("specularColorTexture names texture 7, which does not exist"),
+        "{error}"
+    );
 }

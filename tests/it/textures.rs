@@ -500,3 +500,51 @@ fn textured_lights_render_alike_every_way() {
     eprintln!("cpu vs gpu nee: {verdict:?}");
     assert!(verdict.passed(), "CPU and GPU differ: {verdict:?}");
 }
+
+/// `specular_image` (linear, its red channel) and `specular_color_image` (a colour image) on a
+/// scene file's pbr are its specular's images, with the default specular for them to scale
+/// where the file gives none; a specular image above 1 in red is a one-line error naming it.
+#[test]
+fn specular_images_are_read_from_scene_files() {
+    let scene = |material: &str| {
+        let text = format!(
+            "{}\n[materials]\nglaze = {material}\n[[object]]\nsphere = {{ center = [0, 0, 0], radius = 0.5 }}\nmaterial = \"glaze\"\n",
+            "[camera]\nlook_from = [0, 0, 3]\nlook_at = [0, 0, 0]\nvfov = 40\n"
+        );
+        let loader = rt_gpu::assets::loader::Loader::new(std::path::Path::new("scenes"));
+        rt_gpu::scene::file::parse_with(&loader, &text, "glaze.toml", "glaze")
+    };
+    let s = scene(
+        r#"{ type = "pbr", base_color = [0.1, 0.1, 0.1], metallic = 0, specular_image = "textures/tiles.png", specular_color_image = "textures/planet.png" }"#,
+    )
+    .expect("parses");
+    let rt_gpu::scene::Material::Pbr(p) = &s.materials[0] else {
+        panic!("{:?}", s.materials[0]);
+    };
+    assert_eq!(
+        p.specular().map(|s| (s.factor, s.color)),
+        Some((1.0, Vec3::ONE))
+    );
+    assert!(
+        p.specular_image()
+            .is_some_and(|i| i.source.ends_with("tiles.png"))
+    );
+    assert!(
+        p.specular_color_image()
+            .is_some_and(|i| i.source.ends_with("planet.png"))
+    );
+    // Written back, it reads as the same material.
+    let loader = rt_gpu::assets::loader::Loader::new(std::path::Path::new("scenes"));
+    let again = rt_gpu::scene::file::parse_with(&loader, &to_toml(&s), "again.toml", "glaze")
+        .expect("exported scene parses");
+    assert_eq!(again.materials, s.materials);
+    let error = scene(
+        r#"{ type = "pbr", base_color = [0.1, 0.1, 0.1], metallic = 0, specular_image = "textures/sky.hdr" }"#,
+    )
+    .expect_err("values above 1");
+    let error = error.to_string();
+    assert!(
+        error.contains("specular image") && error.contains("red channel") && !error.contains('\n'),
+        "{error}"
+    );
+}
