@@ -310,6 +310,7 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
 //#endif
 //#endif
     (*hit).shading = select(-shading, shading, front);
+    (*hit).coat = (*hit).shading;
     (*hit).front_face = front;
     (*hit).material = c.material;
     (*hit).primitive = c.primitive;
@@ -337,20 +338,40 @@ fn hit_at_closest(ray: Ray, closest: Closest, hit: ptr<function, Hit>) -> bool {
 //#endif
 //#if NORMAL_MAPS
     let m = materials[c.material];
-    if primitive_kind(c.primitive) == KIND_TRIANGLE && m.normal_map_size.x > 0.0 {
-        shading = normal_mapped(m, primitive_index(c.primitive), c.weights, uv_at(m.normal_map_lookup, *hit), shading, n);
-        (*hit).shading = select(-shading, shading, front);
+    let map = base_normal_map(m);
+    if map.size.x > 0.0 {
+        let bent = bent_normal(map, c, *hit, shading, n);
+        (*hit).shading = select(-bent, bent, front);
     }
-//#if INSTANCES
-    if primitive_kind(c.primitive) == KIND_INSTANCE && m.normal_map_size.x > 0.0 {
-        let inst = instances[primitive_index(c.primitive)];
-        shading = instanced_normal_mapped(m, inst, c.triangle, c.weights, uv_at(m.normal_map_lookup, *hit), shading, n);
-        (*hit).shading = select(-shading, shading, front);
+//#if CLEARCOAT
+    // The coat's normal: the interpolated one, bent by the coat's own map only.
+    let coat_map = coat_normal_map(m);
+    if coat_map.size.x > 0.0 {
+        let bent = bent_normal(coat_map, c, *hit, shading, n);
+        // Bent where its mirror would send the view below the surface.
+        (*hit).coat = valid_reflection((*hit).normal, -ray.dir, select(-bent, bent, front));
     }
 //#endif
 //#endif
     return true;
 }
+
+//#if NORMAL_MAPS
+// The interpolated normal `shading` of hit (on candidate c) bent by normal map `map`, on
+// outward's side; unbent on a shape.
+fn bent_normal(map: NormalMap, c: Closest, hit: Hit, shading: vec3f, outward: vec3f) -> vec3f {
+    if primitive_kind(c.primitive) == KIND_TRIANGLE {
+        return normal_mapped(map, primitive_index(c.primitive), c.weights, uv_at(map.lookup, hit), shading, outward);
+    }
+//#if INSTANCES
+    if primitive_kind(c.primitive) == KIND_INSTANCE {
+        let inst = instances[primitive_index(c.primitive)];
+        return instanced_normal_mapped(map, inst, c.triangle, c.weights, uv_at(map.lookup, hit), shading, outward);
+    }
+//#endif
+    return shading;
+}
+//#endif
 
 //#if TRIANGLE_UVS || TRIANGLE_UVS1
 // Three corners' texture coordinates interpolated at weights (twin: interpolated_uv in

@@ -317,7 +317,7 @@ fn look_up_environment(@builtin(global_invocation_id) gid: vec3u) {
 
 //#if NEE
 // The BSDF interface, for comparing materials with the CPU: each slot holds wo (`point`), a
-// material index (`primitive`), the shading and geometric normal (`normal`), whether the hit is
+// material index (`primitive`), the shading, coat and geometric normal (`normal`), whether the hit is
 // on the front face (`hit`, 1) and a direction wi (`dir`) on input; on output bsdf_sample's weight (`point`), pdf (`primitive`, as bits), wi
 // (`normal`) and lobe (`hit`), and bsdf_eval (`dir`) and bsdf_pdf (`scattered`, as bits) at
 // the input's wo and wi. The sample's numbers are sample dispatch.first_sample's, after one
@@ -333,6 +333,7 @@ fn sample_bsdf(@builtin(global_invocation_id) gid: vec3u) {
     var hit: Hit;
     hit.normal = input.normal;
     hit.shading = input.normal;
+    hit.coat = input.normal;
     hit.front_face = input.hit != 0u;
     hit.material = input.primitive;
     let m = material_at(input.primitive);

@@ -225,7 +225,7 @@ fn pbr_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
     let mix = pbr_pdf_below(m, p, wo, wi, hit);
 //#if CLEARCOAT
     if p.clearcoat > 0.0 {
-        let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.shading));
+        let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.coat));
         return chance * clearcoat_lobe(p.clearcoat, p.clearcoat_alpha, wo, wi, hit).y + (1.0 - chance) * mix;
     }
 //#endif
@@ -240,7 +240,7 @@ fn pbr_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>)
     var out: BsdfSample;
 //#if CLEARCOAT
     if p.clearcoat > 0.0 {
-        let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.shading));
+        let chance = clearcoat_reflectance(p.clearcoat, dot(wo, hit.coat));
         if sampler_next(sampler) < chance {
             let u1 = sampler_next(sampler);
             let u2 = sampler_next(sampler);

@@ -378,14 +378,22 @@ fn hit_on(scene: &FlatScene, ray: &Ray, t: f32, found: &Candidate) -> Hit {
     .normalize();
     let (material, (point, error), uv) = surface(scene, found, ray.at(t));
     let uv1 = second_uv(scene, found, uv);
-    let shading = shading(scene, found, material, [uv, uv1], outward);
+    let (shading, (coat, coat_mapped)) = shading(scene, found, material, [uv, uv1], outward);
     let front_face = ray.dir.dot(outward) < 0.0;
+    let facing = |n: Vec3| if front_face { n } else { -n };
+    let normal = facing(outward);
+    // A coat's own map bent where its mirror would send the view below the surface.
+    let coat = match coat_mapped {
+        false => facing(coat),
+        true => crate::assets::normal_map::valid_reflection(normal, -ray.dir, facing(coat)),
+    };
     Hit {
         t,
         point,
         error,
-        normal: if front_face { outward } else { -outward },
-        shading: if front_face { shading } else { -shading },
+        normal,
+        shading: facing(shading),
+        coat,
         front_face,
         material,
         primitive: found.primitive,
@@ -649,14 +657,15 @@ fn surface(scene: &FlatScene, found: &Candidate, along_ray: Vec3) -> (u32, (Vec3
 
 /// The shading normal of the hit on `found` (whose texture coordinates are `uvs`, both sets),
 /// on the side of its unit geometric normal `outward`: a mesh's corner normals interpolated,
-/// bent by its material's normal map.
+/// bent by its material's normal map; and its clear coat's (`Hit::coat`), bent by the coat's
+/// (and whether it has one).
 fn shading(
     scene: &FlatScene,
     found: &Candidate,
     material: u32,
     uvs: [Vec2; 2],
     outward: Vec3,
-) -> Vec3 {
+) -> (Vec3, (Vec3, bool)) {
     let weights = found.weights;
     let shading = match found.primitive {
         PrimitiveRef::Triangle(i) if !scene.triangle_normals.is_empty() => {
@@ -676,10 +685,31 @@ fn shading(
         }
         _ => outward,
     };
-    let map = match scene.materials[material as usize].normal_map() {
-        Some(map) if !scene.triangle_tangents.is_empty() => map,
-        _ => return shading,
+    let m = &scene.materials[material as usize];
+    let bent = |map: Option<&NormalMap>| match map {
+        Some(map) if !scene.triangle_tangents.is_empty() => {
+            mapped(scene, found, map, uvs, shading, outward)
+        }
+        _ => shading,
     };
+    let coat_mapped = m.coat_normal_map().is_some() && !scene.triangle_tangents.is_empty();
+    (
+        bent(m.normal_map()),
+        (bent(m.coat_normal_map()), coat_mapped),
+    )
+}
+
+/// `shading`, the interpolated normal of the hit on `found` (whose texture coordinates are
+/// `uvs`), bent by `map` in its triangle's tangent frame.
+fn mapped(
+    scene: &FlatScene,
+    found: &Candidate,
+    map: &NormalMap,
+    uvs: [Vec2; 2],
+    shading: Vec3,
+    outward: Vec3,
+) -> Vec3 {
+    let weights = found.weights;
     let uv = match map.image.lookup.uv_set {
         UvSet::First => uvs[0],
         UvSet::Second => uvs[1],

@@ -436,6 +436,9 @@ impl SceneBuffers {
                 if let Some(map) = m.normal_map() {
                     gpu.normal_map_image = images.texels_of(&map.image);
                 }
+                if let Some(map) = m.coat_normal_map() {
+                    gpu.coat_normal_map_image = images.texels_of(&map.image);
+                }
                 if let Some(image) = m.parameter_image() {
                     gpu.parameter_image = images.texels_of(image);
                 }

@@ -15,9 +15,13 @@
 //! reflects exactly everything, and a rough one loses only what its microfacets lose in
 //! single scattering (tests/it/bsdfs/clearcoat.rs). Not reciprocal, as the extension's model
 //! is not; a path tracer evaluates it with `wo` toward the eye, both backends alike.
-//! The coat shades with the base's shading normal (its normal map where it has one); glTF's
-//! clearcoatNormalTexture is not read yet; the coat's factor and roughness textures scale it point by
-//! point (`Pbr::layers`).
+//! The coat shades with a normal of its own, `Hit::coat`: a mesh's interpolated normal bent
+//! by the coat's normal map (glTF's clearcoatNormalTexture) where it has one, never by the
+//! base's, as glTF draws it. A mapped coat normal is bent further where its mirror would send
+//! the view below the surface (`assets::normal_map::valid_reflection`, as Cycles does): the
+//! steep slopes of ClearcoatWicker's wrinkles rendered black without it. A mapped base under
+//! a coat is no microsurface (`material::microsurface`). The coat's factor and roughness
+//! textures scale it point by point (`Pbr::layers`).
 //!
 //! Sampling picks the coat with chance `c F(cos_o)`, else the base (one number), so that a
 //! smooth coat's mirror weighs exactly 1 and the base's deltas their own weight.
@@ -47,6 +51,16 @@ pub struct Clearcoat {
 
 fn one() -> f32 {
     1.0
+}
+
+/// `hit` as the coat sees it: shading with the coat's normal (twin: `on_coat` in
+/// shaders/clearcoat.wgsl).
+#[inline]
+fn on_coat(hit: &Hit) -> Hit {
+    Hit {
+        shading: hit.coat,
+        ..*hit
+    }
 }
 
 /// Where a sampled coat direction came from.
@@ -92,7 +106,7 @@ impl Clearcoat {
     /// What of the mix below is seen through the coat toward `wo`: 1 - its reflectance there.
     #[inline]
     pub fn through(&self, wo: Vec3, hit: &Hit) -> f32 {
-        1.0 - self.reflectance(wo.dot(hit.shading))
+        1.0 - self.reflectance(wo.dot(hit.coat))
     }
 
     /// The rough coat's own BSDF x cos (times the factor) and the density of
@@ -101,6 +115,7 @@ impl Clearcoat {
         let Some(ggx) = self.ggx() else {
             return (0.0, 0.0);
         };
+        let hit = &on_coat(hit);
         let frame = Frame::new(hit.shading);
         let (wo_local, wi_local) = (frame.to_local(wo), frame.to_local(wi));
         if !(wo_local.z > MIN_COSINE && wi_local.z > MIN_COSINE) || below_surface(hit, wi) {
@@ -118,6 +133,7 @@ impl Clearcoat {
     /// A direction reflected by the coat toward `wo`, from two numbers; `None` where it would
     /// leave below the surface.
     pub fn sample(&self, wo: Vec3, hit: &Hit, u1: f32, u2: f32) -> Option<CoatDirection> {
+        let hit = &on_coat(hit);
         let frame = Frame::new(hit.shading);
         let wo_local = frame.to_local(wo);
         if !(wo_local.z > MIN_COSINE) {

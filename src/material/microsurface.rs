@@ -24,9 +24,10 @@
 //! `sample` finds and returns with pdf 0 (light it then meets counts in full, as after a
 //! mirror). The two estimate disjoint parts of one BSDF, so their sum is unbiased.
 //!
-//! It applies to normal-mapped materials that only reflect (`Material::has_microsurface`).
-//! Glass keeps the shading normal as its frame and ends paths that would leave on the wrong
-//! side; so do a mesh's interpolated vertex normals, whose small tilts Cycles and pbrt-v4 shade
+//! It applies to normal-mapped materials that only reflect (`Material::has_microsurface`) and
+//! have no clear coat: the microsurface is the whole BSDF's, and a coat lies over a mapped base
+//! with a normal of its own (`Hit::coat`), outside it. Glass, and a coated base, keep the
+//! shading normal as their frame and end paths that would leave on the wrong side; so do a mesh's interpolated vertex normals, whose small tilts Cycles and pbrt-v4 shade
 //! as they are (as microsurfaces they moved Blender's smooth spheres away from Cycles:
 //! docs/benchmarks.md). A normal map's look departs from Cycles' (which bends the map's normal
 //! toward the viewer and lets light below the surface go) where light grazes: a facet tilted

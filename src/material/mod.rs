@@ -75,6 +75,16 @@ pub trait MaterialModel {
     fn normal_map(&self) -> Option<&NormalMap> {
         None
     }
+    /// The normal map that bends its clear coat's normal on meshes (`Hit::coat`; pbr's
+    /// clearcoatNormalTexture), if any.
+    fn coat_normal_map(&self) -> Option<&NormalMap> {
+        None
+    }
+    /// Whether a layer with a normal of its own (`Hit::coat`) lies over it: then its normal map
+    /// bends only what lies below, and is no microsurface (`material::microsurface`).
+    fn has_coat(&self) -> bool {
+        false
+    }
     /// An image of parameters, if it has one (`pbr`'s metallic-roughness texture, per point;
     /// a rough `plastic`'s coat table, per cosine): the GPU's image array holds it.
     fn parameter_image(&self) -> Option<&Arc<Image>> {
@@ -210,8 +220,14 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.normal_map(),)+ }
             }
             pub fn validate(&self) -> Result<(), String> {
-                if let Some(map) = self.normal_map() {
+                for map in self.normal_maps() {
                     map.validate()?;
+                }
+                // A mesh's tangents follow one UV set.
+                if let (Some(base), Some(coat)) = (self.normal_map(), self.coat_normal_map())
+                    && base.image.lookup.uv_set != coat.image.lookup.uv_set
+                {
+                    return Err("its normal map and its clear coat's read different UV sets; rt-gpu lays both out along one".into());
                 }
                 if let Some(alpha) = self.alpha() {
                     alpha.validate()?;
@@ -240,7 +256,7 @@ macro_rules! registry {
             pub fn emission(&self) -> Option<&Light> {
                 match self { $(Material::$ty(m) => m.emission(),)+ }
             }
-            /// Every image it reads: its textures', its normal map's, its parameter image, its
+            /// Every image it reads: its textures', its normal maps', its parameter image, its
             /// table, its layer images, its alpha's and its emission's (an image may come more
             /// than once).
             pub fn images(&self) -> Vec<Arc<Image>> {
@@ -249,7 +265,7 @@ macro_rules! registry {
                     Texture::Image(image) => Some(image),
                     _ => None,
                 });
-                let maps = (self.normal_map().map(|n| &n.image).into_iter())
+                let maps = (self.normal_maps().map(|n| &n.image))
                     .chain(self.parameter_image())
                     .chain(self.table_image())
                     .chain(self.layer_images().into_iter().flatten())
@@ -286,10 +302,20 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.pdf(wo, wi, hit),)+ }
             }
             /// Whether its normal map's shading normals are microsurfaces
-            /// (`material::microsurface`): it has one and only reflects.
+            /// (`material::microsurface`): it has one, only reflects and has no coat over it.
             #[inline]
             pub fn has_microsurface(&self) -> bool {
-                self.normal_map().is_some() && self.reflects_only()
+                self.normal_map().is_some() && self.reflects_only() && !self.has_coat()
+            }
+            pub fn coat_normal_map(&self) -> Option<&NormalMap> {
+                match self { $(Material::$ty(m) => m.coat_normal_map(),)+ }
+            }
+            pub fn has_coat(&self) -> bool {
+                match self { $(Material::$ty(m) => m.has_coat(),)+ }
+            }
+            /// Its normal maps: its own and its coat's.
+            pub fn normal_maps(&self) -> impl Iterator<Item = &NormalMap> {
+                self.normal_map().into_iter().chain(self.coat_normal_map())
             }
             /// The microsurface its BSDF sees at `hit`, if [`Self::has_microsurface`] and the
             /// shading normal there is not the geometric one.
@@ -326,10 +352,13 @@ macro_rules! registry {
             /// where the scene's images are laid out).
             pub fn gpu(&self) -> GpuMaterial {
                 let packed = match self { $(Material::$ty(m) => m.gpu(),)+ };
-                let (normal_map_size, normal_map_scale, normal_map_lookup) = self.normal_map().map_or(
+                let map_of = |map: Option<&NormalMap>| map.map_or(
                     ([0.0; 2], 0.0, 0),
                     |n| ([n.image.width as f32, n.image.height as f32], n.scale, n.image.lookup.bits()),
                 );
+                let (normal_map_size, normal_map_scale, normal_map_lookup) = map_of(self.normal_map());
+                let (coat_normal_map_size, coat_normal_map_scale, coat_normal_map_lookup) =
+                    map_of(self.coat_normal_map());
                 let (alpha_mode, alpha_cutoff) = self.alpha().map_or((0, 0.0), |a| a.gpu_mode());
                 let alpha_image = self.alpha().and_then(|a| a.image.as_ref());
                 let (emission, emission_image) = match self.emission().map(|e| (&e.radiance, e.strength)) {
@@ -342,6 +371,9 @@ macro_rules! registry {
                     normal_map_size,
                     normal_map_scale,
                     normal_map_lookup,
+                    coat_normal_map_size,
+                    coat_normal_map_scale,
+                    coat_normal_map_lookup,
                     alpha_mode,
                     alpha_cutoff,
                     alpha_factor: self.alpha().map_or(1.0, |a| a.factor),

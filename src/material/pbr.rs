@@ -55,7 +55,9 @@ use serde::{Deserialize, Serialize};
 /// `specular = { factor, color }` (optional) reshapes its dielectric's Fresnel (glTF's
 /// KHR_materials_specular; `material::specular`), and `specular_image = "file.png"` (optional,
 /// linear: its red channel) and `specular_color_image = "file.png"` (optional, a colour image)
-/// scale its factor and colour point by point (specularTexture, specularColorTexture).
+/// scale its factor and colour point by point (specularTexture, specularColorTexture);
+/// `clearcoat_normal_map = { image, scale }` (optional) bends the clear coat's normal on meshes
+/// (glTF's clearcoatNormalTexture; without it the coat is not bent by `normal_map`).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(try_from = "PbrDoc", into = "PbrDoc")]
 pub struct Pbr {
@@ -109,6 +111,8 @@ pub struct ParameterImages {
     pub specular: Option<Arc<Image>>,
     /// The specular colour's texture (glTF's specularColorTexture), which scales its colour.
     pub specular_color: Option<Arc<Image>>,
+    /// The normal map of its clear coat (glTF's clearcoatNormalTexture; `Hit::coat`).
+    pub clearcoat_normal_map: Option<NormalMap>,
 }
 
 impl ParameterImages {
@@ -120,10 +124,12 @@ impl ParameterImages {
             sheen,
             specular,
             specular_color,
+            clearcoat_normal_map,
         } = self;
         [metallic_roughness, layers, sheen, specular, specular_color]
             .iter()
             .any(|i| i.is_some())
+            || clearcoat_normal_map.is_some()
     }
 
     /// Whether it holds a specular image.
@@ -175,6 +181,8 @@ struct PbrDoc {
     specular_image: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     specular_color_image: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    clearcoat_normal_map: Option<NormalMap>,
 }
 
 /// `attenuation = { color = [0.9, 0.6, 0.3], distance = 0.05 }`: the colour white light takes
@@ -225,6 +233,7 @@ impl TryFrom<PbrDoc> for Pbr {
             .with_specular(d.specular)
             .with_layer_images(layers, sheen_image)
             .with_specular_images(specular_image, specular_color_image)
+            .with_clearcoat_normal_map(d.clearcoat_normal_map)
             .with_attenuation(d.attenuation.map(|a| (a.color, a.distance)))
     }
 }
@@ -236,6 +245,7 @@ impl From<Pbr> for PbrDoc {
         let sheen_image = p.sheen_image().map(|i| i.source.clone());
         let specular_image = p.specular_image().map(|i| i.source.clone());
         let specular_color_image = p.specular_color_image().map(|i| i.source.clone());
+        let clearcoat_normal_map = p.images.as_ref().and_then(|i| i.clearcoat_normal_map.clone());
         PbrDoc {
             base_color: p.base_color,
             metallic: p.metallic,
@@ -252,6 +262,7 @@ impl From<Pbr> for PbrDoc {
             sheen_image,
             specular_image,
             specular_color_image,
+            clearcoat_normal_map,
             attenuation: p.volume.map(|v| Attenuation {
                 color: v.color,
                 distance: v.distance,
@@ -325,6 +336,17 @@ impl Pbr {
             images: images.any().then(|| Box::new(images)),
             ..self
         }
+    }
+
+    /// This material with `map` bending its clear coat's normal (glTF's
+    /// clearcoatNormalTexture; without one the coat shades with the mesh's interpolated
+    /// normal, whatever its base's normal map).
+    pub fn with_clearcoat_normal_map(self, map: Option<NormalMap>) -> Self {
+        let images = ParameterImages {
+            clearcoat_normal_map: map,
+            ..self.images.as_deref().cloned().unwrap_or_default()
+        };
+        self.with_images(images)
     }
 
     /// Its specular strength's image (see [`ParameterImages::specular`]).
@@ -588,7 +610,7 @@ impl Lobes {
         let chosen = match self.clearcoat {
             None => self.sample_below(wo, hit, sampler)?,
             Some(clearcoat) => {
-                let chance = clearcoat.reflectance(wo.dot(hit.shading));
+                let chance = clearcoat.reflectance(wo.dot(hit.coat));
                 if sampler.next_f32() < chance {
                     let (u1, u2) = (sampler.next_f32(), sampler.next_f32());
                     match clearcoat.sample(wo, hit, u1, u2)? {
@@ -739,7 +761,7 @@ impl Lobes {
         match self.clearcoat {
             None => mix,
             Some(c) => {
-                let chance = c.reflectance(wo.dot(hit.shading));
+                let chance = c.reflectance(wo.dot(hit.coat));
                 chance * c.lobe(wo, wi, hit).1 + (1.0 - chance) * mix
             }
         }
@@ -983,6 +1005,16 @@ impl MaterialModel for Pbr {
 
     fn normal_map(&self) -> Option<&NormalMap> {
         self.normal_map.as_ref()
+    }
+
+    /// Its clear coat's, where it has a coat.
+    fn coat_normal_map(&self) -> Option<&NormalMap> {
+        self.clearcoat?;
+        self.images.as_ref()?.clearcoat_normal_map.as_ref()
+    }
+
+    fn has_coat(&self) -> bool {
+        self.clearcoat.is_some()
     }
 
     /// A lobe that is not a delta: the coat's base, or any rough one, at some point (a

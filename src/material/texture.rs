@@ -104,6 +104,7 @@ mod tests {
             error: 0.0,
             normal: Vec3::Y,
             shading: Vec3::Y,
+            coat: Vec3::Y,
             front_face: true,
             material: 0,
             primitive: PrimitiveRef::Shape {

@@ -140,7 +140,7 @@ pub const RECENTRE_STEP: f64 = 1024.0;
 /// among them.
 fn reads_uvs(material: &Material) -> bool {
     material.extra_features().iter().any(|f| f.reads_uvs())
-        || material.normal_map().is_some()
+        || material.normal_maps().next().is_some()
         || material.alpha().is_some_and(|a| a.image.is_some())
 }
 
@@ -844,7 +844,10 @@ impl<'a> Flattener<'a> {
     fn new(scene: &'a Scene, instancing: bool) -> Self {
         let normal_mapped = scene.objects.iter().any(|o| {
             matches!(o.shape, Shape::Mesh { .. })
-                && scene.materials[o.material as usize].normal_map().is_some()
+                && scene.materials[o.material as usize]
+                    .normal_maps()
+                    .next()
+                    .is_some()
         });
         // A normal map bends a shading normal: every triangle then has corner normals.
         let smooth = normal_mapped
@@ -938,7 +941,8 @@ impl<'a> Flattener<'a> {
             }
             Shape::Mesh { ref mesh, scale } => {
                 // The UV set its normal map reads, which its tangents follow.
-                let normal_map = (self.scene.materials[object.material as usize].normal_map())
+                let normal_map = (self.scene.materials[object.material as usize].normal_maps())
+                    .next()
                     .map(|map| map.image.lookup.uv_set);
                 match self.instancing_key(object) {
                     Some(key) if self.placements[&key] > 1 => {

@@ -26,7 +26,11 @@ pub const VOLUME: &str = "KHR_materials_volume";
 pub fn live_textures<'a>(m: &'a gltf::Material<'a>) -> Vec<(&'static str, &'a Value)> {
     let mut out = Vec::new();
     if let Some(ext) = m.extension_value(CLEARCOAT).filter(|ext| coats(ext)) {
-        for slot in ["clearcoatTexture", "clearcoatRoughnessTexture"] {
+        for slot in [
+            "clearcoatTexture",
+            "clearcoatRoughnessTexture",
+            "clearcoatNormalTexture",
+        ] {
             out.extend(ext.get(slot).map(|info| (slot, info)));
         }
     }
@@ -142,8 +146,8 @@ pub fn sheen(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<Sheen
 /// `m`'s layer images (`Pbr::with_layer_images`, `Pbr::with_specular_images`) from its
 /// [`live_textures`]: its clearcoatTexture (red channel), clearcoatRoughnessTexture (green) and
 /// sheenRoughnessTexture (alpha) in one image, its sheenColorTexture (sRGB), its
-/// specularTexture's alpha channel and its specularColorTexture (sRGB); `name` names the
-/// material in errors.
+/// specularTexture's alpha channel and its specularColorTexture (sRGB), and its
+/// clearcoatNormalTexture (linear, with its scale); `name` names the material in errors.
 pub fn layer_images(
     m: &gltf::Material,
     textures: &mut FileTextures,
@@ -161,6 +165,26 @@ pub fn layer_images(
     let sheen_colour = texture("sheenColorTexture", true, false)?;
     let specular = texture("specularTexture", false, true)?;
     let specular_color = texture("specularColorTexture", true, false)?;
+    let coat_normal = match texture("clearcoatNormalTexture", false, false)? {
+        None => None,
+        Some(image) => {
+            // A normalTextureInfo's scale (default 1).
+            let info = live.iter().find(|(s, _)| *s == "clearcoatNormalTexture");
+            let scale = match info.and_then(|(_, info)| info.get("scale")) {
+                None => 1.0,
+                Some(v) => match v.as_f64() {
+                    Some(x) if x.is_finite() && x.abs() <= f32::MAX as f64 => x as f32,
+                    _ => {
+                        return Err(format!(
+                            "mesh {}: material \"{name}\": its {CLEARCOAT}.clearcoatNormalTexture's scale is {v}; glTF requires a number",
+                            textures.source
+                        ));
+                    }
+                },
+            };
+            Some(crate::assets::normal_map::NormalMap { image, scale })
+        }
+    };
     let layers = textures.layers([coat, coat_roughness, sheen_roughness], name)?;
     Ok(ParameterImages {
         metallic_roughness: None,
@@ -168,6 +192,7 @@ pub fn layer_images(
         sheen: sheen_colour,
         specular,
         specular_color,
+        clearcoat_normal_map: coat_normal,
     })
 }
 
@@ -216,28 +241,9 @@ pub fn clearcoat(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<C
 }
 
 /// What the file's materials ask of the extensions above that rt-gpu does not render, for its
-/// note: the clear coat's normal texture, sheens smoother than rt-gpu's least roughness, the
-/// specular on transmission, and a coat over a normal-mapped base (glTF draws such a coat
-/// unmapped; here it follows the base's normal map).
+/// note: sheens smoother than rt-gpu's least roughness and the specular on transmission.
 pub fn unread(document: &gltf::Document) -> Vec<String> {
-    let coated: Vec<(bool, Value)> = document
-        .materials()
-        .filter_map(|m| {
-            let ext = m.extension_value(CLEARCOAT).filter(|ext| coats(ext))?;
-            Some((m.normal_texture().is_some(), ext.clone()))
-        })
-        .collect();
     let mut out = Vec::new();
-    let n = coated
-        .iter()
-        .filter(|(_, ext)| ext.get("clearcoatNormalTexture").is_some())
-        .count();
-    if n > 0 {
-        out.push(format!(
-            "{CLEARCOAT}.clearcoatNormalTexture ({n} material{})",
-            plural(n)
-        ));
-    }
     // Only sheens that are there: glTF's default colour, black, is none.
     let sheened: Vec<Value> = document
         .materials()
@@ -279,13 +285,6 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
         out.push(format!(
             "{SPECULAR} on transmission ({transmitting} material{}: the glass keeps its index's Fresnel)",
             plural(transmitting)
-        ));
-    }
-    let mapped = coated.iter().filter(|(mapped, _)| *mapped).count();
-    if mapped > 0 {
-        out.push(format!(
-            "a clear coat without its base's normal map ({mapped} material{}: the coat follows it)",
-            plural(mapped)
         ));
     }
     out

@@ -24,7 +24,7 @@ pub struct FileTextures<'a> {
     /// The folder the file's relative URIs start from.
     base_dir: Option<&'a Path>,
     /// The file as the user named it, for messages.
-    source: &'a str,
+    pub(super) source: &'a str,
     /// Images decoded, by (image index, whether decoded from sRGB).
     decoded: HashMap<(usize, bool), Arc<Image>>,
     /// Decoded images read with a sampler other than the default, by (image index, sRGB, how).

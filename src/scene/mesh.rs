@@ -1569,6 +1569,7 @@ fn material_of(
     .with_specular(super::gltf_extensions::specular(m, &at)?)
     .with_layer_images(layer_images.layers, layer_images.sheen)
     .with_specular_images(layer_images.specular, layer_images.specular_color)
+    .with_clearcoat_normal_map(layer_images.clearcoat_normal_map)
     .with_attenuation(volume_of(m))
     .map_err(|e| format!("{}: {e}", at()))?;
     out.transmission_in_red = transmission_in_red;

@@ -184,7 +184,8 @@ impl Scene {
             object.shape.validate().map_err(SceneError::Invalid)?;
             // Tangent frames follow from texture coordinates (`scene::tangents`).
             if self.materials[object.material as usize]
-                .normal_map()
+                .normal_maps()
+                .next()
                 .is_some()
             {
                 let name = &self.material_names[object.material as usize];

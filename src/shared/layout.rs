@@ -401,6 +401,15 @@ gpu_struct! {
         specular_color_image_size: [f32; 2],
         specular_color_image: u32,
         specular_color_image_lookup: u32,
+        /// Its clear coat's normal map (`Material::coat_normal_map`; `Hit::coat`): as
+        /// `normal_map_*`.
+        coat_normal_map_size: [f32; 2],
+        coat_normal_map_image: u32,
+        coat_normal_map_scale: f32,
+        coat_normal_map_lookup: u32,
+        _pad0: u32,
+        _pad1: u32,
+        _pad2: u32,
     }
 }
 

@@ -33,8 +33,14 @@ kernel_struct! {
         /// The geometric normal, facing the incoming ray: it decides sides and offsets.
         normal: Vec3,
         /// The normal materials shade with, on `normal`'s side: a mesh's interpolated vertex
-        /// normals (see `cpu::intersect::shading_normal`), else `normal` itself.
+        /// normals (see `cpu::intersect::shading_normal`) bent by the material's normal map,
+        /// else `normal` itself.
         shading: Vec3,
+        /// The normal a clear coat shades with (pbr's, `material::clearcoat`), on `normal`'s
+        /// side: a mesh's interpolated vertex normals bent by the material's clear coat normal
+        /// map where it has one (glTF's clearcoatNormalTexture), but never by its base's (glTF
+        /// draws a coat without one unmapped); else `normal` itself.
+        coat: Vec3,
         material: u32,
         front_face: bool,
         /// Which primitive was hit.

@@ -452,6 +452,7 @@ fn gpu_image_lookups_match_the_cpu() {
             error: 0.0,
             normal: Vec3::Y,
             shading: Vec3::Y,
+            coat: Vec3::Y,
             front_face: true,
             material: *material,
             primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {

@@ -230,6 +230,7 @@ fn gpu_texture_lookups_match_the_cpu() {
             error: 0.0,
             normal: Vec3::Y,
             shading: Vec3::Y,
+            coat: Vec3::Y,
             front_face: true,
             material: *material,
             primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {
@@ -350,6 +351,7 @@ fn gpu_image_lookups_wrap_and_filter_as_the_cpu() {
             error: 0.0,
             normal: Vec3::Z,
             shading: Vec3::Z,
+            coat: Vec3::Z,
             front_face: true,
             material: *material,
             primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {

@@ -45,6 +45,18 @@ pub fn sample_vs_pdf_in(
     cells: &Histogram,
     samples: u32,
 ) -> (f64, usize, f64) {
+    sample_vs_pdf_between(material, h, (pdf_of, h), wo, cells, samples)
+}
+
+/// [`sample_vs_pdf_in`], the pdf taken of `pdf_of` at another hit (a negative control's).
+pub fn sample_vs_pdf_between(
+    material: &Material,
+    h: &Hit,
+    (pdf_of, pdf_hit): (&Material, &Hit),
+    wo: Vec3,
+    cells: &Histogram,
+    samples: u32,
+) -> (f64, usize, f64) {
     let tally = chi_square::tally(cells, samples, |i| {
         let mut sampler = Sampler::independent(i, 0, 17);
         match material.sample(wo, h, &mut sampler) {
@@ -63,6 +75,6 @@ pub fn sample_vs_pdf_in(
             None => Draw::Lost,
         }
     });
-    let expected = chi_square::expected_with_lost(cells, &|wi| pdf_of.pdf(wo, wi, h) as f64);
+    let expected = chi_square::expected_with_lost(cells, &|wi| pdf_of.pdf(wo, wi, pdf_hit) as f64);
     chi_square::test(&tally, &expected, samples)
 }

@@ -69,6 +69,7 @@ pub fn surface_hit(normal: Vec3, front_face: bool) -> rt_gpu::shared::ray::Hit {
         error: 0.0,
         normal,
         shading: normal,
+        coat: normal,
         front_face,
         material: 0,
         primitive: rt_gpu::shared::primitive::PrimitiveRef::Shape {
