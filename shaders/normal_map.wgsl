@@ -47,7 +47,8 @@ fn valid_reflection(ng: vec3f, wo: vec3f, n: vec3f) -> vec3f {
     let b = 2.0 * (a + iz * threshold);
     let c = (threshold + iz) * (threshold + iz);
     let root = sqrt(max(b * b - 4.0 * a * c, 0.0));
-    let u = clamp(0.25 * select(b - root, b + root, ix < 0.0) / a, 0.0, 1.0);
+    // The smaller root as c / (b + root), which keeps its digits where it is near 0.
+    let u = clamp(select(c / (b + root), 0.25 * (b + root) / a, ix < 0.0), 0.0, 1.0);
     let bent = sqrt(1.0 - u) * x + sqrt(u) * ng;
     return bent / length(bent);
 }

@@ -82,9 +82,9 @@ impl NormalMap {
 /// (`ensure_valid_specular_reflection`), here for a clear coat's normal map (`Hit::coat`),
 /// whose mirror would otherwise send much of what it reflects below the surface and darken
 /// the map's steep slopes to black. The bent normal's height over the surface, `u = n.ng`
-/// squared, solves `2 (n.wo) u' - wo.ng = threshold` with `n = sqrt(1 - u) x + sqrt(u) ng`:
-/// a quadratic in `u` whose root is the one on `wo`'s side. Twin: `valid_reflection` in
-/// shaders/normal_map.wgsl.
+/// squared, solves `2 (n.wo) sqrt(u) - wo.ng = threshold` with
+/// `n = sqrt(1 - u) x + sqrt(u) ng`: a quadratic in `u`, `4 a u^2 - 2 b u + c = 0`, whose
+/// root is the one on `wo`'s side. Twin: `valid_reflection` in shaders/normal_map.wgsl.
 pub fn valid_reflection(ng: glam::Vec3, wo: glam::Vec3, n: glam::Vec3) -> glam::Vec3 {
     let iz = wo.dot(ng).max(0.0);
     let threshold = (0.9 * iz).min(0.01);
@@ -106,7 +106,13 @@ pub fn valid_reflection(ng: glam::Vec3, wo: glam::Vec3, n: glam::Vec3) -> glam::
     let b = 2.0 * (a + iz * threshold);
     let c = (threshold + iz) * (threshold + iz);
     let root = (b * b - 4.0 * a * c).max(0.0).sqrt();
-    let u = (0.25 * if ix < 0.0 { b + root } else { b - root } / a).clamp(0.0, 1.0);
+    // The smaller root as c / (b + root), which keeps its digits where it is near 0.
+    let u = if ix < 0.0 {
+        0.25 * (b + root) / a
+    } else {
+        c / (b + root)
+    }
+    .clamp(0.0, 1.0);
     let bent = (1.0 - u).sqrt() * x + u.sqrt() * ng;
     bent / bent.length()
 }

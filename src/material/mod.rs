@@ -220,8 +220,11 @@ macro_rules! registry {
                 match self { $(Material::$ty(m) => m.normal_map(),)+ }
             }
             pub fn validate(&self) -> Result<(), String> {
-                for map in self.normal_maps() {
+                if let Some(map) = self.normal_map() {
                     map.validate()?;
+                }
+                if let Some(map) = self.coat_normal_map() {
+                    map.validate().map_err(|e| format!("clear coat's {e}"))?;
                 }
                 // A mesh's tangents follow one UV set.
                 if let (Some(base), Some(coat)) = (self.normal_map(), self.coat_normal_map())

@@ -896,6 +896,9 @@ impl MaterialModel for Pbr {
         if let Some(clearcoat) = &self.clearcoat {
             clearcoat.validate()?;
         }
+        if self.clearcoat.is_none() && self.images.as_ref().is_some_and(|i| i.clearcoat_normal_map.is_some()) {
+            return Err("clearcoat_normal_map bends a clear coat's normal, but it has no clearcoat".into());
+        }
         if let Some(sheen) = &self.sheen {
             sheen.validate()?;
         }

@@ -550,3 +550,28 @@ fn specular_images_are_read_from_scene_files() {
         "{error}"
     );
 }
+
+/// A clear coat's normal map on a scene file's pbr without a clear coat is a one-line error
+/// naming it, not a map silently left unused; with the coat, it reads and is written back.
+#[test]
+fn a_clear_coat_normal_map_needs_a_clear_coat() {
+    let text = |coat: &str| {
+        format!(
+            "[camera]\nlook_from = [0, 0, 3]\nlook_at = [0, 0, 0]\nvfov = 40\n[materials]\nglaze = {{ type = \"pbr\", base_color = [0.5, 0.1, 0.1], metallic = 0{coat}, clearcoat_normal_map = {{ image = \"blender/bumpy-normals.png\", scale = 1 }} }}\n[[object]]\nmesh = {{ file = \"blender/bumpy.glb\", node = \"Cube\" }}\nmaterial = \"glaze\"\n"
+        )
+    };
+    let loader = rt_gpu::assets::loader::Loader::new(std::path::Path::new("scenes"));
+    let parse = |t: &str| rt_gpu::scene::file::parse_with(&loader, t, "glaze.toml", "glaze");
+    let error = parse(&text("")).expect_err("no coat").to_string();
+    assert!(
+        error.contains("clearcoat_normal_map") && !error.contains('\n'),
+        "{error}"
+    );
+    let scene = parse(&text(", clearcoat = { factor = 1 }")).expect("parses");
+    let again = parse(&to_toml(&scene)).expect("exported scene parses");
+    assert_eq!(again.materials, scene.materials);
+    let rt_gpu::scene::Material::Pbr(p) = &scene.materials[0] else {
+        panic!("{:?}", scene.materials[0]);
+    };
+    assert!(rt_gpu::material::MaterialModel::coat_normal_map(p).is_some());
+}
