@@ -164,7 +164,40 @@ fn load_unrecorded(
         inputs: Vec::new(),
     };
     scene.validate().map_err(|e| format!("{source}: {e}"))?;
-    Ok((scene, extras.notes))
+    let mut notes = extras.notes;
+    notes.extend(smooth_sheen_note(&scene.materials, source));
+    Ok((scene, notes))
+}
+
+/// The note for sheens whose roughness texture (sheenRoughnessTexture, in the layers image's
+/// blue channel) takes their roughness below rt-gpu's least in places, where it is taken as the
+/// least; a factor already below it is the file note's (`gltf_extensions::unread`).
+fn smooth_sheen_note(materials: &[crate::scene::Material], source: &str) -> Option<String> {
+    let least = crate::material::sheen::MIN_ROUGHNESS;
+    let n = materials
+        .iter()
+        .filter(|m| {
+            let crate::scene::Material::Pbr(p) = m else {
+                return false;
+            };
+            let (Some(sheen), Some(layers)) = (p.sheen, p.layers()) else {
+                return false;
+            };
+            sheen.roughness >= least
+                && layers
+                    .texels
+                    .iter()
+                    .skip(2)
+                    .step_by(3)
+                    .any(|&blue| sheen.roughness * blue < least)
+        })
+        .count();
+    (n > 0).then(|| {
+        format!(
+            "note: {source}: the sheenRoughnessTexture of {n} material{} takes the sheen's roughness below {least} in places: taken as {least} there",
+            if n == 1 { "" } else { "s" }
+        )
+    })
 }
 
 /// The perspective camera named `name` of the glTF file at `path` (`source`: as the scene

@@ -1240,7 +1240,8 @@ fn a_volume_fills_transmissive_glass_with_what_absorbs() {
 
 /// Issue 63: KHR_materials_sheen's factors are read onto the pbr material, required or not (a
 /// black colour, glTF's default, is no sheen); its colour texture becomes the sheen image and
-/// its roughness texture's alpha channel the layers' blue, with no note.
+/// its roughness texture's alpha channel the layers' blue; a note says where that texture takes
+/// the roughness below rt-gpu's least, and only then.
 #[test]
 fn a_sheen_and_its_textures_are_read() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -1321,6 +1322,22 @@ fn a_sheen_and_its_textures_are_read() {
             < 1e-6,
         "{layers}"
     );
+    // Its roughness texture takes the roughness to 0.5 x 0.251, below rt-gpu's least: noted.
+    assert!(
+        notes.len() == 1
+            && notes[0].contains(
+                "the sheenRoughnessTexture of 1 material takes the sheen's roughness below 0.25 in places: taken as 0.25 there"
+            ),
+        "{notes:?}"
+    );
+    // At a factor of 1 the texel, 0.251, stays above it: nothing to note.
+    let rough = textured.replace(
+        "\"sheenRoughnessFactor\": 0.5",
+        "\"sheenRoughnessFactor\": 1",
+    );
+    let path =
+        common::gltf::write_triangle(dir.path(), "rough.gltf", true, &velvet(&rough), "", &images);
+    let (_, notes) = load(&path, "rough.gltf", None).expect("loads");
     assert!(notes.is_empty(), "{notes:?}");
 }
 
