@@ -204,26 +204,15 @@ impl TryFrom<PbrDoc> for Pbr {
     type Error = String;
     fn try_from(d: PbrDoc) -> Result<Self, String> {
         super::fresnel::check_ior(d.ior)?;
-        let metallic_roughness = match d.metallic_roughness {
-            Some(name) => Some(crate::assets::loader::data_image(&name)?),
-            None => None,
-        };
-        let layers = match d.layers {
-            Some(name) => Some(crate::assets::loader::data_image(&name)?),
-            None => None,
-        };
-        let sheen_image = match d.sheen_image {
-            Some(name) => Some(crate::assets::loader::image(&name)?),
-            None => None,
-        };
-        let specular_image = match d.specular_image {
-            Some(name) => Some(crate::assets::loader::data_image(&name)?),
-            None => None,
-        };
-        let specular_color_image = match d.specular_color_image {
-            Some(name) => Some(crate::assets::loader::image(&name)?),
-            None => None,
-        };
+        use crate::assets::loader::{data_image, image};
+        // Data images (linear) and colour images (from sRGB), each where the file names one.
+        let data = |name: Option<String>| name.as_deref().map(data_image).transpose();
+        let colour = |name: Option<String>| name.as_deref().map(image).transpose();
+        let metallic_roughness = data(d.metallic_roughness)?;
+        let layers = data(d.layers)?;
+        let sheen_image = colour(d.sheen_image)?;
+        let specular_image = data(d.specular_image)?;
+        let specular_color_image = colour(d.specular_color_image)?;
         Pbr::new(d.base_color, d.metallic, d.roughness, d.ior, d.transmission)
             .with_normal_map(d.normal_map)
             .with_metallic_roughness(metallic_roughness)
