@@ -1,9 +1,9 @@
-// glTF's specular strength and colour (KHR_materials_specular) on pbr's dielectric coat (twin:
+// glTF's specular strength and colour (KHR_materials_specular) on pbr's dielectric coat and glass (twin:
 // src/material/specular.rs, whose comment gives the model): Fresnel reshaped to
 // factor x (f0 + (1 - f0) w), w exact Fresnel's own shape from 0 at normal incidence to 1 at
 // grazing. spec: (factor, f0's rgb); a factor below 0 is none (Fresnel's own).
 
-// No reshaping: what plastic's coat and a pbr without the extension pass.
+// No reshaping: what plastic's coat, plain glass and a pbr without the extension pass.
 const NO_SPECULAR: vec4f = vec4f(-1.0, 0.0, 0.0, 0.0);
 
 //#if PLASTIC || PBR

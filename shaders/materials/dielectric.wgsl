@@ -1,8 +1,8 @@
 // Glass (twin: src/material/dielectric.rs): exact unpolarised Fresnel, refraction by Snell's
 // law, total internal reflection; smooth (alpha 0: two delta lobes) or on GGX microfacets
 // (Walter et al. 2007) sampled by visible normals. Random numbers per sample: 1 when smooth, 3
-// when rough. Its parameters: DielectricParams; the glass_* functions take them alone, for pbr's
-// glass too.
+// when rough. Its parameters: DielectricParams; the glass_* functions take them and a specular's
+// reshaping of its Fresnel (shaders/specular.wgsl; NO_SPECULAR: none), for pbr's glass too.
 
 fn dielectric_samples_lights(m: Material) -> bool {
 //#if MICROFACET
@@ -24,21 +24,36 @@ fn on_its_side(hit: Hit, wi: vec3f, reflected: bool) -> bool {
 }
 
 fn dielectric_sample(m: Material, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
-    return glass_sample(dielectric_params(m), wo, hit, sampler);
+    return glass_sample(dielectric_params(m), NO_SPECULAR, wo, hit, sampler);
 }
 
 fn dielectric_eval(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
-    return glass_eval(dielectric_params(m), wo, wi, hit);
+    return glass_eval(dielectric_params(m), NO_SPECULAR, wo, wi, hit);
 }
 
 fn dielectric_pdf(m: Material, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
-    return glass_pdf(dielectric_params(m), wo, wi, hit);
+    return glass_pdf(dielectric_params(m), NO_SPECULAR, wo, wi, hit);
 }
 
-fn glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+// What the glass reflects at a (micro)surface where exact Fresnel reflectance is f (1 under
+// total internal reflection), in xyz, and in w the chance that a sample reflects: f and f, or
+// where spec reshapes it, factor x Fr and its largest channel (Dielectric::reflectance).
+fn glass_reflectance(spec: vec4f, f: f32, ior: f32) -> vec4f {
+//#if SPECULAR
+//#if PLASTIC || PBR
+    if spec.x >= 0.0 && f < 1.0 {
+        let r = spec.x * (spec.yzw + (vec3f(1.0) - spec.yzw) * specular_shape(f, coat_fresnel(1.0, ior)));
+        return vec4f(r, max(max(r.x, r.y), r.z));
+    }
+//#endif
+//#endif
+    return vec4f(f);
+}
+
+fn glass_sample(g: DielectricParams, spec: vec4f, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
 //#if MICROFACET
     if g.alpha > 0.0 {
-        return rough_glass_sample(g, wo, hit, sampler);
+        return rough_glass_sample(g, spec, wo, hit, sampler);
     }
 //#endif
     let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
@@ -48,12 +63,17 @@ fn glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function,
     let u = sampler_next_in_group(sampler);
     var wi = reflect_dir(dir_in, n);
     var reflected = true;
+    var weight = vec3f(1.0);
     let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
     if sin2_t < 1.0 {
         let cos_t = sqrt(1.0 - sin2_t);
-        if u >= fresnel(cos_i, cos_t, eta) {
+        let r = glass_reflectance(spec, fresnel(cos_i, cos_t, eta), g.ior);
+        if u >= r.w {
             wi = eta * dir_in + (eta * cos_i - cos_t) * n;
             reflected = false;
+        } else {
+            // What it reflects over its chance: 1 without a specular.
+            weight = r.xyz / r.w;
         }
     }
     wi = normalize(wi);
@@ -61,7 +81,7 @@ fn glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function,
     if !on_its_side(hit, wi, reflected) {
         lobe = 0u;
     }
-    return BsdfSample(vec3f(1.0), wi, 0.0, lobe);
+    return BsdfSample(weight, wi, 0.0, lobe);
 }
 
 //#if MICROFACET
@@ -90,7 +110,7 @@ fn pair_fresnel(cos_o: f32, cos_i: f32, eta: f32, reflected: bool) -> f32 {
     return fresnel(cos_o, -cos_i, eta);
 }
 
-fn rough_glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
+fn rough_glass_sample(g: DielectricParams, spec: vec4f, wo: vec3f, hit: Hit, sampler: ptr<function, Sampler>) -> BsdfSample {
     var out = BsdfSample(vec3f(0.0), vec3f(0.0, 1.0, 0.0), 0.0, 0u);
     let u1 = sampler_next_in_group(sampler);
     let u2 = sampler_next_in_group(sampler);
@@ -104,18 +124,22 @@ fn rough_glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<fun
     let mf = ggx_sample_visible(g.alpha, wo_local, u1, u2);
     let cos_i = dot(wo_local, mf);
     let fr = fresnel_and_cos_t(cos_i, eta);
-    // Reflection with probability F: the BSDF's F and the pdf's cancel in the weight.
+    let r = glass_reflectance(spec, fr.f, g.ior);
+    // Reflection with its chance, F without a specular: the BSDF's and the pdf's cancel in the
+    // weight but for the reflectance's colour.
     var wi_local: vec3f;
     var reflected = true;
-    if fr.f < 1.0 && u >= fr.f {
+    var tint = vec3f(1.0);
+    if fr.f < 1.0 && u >= r.w {
         wi_local = (eta * cos_i - fr.cos_t) * mf - eta * wo_local;
         let denom = dot(wi_local, mf) + eta * cos_i;
         let jacobian = abs(dot(wi_local, mf)) / (denom * denom);
-        out.pdf = (1.0 - fr.f) * ggx_visible_pdf(g.alpha, wo_local, mf) * jacobian;
+        out.pdf = (1.0 - r.w) * ggx_visible_pdf(g.alpha, wo_local, mf) * jacobian;
         reflected = false;
     } else {
         wi_local = reflect_dir(-wo_local, mf);
-        out.pdf = fr.f * ggx_reflection_pdf(g.alpha, wo_local, mf);
+        out.pdf = r.w * ggx_reflection_pdf(g.alpha, wo_local, mf);
+        tint = r.xyz / r.w;
     }
     let wi = to_world(frame, wi_local);
     let on_side = select((wi_local.z < -MIN_COSINE), (wi_local.z > MIN_COSINE), reflected);
@@ -123,8 +147,8 @@ fn rough_glass_sample(g: DielectricParams, wo: vec3f, hit: Hit, sampler: ptr<fun
         out.pdf = 0.0;
         return out;
     }
-    // f cos / pdf = G2 / G1 for either lobe (Walter's BTDF over its pdf).
-    out.weight = vec3f(ggx_g2(g.alpha, wo_local, wi_local) / ggx_g1(g.alpha, wo_local));
+    // f cos / pdf = G2 / G1 for either lobe (Walter's BTDF over its pdf), tinted.
+    out.weight = tint * (ggx_g2(g.alpha, wo_local, wi_local) / ggx_g1(g.alpha, wo_local));
     out.wi = wi;
     out.lobe = select(LOBE_TRANSMISSION, LOBE_REFLECTION, reflected) | LOBE_GLOSSY;
     return out;
@@ -156,36 +180,36 @@ fn rough_pair(wo: vec3f, wi: vec3f, hit: Hit, eta: f32) -> RoughPair {
 }
 //#endif
 
-fn glass_eval(g: DielectricParams, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
+fn glass_eval(g: DielectricParams, spec: vec4f, wo: vec3f, wi: vec3f, hit: Hit) -> vec3f {
 //#if MICROFACET
     let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
     let p = rough_pair(wo, wi, hit, eta);
     if p.ok && g.alpha > 0.0 {
         let cos_i = dot(p.wo, p.m);
-        let f = pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected);
+        let r = glass_reflectance(spec, pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected), g.ior);
         let dg = ggx_d(g.alpha, p.m) * ggx_g2(g.alpha, p.wo, p.wi);
         if p.reflected {
-            return vec3f(f * dg / (4.0 * p.wo.z));
+            return r.xyz * dg / (4.0 * p.wo.z);
         }
         let denom = dot(p.wi, p.m) + eta * cos_i;
-        return vec3f((1.0 - f) * dg * abs(dot(p.wi, p.m)) * cos_i / (p.wo.z * denom * denom));
+        return vec3f((1.0 - r.w) * dg * abs(dot(p.wi, p.m)) * cos_i / (p.wo.z * denom * denom));
     }
 //#endif
     return vec3f(0.0);
 }
 
-fn glass_pdf(g: DielectricParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
+fn glass_pdf(g: DielectricParams, spec: vec4f, wo: vec3f, wi: vec3f, hit: Hit) -> f32 {
 //#if MICROFACET
     let eta = select(g.ior, 1.0 / g.ior, hit.front_face);
     let p = rough_pair(wo, wi, hit, eta);
     if p.ok && g.alpha > 0.0 {
         let cos_i = dot(p.wo, p.m);
-        let f = pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected);
+        let chance = glass_reflectance(spec, pair_fresnel(cos_i, dot(p.wi, p.m), eta, p.reflected), g.ior).w;
         if p.reflected {
-            return f * ggx_reflection_pdf(g.alpha, p.wo, p.m);
+            return chance * ggx_reflection_pdf(g.alpha, p.wo, p.m);
         }
         let denom = dot(p.wi, p.m) + eta * cos_i;
-        return (1.0 - f) * ggx_visible_pdf(g.alpha, p.wo, p.m) * abs(dot(p.wi, p.m)) / (denom * denom);
+        return (1.0 - chance) * ggx_visible_pdf(g.alpha, p.wo, p.m) * abs(dot(p.wi, p.m)) / (denom * denom);
     }
 //#endif
     return 0.0;

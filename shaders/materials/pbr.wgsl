@@ -136,7 +136,7 @@ fn pbr_eval_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> ve
 //#if DIELECTRIC
     if w_glass > 0.0 {
         let tint = select(vec3f(1.0), base, dot(wi, hit.shading) < 0.0);
-        f += w_glass * tint * glass_eval(pbr_glass(p), wo, wi, hit);
+        f += w_glass * tint * glass_eval(pbr_glass(p), pbr_specular(p), wo, wi, hit);
     }
 //#endif
     if w_metal > 0.0 {
@@ -156,7 +156,7 @@ fn pbr_pdf_mix(m: Material, p: PbrParams, wo: vec3f, wi: vec3f, hit: Hit) -> f32
     }
 //#if DIELECTRIC
     if w_glass > 0.0 {
-        pdf += w_glass * glass_pdf(pbr_glass(p), wo, wi, hit);
+        pdf += w_glass * glass_pdf(pbr_glass(p), pbr_specular(p), wo, wi, hit);
     }
 //#endif
     if w_metal > 0.0 {
@@ -284,10 +284,10 @@ fn pbr_sample_mix(m: Material, p: PbrParams, wo: vec3f, hit: Hit, sampler: ptr<f
         out = coat_sample(base, p.ior, p.alpha, p.internal_reflectance, false, NO_COAT_TABLE, pbr_specular(p), wo, hit, v, u1, u2);
     } else if u < w_coat + w_glass {
 //#if DIELECTRIC
-        out = glass_sample(pbr_glass(p), wo, hit, sampler);
+        out = glass_sample(pbr_glass(p), pbr_specular(p), wo, hit, sampler);
         // A direction within rounding of where the glass's own density vanishes: not one for
         // the other components' densities to weigh.
-        if out.lobe != 0u && (out.lobe & LOBE_DELTA) == 0u && !(glass_pdf(pbr_glass(p), wo, out.wi, hit) > 0.0) {
+        if out.lobe != 0u && (out.lobe & LOBE_DELTA) == 0u && !(glass_pdf(pbr_glass(p), pbr_specular(p), wo, out.wi, hit) > 0.0) {
             out.lobe = 0u;
         }
         out.weight *= select(vec3f(1.0), base, (out.lobe & LOBE_TRANSMISSION) != 0u);

@@ -1,4 +1,5 @@
-//! Glass (twin: `shaders/materials/dielectric.wgsl`): exact unpolarised Fresnel, refraction by
+//! Glass (twin: `shaders/materials/dielectric.wgsl`): exact unpolarised Fresnel (pbr's glass:
+//! reshaped by glTF's specular, `Dielectric::reflectance`), refraction by
 //! Snell's law, total internal reflection; smooth (roughness 0: two delta lobes) or rough, on
 //! GGX microfacets (Walter et al. 2007, "Microfacet Models for Refraction through Rough
 //! Surfaces"), sampled by their visible normals. Random numbers per sample: 1 when smooth, 3
@@ -12,7 +13,9 @@
 
 use crate::shared::feature::MaterialFeature;
 use super::microfacet::{Frame, Ggx, MIN_ALPHA, MIN_COSINE};
+use super::coat::coat_fresnel;
 use super::fresnel::{fresnel, refract_cos};
+use super::specular::SpecularFresnel;
 use super::{BsdfSample, Lobe, MaterialModel, Medium, reflect};
 use crate::shared::ray::Hit;
 use crate::shared::layout::GpuMaterial;
@@ -35,6 +38,11 @@ pub struct Dielectric {
     pub roughness: f32,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub medium: Option<Medium>,
+    /// Its Fresnel reshaped by glTF's specular strength and colour: pbr's glass only
+    /// (`material::specular`; not a scene-file parameter of glass, and not in [`Self::gpu`]'s
+    /// parameters: the kernel's pbr passes its own specular to its glass).
+    #[serde(skip)]
+    pub specular: Option<SpecularFresnel>,
 }
 
 /// How near 1 an index is taken as 1 by rough glass (see `samples_lights`).
@@ -47,6 +55,7 @@ impl Dielectric {
             ior,
             roughness: 0.0,
             medium: None,
+            specular: None,
         }
     }
 
@@ -55,6 +64,27 @@ impl Dielectric {
         Dielectric {
             roughness,
             ..Dielectric::clear(ior)
+        }
+    }
+
+    /// This glass with its Fresnel reshaped by `specular` (none: exact Fresnel's own).
+    pub fn with_specular(self, specular: Option<SpecularFresnel>) -> Self {
+        Dielectric { specular, ..self }
+    }
+
+    /// What the glass reflects at a (micro)surface where exact Fresnel reflectance is `f` (1
+    /// under total internal reflection), and the chance that a sample reflects: `f` and `f`,
+    /// or where a specular reshapes it, `factor x Fr` (a colour) and its largest channel; the
+    /// glass transmits 1 minus the chance (`material::specular`). Under total internal
+    /// reflection it reflects everything, reshaped or not: nothing can cross.
+    #[inline]
+    pub fn reflectance(&self, f: f32) -> (Vec3, f32) {
+        match self.specular {
+            Some(s) if f < 1.0 => {
+                let r = s.reshaped(f, coat_fresnel(1.0, self.ior));
+                (r, r.max_element())
+            }
+            _ => (Vec3::splat(f), f),
         }
     }
 
@@ -79,15 +109,20 @@ impl Dielectric {
         let dir_in = -wo;
         let cos_i = wo.dot(n).clamp(0.0, 1.0);
         let u = sampler.next_f32();
-        let (wi, lobe) = match refract_cos(cos_i, eta) {
-            Some(cos_t) if u >= fresnel(cos_i, cos_t, eta) => {
-                (eta * dir_in + (eta * cos_i - cos_t) * n, Lobe::DELTA_TRANSMISSION)
-            }
-            _ => (reflect(dir_in, n), Lobe::DELTA_REFLECTION),
+        let (f, cos_t) = fresnel_and_cos_t(cos_i, eta);
+        let (r, chance) = self.reflectance(f);
+        // Reflection with its chance: what it reflects over that, 1 without a specular.
+        let (wi, lobe, weight) = match cos_t {
+            Some(cos_t) if u >= chance => (
+                eta * dir_in + (eta * cos_i - cos_t) * n,
+                Lobe::DELTA_TRANSMISSION,
+                Vec3::ONE,
+            ),
+            _ => (reflect(dir_in, n), Lobe::DELTA_REFLECTION, r / chance),
         };
         let wi = wi.normalize();
         on_its_side(hit, wi, lobe).then_some(BsdfSample {
-            weight: Vec3::ONE,
+            weight,
             wi,
             pdf: 0.0,
             lobe,
@@ -227,19 +262,21 @@ impl MaterialModel for Dielectric {
         let m = ggx.sample_visible(wo_local, u1, u2);
         let cos_i = wo_local.dot(m);
         let (f, cos_t) = fresnel_and_cos_t(cos_i, eta);
-        // Reflection with probability F: the BSDF's F and the pdf's cancel in the weight.
-        let (wi_local, lobe, pdf) = match cos_t {
-            Some(cos_t) if u >= f => {
+        let (r, chance) = self.reflectance(f);
+        // Reflection with its chance, F without a specular: the BSDF's and the pdf's cancel in
+        // the weight but for the reflectance's colour.
+        let (wi_local, lobe, pdf, tint) = match cos_t {
+            Some(cos_t) if u >= chance => {
                 let wi_local = (eta * cos_i - cos_t) * m - eta * wo_local;
                 let denom = wi_local.dot(m) + eta * cos_i;
                 let jacobian = wi_local.dot(m).abs() / (denom * denom);
-                let pdf = (1.0 - f) * ggx.visible_pdf(wo_local, m) * jacobian;
-                (wi_local, Lobe::GLOSSY_TRANSMISSION, pdf)
+                let pdf = (1.0 - chance) * ggx.visible_pdf(wo_local, m) * jacobian;
+                (wi_local, Lobe::GLOSSY_TRANSMISSION, pdf, Vec3::ONE)
             }
             _ => {
                 let wi_local = reflect(-wo_local, m);
-                let pdf = f * ggx.reflection_pdf(wo_local, m);
-                (wi_local, Lobe::GLOSSY_REFLECTION, pdf)
+                let pdf = chance * ggx.reflection_pdf(wo_local, m);
+                (wi_local, Lobe::GLOSSY_REFLECTION, pdf, r / chance)
             }
         };
         let wi = frame.to_world(wi_local);
@@ -251,9 +288,9 @@ impl MaterialModel for Dielectric {
         if !(on_side && on_its_side(hit, wi, lobe) && pdf > 0.0) {
             return None;
         }
-        // f cos / pdf = G2 / G1 for either lobe (Walter's BTDF over its pdf).
+        // f cos / pdf = G2 / G1 for either lobe (Walter's BTDF over its pdf), tinted.
         Some(BsdfSample {
-            weight: Vec3::splat(ggx.g2(wo_local, wi_local) / ggx.g1(wo_local)),
+            weight: tint * (ggx.g2(wo_local, wi_local) / ggx.g1(wo_local)),
             wi,
             pdf,
             lobe,
@@ -270,14 +307,14 @@ impl MaterialModel for Dielectric {
         };
         let ggx = self.ggx();
         let cos_i = wo_local.dot(m);
-        let f = pair_fresnel(cos_i, wi_local.dot(m), eta, reflected);
+        let (r, chance) = self.reflectance(pair_fresnel(cos_i, wi_local.dot(m), eta, reflected));
         let dg = ggx.d(m) * ggx.g2(wo_local, wi_local);
-        Vec3::splat(if reflected {
-            f * dg / (4.0 * wo_local.z)
+        if reflected {
+            r * dg / (4.0 * wo_local.z)
         } else {
             let denom = wi_local.dot(m) + eta * cos_i;
-            (1.0 - f) * dg * wi_local.dot(m).abs() * cos_i / (wo_local.z * denom * denom)
-        })
+            Vec3::splat((1.0 - chance) * dg * wi_local.dot(m).abs() * cos_i / (wo_local.z * denom * denom))
+        }
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3, hit: &Hit) -> f32 {
@@ -290,12 +327,12 @@ impl MaterialModel for Dielectric {
         };
         let ggx = self.ggx();
         let cos_i = wo_local.dot(m);
-        let f = pair_fresnel(cos_i, wi_local.dot(m), eta, reflected);
+        let (_, chance) = self.reflectance(pair_fresnel(cos_i, wi_local.dot(m), eta, reflected));
         if reflected {
-            f * ggx.reflection_pdf(wo_local, m)
+            chance * ggx.reflection_pdf(wo_local, m)
         } else {
             let denom = wi_local.dot(m) + eta * cos_i;
-            (1.0 - f) * ggx.visible_pdf(wo_local, m) * wi_local.dot(m).abs() / (denom * denom)
+            (1.0 - chance) * ggx.visible_pdf(wo_local, m) * wi_local.dot(m).abs() / (denom * denom)
         }
     }
 

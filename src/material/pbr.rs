@@ -5,7 +5,8 @@
 //! [`Coat`] without saturation (the base's colour kept, as glTF viewers show it) and exact
 //! Fresnel of `ior` (KHR_materials_ior) where the appendix allows Schlick's; the metal is GGX
 //! with Schlick's Fresnel from F0 = base colour, as the appendix defines it; the glass is
-//! `dielectric`'s.
+//! `dielectric`'s. A specular (KHR_materials_specular) reshapes the coat's and the glass's
+//! Fresnel alike (`specular.rs`).
 //! One roughness for all three (alpha = roughness^2). Two-sided but for the glass. A
 //! metallic-roughness image (glTF's metallicRoughnessTexture, linear) scales metallic by its
 //! blue channel and roughness by its green one, point by point.
@@ -588,8 +589,9 @@ impl Lobes {
         ggx(&self.coat)
     }
 
+    /// The glass of the mix, its Fresnel reshaped as the coat's by any specular.
     fn glass(&self) -> Dielectric {
-        Dielectric::rough(self.ior, self.roughness)
+        Dielectric::rough(self.ior, self.roughness).with_specular(self.coat.specular)
     }
 
     /// Under a clear coat, one number picks the coat (with its reflectance at wo) or the

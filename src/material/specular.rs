@@ -1,5 +1,5 @@
-//! glTF's specular strength and colour (KHR_materials_specular) on `pbr`'s dielectric coat
-//! (twin: `shaders/specular.wgsl`). The extension reshapes the dielectric's Fresnel:
+//! glTF's specular strength and colour (KHR_materials_specular) on `pbr`'s dielectric coat and
+//! glass (twin: `shaders/specular.wgsl`). The extension reshapes the dielectric's Fresnel:
 //!
 //! `Fr(cos) = f0 + (1 - f0) w(cos)`, `f0 = min(F(1) x color, 1)` per channel,
 //!
@@ -11,9 +11,14 @@
 //! white colour, and keeps Schlick's ends: `f0` at normal incidence, 1 at grazing. `max(Fr)` is
 //! the coat's opacity, and its internal reflectance follows from its mean as for a plain coat
 //! (`material::coat`), so a smooth coat over a white base still reflects exactly everything in
-//! its strongest channel whatever the factor and colour (tests/it/bsdfs/specular.rs). The metal
-//! and, here, the glass of the mix keep their own Fresnel: the extension's effect on
-//! transmission is not built (a glTF file's note says so).
+//! its strongest channel whatever the factor and colour (tests/it/bsdfs/specular.rs).
+//!
+//! The glass of the mix is reshaped alike (the extension's `fresnel_mix` over its
+//! `specular_btdf`): it reflects `factor x Fr` and transmits `1 - factor x max(Fr)`, with `w`
+//! exact Fresnel's shape on the side the light comes from, so that seen from inside `Fr` rises
+//! to 1 at the critical angle; under total internal reflection, which the extension (drawn by
+//! rasterizers, no inside) does not consider, the glass reflects everything, as glass does
+//! (`Dielectric::reflectance`). The metal keeps its own Fresnel, as the extension says.
 
 use super::coat::coat_fresnel;
 use crate::params::checked;
@@ -123,7 +128,14 @@ impl SpecularFresnel {
     /// microfacet's): `factor x Fr(cos)`.
     #[inline]
     pub fn reflectance(&self, cos: f32, ior: f32) -> Vec3 {
-        let w = Self::shape(coat_fresnel(cos, ior), coat_fresnel(1.0, ior));
+        self.reshaped(coat_fresnel(cos, ior), coat_fresnel(1.0, ior))
+    }
+
+    /// `factor x Fr` where exact Fresnel is `f`, and `f_normal` at normal incidence: what a
+    /// surface reflects whose Fresnel without the extension would be `f` (from either side).
+    #[inline]
+    pub fn reshaped(&self, f: f32, f_normal: f32) -> Vec3 {
+        let w = Self::shape(f, f_normal);
         let f0 = self.f0();
         self.factor * (f0 + (Vec3::ONE - f0) * w)
     }

@@ -241,7 +241,7 @@ pub fn clearcoat(m: &gltf::Material, at: &dyn Fn() -> String) -> Result<Option<C
 }
 
 /// What the file's materials ask of the extensions above that rt-gpu does not render, for its
-/// note: sheens smoother than rt-gpu's least roughness and the specular on transmission.
+/// note: sheens smoother than rt-gpu's least roughness.
 pub fn unread(document: &gltf::Document) -> Vec<String> {
     let mut out = Vec::new();
     // Only sheens that are there: glTF's default colour, black, is none.
@@ -263,28 +263,6 @@ pub fn unread(document: &gltf::Document) -> Vec<String> {
         out.push(format!(
             "{SHEEN}.sheenRoughnessFactor below {least} ({smooth} material{}: taken as {least})",
             plural(smooth)
-        ));
-    }
-    // The materials with the extension that transmit and would change the glass's Fresnel
-    // (factors other than the defaults, or a texture).
-    let transmitting = document
-        .materials()
-        .filter(|m| {
-            let Some(ext) = m.extension_value(SPECULAR) else {
-                return false;
-            };
-            let changes = SPECULAR_TEXTURES.iter().any(|t| ext.get(*t).is_some())
-                || specular(m, &String::new).is_ok_and(|s| s.is_some_and(|s| !s.is_default()));
-            let transmits = m
-                .transmission()
-                .is_some_and(|t| t.transmission_factor() > 0.0);
-            transmits && changes
-        })
-        .count();
-    if transmitting > 0 {
-        out.push(format!(
-            "{SPECULAR} on transmission ({transmitting} material{}: the glass keeps its index's Fresnel)",
-            plural(transmitting)
         ));
     }
     out

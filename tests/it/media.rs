@@ -184,9 +184,8 @@ fn an_albedo_one_medium_in_an_emitting_furnace_is_invisible() {
         (
             "glass",
             Material::Dielectric(Dielectric {
-                ior: 1.5,
-                roughness: 0.0,
                 medium: Some(medium(1.5, 1.0, -0.3)),
+                ..Dielectric::clear(1.5)
             }),
         ),
     ] {

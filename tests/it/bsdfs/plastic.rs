@@ -349,11 +349,7 @@ fn cosine_up(u1: f32, u2: f32) -> Vec3 {
 /// then from inside after each bounce off the lambertian base, until the light leaves (pbrt-v4's
 /// CoatedDiffuse walk with a coat of no thickness). Returns the mean and its standard error.
 fn layered_albedo(albedo: f32, ior: f32, roughness: f32, wo: Vec3, n: u32) -> (f64, f64) {
-    let glass = Material::Dielectric(rt_gpu::material::Dielectric {
-        ior,
-        roughness,
-        medium: None,
-    });
+    let glass = Material::Dielectric(rt_gpu::material::Dielectric::rough(ior, roughness));
     let (outside, inside) = (hit(Vec3::Z), common::surface_hit(-Vec3::Z, false));
     mean(n, |i| {
         let mut s = Sampler::independent(i, 1, 9);
