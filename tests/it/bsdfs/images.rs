@@ -21,8 +21,10 @@ use rt_gpu::scene::{Scene, Shape};
 /// front corner by the green wall, a blue plastic one (0.2) on the floor at the front and a
 /// half-metallic pbr one (0.4) by the red wall, a red pbr one (0.6) under a smooth clear coat
 /// at the back left and a pbr metal (0.5) under a rough one (0.3, factor 0.7) high at the front
-/// right, and a velvet one (a red rough pbr under a white sheen of roughness 0.5) at the front
-/// left:
+/// right, a velvet one (a red rough pbr under a white sheen of roughness 0.5) at the front
+/// left, and at the back left on the floor a glass of every glTF layer at once (issue 63: a
+/// rough transmissive pbr, tinted by its base and by an absorbing interior, under a tinted
+/// specular of factor 0.6 and a rough clear coat):
 /// smooth and rough lobes, reflected and refracted, over a diffuse base, light sampled at the
 /// rough ones only. (Glass above the short box casts a shadow there that only its caustic
 /// lights: without nee, 20 000 spp find too few of those paths, and the dim pixels fail the
@@ -135,6 +137,25 @@ fn cornell_with_microfacets() -> Scene {
     scene.objects.push(object(
         Shape::sphere(Vec3::new(500.0, 50.0, 200.0), 50.0),
         brass,
+    ));
+    let layered = Pbr::new(
+        Texture::Colour(Vec3::new(0.9, 0.9, 0.7)),
+        0.0,
+        0.3,
+        1.5,
+        1.0,
+    )
+    .with_specular(Some(Specular {
+        factor: 0.6,
+        color: Vec3::new(1.0, 2.0, 4.0),
+    }))
+    .with_clearcoat(coat(0.1, 0.5))
+    .with_attenuation(Some((Vec3::new(0.8, 0.5, 0.3), 100.0)))
+    .expect("valid attenuation");
+    let layered = add("every layer", Material::Pbr(layered));
+    scene.objects.push(object(
+        Shape::sphere(Vec3::new(100.0, 60.0, 400.0), 60.0),
+        layered,
     ));
     scene
 }
