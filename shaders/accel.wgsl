@@ -1,9 +1,10 @@
-// BVH traversal (twin: the binary `traverse` in src/cpu/accel.rs's tests, which the CPU's wide
-// traversal is held to): depth-first; an interior node tests both children's boxes, enters the
-// nearer by entry distance and pushes the other, with that distance, on a stack in private
-// memory. Nodes are read as `gpu_bvh` in src/gpu/layout.rs lays them out:
-// an interior node holds its children's boxes and references, so entering a node is one read
-// and a leaf's primitives are known from its reference.
+// BVH traversal (its model, step for step: `kernel_traverse` in src/cpu/traversal_stats.rs):
+// depth-first over the four-wide hierarchy of src/accel/quantized.rs; an interior node tests
+// its children's quantized boxes, enters the nearest by entry distance and pushes the others
+// met, farthest first, with their distances, on a stack in private memory. Nodes are read as
+// `gpu_bvh` in src/gpu/layout.rs lays them out: an interior node holds its children's boxes
+// and references, so entering a node is one read and a leaf's primitives are known from its
+// reference.
 //
 // Lavapipe silently breaks every loop of an invocation once its SIMD group has run 65 535 loop
 // iterations in all, and a traversal's length depends on the ray. So a kernel for a software
@@ -23,16 +24,59 @@ var<private> loop_iterations: u32;
 var<private> budget_spent: bool;
 //#endif
 
-// Where the ray enters the box if it meets it within [0, t_max], else -1 (see box_entry in
-// src/accel/mod.rs).
-fn box_entry(box_min: vec3f, box_max: vec3f, origin: vec3f, inverse: vec3f, t_max: f32) -> f32 {
-    let t0 = (box_min - origin) * inverse;
-    let t1 = (box_max - origin) * inverse;
-    let lo = min(t0, t1);
-    let hi = max(t0, t1);
-    let near = max(max(lo.x, lo.y), max(lo.z, 0.0));
-    let far = min(min(hi.x, hi.y), min(hi.z, t_max)) * BOX_FAR_WIDENING;
-    return select(-1.0, near, near <= far);
+// Where the ray enters each of a node's children's boxes if it meets them within [0, t_max],
+// else -1: box_entry (src/accel/mod.rs) four at once, of the boxes QuantizedNode::child_box decodes (a grid byte
+// times its step is exact, so the decoding rounds alike fused or not).
+fn children_entry(node: BvhNode, origin: vec3f, inverse: vec3f, t_max: f32) -> vec4f {
+    let step = vec3f(
+        bitcast<f32>((node.steps & 0xffu) << 23u),
+        bitcast<f32>(((node.steps >> 8u) & 0xffu) << 23u),
+        bitcast<f32>(((node.steps >> 16u) & 0xffu) << 23u),
+    );
+    let t0x = (node.origin.x + lane_bytes(node.low.x) * step.x - origin.x) * inverse.x;
+    let t1x = (node.origin.x + lane_bytes(node.high.x) * step.x - origin.x) * inverse.x;
+    let t0y = (node.origin.y + lane_bytes(node.low.y) * step.y - origin.y) * inverse.y;
+    let t1y = (node.origin.y + lane_bytes(node.high.y) * step.y - origin.y) * inverse.y;
+    let t0z = (node.origin.z + lane_bytes(node.low.z) * step.z - origin.z) * inverse.z;
+    let t1z = (node.origin.z + lane_bytes(node.high.z) * step.z - origin.z) * inverse.z;
+    let near = max(max(min(t0x, t1x), min(t0y, t1y)), max(min(t0z, t1z), vec4f(0.0)));
+    let far = min(min(max(t0x, t1x), max(t0y, t1y)), min(max(t0z, t1z), vec4f(t_max))) * BOX_FAR_WIDENING;
+    let used = vec4u(0u, 1u, 2u, 3u) < vec4u(node.lanes);
+    return select(vec4f(-1.0), near, (near <= far) & used);
+}
+
+// The four bytes of w, lowest first, as floats.
+fn lane_bytes(w: u32) -> vec4f {
+    return vec4f((vec4u(w) >> vec4u(0u, 8u, 16u, 24u)) & vec4u(0xffu));
+}
+
+struct Ordered {
+    key: vec4f,
+    child: vec4u,
+}
+
+// The children met (key: entry distance, below BVH_NEAREST) before those missed (BVH_MISSED,
+// BVH_EMPTY), nearest first: the sorting network of nearest_first in src/accel/quantized.rs.
+fn nearest_first(near: vec4f, children: vec4u) -> Ordered {
+    let met = near >= vec4f(0.0);
+    var k = select(vec4f(BVH_MISSED), min(near, vec4f(BVH_NEAREST)), met);
+    var c = select(vec4u(BVH_EMPTY), children, met);
+    var s = k.y < k.x;
+    k = select(k, k.yxzw, s);
+    c = select(c, c.yxzw, s);
+    s = k.w < k.z;
+    k = select(k, k.xywz, s);
+    c = select(c, c.xywz, s);
+    s = k.z < k.x;
+    k = select(k, k.zyxw, s);
+    c = select(c, c.zyxw, s);
+    s = k.w < k.y;
+    k = select(k, k.xwzy, s);
+    c = select(c, c.xwzy, s);
+    s = k.z < k.y;
+    k = select(k, k.xzyw, s);
+    c = select(c, c.xzyw, s);
+    return Ordered(k, c);
 }
 
 // 1 / dir with components below 1e-20 in size taken as 1e-20 (no infinities in WGSL).
@@ -88,8 +132,8 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 // One iteration per interior node entered (`entering`: a node's or a leaf's reference), with
 // the leaf it descends into if it does; one per leaf popped from the stack; none for a child
 // whose box the ray misses; a popped entry whose box now lies beyond the closest hit costs a
-// pass of the popping loop, no node read. The nodes are visited in the order the CPU visits
-// them. (Testing the popped node's own box instead, as before, took 1.25x as long on lavapipe.)
+// pass of the popping loop, no node read. (Testing the popped node's own box instead, as the
+// binary walk once did, took 1.25x as long on lavapipe.)
 fn traverse(world: Ray, c: ptr<function, Closest>) {
     var ray = world;
     let world_inverse = inverse_direction(world.dir);
@@ -123,18 +167,25 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
         var pop = false;
         if (entering & BVH_LEAF) == 0u {
             let node = bvh_node(entering);
-            let t_first = box_entry(node.first_min, node.first_max, ray.origin, inverse, (*c).t);
-            let t_second = box_entry(node.second_min, node.second_max, ray.origin, inverse, (*c).t);
-            let hit_first = t_first >= 0.0;
-            let hit_second = t_second >= 0.0;
-            let second_nearer = hit_second && (!hit_first || t_second < t_first);
-            if hit_first && hit_second {
-                stack[top] = select(node.second, node.first, second_nearer);
-                stack_entry[top] = select(t_second, t_first, second_nearer);
+            let o = nearest_first(children_entry(node, ray.origin, inverse, (*c).t), node.children);
+            // The others met, farthest first: popped nearest first.
+            if o.child.w != BVH_EMPTY {
+                stack[top] = o.child.w;
+                stack_entry[top] = o.key.w;
                 top += 1u;
             }
-            entering = select(node.first, node.second, second_nearer);
-            pop = !(hit_first || hit_second);
+            if o.child.z != BVH_EMPTY {
+                stack[top] = o.child.z;
+                stack_entry[top] = o.key.z;
+                top += 1u;
+            }
+            if o.child.y != BVH_EMPTY {
+                stack[top] = o.child.y;
+                stack_entry[top] = o.key.y;
+                top += 1u;
+            }
+            entering = o.child.x;
+            pop = o.child.x == BVH_EMPTY;
         }
         if !pop && (entering & BVH_LEAF) != 0u {
             let first = entering & (BVH_LEAF_OFFSET_LIMIT - 1u);

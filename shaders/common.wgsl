@@ -91,7 +91,7 @@ fn bvh_node(i: u32) -> BvhNode {
     let b = texel_at(bvh_node_texels, 4u * i + 1u);
     let c = texel_at(bvh_node_texels, 4u * i + 2u);
     let d = texel_at(bvh_node_texels, 4u * i + 3u);
-    return BvhNode(bitcast<vec3f>(a.xyz), a.w, bitcast<vec3f>(b.xyz), b.w, bitcast<vec3f>(c.xyz), bitcast<vec3f>(d.xyz));
+    return BvhNode(bitcast<vec3f>(a.xyz), a.w, b, c.xyz, c.w, d.xyz);
 }
 //#endif
 //#endif

@@ -1,9 +1,10 @@
 //! The bounding volume hierarchy both backends traverse (CPU: `cpu/accel.rs`, collapsed by
-//! `wide`; GPU: `shaders/accel.wgsl`): built once on the host over every primitive of a flat scene (spheres,
+//! `wide`; GPU: `shaders/accel.wgsl`, collapsed by `quantized`): built once on the host over every primitive of a flat scene (spheres,
 //! quads, triangles) by binned SAH, in parallel, and flattened depth-first into a compact node
 //! array: an interior node's first child follows it, its second is at `offset`; a leaf's
 //! primitives are `primitives[offset .. offset + count]`.
 
+pub mod quantized;
 pub mod wide;
 
 use glam::{Vec3, Vec3A};

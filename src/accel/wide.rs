@@ -4,8 +4,8 @@
 //! are reached. Leaves stay the binary hierarchy's, so the primitives and their order are the
 //! same; a subtree of triangles alone, at most `WIDTH` of them, becomes a [`TriangleBlock`], its
 //! corners copied beside each other, so that it is one load and one test of all its lanes rather
-//! than a chase through the primitive list into the scene's triangles. The GPU keeps the binary
-//! hierarchy.
+//! than a chase through the primitive list into the scene's triangles. The kernel's hierarchy
+//! is collapsed alike, four wide, with its boxes quantized (`quantized`).
 
 use crate::accel::{Bvh, Node};
 use crate::shared::primitive::PRIMITIVE_INDEX_BITS;
@@ -122,23 +122,9 @@ impl WideBvh {
             debug_assert!(index < TRIANGLES, "a leaf's index would read as a block's");
             return LEAF | index;
         }
-        let mut children = [EMPTY; WIDTH];
-        (children[0], children[1]) = (index + 1, node.offset);
-        let mut count = 2;
-        while count < WIDTH {
-            // Open the interior child of largest surface area: the likeliest to be entered.
-            let opens =
-                |child: u32| !bvh.nodes[child as usize].is_leaf() && !small.fits_block(child);
-            let widest = (0..count).filter(|&i| opens(children[i])).max_by(|&a, &b| {
-                let area_of = |i: usize| area(&bvh.nodes[children[i] as usize]);
-                area_of(a).total_cmp(&area_of(b))
-            });
-            let Some(i) = widest else { break };
-            let opened = children[i];
-            children[i] = opened + 1;
-            children[count] = bvh.nodes[opened as usize].offset;
-            count += 1;
-        }
+        let (children, count) = open_children::<WIDTH>(bvh, index, |child| {
+            !bvh.nodes[child as usize].is_leaf() && !small.fits_block(child)
+        });
         let at = self.nodes.len();
         self.nodes.push(WideNode {
             min: [[f32::INFINITY; WIDTH]; 3],
@@ -194,6 +180,32 @@ impl WideBvh {
         self.blocks.push(block);
         LEAF | TRIANGLES | (self.blocks.len() - 1) as u32
     }
+}
+
+/// The children of interior binary node `index` opened up to `N`: its two, then, while fewer
+/// than `N`, the child that `opens` allows of largest surface area (the likeliest to be
+/// entered) replaced by its own two; and how many there are (the rest `EMPTY`). The CPU's
+/// collapse and the kernel's (`quantized`) open alike.
+pub fn open_children<const N: usize>(
+    bvh: &Bvh,
+    index: u32,
+    opens: impl Fn(u32) -> bool,
+) -> ([u32; N], usize) {
+    let mut children = [EMPTY; N];
+    (children[0], children[1]) = (index + 1, bvh.nodes[index as usize].offset);
+    let mut count = 2;
+    while count < N {
+        let widest = (0..count).filter(|&i| opens(children[i])).max_by(|&a, &b| {
+            let area_of = |i: usize| area(&bvh.nodes[children[i] as usize]);
+            area_of(a).total_cmp(&area_of(b))
+        });
+        let Some(i) = widest else { break };
+        let opened = children[i];
+        children[i] = opened + 1;
+        children[count] = bvh.nodes[opened as usize].offset;
+        count += 1;
+    }
+    (children, count)
 }
 
 /// Which subtrees of a binary hierarchy hold at most `WIDTH` primitives, all triangles: those

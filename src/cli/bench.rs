@@ -157,6 +157,9 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
         let start = Instant::now();
         rebuilt.build_bvh();
         let seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let kernel_nodes = rebuilt.kernel_bvh().nodes.len();
+        let collapse = start.elapsed().as_secs_f64();
         let bvh = rebuilt.bvh;
         let geometry = rt_gpu::gpu::layout::geometry_bytes(flat);
         let per_triangle = if placed != triangles {
@@ -174,7 +177,7 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
             String::new()
         };
         say!(
-            "  bvh: built in {seconds:.3} s ({:.2} M primitives/s on {} threads), {} nodes, depth {}; GPU geometry {:.1} MB{per_triangle}",
+            "  bvh: built in {seconds:.3} s ({:.2} M primitives/s on {} threads), {} nodes, depth {}; the kernel's collapsed in {collapse:.3} s, {kernel_nodes} nodes; GPU geometry {:.1} MB{per_triangle}",
             built as f64 / seconds / 1e6,
             rayon::current_num_threads(),
             bvh.nodes.len(),
@@ -230,7 +233,7 @@ fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()>
     )?;
     let width = rt_gpu::accel::wide::WIDTH;
     let wide_node = std::mem::size_of::<rt_gpu::accel::wide::WideNode>();
-    let kernel_label = format!("kernel, binary ({KERNEL_NODE_BYTES} B nodes)");
+    let kernel_label = format!("kernel, 4-wide ({KERNEL_NODE_BYTES} B nodes)");
     let wide_label = format!("cpu, {width}-wide ({wide_node} B nodes)");
     let mut disagreements = 0;
     for (kind, s) in [("camera", &stats.camera), ("bounce", &stats.bounce)] {

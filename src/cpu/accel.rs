@@ -2,8 +2,8 @@
 //! enters the nearest (by where the ray enters them) and pushes the others with their entry
 //! distances; a popped child whose box now lies beyond the closest hit is skipped without being
 //! read. The CPU traverses the hierarchy collapsed to `WIDTH` children per node (`traverse_wide`);
-//! the binary walk the kernel does (`shaders/accel.wgsl`) is kept in the tests, as the reference
-//! the wide one must agree with.
+//! a binary walk of the uncollapsed hierarchy is kept in the tests, as the reference the wide one
+//! must agree with (the kernel's four-wide walk is modelled in `traversal_stats`).
 
 use super::lanes::{Lanes, equal_bits};
 use super::triangle_blocks::ShearedRay;
@@ -212,7 +212,7 @@ mod tests {
     use super::*;
     use crate::accel::box_entry;
 
-    /// The kernel's binary walk (twin: `shaders/accel.wgsl`): the reference for `traverse_wide`.
+    /// A binary walk of the uncollapsed hierarchy: the reference for `traverse_wide`.
     /// Calls `test(packed primitive, closest)` for every primitive in a leaf, below node `root`,
     /// whose box the ray meets before `closest` (and for a leaf root's, unconditionally); `test`
     /// shortens `closest` when it finds a nearer hit. The scene's hierarchy starts at node 0, an

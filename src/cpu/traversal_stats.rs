@@ -2,9 +2,10 @@
 //! a GPU's traversal cost where no GPU is at hand (issue 67). Two traversals are counted over
 //! the same rays:
 //!
-//! - the kernel's ([`kernel_traverse`]): a model of the binary walk of `shaders/accel.wgsl`, step
-//!   for step (two children's boxes per interior node read, the nearer entered, the other pushed
-//!   with its entry distance; a top-level leaf's instances pushed and entered when popped);
+//! - the kernel's ([`kernel_traverse`]): a model of the four-wide walk of `shaders/accel.wgsl`,
+//!   step for step (a node's four quantized boxes read, the nearest child met entered, the
+//!   others met pushed with their entry distances; a top-level leaf's instances pushed and
+//!   entered when popped);
 //! - the CPU's: [`traverse_wide`] itself, its reads counted through the [`Leaves`] hooks.
 //!
 //! The rays are a render's two kinds: camera rays through every pixel (coherent) and rays
@@ -14,8 +15,9 @@
 
 use super::accel::{Leaves, reach, traverse_wide};
 use super::intersect::{hit_triangle, intersect, local_ray};
+use crate::accel::quantized::{self, KERNEL_WIDTH, MISSED, NEAREST, nearest_first};
 use crate::accel::wide::{EMPTY, TriangleBlock, WideNode};
-use crate::accel::{BOX_FAR_WIDENING, Bvh, box_entry, inverse_direction};
+use crate::accel::{BOX_FAR_WIDENING, box_entry, inverse_direction};
 use crate::options::{RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
 use crate::shared::primitive::{PRIMITIVE_INDEX_BITS, PrimitiveRef};
@@ -24,8 +26,8 @@ use crate::shared::sampler::Sampler;
 use crate::shared::warp::cosine_direction;
 use rayon::prelude::*;
 
-/// Bytes of one node of the kernel's binary hierarchy (`GpuBvhNode`: both children's boxes and
-/// references), read on entering an interior node.
+/// Bytes of one node of the kernel's hierarchy (`GpuBvhNode`: four children's quantized boxes
+/// and references), read on entering an interior node.
 pub const KERNEL_NODE_BYTES: u64 = std::mem::size_of::<crate::shared::layout::GpuBvhNode>() as u64;
 
 /// Whether the CPU backend walks `scene`'s BVH (a scene of a few shapes is tested in turn).
@@ -41,7 +43,7 @@ pub struct Counts {
     /// weight of 1), the unit of lavapipe's loop budget: an iteration per interior node
     /// entered, a leaf's primitives and one more, a pass of the popping loop.
     pub iterations: u64,
-    /// Interior nodes read (the kernel's: binary; the CPU's: wide).
+    /// Interior nodes read (the kernel's: four wide, quantized; the CPU's: eight or four wide).
     pub nodes: u64,
     /// Bytes of those nodes (interior nodes only, on both sides: what leaves read is the
     /// primitives', counted in `primitives`).
@@ -219,56 +221,61 @@ enum Entry {
 }
 
 /// The kernel's traversal (`traverse` in shaders/accel.wgsl), counting what it reads: the
-/// closest hit's distance in `closest`. An interior node's read tests both children's boxes;
-/// the ray enters the nearer child met and pushes the other with its entry distance; a leaf
-/// (entered, never read: its reference holds its range) tests its primitives and pushes its
-/// instances; popping skips entries whose boxes now lie beyond the closest hit, and an
-/// instance's entry moves the ray into its mesh and descends from the mesh's root until the
-/// stack is back at the height it had then.
+/// closest hit's distance in `closest`. An interior node's read tests its children's quantized
+/// boxes; the ray enters the nearest child met and pushes the others met, farthest first, with
+/// their entry distances; a leaf (entered, never read: its reference holds its range) tests its
+/// primitives and pushes its instances; popping skips entries whose boxes now lie beyond the
+/// closest hit, and an instance's entry moves the ray into its mesh and descends from the
+/// mesh's root until the stack is back at the height it had then.
 pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts: &mut Counts) {
-    let bvh: &Bvh = &scene.bvh;
+    use crate::shared::layout::{BVH_LEAF, BVH_LEAF_COUNT_SHIFT, BVH_LEAF_OFFSET_LIMIT};
+    let kernel = scene.kernel_bvh();
+    let primitives = &scene.bvh.primitives;
     let mut ray = *world;
     let mut inverse = inverse_direction(ray.dir);
     let mut stack: Vec<Entry> = Vec::with_capacity(64);
     let mut deepest = 0;
     // The stack's height when the ray entered the instance it is in.
     let mut instance: Option<usize> = None;
-    let mut entering = 0u32;
+    let mut entering = kernel.root;
     loop {
         counts.iterations += 1;
-        let mut node = &bvh.nodes[entering as usize];
         let mut pop = false;
-        if !node.is_leaf() {
+        if entering & BVH_LEAF == 0 {
             counts.nodes += 1;
             counts.node_bytes += KERNEL_NODE_BYTES;
-            let (first, second) = (entering + 1, node.offset);
-            let entry = |child: u32| {
-                let c = &bvh.nodes[child as usize];
-                box_entry(c.min, c.max, ray.origin, inverse, *closest)
-            };
-            match (entry(first), entry(second)) {
-                (Some(t_first), Some(t_second)) => {
-                    let second_nearer = t_second < t_first;
-                    stack.push(if second_nearer {
-                        Entry::Node(first, t_first)
-                    } else {
-                        Entry::Node(second, t_second)
-                    });
+            let node = &kernel.nodes[entering as usize];
+            let keys: [f32; KERNEL_WIDTH] = std::array::from_fn(|lane| {
+                let (min, max) = node.child_box(lane);
+                let entry = (lane < node.count as usize)
+                    .then(|| box_entry(min, max, ray.origin, inverse, *closest))
+                    .flatten();
+                entry.map_or(MISSED, |t| t.min(NEAREST))
+            });
+            let children = std::array::from_fn(|lane| {
+                if keys[lane] == MISSED {
+                    quantized::EMPTY
+                } else {
+                    node.children[lane]
+                }
+            });
+            let ordered = nearest_first(keys, children);
+            for &(key, child) in ordered[1..].iter().rev() {
+                if child != quantized::EMPTY {
+                    stack.push(Entry::Node(child, key));
                     counts.pushes += 1;
                     deepest = deepest.max(stack.len() as u64);
-                    entering = if second_nearer { second } else { first };
                 }
-                (Some(_), None) => entering = first,
-                (None, Some(_)) => entering = second,
-                (None, None) => pop = true,
             }
-            node = &bvh.nodes[entering as usize];
+            entering = ordered[0].1;
+            pop = entering == quantized::EMPTY;
         }
-        if !pop && node.is_leaf() {
+        if !pop && entering & BVH_LEAF != 0 {
+            let first = (entering & (BVH_LEAF_OFFSET_LIMIT - 1)) as usize;
+            let count = ((entering & !BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT) as usize;
             counts.leaves += 1;
-            counts.iterations += node.count as u64 + 1;
-            let first = node.offset as usize;
-            for &packed in &bvh.primitives[first..first + node.count as usize] {
+            counts.iterations += count as u64 + 1;
+            for &packed in &primitives[first..first + count] {
                 counts.primitives += 1;
                 if instance.is_some() {
                     if let Some(t) = hit_mesh_triangle(scene, packed, &ray, reach(*closest)) {
@@ -299,6 +306,8 @@ pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts
                     inverse = inverse_direction(ray.dir);
                 }
                 let Some(top) = stack.pop() else {
+                    let bound = kernel.stack_bound(scene.largest_instance_leaf());
+                    debug_assert!(deepest <= bound as u64, "{deepest} entries, {bound} held");
                     counts.end_ray(deepest);
                     return;
                 };
@@ -315,7 +324,7 @@ pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts
                         instance = Some(stack.len());
                         ray = local_ray(inst, world);
                         inverse = inverse_direction(ray.dir);
-                        entering = inst.root;
+                        entering = kernel.instance_roots[i as usize];
                         break;
                     }
                 }

@@ -10,59 +10,24 @@ use crate::scene::flat::{FlatScene, Light, LightShape};
 use crate::shared::layout::*;
 use std::sync::Arc;
 
-/// The kernel's BVH: the host's interior nodes, in their order (the root's first), each with
-/// its two children's boxes and references (`GpuBvhNode`); the same hierarchy the CPU
-/// traverses, with the same decisions, laid out for one read per node entered (a node's own
-/// box is read by its parent). Also the reference of every host node, by its index.
-pub fn gpu_bvh(bvh: &crate::accel::Bvh) -> (Vec<GpuBvhNode>, Vec<u32>) {
-    let mut interior = 0;
-    let references: Vec<u32> = bvh
-        .nodes
-        .iter()
+/// The kernel's BVH nodes (`accel::quantized`, four wide: `GpuBvhNode`), in the order
+/// `FlatScene::kernel_bvh` holds them (the root's first).
+pub fn gpu_bvh(bvh: &crate::accel::quantized::QuantizedBvh) -> Vec<GpuBvhNode> {
+    let bytes = |q: &[[u8; 4]; 3]| q.map(u32::from_le_bytes);
+    (bvh.nodes.iter())
         .map(|n| {
-            if n.is_leaf() {
-                leaf_reference(n)
-            } else {
-                interior += 1;
-                interior - 1
-            }
-        })
-        .collect();
-    let nodes = bvh
-        .nodes
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| !n.is_leaf())
-        .map(|(i, n)| {
-            let (first, second) = (&bvh.nodes[i + 1], &bvh.nodes[n.offset as usize]);
+            let [x, y, z] = n.exponents.map(u32::from);
             GpuBvhNode {
-                first_min: first.min.to_array(),
-                first: references[i + 1],
-                first_max: first.max.to_array(),
-                second: references[n.offset as usize],
-                second_min: second.min.to_array(),
-                _pad0: 0,
-                second_max: second.max.to_array(),
-                _pad1: 0,
+                origin: n.origin.to_array(),
+                steps: x | y << 8 | z << 16,
+                children: n.children,
+                low: bytes(&n.low),
+                lanes: n.count as u32,
+                high: bytes(&n.high),
+                _pad: 0,
             }
         })
-        .collect();
-    (nodes, references)
-}
-
-fn leaf_reference(leaf: &crate::accel::Node) -> u32 {
-    const _: () = assert!((crate::accel::MAX_LEAF as u32) < BVH_LEAF_COUNT_LIMIT);
-    BVH_LEAF | (leaf.count << BVH_LEAF_COUNT_SHIFT) | leaf.offset
-}
-
-/// Where the kernel's traversal of the scene starts: its root's reference (`gpu_bvh`); an
-/// empty leaf for an empty hierarchy.
-pub fn bvh_root(bvh: &crate::accel::Bvh) -> u32 {
-    match bvh.nodes.first() {
-        Some(root) if !root.is_leaf() => 0,
-        Some(root) => leaf_reference(root),
-        None => BVH_LEAF,
-    }
+        .collect()
 }
 
 /// Constants the CPU reference and the kernel share, as WGSL `const` declarations.
@@ -148,6 +113,9 @@ fn wgsl_constants() -> String {
         ("BVH_LEAF_COUNT_SHIFT", BVH_LEAF_COUNT_SHIFT.literal()),
         ("BVH_LEAF_OFFSET_LIMIT", BVH_LEAF_OFFSET_LIMIT.literal()),
         ("BOX_FAR_WIDENING", crate::accel::BOX_FAR_WIDENING.literal()),
+        ("BVH_EMPTY", crate::accel::quantized::EMPTY.literal()),
+        ("BVH_MISSED", crate::accel::quantized::MISSED.literal()),
+        ("BVH_NEAREST", crate::accel::quantized::NEAREST.literal()),
         ("TEXEL_ROW", TEXEL_ROW.literal()),
         (
             "MAX_SURVIVAL",
@@ -479,12 +447,11 @@ impl SceneBuffers {
                 _pad: 0,
             })
             .collect();
-        let (mut bvh_nodes, bvh_references) = gpu_bvh(&scene.bvh);
+        let kernel_bvh = scene.kernel_bvh();
+        let mut bvh_nodes = gpu_bvh(kernel_bvh);
         let mut bvh_primitives = scene.bvh.primitives.clone();
-        let mut instances: Vec<GpuInstance> = scene
-            .instances
-            .iter()
-            .map(|i| {
+        let mut instances: Vec<GpuInstance> = (scene.instances.iter().enumerate())
+            .map(|(index, i)| {
                 let [to_world_x, to_world_y, to_world_z] = i.to_world.map(|r| r.to_array());
                 let [to_local_x, to_local_y, to_local_z] = i.to_local.map(|r| r.to_array());
                 GpuInstance {
@@ -494,7 +461,7 @@ impl SceneBuffers {
                     to_local_x,
                     to_local_y,
                     to_local_z,
-                    root: bvh_references[i.root as usize],
+                    root: kernel_bvh.instance_roots[index],
                     material: i.material,
                     _pad: [0; 2],
                 }
@@ -701,45 +668,32 @@ mod tests {
     use crate::accel::Bvh;
     use crate::accel::tests::random_items;
 
-    /// The kernel's layout is the host's hierarchy: every interior node's children's boxes and
-    /// references where the host has them, leaves' ranges intact, from the scene's root and
-    /// from an appended mesh's.
+    /// The kernel's nodes are the quantized hierarchy's, byte for byte where the kernel reads
+    /// them: references, origin, steps and each child's bounds in its lane's byte.
     #[test]
-    fn the_kernels_bvh_is_the_hosts() {
-        for n in [1, 2, 5, 300] {
+    fn the_kernels_nodes_are_the_quantized_hierarchys() {
+        for n in [2, 5, 300] {
             let mut bvh = Bvh::build(&mut random_items(n));
             let mesh_root = bvh.append_hierarchy(Bvh::build(&mut random_items(777)));
-            let (nodes, references) = gpu_bvh(&bvh);
-            assert_eq!(bvh_root(&bvh), references[0]);
-            let mut reached = vec![false; bvh.nodes.len()];
-            let mut stack = vec![0, mesh_root as usize];
-            while let Some(i) = stack.pop() {
-                reached[i] = true;
-                let host = &bvh.nodes[i];
-                let reference = references[i];
-                if host.is_leaf() {
-                    assert_ne!(reference & BVH_LEAF, 0);
-                    assert_eq!(reference & (BVH_LEAF_OFFSET_LIMIT - 1), host.offset);
-                    assert_eq!((reference & !BVH_LEAF) >> BVH_LEAF_COUNT_SHIFT, host.count);
-                    continue;
+            let q = crate::accel::quantized::QuantizedBvh::new(&bvh, [mesh_root]);
+            let nodes = gpu_bvh(&q);
+            assert_eq!(nodes.len(), q.nodes.len());
+            for (packed, node) in nodes.iter().zip(&q.nodes) {
+                assert_eq!(packed.children, node.children);
+                assert_eq!(packed.origin, node.origin.to_array());
+                assert_eq!(packed.lanes, node.count as u32);
+                for axis in 0..3 {
+                    assert_eq!(
+                        (packed.steps >> (8 * axis)) & 0xff,
+                        node.exponents[axis] as u32
+                    );
+                    for lane in 0..4 {
+                        let byte = |w: u32| (w >> (8 * lane)) & 0xff;
+                        assert_eq!(byte(packed.low[axis]), node.low[axis][lane] as u32);
+                        assert_eq!(byte(packed.high[axis]), node.high[axis][lane] as u32);
+                    }
                 }
-                assert_eq!(reference & BVH_LEAF, 0);
-                let node = &nodes[reference as usize];
-                let (first, second) = (i + 1, host.offset as usize);
-                assert_eq!(node.first, references[first]);
-                assert_eq!(node.second, references[second]);
-                assert_eq!(node.first_min, bvh.nodes[first].min.to_array());
-                assert_eq!(node.first_max, bvh.nodes[first].max.to_array());
-                assert_eq!(node.second_min, bvh.nodes[second].min.to_array());
-                assert_eq!(node.second_max, bvh.nodes[second].max.to_array());
-                stack.extend([first, second]);
             }
-            assert!(reached.iter().all(|&r| r), "a node is unreachable");
-            assert_eq!(
-                nodes.len(),
-                bvh.nodes.iter().filter(|n| !n.is_leaf()).count()
-            );
         }
-        assert_eq!(bvh_root(&Bvh::default()), BVH_LEAF);
     }
 }

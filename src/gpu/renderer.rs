@@ -196,13 +196,16 @@ impl GpuRenderer {
         let source = compose(&features, scene).map_err(GpuError::Shader)?;
         // SAFETY: `source` is composed (`shader::compose`) for the scene whose buffers
         // `scene_buffers` binds, with its `Features::of`; every dynamic index is then in range:
-        // - BVH stack (`traverse`): entering a top-level node at depth k, the stack holds <= k
-        //   entries; a top-level leaf pushes <= L = `largest_instance_leaf` instances; inside an
-        //   instance a mesh node j levels down holds <= depth + L - 1 + j. So every write is
-        //   below BVH_STACK = max(bvh.depth, 1) + L + instance_depth (`compose`, `build_bvh`).
-        // - Node references (`gpu_bvh`): interior ones < the interior-node count; a leaf's
-        //   first + count <= bvh.primitives.len() <= BVH_LEAF_OFFSET_LIMIT, and its count fits
-        //   its bits (both checked in `check_fits`). Packed primitive indices are < their
+        // - BVH stack (`traverse`): a node pushes <= 3 entries (its children met but the one
+        //   entered), so entering the k-th interior node of a top-level path the stack holds
+        //   <= 3(k - 1), and <= 3D after it (D = `QuantizedBvh::depth`); a top-level leaf pushes
+        //   <= L = `largest_instance_leaf` instances; inside an instance, whose entry leaves
+        //   <= 3D + L - 1, its mesh's nodes add <= 3 Dm (Dm = `instance_depth`). So every write
+        //   is below BVH_STACK = 3 max(D, 1) + L + 3 Dm (`compose`).
+        // - Node references (`gpu_bvh`): interior ones < the node count (`QuantizedBvh`), a
+        //   lane past a node's `lanes` (BVH_EMPTY) is never entered; a leaf's first + count <=
+        //   bvh.primitives.len() <= BVH_LEAF_OFFSET_LIMIT, and its count fits its bits (both
+        //   checked in `check_fits`). Packed primitive indices are < their
         //   kind's length, and a shape's array is read only under its kind (`consider_shape`,
         //   `shape_light_of` in `shape_dispatch`), declared for every kind the scene has;
         //   instance roots are references of their mesh's root.

@@ -215,8 +215,6 @@ impl Features {
             .max(scene.materials.len())
             .max(scene.lights.len());
         let capacity = (longest.max(1) as u64).next_power_of_two();
-        let interior_nodes = scene.bvh.nodes.iter().filter(|n| !n.is_leaf()).count();
-        let bvh_capacity = (interior_nodes.max(1) as u64).next_power_of_two();
         let reference_words = scene.bvh.primitives.len().div_ceil(4);
         let bvh_primitive_capacity = (reference_words.max(1) as u64).next_power_of_two();
         // Bounded in size: a flat scene holds only the materials and lights its primitives
@@ -230,6 +228,13 @@ impl Features {
         // Any other scene goes through its BVH, faster even on lavapipe than a loop over a few
         // hundred primitives.
         let bvh = !inline_scene;
+        // The kernel's hierarchy only where it traverses one (made on first use).
+        let interior_nodes = if bvh {
+            scene.kernel_bvh().nodes.len()
+        } else {
+            0
+        };
+        let bvh_capacity = (interior_nodes.max(1) as u64).next_power_of_two();
         Features {
             shapes: (shape::KINDS.iter().enumerate())
                 .filter(|(_, k)| scene.shapes.count(k) > 0)
@@ -414,14 +419,19 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         scene.medium_crossings,
         float_literal(f32::MAX)
     ));
-    // The traversal stack holds at most one entry per level below the root: sized to this
-    // scene's BVH (private arrays cost lavapipe in proportion to their size). With instances,
-    // also the instances of one top-level leaf (entered one by one from the stack) and the
-    // levels of an instance's mesh below its root.
-    let stack = scene.bvh.depth.max(1) + scene.largest_instance_leaf() + scene.instance_depth;
+    // The traversal stack sized to this scene's hierarchy (private arrays cost lavapipe in
+    // proportion to their size); a kernel of constants has none (its hierarchy is not made).
+    let (stack, root) = if features.bvh {
+        let kernel_bvh = scene.kernel_bvh();
+        (
+            kernel_bvh.stack_bound(scene.largest_instance_leaf()),
+            kernel_bvh.root,
+        )
+    } else {
+        (1, crate::shared::layout::BVH_LEAF)
+    };
     out.push_str(&format!(
-        "const BVH_STACK: u32 = {stack}u;\nconst BVH_ROOT: u32 = {}u;\n",
-        crate::gpu::layout::bvh_root(&scene.bvh)
+        "const BVH_STACK: u32 = {stack}u;\nconst BVH_ROOT: u32 = {root}u;\n"
     ));
     if features.uniform_scene {
         out.push_str(&format!(

@@ -163,6 +163,17 @@ type Tangents = std::rc::Rc<[[Vec4; 3]]>;
 /// have them: interpolated, they are the barycentric weights a hit has without them.
 pub const BARYCENTRIC_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
 
+/// [`FlatScene::kernel_bvh`], once made: what `bvh` determines, so equal whether made or not
+/// (two flat scenes are equal by their hierarchies).
+#[derive(Clone, Debug, Default)]
+pub struct KernelBvhCache(std::sync::OnceLock<crate::accel::quantized::QuantizedBvh>);
+
+impl PartialEq for KernelBvhCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlatScene {
     /// The world position of this scene's coordinate origin. Every position below is relative
@@ -218,6 +229,9 @@ pub struct FlatScene {
     /// The same hierarchy collapsed to `accel::wide::WIDTH` children per node, which the CPU
     /// traverses.
     pub wide_bvh: crate::accel::wide::WideBvh,
+    /// The same hierarchy as the kernel traverses it (four wide, its boxes quantized), made
+    /// when first asked for ([`Self::kernel_bvh`]): a CPU render never needs it.
+    pub quantized_bvh: KernelBvhCache,
     /// The quads four to a block (`shapes.quads` in order), which the CPU tests together where
     /// it tests a scene's shapes in turn; built with the BVH.
     pub quad_blocks: Vec<crate::shape::quad::QuadBlock>,
@@ -385,6 +399,17 @@ impl FlatScene {
         Ok(())
     }
 
+    /// The hierarchy the kernel traverses (`accel::quantized`), collapsed from `bvh` on first
+    /// use.
+    pub fn kernel_bvh(&self) -> &crate::accel::quantized::QuantizedBvh {
+        self.quantized_bvh.0.get_or_init(|| {
+            crate::accel::quantized::QuantizedBvh::new(
+                &self.bvh,
+                self.instances.iter().map(|i| i.root),
+            )
+        })
+    }
+
     /// Builds `bvh`: each instanced mesh's hierarchy (in mesh coordinates), then the top level
     /// over the placed primitives and the instances (bounded by their meshes' root boxes,
     /// placed), then the meshes' nodes appended after the top level's; sets each instance's
@@ -425,6 +450,7 @@ impl FlatScene {
             _ => None,
         };
         self.wide_bvh = crate::accel::wide::WideBvh::new(&self.bvh, instance_roots, corners);
+        self.quantized_bvh = KernelBvhCache::default();
         self.quad_blocks = crate::shape::quad::QuadBlock::blocks(&self.shapes.quads);
     }
 
@@ -1206,6 +1232,7 @@ impl<'a> Flattener<'a> {
             instance_depth: 0,
             bvh: crate::accel::Bvh::default(),
             wide_bvh: crate::accel::wide::WideBvh::default(),
+            quantized_bvh: KernelBvhCache::default(),
             quad_blocks: Vec::new(),
             lights: Vec::new(),
             medium_crossings: 0,

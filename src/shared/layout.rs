@@ -81,6 +81,16 @@ macro_rules! vec4u_arrays {
 
 vec4u_arrays!(2, 3, 4, 5);
 
+impl WgslType for [u32; 4] {
+    const WGSL: &'static str = "vec4u";
+    fn literal(&self) -> String {
+        format!(
+            "vec4u({}u, {}u, {}u, {}u)",
+            self[0], self[1], self[2], self[3]
+        )
+    }
+}
+
 impl WgslType for [u32; 2] {
     const WGSL: &'static str = "vec2u";
     fn literal(&self) -> String {
@@ -257,18 +267,23 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// An interior node of the BVH as the kernel reads it (see `gpu_bvh`): both children's
-    /// boxes and references, so that one read of four texels decides which children a ray
-    /// enters, and a leaf is known as one before it is reached.
+    /// An interior node of the BVH as the kernel reads it (`accel::quantized::QuantizedNode`,
+    /// packed by `gpu_bvh`): its four children's references and their boxes quantized, a byte
+    /// per bound, so that one read of four texels decides which children a ray enters, and a
+    /// leaf is known as one before it is reached.
     pub struct GpuBvhNode as "BvhNode" {
-        first_min: [f32; 3],
-        first: u32,
-        first_max: [f32; 3],
-        second: u32,
-        second_min: [f32; 3],
-        _pad0: u32,
-        second_max: [f32; 3],
-        _pad1: u32,
+        /// The grid's origin.
+        origin: [f32; 3],
+        /// Each axis's step as an f32's biased exponent: x in bits 0-7, y 8-15, z 16-23.
+        steps: u32,
+        /// `accel::quantized::EMPTY` where unused.
+        children: [u32; 4],
+        /// The children's minima, in steps: a byte per child (child i in bits 8i up) per axis;
+        /// `lanes` is the children in use.
+        low: [u32; 3],
+        lanes: u32,
+        high: [u32; 3],
+        _pad: u32,
     }
 }
 

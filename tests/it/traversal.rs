@@ -25,7 +25,8 @@ fn scenes() -> Vec<(&'static str, Scene)> {
 }
 
 /// Both traversals find every ray's closest hit where the renderer does, and the CPU's wide
-/// walk reads fewer nodes than the kernel's binary one; the knots are entered as instances.
+/// walk (eight or four wide) reads fewer nodes than the kernel's four-wide one; the knots are
+/// entered as instances.
 #[test]
 fn both_counted_traversals_find_the_renderers_hits() {
     for (name, scene) in scenes() {
@@ -38,7 +39,7 @@ fn both_counted_traversals_find_the_renderers_hits() {
             assert!(s.kernel.rays > 0 && s.kernel.rays == s.wide.rays);
             assert!(
                 0 < s.wide.nodes && s.wide.nodes < s.kernel.nodes,
-                "{name} {kind}: wide {} nodes, binary {}",
+                "{name} {kind}: CPU {} nodes, kernel {}",
                 s.wide.nodes,
                 s.kernel.nodes
             );
