@@ -7,6 +7,7 @@ import _thread
 import os
 import pathlib
 import shutil
+import signal
 import subprocess
 import sys
 import threading
@@ -142,10 +143,16 @@ def test_errors_are_value_errors_with_the_one_line_message(tmp_path):
 
 
 def test_ctrl_c_stops_a_render_with_keyboard_interrupt():
-    # Far more samples than the test waits for; Ctrl-C (SIGINT's handler) a second in.
-    threading.Timer(1.0, _thread.interrupt_main).start()
-    with pytest.raises(KeyboardInterrupt):
-        rtgpu.render(rtgpu.load("cornell"), spp=1_000_000, size=(64, 64), backend="cpu")
+    # Far more samples than the test waits for; Ctrl-C (SIGINT's handler) a second in. Python's
+    # own handler, even where the tests were started with SIGINT ignored (a background job of a
+    # shell without job control), where interrupt_main would do nothing and the render run on.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        threading.Timer(1.0, _thread.interrupt_main).start()
+        with pytest.raises(KeyboardInterrupt):
+            rtgpu.render(rtgpu.load("cornell"), spp=1_000_000, size=(64, 64), backend="cpu")
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def test_two_renders_in_threads_give_each_its_own_image():
