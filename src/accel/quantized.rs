@@ -9,10 +9,9 @@
 //!
 //! A quantized box is never smaller than the child's: it can only make a ray enter more
 //! boxes, never miss a primitive, so both backends find the same closest hits. Four children,
-//! not the CPU's eight: a GPU lane tests a node's boxes one after another, and four already
-//! take a bounce ray off the knot through 0.43x the binary walk's nodes and node bytes
-//! (docs/benchmarks.md, 2026-12-07 afternoon, issue 67). Where a bound would need a step beyond
-//! f32's (coordinates near 1e38) it is decoded as infinite, by IEEE overflow.
+//! not the CPU's eight: a GPU lane tests a node's boxes one after another and sorts them, and
+//! four already halve what the binary walk read (docs/benchmarks.md). Where a bound would need
+//! a step beyond f32's (coordinates near 1e38) it is decoded as infinite, by IEEE overflow.
 
 use super::wide::open_children;
 use super::{Bvh, Node};
