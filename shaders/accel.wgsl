@@ -1,7 +1,8 @@
 // BVH traversal (its model, step for step: `kernel_traverse` in src/cpu/traversal_stats.rs):
 // depth-first over the four-wide hierarchy of src/accel/quantized.rs; an interior node tests
-// its children's quantized boxes, enters the nearest by entry distance and pushes the others
-// met, farthest first, with their distances, on a stack in private memory. Nodes are read as
+// its children's quantized boxes, enters the nearest by entry distance and pushes one entry
+// for the others met (`group_entry` there: the node and their lanes, nearest first) with the
+// nearest one's distance, on a stack in private memory. Nodes are read as
 // `gpu_bvh` in src/gpu/layout.rs lays them out: an interior node holds its children's boxes
 // and references, so entering a node is one read and a leaf's primitives are known from its
 // reference.
@@ -19,6 +20,13 @@
 // that sample to the next dispatch (see kernel.wgsl and GpuParams in src/shared/layout.rs).
 
 //#if BVH
+// The traversal's stack: each entry a word (an interior node's children left to enter, or an
+// instance's index) and a distance (where the ray enters the nearest of those children's boxes,
+// or ENTER_INSTANCE). At module scope: lavapipe keeps a function's array in registers, each
+// dynamic index a chain of selects over every element, but a module's private array in memory
+// (1.2x on the knot, whatever the stack's size; docs/benchmarks.md).
+var<private> stack: array<u32, BVH_STACK>;
+var<private> stack_entry: array<f32, BVH_STACK>;
 //#if LOOP_BUDGET
 var<private> loop_iterations: u32;
 var<private> budget_spent: bool;
@@ -52,15 +60,16 @@ fn lane_bytes(w: u32) -> vec4f {
 
 struct Ordered {
     key: vec4f,
-    child: vec4u,
+    lane: vec4u,
 }
 
-// The children met (key: entry distance, below BVH_NEAREST) before those missed (BVH_MISSED,
-// BVH_EMPTY), nearest first: the sorting network of nearest_first in src/accel/quantized.rs.
-fn nearest_first(near: vec4f, children: vec4u) -> Ordered {
+// The lanes of the children met (key: entry distance, below BVH_NEAREST) before those missed
+// (BVH_MISSED, BVH_EMPTY), nearest first: the sorting network of nearest_first in
+// src/accel/quantized.rs.
+fn nearest_first(near: vec4f) -> Ordered {
     let met = near >= vec4f(0.0);
     var k = select(vec4f(BVH_MISSED), min(near, vec4f(BVH_NEAREST)), met);
-    var c = select(vec4u(BVH_EMPTY), children, met);
+    var c = select(vec4u(BVH_EMPTY), vec4u(0u, 1u, 2u, 3u), met);
     var s = k.y < k.x;
     k = select(k, k.yxzw, s);
     c = select(c, c.yxzw, s);
@@ -144,8 +153,6 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
     let world_shear = Shear(0u, vec3f(0.0));
 //#endif
     var sh = world_shear;
-    var stack: array<u32, BVH_STACK>;
-    var stack_entry: array<f32, BVH_STACK>;
     var top = 0u;
     var entering = BVH_ROOT;
 //#if TRIANGLES
@@ -167,25 +174,17 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
         var pop = false;
         if (entering & BVH_LEAF) == 0u {
             let node = bvh_node(entering);
-            let o = nearest_first(children_entry(node, ray.origin, inverse, (*c).t), node.children);
-            // The others met, farthest first: popped nearest first.
-            if o.child.w != BVH_EMPTY {
-                stack[top] = o.child.w;
-                stack_entry[top] = o.key.w;
-                top += 1u;
-            }
-            if o.child.z != BVH_EMPTY {
-                stack[top] = o.child.z;
-                stack_entry[top] = o.key.z;
-                top += 1u;
-            }
-            if o.child.y != BVH_EMPTY {
-                stack[top] = o.child.y;
+            let o = nearest_first(children_entry(node, ray.origin, inverse, (*c).t));
+            // The others met, in one entry (group_entry): the missed sort last.
+            if o.lane.y != BVH_EMPTY {
+                let left = select(select(3u, 2u, o.lane.w == BVH_EMPTY), 1u, o.lane.z == BVH_EMPTY);
+                let lanes = (o.lane.y & 3u) | ((o.lane.z & 3u) << 2u) | ((o.lane.w & 3u) << 4u);
+                stack[top] = entering | (lanes << BVH_GROUP_LANES_SHIFT) | (left << BVH_GROUP_COUNT_SHIFT);
                 stack_entry[top] = o.key.y;
                 top += 1u;
             }
-            entering = o.child.x;
-            pop = o.child.x == BVH_EMPTY;
+            pop = o.lane.x == BVH_EMPTY;
+            entering = node.children[o.lane.x & 3u];
         }
         if !pop && (entering & BVH_LEAF) != 0u {
             let first = entering & (BVH_LEAF_OFFSET_LIMIT - 1u);
@@ -237,13 +236,32 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
                     break;
                 }
                 top -= 1u;
-                entering = stack[top];
-                // The box as box_entry would test it against the closest hit now.
-                var entered = stack_entry[top] <= (*c).t * BOX_FAR_WIDENING;
+                let word = stack[top];
+                let key = stack_entry[top];
+                // The nearest box left as box_entry would test it against the closest hit now:
+                // beyond it, so are the others.
+                var entered = key <= (*c).t * BOX_FAR_WIDENING;
+                var group = true;
 //#if TRIANGLES
 //#if INSTANCES
-                if stack_entry[top] == ENTER_INSTANCE {
-                    instance = entering;
+                group = key != ENTER_INSTANCE;
+//#endif
+//#endif
+                // The entry's next child (group_next; node 0 for an instance's entry, whatever
+                // the lanes, so that every lane reads a node), the rest put back under the same
+                // distance.
+                let node = select(0u, word & (BVH_GROUP_NODE_LIMIT - 1u), group);
+                let lanes = (word >> BVH_GROUP_LANES_SHIFT) & 0x3fu;
+                let left = word >> BVH_GROUP_COUNT_SHIFT;
+                entering = bvh_child(node, lanes & 3u);
+                if group && entered && left > 1u {
+                    stack[top] = node | ((lanes >> 2u) << BVH_GROUP_LANES_SHIFT) | ((left - 1u) << BVH_GROUP_COUNT_SHIFT);
+                    top += 1u;
+                }
+//#if TRIANGLES
+//#if INSTANCES
+                if !group {
+                    instance = word;
                     floor = top;
                     let inst = instances[instance];
                     ray = Ray(instance_to_local(inst, world.origin), instance_vector_to_local(inst, world.dir));

@@ -77,6 +77,11 @@ fn bvh_primitive(i: u32) -> u32 {
 fn bvh_node(i: u32) -> BvhNode {
     return bvh_nodes[i];
 }
+
+// Child `lane`'s reference of node i.
+fn bvh_child(i: u32, lane: u32) -> u32 {
+    return bvh_nodes[i].children[lane];
+}
 //#else
 // Four texels per node (TEXEL_ROW and GpuBvhNode in src/shared/layout.rs).
 @group(0) @binding(BINDING_BVH_NODES) var bvh_node_texels: texture_2d<u32>;
@@ -92,6 +97,11 @@ fn bvh_node(i: u32) -> BvhNode {
     let c = texel_at(bvh_node_texels, 4u * i + 2u);
     let d = texel_at(bvh_node_texels, 4u * i + 3u);
     return BvhNode(bitcast<vec3f>(a.xyz), a.w, b, c.xyz, c.w, d.xyz);
+}
+
+// Child `lane`'s reference of node i: one texel.
+fn bvh_child(i: u32, lane: u32) -> u32 {
+    return texel_at(bvh_node_texels, 4u * i + 1u)[lane];
 }
 //#endif
 //#endif

@@ -254,6 +254,25 @@ pub struct BenchArgs {
     /// where no GPU is at hand.
     #[arg(long)]
     pub stats: bool,
+    /// Which renders to time, comma-separated (the CPU's run also counts the rays per sample).
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "cpu,gpu,gpu-everything"
+    )]
+    pub runs: Vec<BenchRun>,
+}
+
+/// A render `bench` times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchRun {
+    /// The CPU reference renderer.
+    Cpu,
+    /// The GPU kernel specialised to the scene (what a render runs).
+    Gpu,
+    /// The GPU's general kernel, every feature enabled.
+    GpuEverything,
 }
 
 #[cfg(feature = "viewer")]

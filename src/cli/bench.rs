@@ -1,6 +1,6 @@
 //! `rt-gpu bench`: million samples per second of each backend, side by side in one run.
 
-use super::args::BenchArgs;
+use super::args::{BenchArgs, BenchRun};
 use super::one_line;
 use super::scenes::resolve_scene;
 use anyhow::{Context, bail};
@@ -53,11 +53,21 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     // credited with the same rays per sample.
     let mut rays_per_sample = None;
     let runs = [
-        ("cpu", Backend::Cpu, false),
-        ("gpu specialised kernel", Backend::Gpu, false),
-        ("gpu everything-enabled kernel", Backend::Gpu, true),
+        (BenchRun::Cpu, "cpu", Backend::Cpu, false),
+        (BenchRun::Gpu, "gpu specialised kernel", Backend::Gpu, false),
+        (
+            BenchRun::GpuEverything,
+            "gpu everything-enabled kernel",
+            Backend::Gpu,
+            true,
+        ),
     ];
-    for (label, backend, everything) in runs {
+    let runs: Vec<_> = runs
+        .into_iter()
+        .filter(|run| args.runs.contains(&run.0))
+        .map(|(_, label, backend, everything)| (label, backend, everything))
+        .collect();
+    for &(label, backend, everything) in &runs {
         let gpu = GpuChoice {
             adapter: args.adapter.clone(),
             everything,
@@ -113,10 +123,13 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     if let Some(r) = rays_per_sample {
         say!("  rays per sample (the CPU's count: camera, bounce and shadow rays): {r:.2}")?;
     }
-    if let (Some(gpu), Some(cpu)) = (rate(runs[1].0), rate(runs[0].0)) {
+    if let (Some(gpu), Some(cpu)) = (rate("gpu specialised kernel"), rate("cpu")) {
         say!("  gpu / cpu speed: {:.2}x", gpu / cpu)?;
     }
-    if let (Some(special), Some(general)) = (rate(runs[1].0), rate(runs[2].0)) {
+    if let (Some(special), Some(general)) = (
+        rate("gpu specialised kernel"),
+        rate("gpu everything-enabled kernel"),
+    ) {
         say!(
             "  specialised / everything-enabled kernel speed: {:.2}x",
             special / general

@@ -212,21 +212,23 @@ fn hit_mesh_triangle(scene: &FlatScene, packed: u32, local: &Ray, t_max: f32) ->
     hit_triangle(&scene.triangles[triangle as usize], local, 0.0, t_max).map(|h| h.0)
 }
 
-/// A stack entry of the kernel's walk: a node reference and the distance at which the ray
-/// enters its box, or an instance to enter.
+/// A stack entry of the kernel's walk: an interior node's children left to enter
+/// (`quantized::group_entry`) and the distance at which the ray enters the nearest one's box,
+/// or an instance to enter.
 #[derive(Clone, Copy)]
 enum Entry {
-    Node(u32, f32),
+    Group(u32, f32),
     Instance(u32),
 }
 
 /// The kernel's traversal (`traverse` in shaders/accel.wgsl), counting what it reads: the
 /// closest hit's distance in `closest`. An interior node's read tests its children's quantized
-/// boxes; the ray enters the nearest child met and pushes the others met, farthest first, with
-/// their entry distances; a leaf (entered, never read: its reference holds its range) tests its
-/// primitives and pushes its instances; popping skips entries whose boxes now lie beyond the
-/// closest hit, and an instance's entry moves the ray into its mesh and descends from the
-/// mesh's root until the stack is back at the height it had then.
+/// boxes; the ray enters the nearest child met and pushes one entry for the others met, nearest
+/// first, with the nearest one's entry distance; a leaf (entered, never read: its reference
+/// holds its range) tests its primitives and pushes its instances; popping drops entries whose
+/// nearest box now lies beyond the closest hit, enters an entry's next child (putting the rest
+/// back), and an instance's entry moves the ray into its mesh and descends from the mesh's root
+/// until the stack is back at the height it had then.
 pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts: &mut Counts) {
     use crate::shared::layout::{BVH_LEAF, BVH_LEAF_COUNT_SHIFT, BVH_LEAF_OFFSET_LIMIT};
     let kernel = scene.kernel_bvh();
@@ -252,23 +254,30 @@ pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts
                     .flatten();
                 entry.map_or(MISSED, |t| t.min(NEAREST))
             });
-            let children = std::array::from_fn(|lane| {
+            let lanes = std::array::from_fn(|lane| {
                 if keys[lane] == MISSED {
                     quantized::EMPTY
                 } else {
-                    node.children[lane]
+                    lane as u32
                 }
             });
-            let ordered = nearest_first(keys, children);
-            for &(key, child) in ordered[1..].iter().rev() {
-                if child != quantized::EMPTY {
-                    stack.push(Entry::Node(child, key));
-                    counts.pushes += 1;
-                    deepest = deepest.max(stack.len() as u64);
-                }
+            let ordered = nearest_first(keys, lanes);
+            let others: Vec<u32> = (ordered[1..].iter())
+                .map(|o| o.1)
+                .take_while(|&lane| lane != quantized::EMPTY)
+                .collect();
+            if !others.is_empty() {
+                stack.push(Entry::Group(
+                    quantized::group_entry(entering, &others),
+                    ordered[1].0,
+                ));
+                counts.pushes += 1;
+                deepest = deepest.max(stack.len() as u64);
             }
-            entering = ordered[0].1;
-            pop = entering == quantized::EMPTY;
+            pop = ordered[0].1 == quantized::EMPTY;
+            if !pop {
+                entering = node.children[ordered[0].1 as usize];
+            }
         }
         if !pop && entering & BVH_LEAF != 0 {
             let first = (entering & (BVH_LEAF_OFFSET_LIMIT - 1)) as usize;
@@ -312,9 +321,14 @@ pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts
                     return;
                 };
                 match top {
-                    Entry::Node(reference, t_entry) => {
+                    Entry::Group(word, t_entry) => {
                         if t_entry <= *closest * BOX_FAR_WIDENING {
-                            entering = reference;
+                            let (lane, rest) = quantized::group_next(word);
+                            let node = word & (quantized::GROUP_NODE_LIMIT - 1);
+                            entering = kernel.nodes[node as usize].children[lane as usize];
+                            if let Some(rest) = rest {
+                                stack.push(Entry::Group(rest, t_entry));
+                            }
                             break;
                         }
                     }

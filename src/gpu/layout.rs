@@ -116,6 +116,18 @@ fn wgsl_constants() -> String {
         ("BVH_EMPTY", crate::accel::quantized::EMPTY.literal()),
         ("BVH_MISSED", crate::accel::quantized::MISSED.literal()),
         ("BVH_NEAREST", crate::accel::quantized::NEAREST.literal()),
+        (
+            "BVH_GROUP_LANES_SHIFT",
+            crate::accel::quantized::GROUP_LANES_SHIFT.literal(),
+        ),
+        (
+            "BVH_GROUP_COUNT_SHIFT",
+            crate::accel::quantized::GROUP_COUNT_SHIFT.literal(),
+        ),
+        (
+            "BVH_GROUP_NODE_LIMIT",
+            crate::accel::quantized::GROUP_NODE_LIMIT.literal(),
+        ),
         ("TEXEL_ROW", TEXEL_ROW.literal()),
         (
             "MAX_SURVIVAL",

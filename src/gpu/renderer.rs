@@ -6,6 +6,7 @@ use super::dispatch::{DispatchSizer, LOOP_ITERATION_BUDGET, LoopCost, Tuning};
 use super::layout::{ImageArray, SceneBuffers, base_params, whole_image_dispatch};
 use super::shader::{Features, compose, validate};
 use super::tile::TileRenderer;
+use crate::accel::quantized::GROUP_NODE_LIMIT;
 use crate::film::Film;
 use crate::options::{RenderOptions, SamplerKind};
 use crate::scene::flat::FlatScene;
@@ -196,12 +197,16 @@ impl GpuRenderer {
         let source = compose(&features, scene).map_err(GpuError::Shader)?;
         // SAFETY: `source` is composed (`shader::compose`) for the scene whose buffers
         // `scene_buffers` binds, with its `Features::of`; every dynamic index is then in range:
-        // - BVH stack (`traverse`): a node pushes <= 3 entries (its children met but the one
-        //   entered), so entering the k-th interior node of a top-level path the stack holds
-        //   <= 3(k - 1), and <= 3D after it (D = `QuantizedBvh::depth`); a top-level leaf pushes
+        // - BVH stack (`traverse`): a node pushes <= 1 entry (its children met but the one
+        //   entered, `group_entry`), and popping a child of an entry puts back at most that
+        //   entry, so entering the k-th interior node of a top-level path the stack holds
+        //   <= k - 1, and <= D after it (D = `QuantizedBvh::depth`); a top-level leaf pushes
         //   <= L = `largest_instance_leaf` instances; inside an instance, whose entry leaves
-        //   <= 3D + L - 1, its mesh's nodes add <= 3 Dm (Dm = `instance_depth`). So every write
-        //   is below BVH_STACK = 3 max(D, 1) + L + 3 Dm (`compose`).
+        //   <= D + L - 1, its mesh's nodes add <= Dm (Dm = `instance_depth`). So every write
+        //   is below BVH_STACK = max(D, 1) + L + Dm (`compose`). An entry's node is an interior
+        //   node's index (below the node count, itself below GROUP_NODE_LIMIT: `check_fits`),
+        //   and its lanes are below 4; an instance's entry reads node 0 (which exists: an
+        //   empty hierarchy gets one).
         // - Node references (`gpu_bvh`): interior ones < the node count (`QuantizedBvh`), a
         //   lane past a node's `lanes` (BVH_EMPTY) is never entered; a leaf's first + count <=
         //   bvh.primitives.len() <= BVH_LEAF_OFFSET_LIMIT, and its count fits its bits (both
@@ -490,6 +495,12 @@ impl GpuRenderer {
             return Err(GpuError::TooLarge(format!(
                 "the scene's BVH has {} primitive references, more than the kernel can address ({BVH_LEAF_OFFSET_LIMIT}): use fewer triangles, or --backend cpu",
                 buffers.bvh_primitives.len()
+            )));
+        }
+        if buffers.bvh_nodes.len() as u64 > GROUP_NODE_LIMIT as u64 {
+            return Err(GpuError::TooLarge(format!(
+                "the scene's BVH has {} nodes, more than the kernel's traversal addresses ({GROUP_NODE_LIMIT}): use fewer triangles, or --backend cpu",
+                buffers.bvh_nodes.len()
             )));
         }
         if node_rows > max_rows {

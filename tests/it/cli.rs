@@ -576,6 +576,27 @@ fn bench_fails_when_a_run_fails() {
     assert!(stderr(&out).contains("runs failed"), "{}", stderr(&out));
 }
 
+/// `bench --runs cpu` times the CPU alone: with a GPU adapter that does not exist, nothing
+/// fails, and no GPU line is printed.
+#[test]
+fn bench_times_only_the_runs_asked_for() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let args = [
+        "bench",
+        "--adapter",
+        "no-such-gpu-xyz",
+        "--spp",
+        "1",
+        "--size",
+        "4x4",
+    ];
+    let out = rt_gpu(&[&args[..], &["--runs", "cpu"]].concat(), dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let printed = String::from_utf8_lossy(&out.stdout);
+    assert!(printed.contains("  cpu "), "{printed}");
+    assert!(!printed.contains("gpu"), "{printed}");
+}
+
 /// SIGTERM (or Ctrl-C) during a render exits non-zero (128 + the signal) and leaves no
 /// temporary file and no partial image.
 #[cfg(unix)]
