@@ -109,7 +109,8 @@ fn consider_primitive(packed: u32, ray: Ray, sh: ptr<function, Shear>, c: ptr<fu
 //#if TRIANGLES
 //#if INSTANCES
 const NO_INSTANCE: u32 = 0xffffffffu;
-// The entry distance of a stack entry that enters an instance (the entry its index), not a node.
+// The entry distance of a stack entry that enters an instance (the entry its index), not a
+// node's children.
 const ENTER_INSTANCE: f32 = -1.0;
 
 // Triangle `triangle` of instance `instance`'s mesh against the ray in mesh coordinates (the
@@ -140,9 +141,9 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 //
 // One iteration per interior node entered (`entering`: a node's or a leaf's reference), with
 // the leaf it descends into if it does; one per leaf popped from the stack; none for a child
-// whose box the ray misses; a popped entry whose box now lies beyond the closest hit costs a
-// pass of the popping loop, no node read. (Testing the popped node's own box instead, as the
-// binary walk once did, took 1.25x as long on lavapipe.)
+// whose box the ray misses; a popped entry whose nearest box now lies beyond the closest hit
+// costs a pass of the popping loop, no read. (Testing the popped node's own box instead, as
+// the binary walk once did, took 1.25x as long on lavapipe.)
 fn traverse(world: Ray, c: ptr<function, Closest>) {
     var ray = world;
     let world_inverse = inverse_direction(world.dir);
@@ -247,16 +248,19 @@ fn traverse(world: Ray, c: ptr<function, Closest>) {
                 group = key != ENTER_INSTANCE;
 //#endif
 //#endif
-                // The entry's next child (group_next; node 0 for an instance's entry, whatever
-                // the lanes, so that every lane reads a node), the rest put back under the same
-                // distance.
+                // The entry's next child (group_next; node 0 for an instance's entry, so that a
+                // SIMD lane that reads under another's mask reads a node), the rest put back
+                // under the same distance
+                // (stack_entry[top], the distance, is still there for the rest).
                 let node = select(0u, word & (BVH_GROUP_NODE_LIMIT - 1u), group);
                 let lanes = (word >> BVH_GROUP_LANES_SHIFT) & 0x3fu;
                 let left = word >> BVH_GROUP_COUNT_SHIFT;
-                entering = bvh_child(node, lanes & 3u);
-                if group && entered && left > 1u {
-                    stack[top] = node | ((lanes >> 2u) << BVH_GROUP_LANES_SHIFT) | ((left - 1u) << BVH_GROUP_COUNT_SHIFT);
-                    top += 1u;
+                if group && entered {
+                    entering = bvh_child(node, lanes & 3u);
+                    if left > 1u {
+                        stack[top] = node | ((lanes >> 2u) << BVH_GROUP_LANES_SHIFT) | ((left - 1u) << BVH_GROUP_COUNT_SHIFT);
+                        top += 1u;
+                    }
                 }
 //#if TRIANGLES
 //#if INSTANCES

@@ -334,7 +334,8 @@ mod tests {
     }
 
     /// A group entry gives back its lanes in order, then none, for every node index's extremes
-    /// and every count; the kernel's bit layout (traverse in shaders/accel.wgsl) is this one.
+    /// and every count; the kernel packs and unpacks the same bits (traverse in
+    /// shaders/accel.wgsl; it leaves 3 where Rust leaves 0 in lanes past the count, never read).
     #[test]
     fn group_entries_give_back_their_lanes_in_order() {
         for node in [0, 1, 12_345, GROUP_NODE_LIMIT - 1] {

@@ -254,12 +254,14 @@ pub struct BenchArgs {
     /// where no GPU is at hand.
     #[arg(long)]
     pub stats: bool,
-    /// Which renders to time, comma-separated (the CPU's run also counts the rays per sample).
+    /// Which renders to time, comma-separated (the CPU's run also counts the rays per sample,
+    /// which the GPU's lines are credited with: Mrays/s).
     #[arg(
         long,
         value_enum,
         value_delimiter = ',',
-        default_value = "cpu,gpu,gpu-everything"
+        default_value = "cpu,gpu,gpu-everything",
+        conflicts_with = "stats"
     )]
     pub runs: Vec<BenchRun>,
 }

@@ -12,7 +12,8 @@ use rt_gpu::scene::flat::FlatScene;
 use std::io::Write;
 use std::time::Instant;
 
-/// Renders the same scene on each backend (and the GPU with both kernels) in one run.
+/// Renders the same scene on each backend (and the GPU with both kernels) in one run, or on
+/// those `--runs` names.
 pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let (scene, _) = resolve_scene(&args.scene, None)?;
@@ -50,7 +51,7 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let mut rates = Vec::new();
     let mut failed = Vec::new();
     // The CPU counts its rays; the kernel, whose sample values and paths are the CPU's, is
-    // credited with the same rays per sample.
+    // credited with the same rays per sample (where the CPU runs: it runs first).
     let mut rays_per_sample = None;
     let runs = [
         (BenchRun::Cpu, "cpu", Backend::Cpu, false),
@@ -65,9 +66,8 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let runs: Vec<_> = runs
         .into_iter()
         .filter(|run| args.runs.contains(&run.0))
-        .map(|(_, label, backend, everything)| (label, backend, everything))
         .collect();
-    for &(label, backend, everything) in &runs {
+    for &(run, label, backend, everything) in &runs {
         let gpu = GpuChoice {
             adapter: args.adapter.clone(),
             everything,
@@ -111,7 +111,7 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
                     rendered.device,
                     mrays(rate)
                 )?;
-                rates.push((label, rate));
+                rates.push((run, rate));
             }
             Err(e) => {
                 say!("  {label:<30} failed: {}", one_line(&format!("{e:#}")))?;
@@ -119,17 +119,14 @@ pub fn bench(args: &BenchArgs) -> anyhow::Result<()> {
             }
         }
     }
-    let rate = |name: &str| rates.iter().find(|(l, _)| *l == name).map(|(_, r)| *r);
+    let rate = |run: BenchRun| rates.iter().find(|(r, _)| *r == run).map(|(_, r)| *r);
     if let Some(r) = rays_per_sample {
         say!("  rays per sample (the CPU's count: camera, bounce and shadow rays): {r:.2}")?;
     }
-    if let (Some(gpu), Some(cpu)) = (rate("gpu specialised kernel"), rate("cpu")) {
+    if let (Some(gpu), Some(cpu)) = (rate(BenchRun::Gpu), rate(BenchRun::Cpu)) {
         say!("  gpu / cpu speed: {:.2}x", gpu / cpu)?;
     }
-    if let (Some(special), Some(general)) = (
-        rate("gpu specialised kernel"),
-        rate("gpu everything-enabled kernel"),
-    ) {
+    if let (Some(special), Some(general)) = (rate(BenchRun::Gpu), rate(BenchRun::GpuEverything)) {
         say!(
             "  specialised / everything-enabled kernel speed: {:.2}x",
             special / general
@@ -204,6 +201,7 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
 /// `bench --stats`: the traversal counts per ray, kernel and CPU side by side, for the backends
 /// that walk the scene's BVH.
 fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()> {
+    use rt_gpu::accel::quantized::GROUP_NODE_LIMIT;
     use rt_gpu::cpu::traversal_stats::{KERNEL_NODE_BYTES, cpu_traverses};
     // The kernel of a scene of a few shapes holds them as constants and tests them all.
     #[cfg(feature = "gpu")]
@@ -221,6 +219,12 @@ fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()>
     }
     if !(kernel_traverses || cpu_traverses) {
         return Ok(());
+    }
+    let nodes = flat.kernel_bvh().nodes.len();
+    if nodes > GROUP_NODE_LIMIT as usize {
+        bail!(
+            "the scene's BVH has {nodes} nodes, more than the kernel's traversal addresses ({GROUP_NODE_LIMIT}): count a smaller scene"
+        );
     }
     let start = Instant::now();
     let Some(stats) = rt_gpu::cpu::traversal_stats::traversal_stats(flat, opts) else {

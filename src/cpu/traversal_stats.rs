@@ -4,8 +4,8 @@
 //!
 //! - the kernel's ([`kernel_traverse`]): a model of the four-wide walk of `shaders/accel.wgsl`,
 //!   step for step (a node's four quantized boxes read, the nearest child met entered, the
-//!   others met pushed with their entry distances; a top-level leaf's instances pushed and
-//!   entered when popped);
+//!   others met pushed as one entry with the nearest one's entry distance; a top-level leaf's
+//!   instances pushed and entered when popped);
 //! - the CPU's: [`traverse_wide`] itself, its reads counted through the [`Leaves`] hooks.
 //!
 //! The rays are a render's two kinds: camera rays through every pixel (coherent) and rays
@@ -29,6 +29,9 @@ use rayon::prelude::*;
 /// Bytes of one node of the kernel's hierarchy (`GpuBvhNode`: four children's quantized boxes
 /// and references), read on entering an interior node.
 pub const KERNEL_NODE_BYTES: u64 = std::mem::size_of::<crate::shared::layout::GpuBvhNode>() as u64;
+/// What the kernel reads of a node to take a child from a stack entry: the texel of its
+/// children's references (`bvh_child` in shaders/common.wgsl).
+pub const KERNEL_CHILD_BYTES: u64 = 16;
 
 /// Whether the CPU backend walks `scene`'s BVH (a scene of a few shapes is tested in turn).
 pub fn cpu_traverses(scene: &FlatScene) -> bool {
@@ -46,7 +49,8 @@ pub struct Counts {
     /// Interior nodes read (the kernel's: four wide, quantized; the CPU's: eight or four wide).
     pub nodes: u64,
     /// Bytes of those nodes (interior nodes only, on both sides: what leaves read is the
-    /// primitives', counted in `primitives`).
+    /// primitives', counted in `primitives`), and the kernel's: a texel of its node for each
+    /// child it takes from a stack entry.
     pub node_bytes: u64,
     /// Leaves whose primitives were tested (the CPU's triangle blocks among them: one block,
     /// its corners beside each other, for a subtree of few triangles).
@@ -55,7 +59,8 @@ pub struct Counts {
     pub primitives: u64,
     /// Instances entered (the ray moved into a mesh's coordinates).
     pub instances: u64,
-    /// Stack entries pushed.
+    /// Stack entries written (the kernel's: an entry put back with a child taken from it
+    /// counts again).
     pub pushes: u64,
     /// The sum over rays of the deepest the stack got, and the deepest of all.
     pub stack_depth_sum: u64,
@@ -326,8 +331,10 @@ pub fn kernel_traverse(scene: &FlatScene, world: &Ray, closest: &mut f32, counts
                             let (lane, rest) = quantized::group_next(word);
                             let node = word & (quantized::GROUP_NODE_LIMIT - 1);
                             entering = kernel.nodes[node as usize].children[lane as usize];
+                            counts.node_bytes += KERNEL_CHILD_BYTES;
                             if let Some(rest) = rest {
                                 stack.push(Entry::Group(rest, t_entry));
+                                counts.pushes += 1;
                             }
                             break;
                         }

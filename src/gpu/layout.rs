@@ -486,7 +486,8 @@ impl SceneBuffers {
             triangles.push(GpuTriangle::default());
         }
         if bvh_nodes.is_empty() {
-            // Only a lone leaf, or nothing, which the kernel never reads as a node.
+            // Only a lone leaf, or nothing: never traversed as a node, but a popped instance's
+            // entry may read node 0 (`traverse` in shaders/accel.wgsl), so there is one.
             bvh_nodes.push(GpuBvhNode::default());
         }
         let triangle_normals = corner_floats(&scene.triangle_normals, glam::Vec3::to_array);

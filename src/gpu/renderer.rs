@@ -197,11 +197,13 @@ impl GpuRenderer {
         let source = compose(&features, scene).map_err(GpuError::Shader)?;
         // SAFETY: `source` is composed (`shader::compose`) for the scene whose buffers
         // `scene_buffers` binds, with its `Features::of`; every dynamic index is then in range:
-        // - BVH stack (`traverse`): a node pushes <= 1 entry (its children met but the one
-        //   entered, `group_entry`), and popping a child of an entry puts back at most that
-        //   entry, so entering the k-th interior node of a top-level path the stack holds
-        //   <= k - 1, and <= D after it (D = `QuantizedBvh::depth`); a top-level leaf pushes
-        //   <= L = `largest_instance_leaf` instances; inside an instance, whose entry leaves
+        // - BVH stack (`traverse`): every node entry on the stack is of a different interior
+        //   node on the path to the node being entered, its strict ancestor (a node pushes <= 1
+        //   entry, for its children met but the one entered: `group_entry`; taking a child from
+        //   an entry puts back at most that entry, of the child's parent). So entering the k-th
+        //   interior node of a top-level path the stack holds <= k - 1 node entries, and <= D
+        //   after it (D = `QuantizedBvh::depth`); a top-level leaf pushes <= L =
+        //   `largest_instance_leaf` instances; inside an instance, whose entry leaves
         //   <= D + L - 1, its mesh's nodes add <= Dm (Dm = `instance_depth`). So every write
         //   is below BVH_STACK = max(D, 1) + L + Dm (`compose`). An entry's node is an interior
         //   node's index (below the node count, itself below GROUP_NODE_LIMIT: `check_fits`),

@@ -419,8 +419,8 @@ pub fn compose(features: &Features, scene: &FlatScene) -> Result<String, String>
         scene.medium_crossings,
         float_literal(f32::MAX)
     ));
-    // The traversal stack sized to this scene's hierarchy (private arrays cost lavapipe in
-    // proportion to their size); a kernel of constants has none (its hierarchy is not made).
+    // The traversal stack sized to this scene's hierarchy (GPU memory per invocation); a kernel
+    // of constants has none (its hierarchy is not made).
     let (stack, root) = if features.bvh {
         let kernel_bvh = scene.kernel_bvh();
         (
