@@ -202,7 +202,7 @@ fn describe_geometry(flat: &FlatScene, loading: f64, flattening: f64) -> anyhow:
 /// that walk the scene's BVH.
 fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()> {
     use rt_gpu::accel::quantized::GROUP_NODE_LIMIT;
-    use rt_gpu::cpu::traversal_stats::{KERNEL_NODE_BYTES, cpu_traverses};
+    use rt_gpu::cpu::traversal_stats::{KERNEL_NODE_BYTES, SIMD_LANES, cpu_traverses};
     // The kernel of a scene of a few shapes holds them as constants and tests them all.
     #[cfg(feature = "gpu")]
     let kernel_traverses = rt_gpu::gpu::Features::of(flat).bvh;
@@ -273,6 +273,14 @@ fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()>
                 c.per_ray(c.leaves),
                 c.per_ray(c.primitives),
                 c.per_ray(c.instances),
+            )?;
+        }
+        if kernel_traverses {
+            let k = &s.kernel;
+            say!(
+                "  {kind:<8} kernel, SIMD groups of {SIMD_LANES} adjacent rays each as long as its slowest: {:.1} iterations per ray, {:.2}x the rays' own",
+                k.per_ray(k.group_iterations),
+                k.group_iterations as f64 / k.iterations.max(1) as f64
             )?;
         }
         if kernel_traverses && cpu_traverses {

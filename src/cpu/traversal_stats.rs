@@ -59,6 +59,10 @@ pub struct Counts {
     pub primitives: u64,
     /// Instances entered (the ray moved into a mesh's coordinates).
     pub instances: u64,
+    /// The kernel's: `iterations` as SIMD groups of [`SIMD_LANES`] adjacent rays run them, each
+    /// lane as long as its group's slowest (lavapipe runs every lane through every iteration
+    /// of its group: what divergence costs there).
+    pub group_iterations: u64,
     /// Stack entries written (the kernel's: an entry put back with a child taken from it
     /// counts again).
     pub pushes: u64,
@@ -71,6 +75,7 @@ impl Counts {
     fn add(mut self, o: Counts) -> Counts {
         self.rays += o.rays;
         self.iterations += o.iterations;
+        self.group_iterations += o.group_iterations;
         self.nodes += o.nodes;
         self.node_bytes += o.node_bytes;
         self.leaves += o.leaves;
@@ -149,21 +154,34 @@ pub fn stats_rays(scene: &FlatScene, opts: &RenderOptions) -> [Vec<Ray>; 2] {
     [cameras.concat(), bounces.concat()]
 }
 
+/// The rays of one SIMD group in `Counts::group_iterations`: lavapipe's 8 lanes of 32 bits
+/// (256-bit vectors), a row of 8 pixels of a workgroup.
+pub const SIMD_LANES: usize = 8;
+
 /// Both traversals' counts over [`stats_rays`]; `None` when the scene has no BVH.
 pub fn traversal_stats(scene: &FlatScene, opts: &RenderOptions) -> Option<TraversalStats> {
     if scene.bvh.nodes.is_empty() {
         return None;
     }
     let [cameras, bounces] = stats_rays(scene, opts);
-    let count = |rays: &[Ray]| {
-        rays.par_iter()
-            .map(|ray| count_ray(scene, ray))
-            .reduce(RayKindStats::default, RayKindStats::add)
-    };
     Some(TraversalStats {
-        camera: count(&cameras),
-        bounce: count(&bounces),
+        camera: group_stats(scene, &cameras),
+        bounce: group_stats(scene, &bounces),
     })
+}
+
+/// Both traversals' counts over `rays`, taken as SIMD groups of [`SIMD_LANES`] adjacent rays
+/// (a row's pixels; a bounce's, those whose camera ray hit) for `Counts::group_iterations`.
+pub fn group_stats(scene: &FlatScene, rays: &[Ray]) -> RayKindStats {
+    rays.par_chunks(SIMD_LANES)
+        .map(|group| {
+            let each: Vec<RayKindStats> = group.iter().map(|r| count_ray(scene, r)).collect();
+            let slowest = each.iter().map(|s| s.kernel.iterations).max().unwrap_or(0);
+            let mut sum = (each.into_iter()).fold(RayKindStats::default(), RayKindStats::add);
+            sum.kernel.group_iterations = slowest * group.len() as u64;
+            sum
+        })
+        .reduce(RayKindStats::default, RayKindStats::add)
 }
 
 /// One ray through both traversals, checked against `intersect`.

@@ -8,7 +8,7 @@
 use crate::common;
 
 use rt_gpu::cpu::traversal_stats::{
-    Counts, count_ray, kernel_traverse, stats_rays, traversal_stats,
+    Counts, SIMD_LANES, count_ray, group_stats, kernel_traverse, stats_rays, traversal_stats,
 };
 use rt_gpu::render::RenderOptions;
 use rt_gpu::scene::Scene;
@@ -45,8 +45,31 @@ fn both_counted_traversals_find_the_renderers_hits() {
             );
             let instanced = name.contains("knots");
             assert_eq!(s.kernel.instances > 0, instanced, "{name} {kind}");
+            // SIMD groups run as long as their slowest lane: never less than the lanes' own
+            // iterations, never more than 8x (SIMD_LANES) their sum; more where lanes differ.
+            let (own, grouped) = (s.kernel.iterations, s.kernel.group_iterations);
+            assert!(
+                own <= grouped && grouped <= SIMD_LANES as u64 * own,
+                "{name} {kind}: {own} {grouped}"
+            );
+            if kind == "bounce" {
+                assert!(grouped > own, "{name} {kind}: diffuse bounces diverge");
+            }
         }
     }
+}
+
+/// The same ray in every lane: no divergence, a group's iterations are its lanes' own.
+#[test]
+fn groups_of_one_ray_do_not_diverge() {
+    let flat = FlatScene::new(&builtin("showcase").expect("built in"), 40, 30).expect("valid");
+    let opts = RenderOptions::new(40, 30, 1, 1);
+    let ray = stats_rays(&flat, &opts)[1][7];
+    let single = count_ray(&flat, &ray).kernel.iterations;
+    let lanes = vec![ray; 3 * SIMD_LANES + 5];
+    let stats = group_stats(&flat, &lanes);
+    assert_eq!(stats.kernel.iterations, lanes.len() as u64 * single);
+    assert_eq!(stats.kernel.group_iterations, stats.kernel.iterations);
 }
 
 /// The kernel's `trace_rays` returns its traversal loop's count per ray: the model's must be
