@@ -249,8 +249,9 @@ pub struct BenchArgs {
     pub adapter: Option<String>,
     /// Instead of timing renders, count what BVH traversal reads per ray: nodes, their bytes,
     /// leaves, primitives, instances entered and stack depth, and the kernel's loop iterations
-    /// (alone, and as SIMD groups of 8 adjacent rays run them), for the kernel's four-wide walk
-    /// (a model of it, step for step) and the CPU's wide one, over a camera ray through every
+    /// (alone, and with each 8 consecutive rays charged their slowest's: lavapipe's SIMD lanes at
+    /// 256 bits), for the kernel's four-wide walk (a model of it, step for step) and the CPU's
+    /// wide one, over a camera ray through every
     /// pixel and a diffuse bounce from each hit. Hardware-independent: the GPU's traversal cost
     /// where no GPU is at hand.
     #[arg(long)]

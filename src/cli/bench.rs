@@ -278,7 +278,7 @@ fn traversal_stats(flat: &FlatScene, opts: &RenderOptions) -> anyhow::Result<()>
         if kernel_traverses {
             let k = &s.kernel;
             say!(
-                "  {kind:<8} kernel, SIMD groups of {SIMD_LANES} adjacent rays each as long as its slowest: {:.1} iterations per ray, {:.2}x the rays' own",
+                "  {kind:<8} kernel, each {SIMD_LANES} consecutive rays as long as their slowest (a SIMD group): {:.1} iterations per ray, {:.2}x the rays' own",
                 k.per_ray(k.group_iterations),
                 k.group_iterations as f64 / k.iterations.max(1) as f64
             )?;

@@ -59,9 +59,10 @@ pub struct Counts {
     pub primitives: u64,
     /// Instances entered (the ray moved into a mesh's coordinates).
     pub instances: u64,
-    /// The kernel's: `iterations` as SIMD groups of [`SIMD_LANES`] adjacent rays run them, each
-    /// lane as long as its group's slowest (lavapipe runs every lane through every iteration
-    /// of its group: what divergence costs there).
+    /// The kernel's: `iterations` with each [`SIMD_LANES`] consecutive rays charged their
+    /// slowest's (lavapipe runs every lane through every iteration of its group: a lower bound
+    /// of what divergence costs there, whose lanes also wait on each other's leaf and popping
+    /// loops).
     pub group_iterations: u64,
     /// Stack entries written (the kernel's: an entry put back with a child taken from it
     /// counts again).
@@ -154,8 +155,9 @@ pub fn stats_rays(scene: &FlatScene, opts: &RenderOptions) -> [Vec<Ray>; 2] {
     [cameras.concat(), bounces.concat()]
 }
 
-/// The rays of one SIMD group in `Counts::group_iterations`: lavapipe's 8 lanes of 32 bits
-/// (256-bit vectors), a row of 8 pixels of a workgroup.
+/// The rays of one SIMD group in `Counts::group_iterations`: lavapipe's 8 lanes of 32 bits at
+/// 256 bits (4 at 128), a row of 8 pixels of a workgroup (camera rays, at a width that is a
+/// multiple of 8; bounces are 8 successive hits).
 pub const SIMD_LANES: usize = 8;
 
 /// Both traversals' counts over [`stats_rays`]; `None` when the scene has no BVH.

@@ -599,6 +599,21 @@ fn bench_times_only_the_runs_asked_for() {
     }
 }
 
+/// `bench --stats` counts the kernel's and the CPU's traversals, and the kernel's SIMD groups.
+#[test]
+fn bench_stats_prints_both_walks_and_the_simd_groups() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = rt_gpu(
+        &["bench", "showcase", "--stats", "--size", "16x16"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let printed = String::from_utf8_lossy(&out.stdout);
+    for line in ["kernel, 4-wide", "cpu / kernel", "(a SIMD group)"] {
+        assert!(printed.contains(line), "{line}: {printed}");
+    }
+}
+
 /// SIGTERM (or Ctrl-C) during a render exits non-zero (128 + the signal) and leaves no
 /// temporary file and no partial image.
 #[cfg(unix)]
