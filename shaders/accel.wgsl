@@ -23,8 +23,8 @@
 // The traversal's stack: each entry a word (an interior node's children left to enter, or an
 // instance's index) and a distance (where the ray enters the nearest of those children's boxes,
 // or ENTER_INSTANCE). At module scope: lavapipe keeps a function's array in registers, each
-// dynamic index a chain of selects over every element, but a module's private array in memory
-// (1.2x on the knot, whatever the stack's size; docs/benchmarks.md).
+// dynamic index a chain of selects over every element, but a module's private array in memory,
+// where its size costs nothing per index (docs/benchmarks.md).
 var<private> stack: array<u32, BVH_STACK>;
 var<private> stack_entry: array<f32, BVH_STACK>;
 //#if LOOP_BUDGET
@@ -143,7 +143,7 @@ fn consider_instanced_triangle(instance: u32, triangle: u32, ray: Ray, sh: Shear
 // the leaf it descends into if it does; one per leaf popped from the stack; none for a child
 // whose box the ray misses; a popped entry whose nearest box now lies beyond the closest hit
 // costs a pass of the popping loop, no read. (Testing the popped node's own box instead, as
-// the binary walk once did, took 1.25x as long on lavapipe.)
+// the binary walk once did, was slower on lavapipe: it reads the node.)
 fn traverse(world: Ray, c: ptr<function, Closest>) {
     var ray = world;
     let world_inverse = inverse_direction(world.dir);

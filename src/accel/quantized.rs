@@ -56,7 +56,7 @@ pub fn nearest_first(
 /// the stack, and one write instead of three for each node. A child popped while others are
 /// left puts the entry back with the rest, under the same distance (the nearest's, so no
 /// farther one is ever skipped: it costs a node read where the ray would have been seen to
-/// miss its box, 1% more iterations on the knot).
+/// miss its box; docs/benchmarks.md counts how rarely).
 pub const GROUP_LANES_SHIFT: u32 = 24;
 pub const GROUP_COUNT_SHIFT: u32 = 30;
 pub const GROUP_NODE_LIMIT: u32 = 1 << GROUP_LANES_SHIFT;
